@@ -1,0 +1,116 @@
+"""The one interface every physics engine implements; engine-specific code stays in engines/.
+
+The daemon's ``World`` validates every request (names, shapes, finite numbers) and keeps the
+entity registry, the clock and the step counter, so an engine receives only checked data,
+addressed by entity name, and never sees the wire. Engines are driven from one thread.
+
+An engine raises ``galton.protocol`` errors: ``FeatureUnsupportedError`` for what it
+cannot do (and leaves it out of ``capabilities().features``), ``InvalidArgumentError`` for
+a bad parameter value, ``OperationFailedError`` when the engine itself fails. A failed call
+leaves the engine's scene as it was before the call.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from collections.abc import Sequence
+from typing import Any, ClassVar
+
+import numpy as np
+
+from galton.protocol import BodyGroup, BodyProperties, Capabilities, EntityInfo
+
+# Feature flags an engine may list in its capabilities.
+FEATURE_SPAWN = "spawn"
+FEATURE_DELETE = "delete"
+FEATURE_SET_STATE = "set_state"
+FEATURE_UPDATE_MASS = "update_mass"
+FEATURE_UPDATE_FRICTION = "update_friction"
+FEATURE_UPDATE_RESTITUTION = "update_restitution"
+FEATURE_UPDATE_RGBA = "update_rgba"
+FEATURE_LOAD_MODEL = "load_model"
+FEATURE_STATIC_POSE = "set_static_pose"
+
+
+class Engine(ABC):
+    """A physics world holding named rigid bodies, stepped with a fixed timestep."""
+
+    name: ClassVar[str]
+
+    @abstractmethod
+    def capabilities(self) -> Capabilities:
+        """Engine name and version, body shapes, model formats, features, parameters."""
+
+    @abstractmethod
+    def spawn(self, groups: Sequence[BodyGroup]) -> None:
+        """Add every body of every group in one batch (names are new and unique).
+
+        A body's initial twist is ``group.twists`` (zeros when None). ``mass`` None means a
+        density of 1000 kg/m³; ``friction``/``restitution`` None mean the engine defaults.
+        The running world keeps its state (positions, velocities) across the call.
+        """
+
+    @abstractmethod
+    def load_model(self, fmt: str, text: str | None, path: str | None,
+                   prefix: str) -> list[EntityInfo]:
+        """Load a model (format from capabilities().model_formats) given as text or path.
+
+        Every top-level body becomes an entity named ``prefix + body name``; return them
+        (``source="model"``). Raise InvalidArgumentError for a model that does not parse,
+        NameNotUniqueError never (the World checks the returned names and calls
+        ``delete`` to undo on a clash).
+        """
+
+    @abstractmethod
+    def delete(self, names: Sequence[str]) -> None:
+        """Remove these bodies in one batch and free what they held."""
+
+    @abstractmethod
+    def get_states(self, names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
+        """Poses (n, 7: x y z qx qy qz qw) and world twists (n, 6: v, ω) of these bodies."""
+
+    @abstractmethod
+    def set_states(self, names: Sequence[str], poses: np.ndarray | None,
+                   twists: np.ndarray | None) -> None:
+        """Teleport bodies and/or set their velocities (None leaves that part as it is)."""
+
+    @abstractmethod
+    def update(self, names: Sequence[str], props: BodyProperties) -> None:
+        """Change mass, friction, restitution or colour (tags are the World's business)."""
+
+    @abstractmethod
+    def step(self, count: int) -> None:
+        """Advance the physics by ``count`` fixed timesteps."""
+
+    @abstractmethod
+    def state_is_finite(self) -> bool:
+        """False when any body's position or velocity is NaN or infinite, or the engine
+        detected a divergence during the last ``step``."""
+
+    @abstractmethod
+    def clear(self) -> None:
+        """Remove every body: an empty world (parameters kept)."""
+
+    @abstractmethod
+    def reset_dynamics(self) -> None:
+        """Forget contact caches and warm starts after a teleport of every body."""
+
+    @property
+    @abstractmethod
+    def timestep(self) -> float:
+        """Seconds of simulated time per step."""
+
+    @abstractmethod
+    def get_params(self) -> dict[str, Any]:
+        """Every parameter in capabilities().params with its current value."""
+
+    @abstractmethod
+    def set_params(self, params: dict[str, Any]) -> None:
+        """Set parameters: all or none (validate every value before changing any).
+
+        Unknown names raise InvalidArgumentError with a "did you mean"; names that belong to
+        another engine raise FeatureUnsupportedError.
+        """
+
+    def close(self) -> None:  # noqa: B027 - optional hook, a no-op by default
+        """Release the engine's resources."""

@@ -1,0 +1,93 @@
+"""Engine parameters: named, typed, with units and defaults, set all-or-none.
+
+Names shared by every engine are bare (``timestep``); engine-specific ones carry the
+engine's name as prefix (``mujoco.solref``, ``pybullet.collision_margin``). Asking one
+engine for another engine's parameter is FEATURE_UNSUPPORTED, not a silent no-op.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import Any
+
+from galton.protocol.errors import FeatureUnsupportedError, InvalidArgumentError, did_you_mean
+from galton.protocol.model import finite_number
+
+KNOWN_ENGINES = ("mujoco", "pybullet")
+
+
+@dataclass(frozen=True)
+class ParamSpec:
+    """One parameter: its default, unit, meaning, and a checker returning the clean value."""
+
+    name: str
+    default: Any
+    unit: str
+    doc: str
+    check: Callable[[Any, str], Any]
+
+    def describe(self) -> dict[str, Any]:
+        default = list(self.default) if isinstance(self.default, tuple) else self.default
+        return {"default": default, "unit": self.unit, "doc": self.doc}
+
+
+def number(low: float, high: float, *, low_open: bool = False) -> Callable[[Any, str], float]:
+    def check(value: Any, where: str) -> float:
+        return finite_number(value, where, low=low, high=high, low_open=low_open)
+    return check
+
+
+def integer(low: int, high: int) -> Callable[[Any, str], int]:
+    def check(value: Any, where: str) -> int:
+        if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+            raise InvalidArgumentError(f"{where} must be an integer in [{low}, {high}], "
+                                       f"got {value!r}")
+        return value
+    return check
+
+
+def vector(length: int, low: float, high: float) -> Callable[[Any, str], tuple[float, ...]]:
+    def check(value: Any, where: str) -> tuple[float, ...]:
+        if not isinstance(value, list | tuple) or len(value) != length:
+            raise InvalidArgumentError(f"{where} must be a list of {length} numbers, "
+                                       f"got {value!r}")
+        return tuple(finite_number(v, f"{where}[{i}]", low=low, high=high)
+                     for i, v in enumerate(value))
+    return check
+
+
+def choice(*options: str) -> Callable[[Any, str], str]:
+    def check(value: Any, where: str) -> str:
+        if value not in options:
+            raise InvalidArgumentError(f"{where} must be one of {', '.join(options)}, "
+                                       f"got {value!r}")
+        return value
+    return check
+
+
+def flag(value: Any, where: str) -> bool:
+    if not isinstance(value, bool):
+        raise InvalidArgumentError(f"{where} must be true or false, got {value!r}")
+    return value
+
+
+def check_updates(engine: str, specs: Mapping[str, ParamSpec],
+                  updates: Mapping[str, Any]) -> dict[str, Any]:
+    """Validate every update before any is applied; return the clean values."""
+    if not isinstance(updates, Mapping):
+        raise InvalidArgumentError(f"params must be a map of name to value, got {updates!r}")
+    clean: dict[str, Any] = {}
+    for name, value in updates.items():
+        spec = specs.get(name)
+        if spec is None:
+            prefix = str(name).split(".", 1)[0]
+            if "." in str(name) and prefix in KNOWN_ENGINES and prefix != engine:
+                raise FeatureUnsupportedError(
+                    f"parameter {name!r} belongs to the {prefix} engine; this daemon runs "
+                    f"{engine}")
+            raise InvalidArgumentError(
+                f"unknown parameter {name!r}{did_you_mean(str(name), specs)}; "
+                f"known: {', '.join(sorted(specs))}")
+        clean[name] = spec.check(value, f"params.{name}")
+    return clean

@@ -1,0 +1,98 @@
+"""The galton-bridge wire protocol, shared by the daemon and every client.
+
+It imports nothing else of galton: anyone can implement it with zenoh and msgpack alone,
+following ``docs/protocol.md``.
+"""
+
+from galton.protocol.arrays import pack_f64, unpack_f64
+from galton.protocol.codes import ResultCode
+from galton.protocol.envelope import (
+    PROTOCOL_VERSION,
+    Reply,
+    Request,
+    decode_reply,
+    decode_request,
+    encode_reply,
+    encode_request,
+    error_reply,
+)
+from galton.protocol.errors import (
+    DaemonUnreachableError,
+    FeatureUnsupportedError,
+    GaltonError,
+    IncorrectStateError,
+    InvalidArgumentError,
+    MalformedRequestError,
+    NameNotUniqueError,
+    NotFoundError,
+    OperationFailedError,
+    PhysicsError,
+    RemoteError,
+    RequestTimeoutError,
+    UnknownOperationError,
+    UnsupportedVersionError,
+    error_for_code,
+)
+from galton.protocol.keys import (
+    DEFAULT_PORT,
+    Keys,
+    instance_from_liveliness_key,
+    validate_instance_name,
+)
+from galton.protocol.model import (
+    BODY_SHAPES,
+    POSE_WIDTH,
+    RESET_SCOPES,
+    SIM_STATES,
+    TWIST_WIDTH,
+    BodyGroup,
+    BodyProperties,
+    Capabilities,
+    EntityInfo,
+    SimStatus,
+    Telemetry,
+)
+
+__all__ = [
+    "BODY_SHAPES",
+    "DEFAULT_PORT",
+    "POSE_WIDTH",
+    "PROTOCOL_VERSION",
+    "RESET_SCOPES",
+    "SIM_STATES",
+    "TWIST_WIDTH",
+    "BodyGroup",
+    "BodyProperties",
+    "Capabilities",
+    "DaemonUnreachableError",
+    "EntityInfo",
+    "FeatureUnsupportedError",
+    "GaltonError",
+    "IncorrectStateError",
+    "InvalidArgumentError",
+    "Keys",
+    "MalformedRequestError",
+    "NameNotUniqueError",
+    "NotFoundError",
+    "OperationFailedError",
+    "PhysicsError",
+    "RemoteError",
+    "Reply",
+    "Request",
+    "RequestTimeoutError",
+    "ResultCode",
+    "SimStatus",
+    "Telemetry",
+    "UnknownOperationError",
+    "UnsupportedVersionError",
+    "decode_reply",
+    "decode_request",
+    "encode_reply",
+    "encode_request",
+    "error_for_code",
+    "error_reply",
+    "instance_from_liveliness_key",
+    "pack_f64",
+    "unpack_f64",
+    "validate_instance_name",
+]

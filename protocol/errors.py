@@ -1,0 +1,123 @@
+"""The one exception tree of galton-bridge; wire result codes map onto it one to one.
+
+::
+
+    GaltonError
+    ├── RemoteError                  a reply carried a failure code (``.code``)
+    │   ├── NotFoundError            NOT_FOUND: no entity / world of that name
+    │   ├── IncorrectStateError      INCORRECT_STATE: not allowed in the current sim state
+    │   ├── FeatureUnsupportedError  FEATURE_UNSUPPORTED: this engine cannot do it
+    │   ├── OperationFailedError     OPERATION_FAILED: the engine failed or was interrupted
+    │   ├── InvalidArgumentError     INVALID_ARGUMENT: a field has a wrong type or value
+    │   │   ├── MalformedRequestError    MALFORMED_REQUEST: not a msgpack request envelope
+    │   │   └── UnknownOperationError    UNKNOWN_OPERATION: no such operation
+    │   ├── NameNotUniqueError       NAME_NOT_UNIQUE: an entity of that name exists
+    │   ├── UnsupportedVersionError  UNSUPPORTED_VERSION: protocol version mismatch
+    │   └── PhysicsError             PHYSICS_ERROR: the state became NaN or infinite
+    ├── DaemonUnreachableError       no daemon answered (client side only)
+    └── RequestTimeoutError          a daemon exists but did not answer in time (client side)
+"""
+
+from __future__ import annotations
+
+import difflib
+from collections.abc import Iterable
+
+from galton.protocol.codes import ResultCode
+
+
+class GaltonError(Exception):
+    """Root of every error raised by galton-bridge."""
+
+
+class RemoteError(GaltonError):
+    """A request failed; ``code`` is the wire result code that says why."""
+
+    code: ResultCode = ResultCode.OPERATION_FAILED
+
+    def __init__(self, message: str, details: dict | None = None) -> None:
+        super().__init__(message)
+        self.message = message
+        self.details = details or {}
+
+
+class NotFoundError(RemoteError):
+    code = ResultCode.NOT_FOUND
+
+
+class IncorrectStateError(RemoteError):
+    code = ResultCode.INCORRECT_STATE
+
+
+class FeatureUnsupportedError(RemoteError):
+    code = ResultCode.FEATURE_UNSUPPORTED
+
+
+class OperationFailedError(RemoteError):
+    code = ResultCode.OPERATION_FAILED
+
+
+class InvalidArgumentError(RemoteError):
+    code = ResultCode.INVALID_ARGUMENT
+
+
+class MalformedRequestError(InvalidArgumentError):
+    code = ResultCode.MALFORMED_REQUEST
+
+
+class UnknownOperationError(InvalidArgumentError):
+    code = ResultCode.UNKNOWN_OPERATION
+
+
+class NameNotUniqueError(RemoteError):
+    code = ResultCode.NAME_NOT_UNIQUE
+
+
+class UnsupportedVersionError(RemoteError):
+    code = ResultCode.UNSUPPORTED_VERSION
+
+
+class PhysicsError(RemoteError):
+    code = ResultCode.PHYSICS_ERROR
+
+
+class DaemonUnreachableError(GaltonError):
+    """No daemon answered at the address or instance asked for."""
+
+
+class RequestTimeoutError(GaltonError):
+    """A daemon is there but did not answer within the caller's timeout."""
+
+
+_BY_CODE: dict[ResultCode, type[RemoteError]] = {
+    cls.code: cls
+    for cls in (
+        NotFoundError,
+        IncorrectStateError,
+        FeatureUnsupportedError,
+        OperationFailedError,
+        InvalidArgumentError,
+        MalformedRequestError,
+        UnknownOperationError,
+        NameNotUniqueError,
+        UnsupportedVersionError,
+        PhysicsError,
+    )
+}
+
+
+def error_for_code(code: int, message: str, details: dict | None = None) -> RemoteError:
+    """Build the exception that a failure code stands for (unknown codes: OperationFailed)."""
+    try:
+        cls = _BY_CODE[ResultCode(code)]
+    except (ValueError, KeyError):
+        return OperationFailedError(f"unknown result code {code}: {message}", details)
+    return cls(message, details)
+
+
+def did_you_mean(word: str, choices: Iterable[str]) -> str:
+    """A ' (did you mean ...?)' suffix naming the closest choices, or ''."""
+    close = difflib.get_close_matches(word, list(choices), n=3, cutoff=0.6)
+    if not close:
+        return ""
+    return " (did you mean " + " or ".join(repr(c) for c in close) + "?)"

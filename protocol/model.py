@@ -1,0 +1,350 @@
+"""Typed records that travel on the wire, with their checked conversion from msgpack maps.
+
+Conventions: SI units (m, kg, s, rad); a pose is 7 floats ``x y z qx qy qz qw`` (scalar-last
+quaternion, as ROS and scipy), a twist 6 floats ``vx vy vz wx wy wz`` in the world frame.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import numpy as np
+
+from galton.protocol.arrays import pack_f64, unpack_f64
+from galton.protocol.errors import InvalidArgumentError
+
+POSE_WIDTH = 7
+TWIST_WIDTH = 6
+MAX_BATCH = 100_000
+MAX_NAME_LENGTH = 128
+SIM_STATES = ("stopped", "playing", "paused")
+RESET_SCOPES = ("time", "state", "spawned", "all")
+BODY_SHAPES = ("sphere", "box", "cylinder", "capsule", "plane")
+# How many numbers ``size`` holds per shape, and what they mean (all half sizes, metres).
+SIZE_LAYOUT: dict[str, tuple[str, ...]] = {
+    "sphere": ("radius",),
+    "box": ("half_x", "half_y", "half_z"),
+    "cylinder": ("radius", "half_length"),
+    "capsule": ("radius", "half_length"),
+    "plane": ("half_x", "half_y"),
+}
+
+
+def require(args: dict[str, Any], key: str, kind: type | tuple[type, ...], where: str) -> Any:
+    """Fetch a required field, raising InvalidArgument naming it when missing or mistyped."""
+    if key not in args:
+        raise InvalidArgumentError(f"{where}: missing required field {key!r}")
+    return check_type(args[key], kind, f"{where}.{key}")
+
+
+def check_type(value: Any, kind: type | tuple[type, ...], where: str) -> Any:
+    if isinstance(value, bool) and kind in (int, float, (int, float)):
+        raise InvalidArgumentError(f"{where} must be a number, got a boolean")
+    if not isinstance(value, kind):
+        names = kind.__name__ if isinstance(kind, type) else " or ".join(k.__name__ for k in kind)
+        raise InvalidArgumentError(f"{where} must be {names}, got {type(value).__name__} {value!r}")
+    return value
+
+
+def finite_number(value: Any, where: str, *, low: float = -math.inf, high: float = math.inf,
+                  low_open: bool = False) -> float:
+    """A finite float within [low, high] (or (low, high] with low_open), else InvalidArgument."""
+    check_type(value, (int, float), where)
+    number = float(value)
+    too_low = number <= low if low_open else number < low
+    if not math.isfinite(number) or too_low or number > high:
+        bound = f"({low}, {high}]" if low_open else f"[{low}, {high}]"
+        raise InvalidArgumentError(f"{where} must be a finite number in {bound}, got {value!r}")
+    return number
+
+
+def optional_number(args: dict[str, Any], key: str, where: str, **bounds: Any) -> float | None:
+    value = args.get(key)
+    return None if value is None else finite_number(value, f"{where}.{key}", **bounds)
+
+
+def check_name(name: Any, where: str) -> str:
+    check_type(name, str, where)
+    if not name or len(name) > MAX_NAME_LENGTH or not name.isprintable():
+        raise InvalidArgumentError(
+            f"{where} {name!r} is not a valid entity name: use 1-{MAX_NAME_LENGTH} printable "
+            "characters"
+        )
+    return name
+
+
+def check_names(value: Any, where: str) -> list[str]:
+    """A non-empty list of distinct valid names, at most MAX_BATCH long."""
+    check_type(value, list, where)
+    if not value:
+        raise InvalidArgumentError(f"{where} must name at least one entity")
+    if len(value) > MAX_BATCH:
+        raise InvalidArgumentError(f"{where} names {len(value)} entities; at most {MAX_BATCH}")
+    names = [check_name(n, f"{where}[{i}]") for i, n in enumerate(value)]
+    if len(set(names)) != len(names):
+        seen: set[str] = set()
+        dup = next(n for n in names if n in seen or seen.add(n))
+        raise InvalidArgumentError(f"{where} names {dup!r} more than once")
+    return names
+
+
+def check_rows(rows: np.ndarray, count: int, width: int, where: str) -> np.ndarray:
+    if rows.shape != (count, width):
+        raise InvalidArgumentError(
+            f"{where} holds {rows.shape[0]} rows of {width} numbers; expected {count}"
+        )
+    if not np.isfinite(rows).all():
+        bad = int(np.argwhere(~np.isfinite(rows))[0][0])
+        raise InvalidArgumentError(f"{where} row {bad} holds NaN or infinity: {rows[bad].tolist()}")
+    return rows
+
+
+def normalise_quaternions(poses: np.ndarray, where: str) -> np.ndarray:
+    """Return poses with unit quaternions; a zero quaternion is an error."""
+    norms = np.linalg.norm(poses[:, 3:7], axis=1)
+    if (norms < 1e-9).any():
+        bad = int(np.argmax(norms < 1e-9))
+        raise InvalidArgumentError(f"{where} row {bad} has a zero quaternion (qx qy qz qw)")
+    out = poses.copy()
+    out[:, 3:7] /= norms[:, None]
+    return out
+
+
+def decode_poses(data: Any, count: int, where: str) -> np.ndarray:
+    rows = check_rows(unpack_f64(data, POSE_WIDTH, where), count, POSE_WIDTH, where)
+    return normalise_quaternions(rows, where)
+
+
+def decode_twists(data: Any, count: int, where: str) -> np.ndarray:
+    return check_rows(unpack_f64(data, TWIST_WIDTH, where), count, TWIST_WIDTH, where)
+
+
+def check_tags(value: Any, where: str) -> tuple[str, ...]:
+    check_type(value, list, where)
+    return tuple(check_name(t, f"{where}[{i}]") for i, t in enumerate(value))
+
+
+def check_rgba(value: Any, where: str) -> tuple[float, float, float, float] | None:
+    if value is None:
+        return None
+    check_type(value, list, where)
+    if len(value) != 4:
+        raise InvalidArgumentError(f"{where} must hold 4 numbers (r g b a in 0..1)")
+    r, g, b, a = (finite_number(v, f"{where}[{i}]", low=0, high=1) for i, v in enumerate(value))
+    return (r, g, b, a)
+
+
+@dataclass
+class BodyProperties:
+    """Properties that ``update`` may change; None leaves a property as it is."""
+
+    mass: float | None = None
+    friction: float | None = None
+    restitution: float | None = None
+    rgba: tuple[float, float, float, float] | None = None
+    tags: tuple[str, ...] | None = None
+
+    def to_wire(self) -> dict[str, Any]:
+        return {k: (list(v) if isinstance(v, tuple) else v)
+                for k, v in asdict(self).items() if v is not None}
+
+    @classmethod
+    def from_wire(cls, args: dict[str, Any], where: str = "properties") -> BodyProperties:
+        check_type(args, dict, where)
+        unknown = set(args) - {"mass", "friction", "restitution", "rgba", "tags"}
+        if unknown:
+            raise InvalidArgumentError(
+                f"{where} has unknown fields {sorted(unknown)}; allowed: mass, friction, "
+                "restitution, rgba, tags"
+            )
+        tags = args.get("tags")
+        return cls(
+            mass=optional_number(args, "mass", where, low=0, low_open=True, high=1e9),
+            friction=optional_number(args, "friction", where, low=0, high=100),
+            restitution=optional_number(args, "restitution", where, low=0, high=1),
+            rgba=check_rgba(args.get("rgba"), f"{where}.rgba"),
+            tags=None if tags is None else check_tags(tags, f"{where}.tags"),
+        )
+
+
+@dataclass
+class BodyGroup:
+    """Bodies of one shape and material spawned together; each has its own name and state."""
+
+    shape: str
+    size: tuple[float, ...]
+    names: list[str]
+    poses: np.ndarray
+    twists: np.ndarray | None = None
+    static: bool = False
+    mass: float | None = None
+    friction: float | None = None
+    restitution: float | None = None
+    rgba: tuple[float, float, float, float] | None = None
+    tags: tuple[str, ...] = ()
+
+    def __len__(self) -> int:
+        return len(self.names)
+
+    def to_wire(self) -> dict[str, Any]:
+        return {
+            "shape": self.shape,
+            "size": [float(s) for s in self.size],
+            "names": list(self.names),
+            "poses": pack_f64(np.asarray(self.poses, dtype=float).reshape(-1, POSE_WIDTH)),
+            "twists": None if self.twists is None else pack_f64(
+                np.asarray(self.twists, dtype=float).reshape(-1, TWIST_WIDTH)),
+            "static": self.static,
+            "mass": self.mass,
+            "friction": self.friction,
+            "restitution": self.restitution,
+            "rgba": None if self.rgba is None else list(self.rgba),
+            "tags": list(self.tags),
+        }
+
+    @classmethod
+    def from_wire(cls, body: Any, where: str = "group") -> BodyGroup:
+        check_type(body, dict, where)
+        shape = require(body, "shape", str, where)
+        if shape not in BODY_SHAPES:
+            raise InvalidArgumentError(
+                f"{where}.shape {shape!r} is not one of {', '.join(BODY_SHAPES)}")
+        size = _check_size(shape, require(body, "size", list, where), f"{where}.size")
+        names = check_names(require(body, "names", list, where), f"{where}.names")
+        poses = decode_poses(require(body, "poses", (bytes, bytearray), where), len(names),
+                             f"{where}.poses")
+        twists_raw = body.get("twists")
+        twists = None if twists_raw is None else decode_twists(twists_raw, len(names),
+                                                               f"{where}.twists")
+        static = check_type(body.get("static", False), bool, f"{where}.static")
+        if shape == "plane" and not static:
+            raise InvalidArgumentError(f"{where}: a plane must be static (set static: true)")
+        if static and twists is not None and np.any(twists):
+            raise InvalidArgumentError(f"{where}: static bodies cannot have a non-zero twist")
+        return cls(
+            shape=shape, size=size, names=names, poses=poses, twists=twists, static=static,
+            mass=optional_number(body, "mass", where, low=0, low_open=True, high=1e9),
+            friction=optional_number(body, "friction", where, low=0, high=100),
+            restitution=optional_number(body, "restitution", where, low=0, high=1),
+            rgba=check_rgba(body.get("rgba"), f"{where}.rgba"),
+            tags=check_tags(body.get("tags", []), f"{where}.tags"),
+        )
+
+
+def _check_size(shape: str, size: list[Any], where: str) -> tuple[float, ...]:
+    layout = SIZE_LAYOUT[shape]
+    if len(size) != len(layout):
+        raise InvalidArgumentError(
+            f"{where} for a {shape} must hold {len(layout)} numbers ({', '.join(layout)}), "
+            f"got {len(size)}"
+        )
+    return tuple(finite_number(v, f"{where}[{i}] ({layout[i]})", low=0, low_open=True, high=1e4)
+                 for i, v in enumerate(size))
+
+
+@dataclass
+class EntityInfo:
+    """What the scene graph knows of one entity."""
+
+    name: str
+    shape: str
+    size: tuple[float, ...] = ()
+    static: bool = False
+    tags: tuple[str, ...] = ()
+    mass: float | None = None
+    friction: float | None = None
+    restitution: float | None = None
+    source: str = "spawn"
+
+    def to_wire(self) -> dict[str, Any]:
+        out = asdict(self)
+        out["size"] = list(self.size)
+        out["tags"] = list(self.tags)
+        return out
+
+    @classmethod
+    def from_wire(cls, body: dict[str, Any]) -> EntityInfo:
+        return cls(**{**body, "size": tuple(body.get("size", ())),
+                      "tags": tuple(body.get("tags", ()))})
+
+
+@dataclass
+class SimStatus:
+    """The simulation's clock and state at one instant."""
+
+    state: str
+    step: int
+    sim_time: float
+    timestep: float
+    target_rtf: float
+    rtf: float
+    entity_count: int
+    engine: str
+    instance: str
+    world: str = "default"
+    faulted: bool = False
+
+    def to_wire(self) -> dict[str, Any]:
+        return asdict(self)
+
+    @classmethod
+    def from_wire(cls, body: dict[str, Any]) -> SimStatus:
+        return cls(**body)
+
+
+@dataclass
+class Telemetry:
+    """One telemetry sample, published at the daemon's telemetry rate."""
+
+    seq: int
+    instance: str
+    engine: str
+    state: str
+    step: int
+    sim_time: float
+    wall_time: float
+    rtf: float
+    target_rtf: float
+    timestep: float
+    entity_count: int
+    cpu_percent: float
+    rss_bytes: int
+    peak_rss_bytes: int
+    world: str = "default"
+
+    def to_wire(self) -> dict[str, Any]:
+        return asdict(self)
+
+    @classmethod
+    def from_wire(cls, body: dict[str, Any]) -> Telemetry:
+        return cls(**body)
+
+
+@dataclass
+class Capabilities:
+    """What an engine can do; anything it cannot do is refused with FEATURE_UNSUPPORTED."""
+
+    engine: str
+    engine_version: str
+    protocol_version: int
+    body_shapes: tuple[str, ...]
+    model_formats: tuple[str, ...]
+    features: tuple[str, ...]
+    params: dict[str, dict[str, Any]] = field(default_factory=dict)
+    engines_available: tuple[str, ...] = ()
+
+    def supports(self, feature: str) -> bool:
+        return feature in self.features
+
+    def to_wire(self) -> dict[str, Any]:
+        out = asdict(self)
+        for key in ("body_shapes", "model_formats", "features", "engines_available"):
+            out[key] = list(out[key])
+        return out
+
+    @classmethod
+    def from_wire(cls, body: dict[str, Any]) -> Capabilities:
+        return cls(**{**body, **{k: tuple(body.get(k, ())) for k in (
+            "body_shapes", "model_formats", "features", "engines_available")}})
