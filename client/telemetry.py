@@ -1,0 +1,91 @@
+"""Telemetry and events as iterators or callbacks, over Zenoh subscribers."""
+
+from __future__ import annotations
+
+import logging
+import queue
+from collections.abc import Callable, Iterator
+from typing import Any
+
+import msgpack
+import zenoh
+
+from galton.protocol import RequestTimeoutError, Telemetry
+
+log = logging.getLogger("galton.client")
+
+
+class Subscription:
+    """A live subscription; ``close()`` (or leaving a ``with``) ends it."""
+
+    def __init__(self, subscriber: Any) -> None:
+        self._subscriber = subscriber
+
+    def close(self) -> None:
+        if self._subscriber is not None:
+            self._subscriber.undeclare()
+            self._subscriber = None
+
+    def __enter__(self) -> Subscription:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def _decode_telemetry(sample: zenoh.Sample) -> Telemetry | None:
+    try:
+        return Telemetry.from_wire(msgpack.unpackb(sample.payload.to_bytes()))
+    except Exception:
+        log.warning("ignored an unreadable telemetry sample on %s", sample.key_expr)
+        return None
+
+
+class TelemetryStream(Subscription):
+    """Iterate Telemetry samples; each ``next`` waits at most ``timeout`` seconds."""
+
+    def __init__(self, session: zenoh.Session, key: str, timeout: float) -> None:
+        self._queue: queue.SimpleQueue[Telemetry] = queue.SimpleQueue()
+        self.timeout = timeout
+        super().__init__(session.declare_subscriber(key, self._on_sample))
+
+    def _on_sample(self, sample: zenoh.Sample) -> None:
+        telemetry = _decode_telemetry(sample)
+        if telemetry is not None:
+            self._queue.put(telemetry)
+
+    def __iter__(self) -> Iterator[Telemetry]:
+        return self
+
+    def __next__(self) -> Telemetry:
+        return self.next(self.timeout)
+
+    def next(self, timeout: float) -> Telemetry:
+        try:
+            return self._queue.get(timeout=timeout)
+        except queue.Empty:
+            raise RequestTimeoutError(
+                f"no telemetry within {timeout:g} s: is the daemon running, with a "
+                "telemetry rate above 0?") from None
+
+    def __enter__(self) -> TelemetryStream:
+        return self
+
+    @staticmethod
+    def with_callback(session: zenoh.Session, key: str,
+                      callback: Callable[[Telemetry], None]) -> Subscription:
+        def on_sample(sample: zenoh.Sample) -> None:
+            telemetry = _decode_telemetry(sample)
+            if telemetry is not None:
+                callback(telemetry)
+        return Subscription(session.declare_subscriber(key, on_sample))
+
+
+def subscribe_events(session: zenoh.Session, key: str,
+                     callback: Callable[[dict[str, Any]], None]) -> Subscription:
+    def on_sample(sample: zenoh.Sample) -> None:
+        try:
+            callback(msgpack.unpackb(sample.payload.to_bytes()))
+        except Exception:
+            log.exception("event callback failed")
+    return Subscription(session.declare_subscriber(key, on_sample))

@@ -1,0 +1,72 @@
+"""``galton-daemon``: serve one physics world over Zenoh until SIGINT/SIGTERM."""
+
+from __future__ import annotations
+
+import json
+import logging
+import sys
+from pathlib import Path
+from typing import Annotated
+
+import typer
+import zenoh
+
+from galton.daemon.server import DEFAULT_LISTEN, DaemonOptions, run_daemon
+from galton.protocol import GaltonError, validate_instance_name
+
+app = typer.Typer(add_completion=False, help=__doc__)
+
+
+def _parse_params(text: str | None) -> dict:
+    if not text:
+        return {}
+    try:
+        params = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise typer.BadParameter(f"--params must be a JSON object: {exc}") from exc
+    if not isinstance(params, dict):
+        raise typer.BadParameter("--params must be a JSON object of name to value")
+    return params
+
+
+@app.command()
+def serve(
+    engine: Annotated[str, typer.Option(help="Physics engine: mujoco or pybullet.")] = "mujoco",
+    instance: Annotated[str, typer.Option(help="Instance name, one key chunk.")] = "galton",
+    listen: Annotated[list[str] | None, typer.Option(
+        help=f"Zenoh endpoint to listen on (repeatable). Default {DEFAULT_LISTEN}.")] = None,
+    connect: Annotated[list[str] | None, typer.Option(
+        help="Zenoh endpoint of a peer or router to join (repeatable).")] = None,
+    zenoh_config: Annotated[Path | None, typer.Option(
+        help="A Zenoh JSON5 config file; --listen/--connect still override it.",
+        exists=True, dir_okay=False)] = None,
+    multicast: Annotated[bool, typer.Option(
+        help="Enable Zenoh multicast scouting (off by default).")] = False,
+    telemetry_rate: Annotated[float, typer.Option(
+        help="Telemetry publications per second (0 = none).", min=0.0, max=1000.0)] = 10.0,
+    params: Annotated[str | None, typer.Option(
+        help='Engine parameters as JSON, e.g. \'{"timestep": 0.001}\'.')] = None,
+    log_level: Annotated[str, typer.Option(help="Logging level.")] = "warning",
+) -> None:
+    """Serve one world on ENGINE as INSTANCE until SIGINT or SIGTERM."""
+    logging.basicConfig(level=log_level.upper(), format="%(asctime)s %(name)s %(message)s")
+    zenoh.init_log_from_env_or("error")
+    sys.setswitchinterval(0.0005)  # let Zenoh's threads in promptly while physics runs
+    try:
+        validate_instance_name(instance)
+        options = DaemonOptions(
+            engine=engine, instance=instance, listen=listen or [DEFAULT_LISTEN],
+            connect=connect or [], zenoh_config=zenoh_config, multicast=multicast,
+            telemetry_rate_hz=telemetry_rate, params=_parse_params(params))
+        code = run_daemon(options, announce=lambda line: print(line, flush=True))
+    except GaltonError as error:
+        typer.echo(f"galton-daemon: {error}", err=True)
+        raise typer.Exit(2) from error
+    except zenoh.ZError as error:
+        typer.echo(f"galton-daemon: zenoh could not start: {error}", err=True)
+        raise typer.Exit(2) from error
+    raise typer.Exit(code)
+
+
+def main() -> None:
+    app()

@@ -1,0 +1,212 @@
+"""MuJoCo building blocks: parameters, the restitution mapping, quaternions, body specs.
+
+Kept apart from ``mujoco_engine`` so the engine reads as the Engine contract and this module
+as the MuJoCo vocabulary it is written in.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import mujoco
+import numpy as np
+
+from galton.daemon.params import ParamSpec, choice, integer, number, vector
+from galton.protocol import BodyGroup, InvalidArgumentError
+
+GEOM_TYPES: dict[str, int] = {
+    "sphere": mujoco.mjtGeom.mjGEOM_SPHERE,
+    "box": mujoco.mjtGeom.mjGEOM_BOX,
+    "cylinder": mujoco.mjtGeom.mjGEOM_CYLINDER,
+    "capsule": mujoco.mjtGeom.mjGEOM_CAPSULE,
+    "plane": mujoco.mjtGeom.mjGEOM_PLANE,
+}
+SOLVERS = {"newton": mujoco.mjtSolver.mjSOL_NEWTON, "cg": mujoco.mjtSolver.mjSOL_CG,
+           "pgs": mujoco.mjtSolver.mjSOL_PGS}
+CONES = {"pyramidal": mujoco.mjtCone.mjCONE_PYRAMIDAL, "elliptic": mujoco.mjtCone.mjCONE_ELLIPTIC}
+INTEGRATORS = {"euler": mujoco.mjtIntegrator.mjINT_EULER,
+               "implicit": mujoco.mjtIntegrator.mjINT_IMPLICIT,
+               "implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST,
+               "rk4": mujoco.mjtIntegrator.mjINT_RK4}
+
+# Bodies given no mass get MuJoCo's default density, water's.
+DENSITY = 1000.0
+# The smallest damping ratio a restitution may map to, whatever the step allows.
+MIN_DAMPRATIO = 0.01
+# MuJoCo's warnings that mean the state blew up during a step.
+DIVERGENCE_WARNINGS = np.array([int(w) for w in (
+    mujoco.mjtWarning.mjWARN_BADQPOS, mujoco.mjtWarning.mjWARN_BADQVEL,
+    mujoco.mjtWarning.mjWARN_BADQACC)])
+# tree_asleep value of a freshly woken tree (mirrors MuJoCo's own wake value).
+AWAKE = -(1 + mujoco.mjMINAWAKE)
+
+
+def _solref(value: Any, where: str) -> tuple[float, ...]:
+    timeconst, dampratio = vector(2, 0.0, 10.0)(value, where)
+    if timeconst <= 0 or dampratio <= 0:
+        raise InvalidArgumentError(f"{where} must be [timeconst > 0 s, dampratio > 0], got "
+                                   f"{value!r}")
+    return (timeconst, dampratio)
+
+
+def _solimp(value: Any, where: str) -> tuple[float, ...]:
+    dmin, dmax, width, mid, power = vector(5, 0.0, 1e3)(value, where)
+    if not (0 < dmin <= dmax < 1 and width > 0 and 0 < mid < 1 and power >= 1):
+        raise InvalidArgumentError(
+            f"{where} must be [dmin, dmax, width, midpoint, power] with 0 < dmin <= dmax < 1, "
+            f"width > 0, 0 < midpoint < 1, power >= 1; got {value!r}")
+    return (dmin, dmax, width, mid, power)
+
+
+PARAMS: dict[str, ParamSpec] = {p.name: p for p in (
+    ParamSpec("timestep", 0.002, "s", "physics step", number(0.0, 1.0, low_open=True)),
+    ParamSpec("gravity", (0.0, 0.0, -9.81), "m/s²", "gravity vector, world frame",
+              vector(3, -1e3, 1e3)),
+    ParamSpec("solver_iterations", 100, "", "constraint solver iterations (option iterations)",
+              integer(1, 10_000)),
+    ParamSpec("default_friction", 1.0, "",
+              "sliding friction of bodies spawned without one, also when changed later; a "
+              "contact uses the larger of its two geoms' values", number(0.0, 100.0)),
+    ParamSpec("default_restitution", 0.0, "",
+              "restitution of bodies spawned without one, also when changed later; 0 means "
+              "MuJoCo's own contact (mujoco.solref as given)", number(0.0, 1.0)),
+    ParamSpec("mujoco.solref", (0.02, 1.0), "s, 1",
+              "[timeconst, dampratio] of spawned bodies' contacts; a restitution e > 0 "
+              "replaces the dampratio (see mujoco_spec.damping_ratio)", _solref),
+    ParamSpec("mujoco.solimp", (0.9, 0.95, 0.001, 0.5, 2.0), "",
+              "[dmin, dmax, width, midpoint, power] impedance of spawned bodies' contacts",
+              _solimp),
+    ParamSpec("mujoco.solver", "newton", "", "constraint solver", choice(*SOLVERS)),
+    ParamSpec("mujoco.cone", "pyramidal", "", "friction cone", choice(*CONES)),
+    ParamSpec("mujoco.ls_iterations", 50, "", "line-search iterations (newton, cg)",
+              integer(1, 10_000)),
+    ParamSpec("mujoco.noslip_iterations", 0, "", "no-slip solver iterations (0 = off)",
+              integer(0, 10_000)),
+    ParamSpec("mujoco.integrator", "euler", "", "numerical integrator", choice(*INTEGRATORS)),
+    ParamSpec("mujoco.sleep_tolerance", 0.0, "m/s",
+              "island sleeping: trees slower than this fall asleep (0 = sleeping off)",
+              number(0.0, 10.0)),
+)}
+CONTACT_PARAMS = frozenset({"timestep", "default_friction", "default_restitution",
+                            "mujoco.solref", "mujoco.solimp"})
+
+
+def damping_floor(values: dict[str, Any]) -> float:
+    """The smallest damping ratio the current step integrates stably.
+
+    MuJoCo's contact spring has angular frequency 1 / (dmax·timeconst·dampratio), so a low
+    damping ratio stiffens the spring; measured drop tests gain energy once that frequency
+    times the step passes about 1 (timeconst is at least 2 steps, MuJoCo's own refsafe).
+    """
+    timestep = values["timestep"]
+    timeconst = max(values["mujoco.solref"][0], 2 * timestep)
+    return max(MIN_DAMPRATIO, timestep / (values["mujoco.solimp"][1] * timeconst))
+
+
+def damping_ratio(restitution: float, floor: float) -> float:
+    """The solref damping ratio ζ giving a nominal restitution e to a contact.
+
+    A damped spring-mass contact bounces back with e = exp(-ζπ / sqrt(1 - ζ²)); inverted,
+    ζ = L / sqrt(π² + L²) with L = -ln e. e = 0 gives ζ = 1 (critically damped); ζ is clamped
+    to ``floor`` (see damping_floor), so the highest reachable e depends on the step: about
+    0.72 at MuJoCo's defaults (2 ms, timeconst 0.02 s). Measured bounces track the formula
+    within ±0.05 for ζ in 0.1..0.3 but exceed it when damped (ζ = 1 still bounces ≈ 0.12,
+    MuJoCo's soft impedance). A contact averages its two geoms' solref (solmix 1), so both
+    bodies need the restitution for the full effect.
+    """
+    if restitution <= 0:
+        return 1.0
+    log = -math.log(restitution)
+    return max(floor, log / math.sqrt(math.pi**2 + log**2))
+
+
+def contact_solref(restitution: float, values: dict[str, Any]) -> tuple[float, float]:
+    """solref of a geom: mujoco.solref as given for e = 0, its damping replaced for e > 0."""
+    timeconst, dampratio = values["mujoco.solref"]
+    if restitution <= 0:
+        return (timeconst, dampratio)
+    return (timeconst, damping_ratio(restitution, damping_floor(values)))
+
+
+def write_options(option: Any, values: dict[str, Any]) -> None:
+    """Copy the global parameters onto an mjOption (the spec's or the compiled model's)."""
+    option.timestep = values["timestep"]
+    option.gravity = values["gravity"]
+    option.iterations = values["solver_iterations"]
+    option.ls_iterations = values["mujoco.ls_iterations"]
+    option.noslip_iterations = values["mujoco.noslip_iterations"]
+    option.solver = SOLVERS[values["mujoco.solver"]]
+    option.cone = CONES[values["mujoco.cone"]]
+    option.integrator = INTEGRATORS[values["mujoco.integrator"]]
+    option.disableflags |= mujoco.mjtDisableBit.mjDSBL_AUTORESET
+    tolerance = values["mujoco.sleep_tolerance"]
+    if tolerance > 0:
+        option.sleep_tolerance = tolerance
+        option.enableflags |= mujoco.mjtEnableBit.mjENBL_SLEEP
+    else:
+        option.enableflags &= ~int(mujoco.mjtEnableBit.mjENBL_SLEEP)
+
+
+# -- quaternions: MuJoCo is w x y z, the wire x y z w -----------------------------------
+def to_wxyz(xyzw: np.ndarray) -> np.ndarray:
+    return xyzw[..., [3, 0, 1, 2]]
+
+
+def to_xyzw(wxyz: np.ndarray) -> np.ndarray:
+    return wxyz[..., [1, 2, 3, 0]]
+
+
+def rotate(wxyz: np.ndarray, vec: np.ndarray, *, inverse: bool = False) -> np.ndarray:
+    """Rotate rows of vectors by rows of unit quaternions (or by their inverses)."""
+    w = wxyz[:, :1]
+    u = -wxyz[:, 1:] if inverse else wxyz[:, 1:]
+    t = 2.0 * np.cross(u, vec)
+    return vec + w * t + np.cross(u, t)
+
+
+# -- bodies ---------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Material:
+    """Per-geom values shared by a spawned group, resolved once for the whole group."""
+
+    friction: float
+    solref: tuple[float, float]
+    solimp: tuple[float, ...]
+    rgba: tuple[float, float, float, float] | None
+    mass: float | None
+
+
+def geom_size(shape: str, size: tuple[float, ...]) -> list[float]:
+    """MuJoCo's size triple; a plane's third number is only its rendered grid spacing."""
+    if shape == "sphere":
+        return [size[0], 0.0, 0.0]
+    if shape in ("cylinder", "capsule"):
+        return [size[0], size[1], 0.0]
+    if shape == "plane":
+        return [size[0], size[1], max(0.01, min(size) / 10)]
+    return list(size)
+
+
+def add_group(spec: mujoco.MjSpec, group: BodyGroup, material: Material) -> list[Any]:
+    """Add one body per name: a free joint when dynamic, a mocap body when static."""
+    geom: dict[str, Any] = {
+        "type": GEOM_TYPES[group.shape], "size": geom_size(group.shape, group.size),
+        "friction": [material.friction, 0.005, 0.0001], "solref": list(material.solref),
+        "solimp": list(material.solimp)}
+    if material.rgba is not None:
+        geom["rgba"] = list(material.rgba)
+    if material.mass is not None and not group.static:
+        geom["mass"] = material.mass
+    poses = np.asarray(group.poses, dtype=float)
+    quats = to_wxyz(poses[:, 3:7])
+    bodies = []
+    for i, name in enumerate(group.names):
+        body = spec.worldbody.add_body(name=name, pos=poses[i, :3], quat=quats[i],
+                                       mocap=group.static)
+        if not group.static:
+            body.add_freejoint()
+        body.add_geom(**geom)
+        bodies.append(body)
+    return bodies

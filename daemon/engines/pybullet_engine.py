@@ -1,0 +1,442 @@
+"""The PyBullet engine: a headless Bullet world, one per BulletClient (several can live in
+one process, as during an engine switch).
+
+Spawned bodies are plain rigid bodies (``useMaximalCoordinates``): Bullet's continuous
+collision detection works only for those, they carry no default damping (a one-link
+multibody has 0.04, which slows a free fall by 7 % in one second), and they step and read
+faster. Loaded models are multibodies (their joints need it), with damping set to zero.
+
+Contacts: PyBullet multiplies the two bodies' values at a contact, for friction and for
+restitution alike, so the default friction 0.5 on both bodies is 0.25 in effect, and a
+body with restitution 0.9 bounces off a body with restitution 0 hardly at all. Restitution
+is also zero below ``pybullet.restitution_velocity_threshold``.
+"""
+
+from __future__ import annotations
+
+import functools
+import importlib.metadata
+import itertools
+import typing
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any, TypeVar
+
+import numpy as np
+import pybullet
+from pybullet_utils.bullet_client import BulletClient
+
+from galton.daemon.engine import (
+    FEATURE_DELETE,
+    FEATURE_LOAD_MODEL,
+    FEATURE_SET_STATE,
+    FEATURE_SPAWN,
+    FEATURE_STATIC_POSE,
+    FEATURE_UPDATE_FRICTION,
+    FEATURE_UPDATE_MASS,
+    FEATURE_UPDATE_RESTITUTION,
+    FEATURE_UPDATE_RGBA,
+    Engine,
+)
+from galton.daemon.engines.pybullet_shapes import (
+    DENSITY,
+    ShapeCache,
+    check_xml,
+    margin_for,
+    model_file,
+    read_text,
+    unique_name,
+    unit_inertia,
+    volume,
+)
+from galton.daemon.params import ParamSpec, check_updates, flag, integer, number, vector
+from galton.protocol import (
+    PROTOCOL_VERSION,
+    BodyGroup,
+    BodyProperties,
+    Capabilities,
+    EntityInfo,
+    FeatureUnsupportedError,
+    InvalidArgumentError,
+    NameNotUniqueError,
+    NotFoundError,
+    OperationFailedError,
+)
+from galton.protocol.model import BODY_SHAPES, POSE_WIDTH, TWIST_WIDTH
+
+MODEL_FORMATS = ("urdf", "mjcf")
+# Inertia from the file, and true cylinders rather than their convex hulls.
+URDF_FLAGS = pybullet.URDF_USE_INERTIA_FROM_FILE | pybullet.URDF_USE_IMPLICIT_CYLINDER
+
+SPECS: dict[str, ParamSpec] = {spec.name: spec for spec in (
+    ParamSpec("timestep", 1 / 240, "s", "Simulated time per step.",
+              number(0, 1, low_open=True)),
+    ParamSpec("gravity", (0.0, 0.0, -9.81), "m/s²", "Gravity vector, world frame.",
+              vector(3, -1000, 1000)),
+    ParamSpec("solver_iterations", 50, "", "Constraint solver iterations per step "
+              "(numSolverIterations).", integer(1, 10_000)),
+    ParamSpec("default_friction", 0.5, "", "Lateral friction of spawned bodies that set none, "
+              "now and after a change. PyBullet multiplies both bodies' values at a contact.",
+              number(0, 100)),
+    ParamSpec("default_restitution", 0.0, "", "Restitution of spawned bodies that set none, "
+              "now and after a change. PyBullet multiplies both bodies' values at a contact.",
+              number(0, 1)),
+    ParamSpec("pybullet.restitution_velocity_threshold", 0.2, "m/s", "Contacts approaching "
+              "slower than this do not bounce.", number(0, 1000)),
+    ParamSpec("pybullet.ccd_swept_sphere_radius", 0.0, "m", "Continuous collision detection "
+              "for every dynamic body (0 = off): about the smallest ball's radius. Acts on "
+              "spawned bodies only (Bullet has no CCD for the multibodies of models).",
+              number(0, 10)),
+    ParamSpec("pybullet.collision_margin", 0.001, "m", "Margin of spawned boxes, cylinders "
+              "and planes: rounds box edges, capped at half the smallest half size. Spheres "
+              "and capsules keep their radius as margin; models keep theirs.", number(0, 1)),
+    ParamSpec("pybullet.enable_cone_friction", True, "", "Implicit cone friction; false uses "
+              "the cheaper pyramid approximation.", flag),
+    ParamSpec("pybullet.erp", 0.2, "", "Error reduction of non-contact constraints (the "
+              "joints of loaded models).", number(0, 1)),
+    ParamSpec("pybullet.contact_erp", 0.08, "", "Error reduction of contacts: the share of a "
+              "penetration corrected per step.", number(0, 1)),
+    ParamSpec("pybullet.deterministic_overlapping_pairs", True, "", "Sort overlapping pairs, "
+              "so that identical runs give identical results.", flag),
+)}
+
+_P = typing.ParamSpec("_P")
+_R = TypeVar("_R")
+
+
+def _engine_call(method: Callable[_P, _R]) -> Callable[_P, _R]:
+    """Report PyBullet's own failures (a lost connection, a refused call) as
+    OperationFailedError, as the Engine contract asks."""
+    @functools.wraps(method)
+    def wrapper(*args: _P.args, **kwargs: _P.kwargs) -> _R:
+        try:
+            return method(*args, **kwargs)
+        except pybullet.error as exc:
+            raise OperationFailedError(f"PyBullet {method.__name__} failed: {exc}") from exc
+    return wrapper
+
+
+@dataclass(slots=True)
+class _Body:
+    """What the engine keeps per entity beyond PyBullet's body id."""
+
+    uid: int
+    static: bool
+    shape: str  # a protocol shape, or "model"
+    size: tuple[float, ...]
+    unit_inertia: tuple[float, float, float] | None  # None for static bodies
+    links: int = 0  # a model's links beside the base
+    follows_friction: bool = False  # set by default_friction, now and after a change
+    follows_restitution: bool = False
+
+
+class PybulletEngine(Engine):
+    """Named rigid bodies in a headless PyBullet world."""
+
+    name = "pybullet"
+
+    def __init__(self) -> None:
+        self._bc = BulletClient(connection_mode=pybullet.DIRECT)
+        self._closed = False
+        bc = self._bc
+        # Bound once: BulletClient builds a new functools.partial on every attribute access.
+        self._get_pose = bc.getBasePositionAndOrientation
+        self._get_velocity = bc.getBaseVelocity
+        self._reset_pose = bc.resetBasePositionAndOrientation
+        self._reset_velocity = bc.resetBaseVelocity
+        self._change = bc.changeDynamics
+        self._step = bc.stepSimulation
+        self._shapes = ShapeCache(bc.createCollisionShape)
+        self._bodies: dict[str, _Body] = {}
+        self._values: dict[str, Any] = {name: spec.default for name, spec in SPECS.items()}
+        self._configure_world()
+
+    # -- description ----------------------------------------------------------------------
+    def capabilities(self) -> Capabilities:
+        return Capabilities(
+            engine=self.name,
+            engine_version=importlib.metadata.version("pybullet"),
+            protocol_version=PROTOCOL_VERSION,
+            body_shapes=BODY_SHAPES,
+            model_formats=MODEL_FORMATS,
+            features=(FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDATE_MASS,
+                      FEATURE_UPDATE_FRICTION, FEATURE_UPDATE_RESTITUTION, FEATURE_UPDATE_RGBA,
+                      FEATURE_LOAD_MODEL, FEATURE_STATIC_POSE),
+            params={name: spec.describe() for name, spec in SPECS.items()},
+        )
+
+    @property
+    def timestep(self) -> float:
+        return float(self._values["timestep"])
+
+    # -- parameters -----------------------------------------------------------------------
+    def get_params(self) -> dict[str, Any]:
+        return {k: list(v) if isinstance(v, tuple) else v for k, v in self._values.items()}
+
+    @_engine_call
+    def set_params(self, params: dict[str, Any]) -> None:
+        clean = check_updates(self.name, SPECS, params)
+        self._values.update(clean)
+        self._apply(clean)
+
+    def _configure_world(self) -> None:
+        """Every setting of a fresh (or reset) world: resetSimulation forgets them all."""
+        # The file cache keys on file names and keeps every file read: with temporary files
+        # it only grows, and with a rewritten file it serves the old text.
+        self._bc.setPhysicsEngineParameter(enableFileCaching=0)
+        self._apply(self._values)
+
+    def _apply(self, values: dict[str, Any]) -> None:
+        world: dict[str, Any] = {}
+        for name, value in values.items():
+            if name == "timestep":
+                world["fixedTimeStep"] = value
+            elif name == "gravity":
+                self._bc.setGravity(*value)
+            elif name == "solver_iterations":
+                world["numSolverIterations"] = value
+            elif name == "pybullet.restitution_velocity_threshold":
+                world["restitutionVelocityThreshold"] = value
+            elif name == "pybullet.enable_cone_friction":
+                world["enableConeFriction"] = int(value)
+            elif name == "pybullet.erp":
+                world["erp"] = value
+            elif name == "pybullet.contact_erp":
+                world["contactERP"] = value
+            elif name == "pybullet.deterministic_overlapping_pairs":
+                world["deterministicOverlappingPairs"] = int(value)
+        if world:
+            self._bc.setPhysicsEngineParameter(**world)
+        bodies = list(self._bodies.values())
+        if "default_friction" in values:
+            for body in bodies:
+                if body.follows_friction:
+                    self._change(body.uid, -1, lateralFriction=values["default_friction"])
+        if "default_restitution" in values:
+            for body in bodies:
+                if body.follows_restitution:
+                    self._change(body.uid, -1, restitution=values["default_restitution"])
+        if "pybullet.ccd_swept_sphere_radius" in values:
+            radius = values["pybullet.ccd_swept_sphere_radius"]
+            for body in bodies:
+                if not body.static:
+                    self._change(body.uid, -1, ccdSweptSphereRadius=radius)
+        if "pybullet.collision_margin" in values:
+            done: set[tuple[str, tuple[float, ...]]] = set()
+            for body in bodies:  # the shape is shared: one body per shape sets it for all
+                if (body.shape, body.size) not in done:
+                    done.add((body.shape, body.size))
+                    self._set_margin(body.uid, body.shape, body.size)
+
+    def _set_margin(self, uid: int, shape: str, size: tuple[float, ...]) -> None:
+        margin = margin_for(shape, size, self._values["pybullet.collision_margin"])
+        if margin is not None:
+            self._change(uid, -1, collisionMargin=margin)
+
+    # -- bodies ---------------------------------------------------------------------------
+    @_engine_call
+    def spawn(self, groups: Sequence[BodyGroup]) -> None:
+        taken = [n for g in groups for n in g.names if n in self._bodies]
+        if taken:
+            raise NameNotUniqueError(f"an entity named {taken[0]!r} already exists")
+        made: list[int] = []
+        bodies: dict[str, _Body] = {}
+        try:
+            for group in groups:
+                if group.names:
+                    bodies.update(self._spawn_group(group, made))
+        except BaseException:
+            for uid in made:
+                self._bc.removeBody(uid)
+            raise
+        self._bodies.update(bodies)
+
+    def _spawn_group(self, group: BodyGroup, made: list[int]) -> dict[str, _Body]:
+        """One createMultiBody call for the whole group, then each body's own settings."""
+        if group.shape not in BODY_SHAPES:
+            raise InvalidArgumentError(f"unknown shape {group.shape!r}")
+        if group.shape == "plane" and not group.static:
+            raise InvalidArgumentError("a plane must be static")
+        size = tuple(float(s) for s in group.size)
+        poses = np.asarray(group.poses, dtype=float).reshape(-1, POSE_WIDTH).tolist()
+        mass = 0.0 if group.static else (
+            group.mass if group.mass is not None else DENSITY * volume(group.shape, size))
+        ids = self._bc.createMultiBody(
+            baseMass=mass, baseCollisionShapeIndex=self._shapes.get(group.shape, size),
+            baseVisualShapeIndex=-1,  # PyBullet draws the collision shape; rgba still works
+            basePosition=poses[0][:3], useMaximalCoordinates=True,
+            batchPositions=[pose[:3] for pose in poses])
+        ids = list(ids) if isinstance(ids, tuple | list) else [ids]
+        made.extend(uid for uid in ids if uid >= 0)
+        if len(ids) != len(poses) or min(ids) < 0:
+            raise OperationFailedError(
+                f"PyBullet created {sum(u >= 0 for u in ids)} of {len(poses)} {group.shape}s")
+        friction = group.friction if group.friction is not None else (
+            self._values["default_friction"])
+        restitution = group.restitution if group.restitution is not None else (
+            self._values["default_restitution"])
+        dynamics: dict[str, Any] = {"lateralFriction": friction, "restitution": restitution}
+        inertia = None
+        if not group.static:
+            inertia = unit_inertia(group.shape, size)
+            # Mass and inertia together: an inertia alone sets a rigid body's mass to 0.
+            dynamics.update(mass=mass, localInertiaDiagonal=[mass * i for i in inertia],
+                            ccdSweptSphereRadius=self._values["pybullet.ccd_swept_sphere_radius"])
+        twists = None if group.twists is None else np.asarray(
+            group.twists, dtype=float).reshape(-1, TWIST_WIDTH).tolist()
+        for k, uid in enumerate(ids):
+            self._reset_pose(uid, poses[k][:3], poses[k][3:])
+            if twists is not None:
+                self._reset_velocity(uid, twists[k][:3], twists[k][3:])
+            self._change(uid, -1, **dynamics)
+            if group.rgba is not None:
+                self._bc.changeVisualShape(uid, -1, rgbaColor=list(group.rgba))
+        self._set_margin(ids[0], group.shape, size)
+        return {name: _Body(uid, group.static, group.shape, size, inertia,
+                            follows_friction=group.friction is None,
+                            follows_restitution=group.restitution is None)
+                for name, uid in zip(group.names, ids, strict=True)}
+
+    @_engine_call
+    def delete(self, names: Sequence[str]) -> None:
+        bodies = self._lookup(names)
+        for name, body in zip(names, bodies, strict=True):
+            self._bc.removeBody(body.uid)
+            del self._bodies[name]
+
+    @_engine_call
+    def clear(self) -> None:
+        """resetSimulation: the only call that frees PyBullet's collision shapes."""
+        self._bc.resetSimulation()
+        self._bodies.clear()
+        self._shapes.forget()
+        self._configure_world()
+
+    def reset_dynamics(self) -> None:
+        """Nothing to do: Bullet rebuilds contacts from the new poses at the next step, and
+        rigid bodies made by PyBullet do not fall asleep (a moved floor lets balls fall)."""
+
+    @_engine_call
+    def update(self, names: Sequence[str], props: BodyProperties) -> None:
+        bodies = self._lookup(names)
+        if props.mass is not None:
+            static = [n for n, b in zip(names, bodies, strict=True) if b.static]
+            if static:
+                raise InvalidArgumentError(f"entity {static[0]!r} is static: it has no mass")
+        for body in bodies:
+            dynamics: dict[str, Any] = {}
+            if props.mass is not None and body.unit_inertia is not None:
+                dynamics.update(mass=props.mass,
+                                localInertiaDiagonal=[props.mass * i for i in body.unit_inertia])
+            if props.friction is not None:
+                dynamics["lateralFriction"] = props.friction
+                body.follows_friction = False
+            if props.restitution is not None:
+                dynamics["restitution"] = props.restitution
+                body.follows_restitution = False
+            if dynamics:
+                self._change(body.uid, -1, **dynamics)
+            if props.rgba is not None:
+                for link in range(-1, body.links):
+                    self._bc.changeVisualShape(body.uid, link, rgbaColor=list(props.rgba))
+
+    def _lookup(self, names: Sequence[str]) -> list[_Body]:
+        try:
+            return [self._bodies[n] for n in names]
+        except KeyError as exc:
+            raise NotFoundError(f"no entity named {exc.args[0]!r} in the PyBullet world") from None
+
+    # -- state ----------------------------------------------------------------------------
+    @_engine_call
+    def get_states(self, names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
+        return self._read([b.uid for b in self._lookup(names)])
+
+    def _read(self, ids: list[int]) -> tuple[np.ndarray, np.ndarray]:
+        """One call per body and per quantity (PyBullet has no batch getter): the nested
+        tuples are flattened straight into numpy, the cheapest way measured."""
+        n, flat = len(ids), itertools.chain.from_iterable
+        poses = np.fromiter(flat(flat(map(self._get_pose, ids))), float, n * POSE_WIDTH)
+        twists = np.fromiter(flat(flat(map(self._get_velocity, ids))), float, n * TWIST_WIDTH)
+        return poses.reshape(n, POSE_WIDTH), twists.reshape(n, TWIST_WIDTH)
+
+    @_engine_call
+    def set_states(self, names: Sequence[str], poses: np.ndarray | None,
+                   twists: np.ndarray | None) -> None:
+        ids = [b.uid for b in self._lookup(names)]
+        if poses is not None:
+            for uid, pose in zip(ids, np.asarray(poses, dtype=float).tolist(), strict=True):
+                self._reset_pose(uid, pose[:3], pose[3:])
+        if twists is not None:
+            for uid, twist in zip(ids, np.asarray(twists, dtype=float).tolist(), strict=True):
+                self._reset_velocity(uid, twist[:3], twist[3:])
+
+    @_engine_call
+    def step(self, count: int) -> None:
+        step = self._step
+        for _ in range(count):
+            step()
+
+    @_engine_call
+    def state_is_finite(self) -> bool:
+        if not self._bodies:
+            return True
+        poses, twists = self._read([b.uid for b in self._bodies.values()])
+        return bool(np.isfinite(poses).all() and np.isfinite(twists).all())
+
+    # -- models ---------------------------------------------------------------------------
+    @_engine_call
+    def load_model(self, fmt: str, text: str | None, path: str | None,
+                   prefix: str) -> list[EntityInfo]:
+        if fmt not in MODEL_FORMATS:
+            raise FeatureUnsupportedError(
+                f"PyBullet cannot load {fmt!r} models; it loads {', '.join(MODEL_FORMATS)}")
+        if (text is None) == (path is None):
+            raise InvalidArgumentError("give a model as text or as a path, not both or neither")
+        check_xml(fmt, text if text is not None else read_text(path or ""))
+        before = self._known_ids()
+        try:
+            with model_file(fmt, text, path) as file_name:
+                if fmt == "urdf":
+                    ids = [self._bc.loadURDF(file_name, flags=URDF_FLAGS)]
+                else:
+                    ids = list(self._bc.loadMJCF(file_name, flags=pybullet.MJCF_COLORS_FROM_FILE))
+        except pybullet.error as exc:
+            for uid in self._known_ids() - before:  # whatever a half-done load left
+                self._bc.removeBody(uid)
+            raise InvalidArgumentError(
+                f"PyBullet could not load this {fmt.upper()} model ({exc}); its importer "
+                "printed the reason on the daemon's output") from exc
+        if not ids:
+            raise InvalidArgumentError(f"the {fmt.upper()} model holds no bodies")
+        infos: list[EntityInfo] = []
+        for uid in ids:
+            name = unique_name(prefix + self._bc.getBodyInfo(uid)[0].decode("utf-8", "replace"),
+                           {i.name for i in infos})
+            infos.append(self._adopt_model_body(uid, name))
+        return infos
+
+    def _adopt_model_body(self, uid: int, name: str) -> EntityInfo:
+        """Register one loaded body, with the settings every dynamic body gets."""
+        links = self._bc.getNumJoints(uid)
+        base = self._bc.getDynamicsInfo(uid, -1)
+        mass, friction, inertia, restitution = base[0], base[1], base[2], base[5]
+        static = mass <= 0
+        if not static:
+            self._change(uid, -1, linearDamping=0.0, angularDamping=0.0,
+                         ccdSweptSphereRadius=self._values["pybullet.ccd_swept_sphere_radius"])
+        total = mass + sum(self._bc.getDynamicsInfo(uid, link)[0] for link in range(links))
+        self._bodies[name] = _Body(uid, static, "model", (), None if static else (
+            tuple(i / mass for i in inertia)), links=links)
+        return EntityInfo(name=name, shape="model", static=static, mass=total,
+                          friction=friction, restitution=restitution, source="model")
+
+    def _known_ids(self) -> set[int]:
+        """Bodies PyBullet's client knows (loads register each; batch spawns do not)."""
+        bc = self._bc
+        return {bc.getBodyUniqueId(i) for i in range(bc.getNumBodies())}
+
+    # -- life -----------------------------------------------------------------------------
+    def close(self) -> None:
+        if not self._closed:
+            self._closed = True
+            self._bc.disconnect()

@@ -1,0 +1,172 @@
+"""What the PyBullet engine hands to PyBullet: primitive collision shapes shared through a
+cache, the mass properties PyBullet would otherwise approximate, and model files.
+
+Sizes are the protocol's half sizes: sphere (radius,), box (hx, hy, hz), cylinder and
+capsule (radius, half_length) with the axis along local z, plane (hx, hy) for looks only
+(a PyBullet plane is infinite). A capsule's half_length is half its cylindrical part, as in
+MuJoCo, and PyBullet's capsule ``height`` is that part's full length.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import os
+import tempfile
+import xml.etree.ElementTree as ElementTree
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from typing import Any
+
+import pybullet
+
+from galton.protocol import InvalidArgumentError
+
+# Shapes whose collision margin is a free setting. A sphere's and a capsule's margin is
+# their radius (Bullet models them as a point or a segment grown by the margin), so
+# changeDynamics(collisionMargin=...) leaves them as they are.
+MARGIN_SHAPES = ("box", "cylinder", "plane")
+# A box or cylinder keeps its outer size when its margin changes (Bullet shrinks the inner
+# shape by the margin), so the margin must stay well below the smallest half size.
+MARGIN_CAP = 0.5
+
+MODEL_ROOTS = {"urdf": "robot", "mjcf": "mujoco"}  # root element of each model format
+DENSITY = 1000.0  # kg/m³, the protocol's default when a dynamic body has no mass
+
+
+def collision_args(shape: str, size: tuple[float, ...]) -> dict[str, Any]:
+    """Keyword arguments of createCollisionShape for one protocol shape and size."""
+    if shape == "sphere":
+        return {"shapeType": pybullet.GEOM_SPHERE, "radius": size[0]}
+    if shape == "box":
+        return {"shapeType": pybullet.GEOM_BOX, "halfExtents": list(size)}
+    if shape == "cylinder":
+        return {"shapeType": pybullet.GEOM_CYLINDER, "radius": size[0], "height": 2 * size[1]}
+    if shape == "capsule":
+        return {"shapeType": pybullet.GEOM_CAPSULE, "radius": size[0], "height": 2 * size[1]}
+    if shape == "plane":
+        return {"shapeType": pybullet.GEOM_PLANE, "planeNormal": [0, 0, 1]}
+    raise ValueError(f"unknown shape {shape!r}")
+
+
+def volume(shape: str, size: tuple[float, ...]) -> float:
+    """Volume in m³, for the default mass of a dynamic body."""
+    if shape == "sphere":
+        return 4 / 3 * math.pi * size[0] ** 3
+    if shape == "box":
+        return 8 * size[0] * size[1] * size[2]
+    radius, half = size
+    cylinder = math.pi * radius**2 * 2 * half
+    if shape == "cylinder":
+        return cylinder
+    if shape == "capsule":
+        return cylinder + 4 / 3 * math.pi * radius**3
+    raise ValueError(f"a {shape} has no volume: only static bodies may be {shape}s")
+
+
+def unit_inertia(shape: str, size: tuple[float, ...]) -> tuple[float, float, float]:
+    """Principal moments of inertia per kilogram (uniform density), about the body axes.
+
+    Set explicitly because Bullet approximates a capsule's inertia by its bounding box, and
+    because changing only the mass makes PyBullet recompute the inertia from the shape.
+    """
+    if shape == "sphere":
+        moment = 0.4 * size[0] ** 2
+        return (moment, moment, moment)
+    if shape == "box":
+        x2, y2, z2 = (h * h for h in size)
+        return ((y2 + z2) / 3, (x2 + z2) / 3, (x2 + y2) / 3)
+    radius, half = size
+    r2, length = radius * radius, 2 * half
+    if shape == "cylinder":
+        side = r2 / 4 + length * length / 12
+        return (side, side, r2 / 2)
+    if shape == "capsule":
+        # Cylinder plus two hemispheres, weighted by volume (the standard capsule formula).
+        cyl, caps = math.pi * r2 * length, 4 / 3 * math.pi * r2 * radius
+        side = (cyl * (length * length / 12 + r2 / 4)
+                + caps * (0.4 * r2 + length * length / 4 + 3 * length * radius / 8))
+        axial = cyl * r2 / 2 + caps * 0.4 * r2
+        total = cyl + caps
+        return (side / total, side / total, axial / total)
+    raise ValueError(f"a {shape} has no inertia: only static bodies may be {shape}s")
+
+
+def margin_for(shape: str, size: tuple[float, ...], margin: float) -> float | None:
+    """The collision margin to give this shape, or None where Bullet fixes it (radius)."""
+    if shape not in MARGIN_SHAPES:
+        return None
+    if shape == "plane":
+        return margin
+    smallest = min(size) if shape == "box" else min(size[0], size[1])
+    return min(margin, MARGIN_CAP * smallest)
+
+
+class ShapeCache:
+    """One collision shape per (shape, size), reused by every body that has it.
+
+    PyBullet's removeBody never frees a collision shape (only resetSimulation does), so a
+    shape made per body would leak with every spawn and delete.
+    """
+
+    def __init__(self, create: Callable[..., int]) -> None:
+        self._create = create
+        self._ids: dict[tuple[str, tuple[float, ...]], int] = {}
+
+    def get(self, shape: str, size: tuple[float, ...]) -> int:
+        key = (shape, tuple(float(s) for s in size))
+        uid = self._ids.get(key)
+        if uid is None:
+            uid = self._create(**collision_args(shape, key[1]))
+            if uid < 0:
+                raise RuntimeError(f"PyBullet could not create a {shape} of size {size}")
+            self._ids[key] = uid
+        return uid
+
+    def forget(self) -> None:
+        """Drop every id, after resetSimulation has freed the shapes themselves."""
+        self._ids.clear()
+
+    def __len__(self) -> int:
+        return len(self._ids)
+
+
+def read_text(path: str) -> str:
+    """A model file's text, read here first so that its XML can be checked."""
+    try:
+        with open(path, encoding="utf-8") as handle:
+            return handle.read()
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InvalidArgumentError(f"cannot read the model file {path!r}: {exc}") from exc
+
+
+def check_xml(fmt: str, text: str) -> None:
+    """Catch malformed XML here, with its line and column: PyBullet only says it failed."""
+    try:
+        root = ElementTree.fromstring(text)
+    except ElementTree.ParseError as exc:
+        raise InvalidArgumentError(
+            f"the {fmt.upper()} model is not well-formed XML: {exc}") from exc
+    if root.tag != MODEL_ROOTS[fmt]:
+        raise InvalidArgumentError(
+            f"a {fmt.upper()} model's root element is <{MODEL_ROOTS[fmt]}>, not <{root.tag}>")
+
+
+@contextmanager
+def model_file(fmt: str, text: str | None, path: str | None) -> Iterator[str]:
+    """The file PyBullet loads: the given path, or the text written to a temporary file."""
+    if text is None:
+        yield os.fspath(path or "")
+        return
+    with tempfile.TemporaryDirectory(prefix="galton-model-") as folder:
+        file_name = os.path.join(folder, "model.urdf" if fmt == "urdf" else "model.xml")
+        with open(file_name, "w", encoding="utf-8") as handle:
+            handle.write(text)
+        yield file_name
+
+
+def unique_name(name: str, taken: set[str]) -> str:
+    """``name``, or ``name_1``, ``name_2``... when a body of the same model has it."""
+    if name not in taken:
+        return name
+    return next(f"{name}_{k}" for k in itertools.count(1) if f"{name}_{k}" not in taken)

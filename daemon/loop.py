@@ -1,0 +1,256 @@
+"""The physics thread: applies requests between steps, paces the clock, publishes telemetry.
+
+Everything that touches the engine runs here, on one thread. Zenoh callbacks only put
+``Call`` objects into the inbox; this loop answers each of them exactly once.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import queue
+import time
+from collections.abc import Callable
+from typing import Any
+
+from galton.daemon.calls import Call, StepJob
+from galton.daemon.loop_state import StateOps
+from galton.daemon.monitor import Pacer, ProcessMonitor, RtfWindow
+from galton.daemon.ops import MUTATING_OPS, SCENE_OPS
+from galton.daemon.world import World
+from galton.protocol import (
+    OperationFailedError,
+    PhysicsError,
+    RemoteError,
+    Reply,
+    ResultCode,
+    SimStatus,
+    Telemetry,
+    UnknownOperationError,
+    decode_request,
+    encode_reply,
+    error_reply,
+)
+from galton.protocol.errors import did_you_mean
+
+log = logging.getLogger("galton.daemon")
+
+CHUNK_WALL_S = 0.002  # physics work between two looks at the inbox
+
+
+
+class SimLoop(StateOps):
+    """Owns the World and the simulation state machine (stopped / playing / paused)."""
+
+    def __init__(self, world: World, instance: str,
+                 publish_telemetry: Callable[[Telemetry], None],
+                 publish_event: Callable[[dict[str, Any]], None],
+                 telemetry_rate_hz: float = 10.0,
+                 engine_factory: Callable[[str], Any] | None = None) -> None:
+        self.world = world
+        self.instance = instance
+        self.inbox: queue.SimpleQueue[Call | None] = queue.SimpleQueue()
+        self.state = "stopped"
+        self.target_rtf = 1.0
+        self.job: StepJob | None = None
+        self.pacer = Pacer()
+        self.rtf_window = RtfWindow()
+        self.monitor = ProcessMonitor()
+        self.publish_telemetry = publish_telemetry
+        self.publish_event = publish_event
+        self.telemetry_period = 1.0 / telemetry_rate_hz if telemetry_rate_hz > 0 else math.inf
+        self.engine_factory = engine_factory
+        self._step_cost = 1e-4
+        self._seq = 0
+        self._stopping = False
+        self.rtf = 0.0
+        self.clock: tuple[int, float, float, int, bool] = (0, 0.0, 0.0, 0, False)
+        self.refresh_clock()
+
+    # -- threads ------------------------------------------------------------------------
+    def submit(self, call: Call) -> None:
+        """Called from Zenoh's threads: hand a request to the physics thread."""
+        self.inbox.put(call)
+
+    def stop(self) -> None:
+        self._stopping = True
+        self.inbox.put(None)
+
+    def run(self) -> None:
+        """The physics thread's body; returns after ``stop()``, every query answered."""
+        next_telemetry = time.monotonic()
+        while not self._stopping:
+            self._take_calls(self._idle_timeout(next_telemetry))
+            if self._stopping:
+                break
+            self._advance()
+            now = time.monotonic()
+            if now >= next_telemetry:
+                self._publish_telemetry(now)
+                next_telemetry = max(next_telemetry + self.telemetry_period, now)
+        self._answer_leftovers()
+
+    def _idle_timeout(self, next_telemetry: float) -> float:
+        now = time.monotonic()
+        until_telemetry = max(0.0, next_telemetry - now)
+        if self.job is not None:
+            return 0.0
+        if self.state == "playing":
+            due = self.pacer.seconds_until_due(now, self.world.sim_time, self.world.engine.timestep)
+            return min(due, until_telemetry)
+        return until_telemetry
+
+    def _take_calls(self, timeout: float) -> None:
+        try:
+            call = self.inbox.get(timeout=timeout) if timeout > 0 else self.inbox.get_nowait()
+        except queue.Empty:
+            return
+        while call is not None:
+            self.handle(call)
+            try:
+                call = self.inbox.get_nowait()
+            except queue.Empty:
+                return
+
+    def _answer_leftovers(self) -> None:
+        closing = OperationFailedError("the daemon is shutting down")
+        if self.job is not None:
+            self._reply_error(self.job.call, closing)
+            self.job = None
+        while True:
+            try:
+                call = self.inbox.get_nowait()
+            except queue.Empty:
+                return
+            if call is not None:
+                self._reply_error(call, closing)
+
+    # -- requests -----------------------------------------------------------------------
+    def handle(self, call: Call) -> None:
+        """Answer one call (or start its step job); never raises."""
+        try:
+            request = decode_request(call.payload, call.op)
+            state_op = self.STATE_OPS.get(request.op)
+            if state_op is not None:
+                result = state_op(self, call, request.args)
+                if result is not None:
+                    self._reply_ok(call, result)
+                return
+            scene_op = SCENE_OPS.get(request.op)
+            if scene_op is None:
+                known = sorted([*SCENE_OPS, *self.STATE_OPS])
+                raise UnknownOperationError(
+                    f"unknown operation {request.op!r}{did_you_mean(request.op, known)}",
+                    {"operations": known})
+            result = scene_op(self.world, request.args)
+            if request.op in MUTATING_OPS:
+                self.publish_event({"kind": "scene", "op": request.op,
+                                    "step": self.world.step_index})
+            self._reply_ok(call, result)
+        except RemoteError as error:
+            self._reply_error(call, error)
+        except Exception as exc:  # the daemon keeps serving whatever an engine does
+            log.exception("operation %s failed", call.op)
+            self._reply_error(call, OperationFailedError(f"{type(exc).__name__}: {exc}"))
+
+    def _reply_ok(self, call: Call, result: dict[str, Any]) -> None:
+        self.refresh_clock()
+        reply = Reply(ResultCode.OK, result=result, step=self.world.step_index,
+                      sim_time=self.world.sim_time)
+        self._send(call, encode_reply(reply))
+
+    def _reply_error(self, call: Call, error: RemoteError) -> None:
+        self.refresh_clock()
+        reply = error_reply(error, self.world.step_index, self.world.sim_time)
+        self._send(call, encode_reply(reply))
+
+    def _send(self, call: Call, data: bytes) -> None:
+        try:
+            call.respond(data)
+        except Exception:
+            log.exception("could not answer a %s request", call.op)
+
+    # -- physics ------------------------------------------------------------------------
+    def _advance(self) -> None:
+        """Run one chunk of steps: a pending step job's, or the paced playing clock's."""
+        if self.job is not None:
+            self._run_steps(min(self.job.remaining, self._chunk_size()))
+        elif self.state == "playing":
+            due = self.pacer.steps_due(time.monotonic(), self.world.sim_time,
+                                       self.world.engine.timestep)
+            count = self._chunk_size() if due < 0 else min(due, self._chunk_size())
+            if count:
+                self._run_steps(count)
+
+    def _chunk_size(self) -> int:
+        return max(1, min(10_000, int(CHUNK_WALL_S / self._step_cost)))
+
+    def _run_steps(self, count: int) -> None:
+        started = time.perf_counter()
+        try:
+            self.world.step(count)
+        except PhysicsError as error:
+            self._fault(error)
+            return
+        finally:
+            self.refresh_clock()
+        elapsed = (time.perf_counter() - started) / count
+        self._step_cost = 0.8 * self._step_cost + 0.2 * max(elapsed, 1e-7)
+        if self.job is not None:
+            self.job.remaining -= count
+            if self.job.remaining == 0:
+                job, self.job = self.job, None
+                self._reply_ok(job.call, {"steps": job.total})
+
+    def _fault(self, error: PhysicsError) -> None:
+        """A diverged step: pause, tell subscribers, fail the step job; never publish it."""
+        self.state = "paused"
+        self.publish_event({"kind": "physics_error", "message": error.message,
+                            "step": self.world.step_index, "sim_time": self.world.sim_time})
+        if self.job is not None:
+            job, self.job = self.job, None
+            self._reply_error(job.call, error)
+
+    # -- status & telemetry -------------------------------------------------------------
+    def refresh_clock(self) -> None:
+        """Publish the world's clock to other threads as one tuple, swapped atomically."""
+        world = self.world
+        self.clock = (world.step_index, world.sim_time, world.engine.timestep,
+                      len(world.entities), world.faulted)
+
+    def status(self) -> SimStatus:
+        """Safe to call from any thread: reads only values swapped atomically."""
+        step, sim_time, timestep, count, faulted = self.clock
+        world = self.world
+        return SimStatus(
+            state=self.state, step=step, sim_time=sim_time, timestep=timestep,
+            target_rtf=self.target_rtf, rtf=self.rtf, entity_count=count,
+            engine=world.engine.name, instance=self.instance, world=world.name,
+            faulted=faulted)
+
+    def handle_readonly(self, call: Call) -> None:
+        """Answer a status request on the caller's thread, from the atomic snapshot."""
+        status = self.status()
+        try:
+            decode_request(call.payload, call.op)
+            reply = Reply(ResultCode.OK, result=status.to_wire(), step=status.step,
+                          sim_time=status.sim_time)
+        except RemoteError as error:
+            reply = error_reply(error, status.step, status.sim_time)
+        self._send(call, encode_reply(reply))
+
+    def _publish_telemetry(self, now: float) -> None:
+        cpu, rss, peak = self.monitor.sample()
+        rtf = self.rtf = self.rtf_window.add(now, self.world.sim_time)
+        self._seq += 1
+        world = self.world
+        sample = Telemetry(
+            seq=self._seq, instance=self.instance, engine=world.engine.name, state=self.state,
+            step=world.step_index, sim_time=world.sim_time, wall_time=time.time(), rtf=rtf,
+            target_rtf=self.target_rtf, timestep=world.engine.timestep,
+            entity_count=len(world.entities), cpu_percent=cpu, rss_bytes=rss,
+            peak_rss_bytes=peak, world=world.name)
+        try:
+            self.publish_telemetry(sample)
+        except Exception:
+            log.exception("could not publish telemetry")

@@ -1,0 +1,160 @@
+"""Time-control operations of the physics loop: play, pause, stop, step, run_until, reset.
+
+A mixin of ``SimLoop`` so that the state machine reads as one table. Each operation
+returns the reply's result map, or None when the reply comes later (a step job).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any, ClassVar
+
+from galton.daemon.calls import Call, StepJob
+from galton.daemon.world import World
+from galton.protocol import (
+    IncorrectStateError,
+    InvalidArgumentError,
+    OperationFailedError,
+)
+from galton.protocol.model import check_type, finite_number
+
+if TYPE_CHECKING:
+    from galton.daemon.loop import SimLoop
+
+MAX_STEPS = 1_000_000_000
+MAX_RTF = 1e6
+
+
+def _check_count(value: Any) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= MAX_STEPS:
+        raise InvalidArgumentError(f"step.count must be an integer in [1, {MAX_STEPS}], "
+                                   f"got {value!r}")
+    return value
+
+
+def _check_rtf(value: Any, where: str) -> float:
+    return finite_number(value, where, low=0.0, high=MAX_RTF)
+
+
+class StateOps:
+    """The state machine: stopped → playing ⇄ paused, with step jobs while not playing."""
+
+    def op_status(self: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+        return self.status().to_wire()
+
+    def op_play(self: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+        rtf = args.get("rtf")
+        if rtf is not None:
+            self.target_rtf = _check_rtf(rtf, "play.rtf")
+        if self.job is not None:
+            raise IncorrectStateError("a step request is still running; wait for it or pause")
+        self._set_state("playing")
+        return self.status().to_wire()
+
+    def op_set_rtf(self: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+        self.target_rtf = _check_rtf(args.get("rtf"), "set_rtf.rtf")
+        self.pacer.anchor(time.monotonic(), self.world.sim_time, self.target_rtf)
+        return self.status().to_wire()
+
+    def op_pause(self: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+        self._cancel_job("paused")
+        self._set_state("paused")
+        return self.status().to_wire()
+
+    def op_stop(self: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+        """Pause and rewind: time to 0 and every entity back to the state it was created in."""
+        self._cancel_job("stopped")
+        self.world.reset("state")
+        self.world.reset("time")
+        self._after_reset()
+        self._set_state("stopped")
+        return self.status().to_wire()
+
+    def op_step(self: SimLoop, call: Call, args: dict[str, Any]) -> None:
+        count = _check_count(args.get("count", 1))
+        self._start_job(call, count)
+
+    def op_run_until(self: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any] | None:
+        target = finite_number(args.get("sim_time"), "run_until.sim_time", low=0.0)
+        dt = self.world.engine.timestep
+        count = math.ceil((target - self.world.sim_time) / dt - 1e-9)
+        if count <= 0:
+            raise InvalidArgumentError(
+                f"run_until.sim_time {target} is not after the current sim time "
+                f"{self.world.sim_time}")
+        self._start_job(call, _check_count(count))
+        return None
+
+    def op_reset(self: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+        scope = check_type(args.get("scope", "all"), str, "reset.scope")
+        self._cancel_job("reset")
+        self.world.reset(scope)
+        self._after_reset()
+        return self.status().to_wire()
+
+    def op_load_world(self: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+        """Replace the world with a fresh one on the named engine, in this process."""
+        name = check_type(args.get("engine"), str, "load_world.engine")
+        if self.engine_factory is None:
+            raise OperationFailedError("this daemon cannot switch engines")
+        engine = self.engine_factory(name)
+        params = args.get("params")
+        if params is not None:
+            try:
+                engine.set_params(check_type(params, dict, "load_world.params"))
+            except Exception:
+                engine.close()
+                raise
+        self._cancel_job("world replaced")
+        old, self.world = self.world, World(engine, self.world.name)
+        old.engine.close()
+        self._after_reset()
+        self._set_state("stopped")
+        return self.status().to_wire()
+
+    # -- helpers ------------------------------------------------------------------------
+    def _start_job(self: SimLoop, call: Call, count: int) -> None:
+        if self.state == "playing":
+            raise IncorrectStateError("cannot step while playing: pause first")
+        if self.job is not None:
+            raise IncorrectStateError("another step request is still running")
+        self.world.require_valid()
+        if self.state == "stopped":
+            self._set_state("paused")
+        self.job = StepJob(call, count, count)
+
+    def _cancel_job(self: SimLoop, reason: str) -> None:
+        if self.job is None:
+            return
+        job, self.job = self.job, None
+        done = job.total - job.remaining
+        self._reply_error(job.call, OperationFailedError(
+            f"step request interrupted ({reason}) after {done} of {job.total} steps",
+            {"steps_done": done}))
+
+    def _after_reset(self: SimLoop) -> None:
+        self.refresh_clock()
+        self.rtf_window.clear()
+        self.pacer.anchor(time.monotonic(), self.world.sim_time, self.target_rtf)
+
+    def _set_state(self: SimLoop, state: str) -> None:
+        if state == "playing":
+            self.pacer.anchor(time.monotonic(), self.world.sim_time, self.target_rtf)
+        if state != self.state:
+            self.state = state
+            self.publish_event({"kind": "state", "state": state, "step": self.world.step_index,
+                                "sim_time": self.world.sim_time})
+
+    STATE_OPS: ClassVar[dict[str, Callable[..., dict[str, Any] | None]]] = {
+        "status": op_status,
+        "play": op_play,
+        "set_rtf": op_set_rtf,
+        "pause": op_pause,
+        "stop": op_stop,
+        "step": op_step,
+        "run_until": op_run_until,
+        "reset": op_reset,
+        "load_world": op_load_world,
+    }

@@ -1,0 +1,129 @@
+"""The daemon's Zenoh side: session, control queryable, publishers, liveliness token."""
+
+from __future__ import annotations
+
+import json
+import logging
+import signal
+import threading
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import msgpack
+import zenoh
+
+from galton.daemon.calls import Call
+from galton.daemon.engines import ENGINE_CLASSES, create_engine
+from galton.daemon.loop import SimLoop
+from galton.daemon.world import World
+from galton.protocol import DEFAULT_PORT, Keys, Telemetry
+from galton.protocol.keys import op_from_control_key
+
+log = logging.getLogger("galton.daemon")
+
+DEFAULT_LISTEN = f"tcp/127.0.0.1:{DEFAULT_PORT}"
+FAST_OPS = frozenset({"status"})  # read-only, answered on Zenoh's thread from a snapshot
+
+
+@dataclass
+class DaemonOptions:
+    """How one daemon is started (the ``galton-daemon`` command line, as a value)."""
+
+    engine: str = "mujoco"
+    instance: str = "galton"
+    listen: list[str] = field(default_factory=lambda: [DEFAULT_LISTEN])
+    connect: list[str] = field(default_factory=list)
+    zenoh_config: Path | None = None
+    multicast: bool = False
+    telemetry_rate_hz: float = 10.0
+    params: dict[str, Any] = field(default_factory=dict)
+
+
+def zenoh_config(options: DaemonOptions) -> zenoh.Config:
+    """Loopback-only peer with multicast scouting off, unless a config file says otherwise."""
+    config = zenoh.Config.from_file(str(options.zenoh_config)) if options.zenoh_config else (
+        zenoh.Config())
+    if options.zenoh_config is None:
+        config.insert_json5("mode", json.dumps("peer"))
+        config.insert_json5("scouting/multicast/enabled", json.dumps(options.multicast))
+    if options.listen:
+        config.insert_json5("listen/endpoints", json.dumps(options.listen))
+    if options.connect:
+        config.insert_json5("connect/endpoints", json.dumps(options.connect))
+    return config
+
+
+class Daemon:
+    """One daemon instance: a SimLoop on its own thread, served over one Zenoh session."""
+
+    def __init__(self, options: DaemonOptions) -> None:
+        self.options = options
+        self.keys = Keys(options.instance)
+        engine = create_engine(options.engine)
+        if options.params:
+            engine.set_params(options.params)
+        self.session = zenoh.open(zenoh_config(options))
+        self._telemetry_pub = self.session.declare_publisher(
+            self.keys.telemetry, congestion_control=zenoh.CongestionControl.DROP)
+        self._events_pub = self.session.declare_publisher(self.keys.events)
+        self.loop = SimLoop(World(engine), options.instance, self._publish_telemetry,
+                            self._publish_event, options.telemetry_rate_hz, create_engine)
+        self._thread = threading.Thread(target=self.loop.run, name="physics", daemon=True)
+        self._queryable: Any = None
+        self._token: Any = None
+
+    def start(self) -> None:
+        self._thread.start()
+        self._queryable = self.session.declare_queryable(self.keys.control_all, self._on_query)
+        self._token = self.session.liveliness().declare_token(self.keys.alive)
+
+    def close(self) -> None:
+        """Withdraw liveliness first, answer what is pending, then close the session."""
+        if self._token is not None:
+            self._token.undeclare()
+        self.loop.stop()
+        self._thread.join(timeout=10)
+        if self._queryable is not None:
+            self._queryable.undeclare()
+        self.loop.world.engine.close()
+        self.session.close()
+
+    def _on_query(self, query: zenoh.Query) -> None:
+        op = op_from_control_key(str(query.key_expr))
+        payload = query.payload.to_bytes() if query.payload is not None else b""
+        call = Call(op, payload, _responder(query))
+        if op in FAST_OPS:
+            self.loop.handle_readonly(call)
+        else:
+            self.loop.submit(call)
+
+    def _publish_telemetry(self, sample: Telemetry) -> None:
+        self._telemetry_pub.put(msgpack.packb(sample.to_wire()))
+
+    def _publish_event(self, event: dict[str, Any]) -> None:
+        self._events_pub.put(msgpack.packb({"instance": self.options.instance, **event}))
+
+
+def _responder(query: zenoh.Query) -> Callable[[bytes], None]:
+    def respond(data: bytes) -> None:
+        try:
+            query.reply(query.key_expr, data)
+        finally:
+            query.drop()
+    return respond
+
+
+def run_daemon(options: DaemonOptions, announce: Callable[[str], None] = print) -> int:
+    """Serve until SIGINT or SIGTERM; return the exit code (0 on a clean stop)."""
+    stop = threading.Event()
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, lambda *_: stop.set())
+    daemon = Daemon(options)
+    daemon.start()
+    announce(f"galton-daemon ready: instance={options.instance} engine={options.engine} "
+             f"listen={','.join(options.listen)} engines={','.join(ENGINE_CLASSES)}")
+    stop.wait()
+    daemon.close()
+    return 0

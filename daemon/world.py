@@ -1,0 +1,211 @@
+"""The scene graph: named entities over one engine, with the clock and the step counter.
+
+The World checks every request against the registry before the engine sees it, so an
+engine never receives an unknown or duplicate name, and a rejected request changes nothing.
+"""
+
+from __future__ import annotations
+
+import fnmatch
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from galton.daemon.engine import Engine
+from galton.protocol import (
+    POSE_WIDTH,
+    RESET_SCOPES,
+    TWIST_WIDTH,
+    BodyGroup,
+    BodyProperties,
+    EntityInfo,
+    InvalidArgumentError,
+    NameNotUniqueError,
+    NotFoundError,
+    PhysicsError,
+)
+from galton.protocol.errors import did_you_mean
+
+ENTITY_KINDS = ("static", "dynamic")
+
+
+@dataclass
+class Entity:
+    """A registry entry: what the entity is, and the state it was created with."""
+
+    info: EntityInfo
+    initial_pose: np.ndarray
+    initial_twist: np.ndarray
+
+
+class World:
+    """One simulated world: an engine, its entities by name, and its clock."""
+
+    def __init__(self, engine: Engine, name: str = "default") -> None:
+        self.engine = engine
+        self.name = name
+        self.entities: dict[str, Entity] = {}
+        self.step_index = 0
+        self.faulted = False
+        self._time_base = (0, 0.0, engine.timestep)  # (step, sim time, dt) since dt changed
+
+    # -- lookup -------------------------------------------------------------------------
+    def require_known(self, names: Sequence[str]) -> None:
+        """Raise NotFound naming the first unknown name (with a "did you mean")."""
+        missing = [n for n in names if n not in self.entities]
+        if missing:
+            first = missing[0]
+            more = f" and {len(missing) - 1} more" if len(missing) > 1 else ""
+            raise NotFoundError(
+                f"no entity named {first!r}{more}{did_you_mean(first, self.entities)}",
+                {"missing": missing[:100], "missing_count": len(missing)},
+            )
+
+    def require_new(self, names: Sequence[str]) -> None:
+        taken = [n for n in names if n in self.entities]
+        if taken:
+            more = f" and {len(taken) - 1} more" if len(taken) > 1 else ""
+            raise NameNotUniqueError(
+                f"an entity named {taken[0]!r}{more} already exists; delete it first or "
+                "choose another name",
+                {"taken": taken[:100], "taken_count": len(taken)},
+            )
+
+    def select(self, pattern: str | None = None, tag: str | None = None,
+               kind: str | None = None) -> list[EntityInfo]:
+        """Entities whose name matches a glob, that carry a tag, of a kind (static/dynamic)."""
+        if kind is not None and kind not in ENTITY_KINDS:
+            raise InvalidArgumentError(f"kind must be one of {ENTITY_KINDS}, got {kind!r}")
+        found = []
+        for name, entity in self.entities.items():
+            if pattern is not None and not fnmatch.fnmatchcase(name, pattern):
+                continue
+            if tag is not None and tag not in entity.info.tags:
+                continue
+            if kind is not None and entity.info.static != (kind == "static"):
+                continue
+            found.append(entity.info)
+        return found
+
+    # -- create / delete ----------------------------------------------------------------
+    def spawn(self, groups: Sequence[BodyGroup]) -> list[str]:
+        names = [n for g in groups for n in g.names]
+        if len(set(names)) != len(names):
+            raise InvalidArgumentError("the request names the same entity in two groups")
+        self.require_new(names)
+        self.engine.spawn(groups)
+        for group in groups:
+            twists = group.twists if group.twists is not None else np.zeros(
+                (len(group), TWIST_WIDTH))
+            for i, name in enumerate(group.names):
+                info = EntityInfo(name=name, shape=group.shape, size=group.size,
+                                  static=group.static, tags=group.tags, mass=group.mass,
+                                  friction=group.friction, restitution=group.restitution)
+                self.entities[name] = Entity(info, group.poses[i].copy(), twists[i].copy())
+        return names
+
+    def load_model(self, fmt: str, text: str | None, path: str | None, prefix: str) -> list[str]:
+        infos = self.engine.load_model(fmt, text, path, prefix)
+        names = [info.name for info in infos]
+        clash = [n for n in names if n in self.entities]
+        if clash:
+            self.engine.delete(names)
+            self.require_new(clash)
+        poses, twists = self.engine.get_states(names) if names else (
+            np.zeros((0, POSE_WIDTH)), np.zeros((0, TWIST_WIDTH)))
+        for i, info in enumerate(infos):
+            self.entities[info.name] = Entity(info, poses[i].copy(), twists[i].copy())
+        return names
+
+    def delete(self, names: Sequence[str]) -> None:
+        self.require_known(names)
+        self.engine.delete(names)
+        for name in names:
+            del self.entities[name]
+
+    # -- state --------------------------------------------------------------------------
+    def get_states(self, names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
+        self.require_known(names)
+        self.require_valid()
+        return self.engine.get_states(names)
+
+    def set_states(self, names: Sequence[str], poses: np.ndarray | None,
+                   twists: np.ndarray | None) -> None:
+        self.require_known(names)
+        if twists is not None:
+            static = [n for i, n in enumerate(names)
+                      if self.entities[n].info.static and np.any(twists[i])]
+            if static:
+                raise InvalidArgumentError(
+                    f"entity {static[0]!r} is static: it cannot be given a non-zero twist")
+        self.engine.set_states(names, poses, twists)
+
+    def update(self, names: Sequence[str], props: BodyProperties) -> None:
+        self.require_known(names)
+        if props.mass is not None:
+            static = [n for n in names if self.entities[n].info.static]
+            if static:
+                raise InvalidArgumentError(f"entity {static[0]!r} is static: it has no mass")
+        self.engine.update(names, props)
+        for name in names:
+            info = self.entities[name].info
+            for field in ("mass", "friction", "restitution", "tags"):
+                value = getattr(props, field)
+                if value is not None:
+                    setattr(info, field, value)
+
+    def require_valid(self) -> None:
+        if self.faulted:
+            raise PhysicsError(
+                "the simulation diverged (NaN or infinite state) at step "
+                f"{self.step_index}; reset it (scope 'state' or 'all') before reading states")
+
+    # -- time ---------------------------------------------------------------------------
+    @property
+    def sim_time(self) -> float:
+        """Steps times timestep since the timestep last changed: no drift from summing."""
+        base_step, base_time, dt = self._time_base
+        return base_time + (self.step_index - base_step) * dt
+
+    def _rebase_clock(self, sim_time: float | None = None) -> None:
+        now = self.sim_time if sim_time is None else sim_time
+        self._time_base = (self.step_index, now, self.engine.timestep)
+
+    def step(self, count: int) -> None:
+        """Advance ``count`` steps; a non-finite state faults the world and raises."""
+        self.require_valid()
+        if self.engine.timestep != self._time_base[2]:
+            self._rebase_clock()
+        self.engine.step(count)
+        self.step_index += count
+        if not self.engine.state_is_finite():
+            self.faulted = True
+            raise PhysicsError(
+                f"the simulation diverged (NaN or infinite state) within steps "
+                f"{self.step_index - count + 1}..{self.step_index}; the world is paused and "
+                "its states will not be served until a reset")
+
+    def reset(self, scope: str) -> None:
+        if scope not in RESET_SCOPES:
+            raise InvalidArgumentError(
+                f"reset scope {scope!r} is not one of {', '.join(RESET_SCOPES)}"
+                f"{did_you_mean(scope, RESET_SCOPES)}")
+        if scope in ("time", "all"):
+            self.step_index = 0
+            self._rebase_clock(0.0)
+        if scope in ("spawned", "all"):
+            self.engine.clear()
+            self.entities.clear()
+            self.faulted = False
+        if scope == "state":
+            self.restore_initial_states()
+
+    def restore_initial_states(self) -> None:
+        names = list(self.entities)
+        if names:
+            poses = np.stack([self.entities[n].initial_pose for n in names])
+            twists = np.stack([self.entities[n].initial_twist for n in names])
+            self.engine.set_states(names, poses, twists)
+        self.engine.reset_dynamics()
+        self.faulted = False

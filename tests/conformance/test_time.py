@@ -1,0 +1,166 @@
+"""Time control through a real daemon: step, pause, play, run_until, reset, stop."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from support import ball_row, ground_and_balls
+
+from galton.client import Client, spheres
+from galton.protocol import IncorrectStateError, InvalidArgumentError, OperationFailedError
+
+RTF_TOLERANCE = 0.05
+
+
+def test_a_new_world_is_stopped_at_zero(sim: Client) -> None:
+    status = sim.status()
+    assert (status.state, status.step, status.sim_time) == ("stopped", 0, 0.0)
+
+
+@pytest.mark.parametrize("count", [1, 7, 250])
+def test_step_advances_exactly_n(sim: Client, count: int) -> None:
+    ground_and_balls(sim)
+    before = sim.status()
+    stamp = sim.step(count)
+    after = sim.status()
+    assert stamp.step == after.step == before.step + count
+    assert after.sim_time == pytest.approx(before.sim_time + count * after.timestep)
+    assert after.state == "paused"
+
+
+def test_identical_runs_give_identical_states(sim: Client) -> None:
+    runs = []
+    for _ in range(2):
+        sim.reset("all")
+        names = ground_and_balls(sim, count=20)
+        sim.set_states(names, twists=np.tile([0.3, 0.1, 0, 0, 0, 0.5], (20, 1)))
+        sim.step(300)
+        runs.append(sim.get_states(names))
+    assert np.array_equal(runs[0].poses, runs[1].poses)
+    assert np.array_equal(runs[0].twists, runs[1].twists)
+
+
+def test_mutating_replies_carry_the_step_they_took_effect_at(sim: Client) -> None:
+    sim.step(10)
+    sim.spawn(spheres(["late"], [[0, 0, 1]], 0.05))
+    assert sim.last_stamp.step == 10
+    assert sim.last_stamp.sim_time == pytest.approx(10 * sim.status().timestep)
+
+
+def test_pause_stops_the_clock(sim: Client) -> None:
+    ground_and_balls(sim)
+    with sim.telemetry(timeout=5) as stream:
+        sim.play(0.0)
+        _wait_for(stream, lambda t: t.state == "playing" and t.sim_time > 0)
+        paused = sim.pause()
+        _wait_for(stream, lambda t: t.state == "paused")
+        later = [stream.next(5) for _ in range(3)]
+    assert all(t.sim_time == paused.sim_time and t.state == "paused" for t in later)
+    assert sim.status().sim_time == paused.sim_time
+
+
+def test_play_at_real_time_tracks_the_wall_clock(sim: Client) -> None:
+    ground_and_balls(sim)
+    with sim.telemetry(timeout=5) as stream:
+        sim.play(1.0)
+        first = _wait_for(stream, lambda t: t.state == "playing" and t.sim_time > 0)
+        last = _wait_for(stream, lambda t: t.wall_time - first.wall_time >= 2.0)
+    sim.pause()
+    rtf = (last.sim_time - first.sim_time) / (last.wall_time - first.wall_time)
+    assert rtf == pytest.approx(1.0, rel=RTF_TOLERANCE)
+    assert last.target_rtf == 1.0
+
+
+def _wait_for(stream, predicate):  # type: ignore[no-untyped-def]
+    for _ in range(200):
+        sample = stream.next(5)
+        if predicate(sample):
+            return sample
+    raise AssertionError("telemetry never met the condition")
+
+
+def test_step_while_playing_is_an_incorrect_state(sim: Client) -> None:
+    sim.play(1.0)
+    with pytest.raises(IncorrectStateError, match="pause first"):
+        sim.step(1)
+    sim.pause()
+
+
+def test_run_until_reaches_the_sim_time(sim: Client) -> None:
+    stamp = sim.run_until(0.5)
+    dt = sim.status().timestep
+    assert 0.5 - 1e-9 <= stamp.sim_time < 0.5 + dt
+    with pytest.raises(InvalidArgumentError, match="not after"):
+        sim.run_until(0.1)
+
+
+def test_reset_time_keeps_states(sim: Client) -> None:
+    names, group = ball_row(1, z=3)
+    sim.spawn(group)
+    sim.step(50)
+    moved = sim.get_states(names).poses
+    status = sim.reset("time")
+    assert (status.step, status.sim_time) == (0, 0.0)
+    assert np.array_equal(sim.get_states(names).poses, moved)
+
+
+def test_reset_state_restores_created_states(sim: Client) -> None:
+    names, group = ball_row(2, z=3)
+    sim.spawn(group)
+    sim.step(50)
+    sim.reset("state")
+    np.testing.assert_allclose(sim.get_states(names).poses, group.poses, atol=1e-9)
+    np.testing.assert_allclose(sim.get_states(names).twists, 0.0, atol=1e-9)
+    assert sim.status().step == 50
+
+
+def test_reset_spawned_removes_entities_and_keeps_time(sim: Client) -> None:
+    ground_and_balls(sim)
+    sim.step(5)
+    status = sim.reset("spawned")
+    assert status.entity_count == 0 and status.step == 5
+
+
+def test_reset_all_empties_and_rewinds(sim: Client) -> None:
+    ground_and_balls(sim)
+    sim.step(5)
+    status = sim.reset("all")
+    assert (status.entity_count, status.step, status.sim_time) == (0, 0, 0.0)
+
+
+def test_stop_rewinds_and_keeps_entities(sim: Client) -> None:
+    names, group = ball_row(1, z=3)
+    sim.spawn(group)
+    sim.step(40)
+    status = sim.stop()
+    assert (status.state, status.step, status.entity_count) == ("stopped", 0, 1)
+    np.testing.assert_allclose(sim.get_states(names).poses, group.poses, atol=1e-9)
+
+
+def test_a_long_step_is_interrupted_by_pause(sim: Client) -> None:
+    ground_and_balls(sim)
+    with pytest.raises(OperationFailedError, match="interrupted"):
+        _step_and_pause(sim)
+    assert sim.status().state == "paused"
+
+
+def _step_and_pause(sim: Client) -> None:
+    import threading
+
+    from galton.client import Client as Other
+
+    started = threading.Event()
+
+    def pause_when_running() -> None:
+        with Other(sim.instance, session=sim.session) as other, other.telemetry() as stream:
+            started.set()
+            _wait_for(stream, lambda t: t.step > 0)
+            other.pause()
+
+    thread = threading.Thread(target=pause_when_running)
+    thread.start()
+    started.wait(5)
+    try:
+        sim.step(100_000_000, timeout=60)
+    finally:
+        thread.join(30)

@@ -1,0 +1,49 @@
+"""Helpers for tests: building bodies and snapshotting a daemon's scene."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from galton.client import Client, plane, spheres
+
+BALL_RADIUS = 0.05
+
+
+def ball_row(count: int, prefix: str = "ball", z: float = 1.0, **options: object) -> tuple:
+    """``count`` spheres in a row along x, 0.2 m apart, at height z."""
+    names = [f"{prefix}_{i}" for i in range(count)]
+    positions = np.column_stack([np.arange(count) * 0.2, np.zeros(count), np.full(count, z)])
+    return names, spheres(names, positions, BALL_RADIUS, **options)
+
+
+@dataclass
+class Snapshot:
+    """Everything a rejected request must leave as it was."""
+
+    entities: list
+    poses: np.ndarray
+    twists: np.ndarray
+    step: int
+    state: str
+
+    def assert_same(self, other: Snapshot) -> None:
+        assert self.entities == other.entities
+        assert np.array_equal(self.poses, other.poses)
+        assert np.array_equal(self.twists, other.twists)
+        assert (self.step, self.state) == (other.step, other.state)
+
+
+def snapshot(sim: Client) -> Snapshot:
+    entities = sorted(sim.list(), key=lambda e: e.name)
+    states = sim.get_states()
+    status = sim.status()
+    return Snapshot(entities, states.poses, states.twists, status.step, status.state)
+
+
+def ground_and_balls(sim: Client, count: int = 3) -> list[str]:
+    sim.spawn(plane())
+    names, group = ball_row(count)
+    sim.spawn(group)
+    return names

@@ -1,0 +1,102 @@
+"""The daemon as a process: discovery, telemetry, events, raw clients, clean shutdown."""
+
+from __future__ import annotations
+
+import importlib.util
+import signal
+import threading
+from pathlib import Path
+
+import pytest
+import zenoh
+
+from galton.client import Client, EmbeddedDaemon, instances, wait_for_daemon
+from galton.protocol import DaemonUnreachableError, Telemetry
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def load_example(name: str):  # type: ignore[no-untyped-def]
+    spec = importlib.util.spec_from_file_location(name, ROOT / "examples" / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    assert spec.loader is not None
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_sigterm_withdraws_liveliness_and_exits_zero() -> None:
+    daemon = EmbeddedDaemon("mujoco", instance="short-lived").start()
+    gone = threading.Event()
+    with Client(daemon.instance, daemon.endpoint) as watcher:
+        wait_for_daemon(watcher.session, daemon.instance, 30)
+        sub = watcher.session.liveliness().declare_subscriber(
+            watcher.keys.alive, lambda s: gone.set() if s.kind == zenoh.SampleKind.DELETE else None)
+        daemon.process.send_signal(signal.SIGTERM)
+        assert daemon.stop() == 0
+        sub.undeclare()
+    assert gone.wait(10)
+
+
+def test_sigint_also_exits_zero() -> None:
+    daemon = EmbeddedDaemon("mujoco", instance="interrupted").start()
+    daemon.process.send_signal(signal.SIGINT)
+    assert daemon.stop() == 0
+
+
+def test_unreachable_daemon_is_its_own_error() -> None:
+    with pytest.raises(DaemonUnreachableError, match="no Zenoh peer"):
+        Client("nobody", "tcp/127.0.0.1:1")
+
+
+def test_wrong_instance_is_unreachable_not_empty(mujoco_sim: Client) -> None:
+    with Client("no-such-instance", session=mujoco_sim.session) as other, \
+            pytest.raises(DaemonUnreachableError, match="no daemon serves"):
+        other.status()
+
+
+def test_liveliness_discovery_lists_the_daemon(mujoco_sim: Client) -> None:
+    assert mujoco_sim.instance in instances(mujoco_sim.session)
+
+
+def test_telemetry_carries_clock_and_footprint(mujoco_sim: Client) -> None:
+    with mujoco_sim.telemetry(timeout=5) as stream:
+        samples = [next(stream) for _ in range(3)]
+    assert [s.seq for s in samples] == sorted(s.seq for s in samples)
+    last = samples[-1]
+    assert last.engine == "mujoco" and last.rss_bytes > 10 * 2**20
+    assert last.peak_rss_bytes >= last.rss_bytes and last.cpu_percent >= 0
+    assert last.timestep > 0 and last.state == "stopped"
+
+
+def test_telemetry_callback_and_events(mujoco_sim: Client) -> None:
+    got_sample = threading.Event()
+    got_state = threading.Event()
+    samples: list[Telemetry] = []
+
+    def on_sample(sample: Telemetry) -> None:
+        samples.append(sample)
+        got_sample.set()
+
+    with mujoco_sim.on_telemetry(on_sample), mujoco_sim.on_event(
+            lambda e: got_state.set() if e.get("kind") == "state" else None):
+        assert got_sample.wait(5)
+        mujoco_sim.step(1)
+        assert got_state.wait(5)
+    assert samples[0].instance == mujoco_sim.instance
+
+
+def test_a_raw_zenoh_msgpack_client_works(daemons: dict) -> None:
+    from conftest import start_daemon
+
+    daemon = start_daemon(daemons, "mujoco")
+    with Client(daemon.instance, daemon.endpoint) as sim:
+        sim.load_world("mujoco")
+    heights = load_example("raw_protocol_client").main(daemon.endpoint, daemon.instance)
+    assert len(heights) == 100 and max(heights) < 2.0
+
+
+def test_the_quickstart_example_runs(daemons: dict) -> None:
+    from conftest import start_daemon
+
+    daemon = start_daemon(daemons, "mujoco")
+    load_example("quickstart").main([daemon.endpoint, daemon.instance])
