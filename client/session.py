@@ -32,12 +32,18 @@ def split_endpoints(connect: str | Sequence[str] | None) -> list[str]:
 
 def open_session(connect: str | Sequence[str] | None = None,
                  config_file: str | None = None) -> zenoh.Session:
-    """A client-mode session to the given endpoints, multicast scouting off."""
+    """A session to the given endpoints, multicast scouting off.
+
+    One endpoint: a Zenoh client (it reaches every daemon meshed with that one). Several: a
+    non-listening peer, since a Zenoh client connects to the first endpoint only.
+    """
     endpoints = split_endpoints(connect)
     config = zenoh.Config.from_file(config_file) if config_file else zenoh.Config()
     if config_file is None:
-        config.insert_json5("mode", json.dumps("client"))
+        config.insert_json5("mode", json.dumps("client" if len(endpoints) == 1 else "peer"))
         config.insert_json5("scouting/multicast/enabled", "false")
+        if len(endpoints) > 1:
+            config.insert_json5("listen/endpoints", "[]")
     config.insert_json5("connect/endpoints", json.dumps(endpoints))
     try:
         return zenoh.open(config)
