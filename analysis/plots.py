@@ -51,7 +51,7 @@ def _histogram_axes(ax: Axes, trials: Sequence[TrialRecord], draws: int, seed: i
     bins = np.arange(first.rows + 1)
     ax.bar(bins, pooled, color="tab:blue", alpha=0.7, label="observed (pooled)")
     ax.plot(bins, stats.expected_counts(int(pooled.sum()), first.rows), "k.-",
-            label="expected Binomial(11, ½)")
+            label=f"expected Binomial({first.rows}, ½)")
     title = f"{balls_text(first.balls)} × {len(trials)} trials"
     if pooled.sum() > 0:
         rng = np.random.default_rng(trial_seed(seed, *config_key(first), first.balls))

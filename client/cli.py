@@ -230,3 +230,6 @@ def _assignment(text: str) -> tuple[str, Any]:
 
 def main() -> None:
     app()
+
+
+from galton.client import cli_bench  # noqa: E402,F401  (registers bench and report)

@@ -1,0 +1,1 @@
+"""The Galton-board benchmark driven through the bridge: build, release, settle, score."""

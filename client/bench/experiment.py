@@ -1,0 +1,95 @@
+"""A whole benchmark run: engines × ball counts × repetitions, trial after trial."""
+
+from __future__ import annotations
+
+import datetime as dt
+import importlib.metadata
+import os
+import platform
+import sys
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+from galton.analysis.board import BallSpec, BoardSpec, ReleaseSpec
+from galton.analysis.records import ExperimentResults, TrialRecord
+from galton.client.bench.trial import (
+    DEFAULT_CHECK_INTERVAL_S,
+    DEFAULT_MAX_SIM_TIME_S,
+    TrialConfig,
+    run_trial,
+)
+from galton.client.sdk import Client
+from galton.protocol import InvalidArgumentError
+
+DEFAULT_ENGINES = ("mujoco", "pybullet")
+DEFAULT_BALLS = (100,)
+DEFAULT_REPETITIONS = 10
+
+
+@dataclass
+class ExperimentConfig:
+    """Everything ``galton-client bench`` runs, as a value."""
+
+    board: BoardSpec
+    engines: tuple[str, ...] = DEFAULT_ENGINES
+    balls: tuple[int, ...] = DEFAULT_BALLS
+    repetitions: int = DEFAULT_REPETITIONS
+    release: str | None = None
+    seed: int = 0
+    max_sim_time: float = DEFAULT_MAX_SIM_TIME_S
+    check_interval: float = DEFAULT_CHECK_INTERVAL_S
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if self.repetitions < 1:
+            raise InvalidArgumentError(f"repetitions must be at least 1, got {self.repetitions}")
+        if not self.balls or min(self.balls) < 1:
+            raise InvalidArgumentError(f"ball counts must be positive, got {self.balls}")
+        if not self.engines:
+            raise InvalidArgumentError("name at least one engine")
+
+    def board_for(self, balls: int) -> BoardSpec:
+        """The board with this ball count and the release mode asked for."""
+        ball = BallSpec(self.board.ball.radius, self.board.ball.mass, balls)
+        release = self.board.release
+        if self.release is not None:
+            release = ReleaseSpec(self.release, release.interval, release.stream_height,
+                                  release.gap)
+        return self.board.replace(ball=ball, release=release)
+
+    def trials(self) -> list[TrialConfig]:
+        """The plan: for each engine, each ball count, each repetition."""
+        return [TrialConfig(engine, self.board_for(balls), rep, self.seed, self.max_sim_time,
+                            self.check_interval)
+                for engine in self.engines for balls in self.balls
+                for rep in range(self.repetitions)]
+
+
+def run_experiment(clients: dict[str, Client], config: ExperimentConfig,
+                   on_trial: Callable[[TrialConfig, TrialRecord], None] | None = None,
+                   ) -> ExperimentResults:
+    """Run every trial of the plan on the daemon serving its engine."""
+    records = []
+    for trial in config.trials():
+        record = run_trial(clients[trial.engine], trial)
+        records.append(record)
+        if on_trial is not None:
+            on_trial(trial, record)
+    return ExperimentResults(trials=records, date=dt.datetime.now(dt.UTC).isoformat(),
+                             host=host_description(), versions=versions(),
+                             command=" ".join(sys.argv), extra=dict(config.extra))
+
+
+def host_description() -> str:
+    return f"{platform.node()} ({platform.machine()}, {os.cpu_count()} CPUs, {platform.system()})"
+
+
+def versions() -> dict[str, str]:
+    found = {"python": platform.python_version()}
+    for package in ("galton-bridge", "eclipse-zenoh", "mujoco", "pybullet", "numpy", "scipy"):
+        try:
+            found[package] = importlib.metadata.version(package)
+        except importlib.metadata.PackageNotFoundError:
+            found[package] = "not installed"
+    return found

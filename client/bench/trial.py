@@ -1,0 +1,150 @@
+"""One Galton trial through the bridge: build the board, release the balls, run until
+every ball has settled or the sim-time cap, read all balls in one call, score them."""
+
+from __future__ import annotations
+
+import threading
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from galton.analysis.board import BoardSpec
+from galton.analysis.board_release import Perturbation, perturbation
+from galton.analysis.board_scoring import DEFAULT_SETTLE_SPEED, BallOutcomes, classify_balls
+from galton.analysis.records import TrialRecord
+from galton.client.bench.build import ball_group, ball_names, board_groups
+from galton.client.sdk import Client
+from galton.protocol import Telemetry
+
+DEFAULT_MAX_SIM_TIME_S = 120.0
+DEFAULT_CHECK_INTERVAL_S = 0.5
+
+
+@dataclass
+class TrialConfig:
+    """What one trial runs: an engine, a board (ball count and release mode in it)."""
+
+    engine: str
+    board: BoardSpec
+    repetition: int = 0
+    seed: int = 0
+    max_sim_time: float = DEFAULT_MAX_SIM_TIME_S
+    check_interval: float = DEFAULT_CHECK_INTERVAL_S
+    settle_speed: float = DEFAULT_SETTLE_SPEED
+
+    @property
+    def balls(self) -> int:
+        return self.board.ball.count
+
+
+@dataclass
+class Footprint:
+    """The daemon's CPU and memory as its telemetry reported them during a trial."""
+
+    cpu: list[float] = field(default_factory=list)
+    peak_rss: int = 0
+    lock: threading.Lock = field(default_factory=threading.Lock)
+
+    def add(self, sample: Telemetry) -> None:
+        with self.lock:
+            if sample.state != "stopped":
+                self.cpu.append(sample.cpu_percent)
+            self.peak_rss = max(self.peak_rss, sample.peak_rss_bytes)
+
+    def cpu_mean(self) -> float | None:
+        with self.lock:
+            return float(np.mean(self.cpu)) if self.cpu else None
+
+
+class PhysicsClock:
+    """Wall time spent inside physics requests, summed: the denominator of the RTF."""
+
+    def __init__(self, sim: Client) -> None:
+        self.sim = sim
+        self.wall = 0.0
+
+    def run_until(self, sim_time: float) -> float:
+        started = time.perf_counter()
+        stamp = self.sim.run_until(sim_time)
+        self.wall += time.perf_counter() - started
+        return stamp.sim_time
+
+
+def prepare_world(sim: Client, config: TrialConfig) -> tuple[Perturbation, list[str]]:
+    """A fresh world on the engine with the board's settings, the board built, no balls yet."""
+    params = config.board.contacts[config.engine].params if (
+        config.engine in config.board.contacts) else {}
+    sim.load_world(config.engine, dict(params) or None)
+    shake = perturbation(config.board, config.repetition, config.seed, config.balls)
+    sim.spawn(*board_groups(config.board, config.engine, shake.board_offset_x))
+    return shake, ball_names(config.balls)
+
+
+def release_and_settle(sim: Client, config: TrialConfig, shake: Perturbation,
+                       names: list[str], clock: PhysicsClock) -> BallOutcomes:
+    """Release the balls (all at once, or each at its time), then run until none moves."""
+    released, now = release(sim, config, shake, names, clock)
+    while True:
+        now = clock.run_until(min(now + config.check_interval, config.max_sim_time))
+        outcomes = score(sim, config, shake, names[:released])
+        if outcomes.reasons.get("moving", 0) == 0 or now >= config.max_sim_time - 1e-9:
+            return outcomes
+
+
+def release(sim: Client, config: TrialConfig, shake: Perturbation, names: list[str],
+            clock: PhysicsClock) -> tuple[int, float]:
+    """Spawn each ball at its release time; return how many were released, and when."""
+    times = shake.release.times
+    released, now = 0, 0.0
+    while released < len(names):
+        ready = int(np.searchsorted(times, now + 1e-9, side="right"))
+        sim.spawn(ball_group(config.board, config.engine, names[released:ready],
+                             shake.release.positions[released:ready]))
+        released = ready
+        if released < len(names):
+            if times[released] >= config.max_sim_time:
+                break
+            now = clock.run_until(times[released])
+    return released, now
+
+
+def score(sim: Client, config: TrialConfig, shake: Perturbation,
+          names: list[str]) -> BallOutcomes:
+    """Every released ball's state in one call, classified against the board."""
+    states = sim.get_states(names)
+    return classify_balls(config.board, states.positions, states.speeds,
+                          shake.board_offset_x, config.settle_speed)
+
+
+def run_trial(sim: Client, config: TrialConfig) -> TrialRecord:
+    """Run one trial on the daemon behind ``sim`` and return its record (unscored)."""
+    footprint = Footprint()
+    with sim.on_telemetry(footprint.add):
+        shake, names = prepare_world(sim, config)
+        clock = PhysicsClock(sim)
+        outcomes = release_and_settle(sim, config, shake, names, clock)
+        sim_time = sim.status().sim_time
+        settings = sim.get_params()
+        version = sim.capabilities().engine_version
+    unreleased = config.balls - len(outcomes.outcomes)
+    lost_by_reason = {r: outcomes.reasons.get(r, 0)
+                      for r in ("below_floor", "outside_cavity", "tunnelled", "nan")}
+    return TrialRecord(
+        engine=config.engine, engine_version=version, board=config.board.name,
+        balls=config.balls, repetition=config.repetition, seed=config.seed,
+        release=config.board.release.mode, counts=[int(c) for c in outcomes.counts],
+        settled=outcomes.settled, lost=outcomes.lost, lost_by_reason=lost_by_reason,
+        unsettled=outcomes.unsettled + unreleased, sim_time=sim_time, wall_time=clock.wall,
+        rtf=sim_time / clock.wall if clock.wall > 0 else None,
+        cpu_percent_mean=footprint.cpu_mean(), peak_rss_bytes=footprint.peak_rss or None,
+        settings=settings, config=trial_config_dict(config, shake))
+
+
+def trial_config_dict(config: TrialConfig, shake: Perturbation) -> dict[str, Any]:
+    return {
+        "board": config.board.to_dict(), "max_sim_time": config.max_sim_time,
+        "check_interval": config.check_interval, "settle_speed": config.settle_speed,
+        "board_offset_x": shake.board_offset_x,
+    }

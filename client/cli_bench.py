@@ -1,0 +1,173 @@
+"""``galton-client bench`` and ``galton-client report``: the Galton-board benchmark."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.table import Table
+
+from galton.analysis.board import BoardSpec
+from galton.analysis.errors import AnalysisError
+from galton.analysis.outputs import write_outputs
+from galton.analysis.published import PUBLISHED_LABEL, PUBLISHED_TABLE2
+from galton.analysis.records import ExperimentResults, TrialRecord
+from galton.analysis.stats import critical_value
+from galton.analysis.summary import EngineSummary, summarise
+from galton.client.bench.daemons import bench_clients
+from galton.client.bench.experiment import (
+    DEFAULT_BALLS,
+    DEFAULT_ENGINES,
+    DEFAULT_REPETITIONS,
+    ExperimentConfig,
+    run_experiment,
+)
+from galton.client.bench.trial import DEFAULT_MAX_SIM_TIME_S, TrialConfig
+from galton.client.cli import JsonOpt, app, console, run_guarded
+from galton.protocol import GaltonError
+
+DEFAULT_OUT = Path("galton-results")
+
+
+def _csv(text: str, where: str) -> list[str]:
+    items = [part.strip() for part in text.split(",") if part.strip()]
+    if not items:
+        raise typer.BadParameter(f"{where} needs at least one value")
+    return items
+
+
+def _ints(text: str, where: str) -> tuple[int, ...]:
+    try:
+        return tuple(int(v) for v in _csv(text, where))
+    except ValueError:
+        raise typer.BadParameter(f"{where} must be comma-separated integers, got {text!r}") \
+            from None
+
+
+def load_board(source: str) -> BoardSpec:
+    try:
+        return BoardSpec.load(source)
+    except (AnalysisError, OSError) as error:
+        raise typer.BadParameter(f"--board {source!r}: {error}") from error
+
+
+@app.command()
+def bench(
+    ctx: typer.Context,
+    engines: Annotated[str, typer.Option(help="Comma-separated engines.")] = ",".join(
+        DEFAULT_ENGINES),
+    connect: Annotated[str | None, typer.Option(
+        help="Endpoint(s) of remote daemons (else the global --connect; if neither is given "
+             "and none answers on the default endpoint, embedded daemons are started).")
+    ] = None,
+    instances: Annotated[str | None, typer.Option(
+        help="Comma-separated daemon instances to use, in engine order.")] = None,
+    board: Annotated[str, typer.Option(help="Preset (paper, small) or a TOML/JSON file.")
+                     ] = "paper",
+    balls: Annotated[str, typer.Option(help="Ball count(s), e.g. 1,25,100.")] = ",".join(
+        map(str, DEFAULT_BALLS)),
+    repetitions: Annotated[int, typer.Option(min=1)] = DEFAULT_REPETITIONS,
+    release: Annotated[str | None, typer.Option(
+        help="all-at-once or stream (default: the board's).")] = None,
+    seed: Annotated[int, typer.Option(min=0)] = 0,
+    max_sim_time: Annotated[float, typer.Option(help="Sim-time cap per trial, s.", min=0.1)
+                            ] = DEFAULT_MAX_SIM_TIME_S,
+    out: Annotated[Path, typer.Option(help="Output folder.")] = DEFAULT_OUT,
+    as_json: JsonOpt = False,
+) -> None:
+    """Run the paper's Galton-board experiment through the bridge and report it."""
+    if release is not None and release not in ("all-at-once", "stream"):
+        raise typer.BadParameter(f"--release must be all-at-once or stream, got {release!r}")
+    config = run_guarded(lambda: ExperimentConfig(
+        board=load_board(board), engines=tuple(_csv(engines, "--engines")),
+        balls=_ints(balls, "--balls"), repetitions=repetitions, release=release, seed=seed,
+        max_sim_time=max_sim_time))
+    endpoints = connect.split(",") if connect else ctx.obj.connect
+    names = _csv(instances, "--instances") if instances else None
+    results = run_guarded(lambda: _run(config, endpoints, names, ctx.obj.timeout, as_json))
+    _finish(results, out, as_json)
+
+
+def _run(config: ExperimentConfig, connect: list[str] | None, instances: list[str] | None,
+         timeout: float, quiet: bool) -> ExperimentResults:
+    plan = config.trials()
+    with bench_clients(config.engines, connect, instances, max(timeout, 30.0)) as clients, \
+            Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
+                     TimeElapsedColumn(), console=console, disable=quiet) as progress:
+        task = progress.add_task("Galton trials", total=len(plan))
+
+        def advance(trial: TrialConfig, record: TrialRecord) -> None:
+            progress.update(task, advance=1, description=(
+                f"{trial.engine} {trial.balls} balls rep {trial.repetition + 1}: "
+                f"lost {record.lost}, RTF {record.rtf or 0:.2f}"))
+        return run_experiment(clients, config, advance)
+
+
+def _finish(results: ExperimentResults, out: Path, as_json: bool) -> None:
+    try:
+        written = write_outputs(results, out)
+        saved = ExperimentResults.from_json(written["results_json"])
+        summaries = summarise(saved.trials)
+    except AnalysisError as error:
+        typer.echo(f"galton-client: {type(error).__name__}: {error}", err=True)
+        raise typer.Exit(1) from error
+    if as_json:
+        typer.echo(json.dumps({"files": {k: str(v) for k, v in written.items()},
+                               "engines": [_headline(s) for s in summaries]}, indent=2))
+        return
+    console.print(table2(summaries, saved.trials[0].rows if saved.trials else 11))
+    console.print(f"Report, results and plots in {out}/ (report.md, results.json, results.csv, "
+                  "*.png)")
+
+
+def _headline(summary: EngineSummary) -> dict:
+    group = summary.overall
+    return {"engine": summary.label, "chi2_median": group.chi2_median,
+            "chi2_pooled": group.pooled.chi2 if group.pooled else None,
+            "p_monte_carlo_pooled": group.pooled.p_monte_carlo if group.pooled else None,
+            "lost_percent": group.lost_percent_pooled, "rtf_mean": group.rtf_mean,
+            "rtf_min": group.rtf_min, "rtf_max": group.rtf_max}
+
+
+def table2(summaries: list[EngineSummary], rows: int = 11) -> Table:
+    """Our engines beside the paper's published rows, as in its Table 2."""
+    title = (f"Galton board, {rows} d.o.f., critical value {critical_value(dof=rows):.2f} at 5 %"
+             " (published rows: the paper's 11-row board)")
+    table = Table("simulator", "chi-squared (median per trial)", "chi-squared pooled (MC p)",
+                  "lost balls (%)", "real-time factor", title=title)
+    for s in summaries:
+        h = _headline(s)
+        pooled = "–" if h["chi2_pooled"] is None else (
+            f"{h['chi2_pooled']:.2f} (p={h['p_monte_carlo_pooled']:.3f})")
+        rtf = "–" if h["rtf_mean"] is None else (
+            f"{h['rtf_mean']:.2f} [{h['rtf_min']:.2f}–{h['rtf_max']:.2f}]")
+        median = "–" if h["chi2_median"] is None else f"{h['chi2_median']:.2f}"
+        table.add_row(f"{s.label} {s.engine_version} (this run)", median, pooled,
+                      f"{h['lost_percent']:.1f}", rtf)
+    for row in PUBLISHED_TABLE2:
+        table.add_row(f"{row.simulator} ({PUBLISHED_LABEL})", f"{row.chi2:.2f}", "–",
+                      f"{row.lost_percent:.1f}", row.rtf_text, style="dim")
+    return table
+
+
+@app.command()
+def report(
+    results_json: Annotated[Path, typer.Argument(help="A results.json written by bench.",
+                                                 exists=True, dir_okay=False)],
+    out: Annotated[Path | None, typer.Option(help="Output folder (default: beside it).")
+                   ] = None,
+    as_json: JsonOpt = False,
+) -> None:
+    """Re-render the report, CSV and plots from saved results."""
+    def load() -> ExperimentResults:
+        try:
+            return ExperimentResults.from_json(results_json)
+        except (AnalysisError, ValueError) as error:
+            raise typer.BadParameter(f"{results_json}: {error}") from error
+    _finish(load(), out or results_json.parent, as_json)
+
+
+__all__ = ["GaltonError", "bench", "report", "table2"]

@@ -1,0 +1,375 @@
+"""The MuJoCo engine on its own, without a daemon: state kept across edits, physics, errors."""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from galton.daemon.engine import FEATURE_LOAD_MODEL, FEATURE_STATIC_POSE
+from galton.daemon.engines.mujoco_engine import MujocoEngine
+from galton.daemon.engines.mujoco_spec import damping_ratio
+from galton.protocol import (
+    BODY_SHAPES,
+    BodyGroup,
+    BodyProperties,
+    FeatureUnsupportedError,
+    InvalidArgumentError,
+    NotFoundError,
+)
+
+GRAVITY = 9.81
+RADIUS = 0.05
+IDENTITY = (0.0, 0.0, 0.0, 1.0)
+ROBOT = """<mujoco>
+  <worldbody>
+    <body name="base" pos="0 0 1"><freejoint/><geom type="box" size=".1 .1 .1"/>
+      <body name="arm" pos="0 0 .2"><joint type="hinge" axis="0 1 0"/>
+        <geom type="capsule" size=".02 .1"/></body>
+    </body>
+    <body name="post" pos="1 0 .5"><geom type="box" size=".05 .05 .5"/></body>
+    <body name="pendulum" pos="-1 0 1"><joint type="hinge" axis="0 1 0"/>
+      <geom type="capsule" fromto="0 0 0 .3 0 0" size=".02"/></body>
+  </worldbody>
+</mujoco>"""
+
+
+def group(shape: str, names: Sequence[str], positions: Sequence[Sequence[float]],
+          size: Sequence[float] = (RADIUS,), **options: Any) -> BodyGroup:
+    rows = np.array([[*p, *IDENTITY] for p in positions], dtype=float)
+    return BodyGroup(shape=shape, size=tuple(size), names=list(names), poses=rows, **options)
+
+
+def ground() -> BodyGroup:
+    return group("plane", ["ground"], [[0, 0, 0]], size=(5, 5), static=True)
+
+
+def ball(name: str = "ball", z: float = 1.0, **options: Any) -> BodyGroup:
+    return group("sphere", [name], [[0, 0, z]], **options)
+
+
+def run(engine: MujocoEngine, seconds: float) -> None:
+    engine.step(round(seconds / engine.timestep))
+
+
+@pytest.fixture
+def engine() -> MujocoEngine:
+    return MujocoEngine()
+
+
+def test_capabilities_describe_the_engine(engine: MujocoEngine) -> None:
+    caps = engine.capabilities()
+    assert caps.engine == "mujoco" and caps.engine_version
+    assert set(caps.body_shapes) == set(BODY_SHAPES) and caps.model_formats == ("mjcf",)
+    assert {FEATURE_LOAD_MODEL, FEATURE_STATIC_POSE} <= set(caps.features)
+    assert caps.params["timestep"]["default"] == 0.002
+    assert set(caps.params) == set(engine.get_params())
+
+
+@pytest.mark.parametrize("shape, size", [
+    ("sphere", (0.1,)), ("box", (0.1, 0.2, 0.3)), ("cylinder", (0.1, 0.2)),
+    ("capsule", (0.1, 0.2))])
+def test_spawned_state_reads_back_in_world_frame(engine: MujocoEngine, shape: str,
+                                                 size: tuple[float, ...]) -> None:
+    quat = Rotation.from_euler("xyz", [0.3, -0.7, 1.1]).as_quat()
+    pose = np.array([[0.5, -0.2, 2.0, *quat]])
+    twist = np.array([[0.1, 0.2, 0.3, 1.0, -2.0, 0.5]])
+    engine.spawn([BodyGroup(shape=shape, size=size, names=["thing"], poses=pose,
+                            twists=twist)])
+    poses, twists = engine.get_states(["thing"])
+    np.testing.assert_allclose(poses, pose, atol=1e-12)
+    np.testing.assert_allclose(twists, twist, atol=1e-12)
+
+
+def test_angular_velocity_is_about_world_axes(engine: MujocoEngine) -> None:
+    engine.set_params({"gravity": [0, 0, 0]})
+    tilted = Rotation.from_euler("x", 90, degrees=True)
+    pose = np.array([[0, 0, 0, *tilted.as_quat()]])
+    spin = np.array([[0, 0, 0, 0, 0, 1.0]])
+    engine.spawn([BodyGroup(shape="sphere", size=(0.1,), names=["s"], poses=pose,
+                            twists=spin)])
+    run(engine, 0.5)
+    poses, twists = engine.get_states(["s"])
+    expected = Rotation.from_euler("z", 0.5) * tilted
+    assert (Rotation.from_quat(poses[0, 3:]) * expected.inv()).magnitude() < 1e-3
+    np.testing.assert_allclose(twists[0], spin[0], atol=1e-9)
+
+
+def test_set_states_round_trip_and_delete(engine: MujocoEngine) -> None:
+    engine.spawn([group("box", ["a", "b"], [[0, 0, 1], [1, 0, 1]], size=(0.1, 0.1, 0.1))])
+    pose = np.array([[2.0, 3.0, 4.0, *Rotation.from_euler("z", 0.4).as_quat()]])
+    twist = np.array([[1.0, 0, 0, 0, 3.0, 0]])
+    engine.set_states(["b"], pose, twist)
+    poses, twists = engine.get_states(["b", "a"])
+    np.testing.assert_allclose(poses[0], pose[0], atol=1e-12)
+    np.testing.assert_allclose(twists[0], twist[0], atol=1e-12)
+    np.testing.assert_allclose(poses[1, :3], [0, 0, 1])
+    engine.delete(["a"])
+    np.testing.assert_allclose(engine.get_states(["b"])[0], pose, atol=1e-12)
+    with pytest.raises(NotFoundError):
+        engine.get_states(["a"])
+
+
+def test_a_batch_of_1000_spheres_costs_one_recompile(engine: MujocoEngine,
+                                                     monkeypatch: pytest.MonkeyPatch) -> None:
+    calls = []
+    original = MujocoEngine._recompile
+
+    def counting(self: MujocoEngine) -> None:
+        calls.append(1)
+        original(self)
+
+    monkeypatch.setattr(MujocoEngine, "_recompile", counting)
+    names = [f"ball_{i}" for i in range(1000)]
+    grid = [[i % 40 * 0.2, i // 40 * 0.2, 1.0] for i in range(1000)]
+    engine.spawn([group("sphere", names, grid)])
+    assert len(calls) == 1
+    poses, _ = engine.get_states(names)
+    np.testing.assert_allclose(poses[:, :3], grid)
+    engine.delete(names[::2])
+    assert len(calls) == 2
+    best = min(_timed(lambda: engine.get_states(names[1::2])) for _ in range(20))
+    assert best < 0.005
+
+
+def _timed(call: Callable[[], object]) -> float:
+    start = time.perf_counter()
+    call()
+    return time.perf_counter() - start
+
+
+def test_spawn_and_delete_keep_the_running_state(engine: MujocoEngine) -> None:
+    reference = MujocoEngine()
+    for world in (engine, reference):
+        world.spawn([ball("faller", z=10.0, twists=np.array([[0.3, 0, 0, 0, 0, 2.0]]))])
+        world.step(100)
+    engine.spawn([ball("other", z=3.0), ground()])
+    for world in (engine, reference):
+        world.step(100)
+    engine.delete(["other"])
+    for world in (engine, reference):
+        world.step(100)
+    for got, want in zip(engine.get_states(["faller"]), reference.get_states(["faller"]),
+                         strict=True):
+        np.testing.assert_array_equal(got, want)
+
+
+def test_free_fall_matches_half_g_t_squared(engine: MujocoEngine) -> None:
+    engine.spawn([ball(z=10.0)])
+    run(engine, 1.0)
+    drop = 10.0 - engine.get_states(["ball"])[0][0, 2]
+    assert drop == pytest.approx(0.5 * GRAVITY, rel=0.01)
+
+
+def test_a_ball_dropped_on_a_plane_rests_on_it(engine: MujocoEngine) -> None:
+    engine.spawn([ground(), ball(z=0.5)])
+    run(engine, 3.0)
+    poses, twists = engine.get_states(["ball"])
+    assert poses[0, 2] == pytest.approx(RADIUS, abs=0.005)
+    assert np.linalg.norm(twists[0, :3]) < 0.01
+
+
+@pytest.mark.parametrize("how", ["update", "default"])
+def test_restitution_makes_a_ball_bounce(how: str) -> None:
+    peaks = {}
+    for e in (0.0, 0.6):
+        world = MujocoEngine()
+        world.spawn([ground(), ball(z=1.0)])
+        if how == "update":
+            world.update(["ground", "ball"], BodyProperties(restitution=e))
+        else:
+            world.set_params({"default_restitution": e})
+        run(world, 0.6)
+        heights = []
+        for _ in range(300):
+            world.step(1)
+            heights.append(world.get_states(["ball"])[0][0, 2])
+        peaks[e] = max(heights)
+    assert peaks[0.0] < 0.1 < peaks[0.6]
+
+
+def test_damping_ratio_inverts_the_bounce_formula() -> None:
+    assert damping_ratio(0.0, 0.1) == 1.0
+    zeta = damping_ratio(0.5, 0.01)
+    assert math.exp(-zeta * math.pi / math.sqrt(1 - zeta**2)) == pytest.approx(0.5)
+    assert damping_ratio(0.99, 0.1) == 0.1
+
+
+def test_a_static_body_moves_by_set_states_and_rejects_a_twist(engine: MujocoEngine) -> None:
+    engine.spawn([group("cylinder", ["early"], [[3, 3, 0.5]], size=(0.1, 0.5), static=True)])
+    engine.spawn([group("box", ["shelf"], [[0, 0, 0.5]], size=(0.3, 0.3, 0.05), static=True),
+                  ball(z=0.6)])
+    run(engine, 0.5)
+    resting = engine.get_states(["ball"])[0][0, 2]
+    assert resting == pytest.approx(0.55 + RADIUS, abs=0.005)
+    with pytest.raises(InvalidArgumentError, match="static"):
+        engine.set_states(["shelf", "ball"], None, np.array([[0, 0, 0, 0, 0, 1.0], [0] * 6]))
+    away = np.array([[5.0, 0, 0.5, *IDENTITY]])
+    engine.set_states(["shelf"], away, np.zeros((1, 6)))
+    poses, twists = engine.get_states(["shelf"])
+    np.testing.assert_array_equal(poses, away)
+    assert not twists.any()
+    engine.spawn([ball("late", z=3.0)])
+    engine.delete(["early"])
+    np.testing.assert_array_equal(engine.get_states(["shelf"])[0], away)
+    run(engine, 0.3)
+    assert engine.get_states(["ball"])[0][0, 2] < resting - 0.2
+
+
+def test_sleeping_bodies_wake_when_moved_or_their_support_moves(engine: MujocoEngine) -> None:
+    engine.set_params({"mujoco.sleep_tolerance": 0.02})
+    engine.spawn([group("box", ["shelf"], [[0, 0, 0.5]], size=(0.3, 0.3, 0.05), static=True),
+                  ball(z=0.6), ground(), ball("parked", z=RADIUS)])
+    run(engine, 2.0)
+    assert not engine.get_states(["ball", "parked"])[1].any()  # asleep: exactly at rest
+    engine.set_states(["shelf"], np.array([[5.0, 0, 0.5, *IDENTITY]]), None)
+    engine.set_states(["parked"], np.array([[2.0, 0, 1.0, *IDENTITY]]), None)
+    run(engine, 0.3)
+    assert engine.get_states(["ball"])[0][0, 2] < 0.4
+    assert engine.get_states(["parked"])[0][0, 2] < 0.7
+
+
+def test_update_changes_mass_and_keeps_the_state(engine: MujocoEngine) -> None:
+    engine.set_params({"gravity": [0, 0, 0]})
+    engine.spawn([group("sphere", ["a", "b"], [[0, 0, 1], [0.5, 0, 1]], friction=0.0)])
+    engine.set_states(["a"], None, np.array([[1.0, 0, 0, 0, 0, 0]]))
+    engine.step(10)
+    before = engine.get_states(["a", "b"])
+    engine.update(["b"], BodyProperties(mass=3 * 1000 * 4 / 3 * math.pi * RADIUS**3,
+                                        rgba=(1, 0, 0, 1), friction=0.0))
+    for got, want in zip(engine.get_states(["a", "b"]), before, strict=True):
+        np.testing.assert_array_equal(got, want)
+    run(engine, 1.0)
+    velocity = engine.get_states(["a", "b"])[1][:, 0]
+    assert velocity[0] + 3 * velocity[1] == pytest.approx(1.0, abs=1e-3)
+    assert velocity[1] > 0.2
+
+
+def test_params_set_get_and_keep_state(engine: MujocoEngine) -> None:
+    engine.spawn([ball(z=5.0)])
+    engine.step(50)
+    before = engine.get_states(["ball"])
+    engine.set_params({"timestep": 0.001, "mujoco.solver": "cg", "solver_iterations": 30,
+                       "mujoco.solref": [0.01, 0.5], "default_friction": 0.3})
+    assert engine.timestep == 0.001
+    params = engine.get_params()
+    assert params["mujoco.solver"] == "cg" and params["mujoco.solref"] == [0.01, 0.5]
+    for got, want in zip(engine.get_states(["ball"]), before, strict=True):
+        np.testing.assert_array_equal(got, want)
+
+
+def test_params_are_all_or_none(engine: MujocoEngine) -> None:
+    before = engine.get_params()
+    with pytest.raises(InvalidArgumentError):
+        engine.set_params({"timestep": 0.001, "mujoco.cone": "round"})
+    with pytest.raises(InvalidArgumentError, match="did you mean 'timestep'"):
+        engine.set_params({"timestpe": 0.01})
+    with pytest.raises(InvalidArgumentError):
+        engine.set_params({"mujoco.solimp": [0.9, 0.95, 0.001, 0.5, 0.5]})
+    with pytest.raises(FeatureUnsupportedError, match="pybullet"):
+        engine.set_params({"pybullet.collision_margin": 0.01})
+    assert engine.get_params() == before
+    assert engine.timestep == 0.002
+
+
+def test_load_model_makes_top_level_bodies_entities(engine: MujocoEngine) -> None:
+    engine.spawn([ground()])
+    infos = engine.load_model("mjcf", ROBOT, None, "r1/")
+    assert [(i.name, i.static, i.source, i.shape) for i in infos] == [
+        ("r1/base", False, "model", "model"), ("r1/post", True, "model", "model"),
+        ("r1/pendulum", False, "model", "model")]
+    poses, _ = engine.get_states([i.name for i in infos])
+    np.testing.assert_allclose(poses[:, :3], [[0, 0, 1], [1, 0, 0.5], [-1, 0, 1]])
+    engine.load_model("mjcf", ROBOT, None, "r2/")
+    run(engine, 1.0)
+    assert engine.state_is_finite()
+    assert engine.get_states(["r1/pendulum"])[1][0, 4] != 0
+    with pytest.raises(FeatureUnsupportedError, match="joints"):
+        engine.set_states(["r1/pendulum"], np.array([[0, 0, 3.0, *IDENTITY]]), None)
+    engine.set_states(["r1/pendulum"], poses[2:], np.zeros((1, 6)))
+    assert not engine.get_states(["r1/pendulum"])[1].any()
+    engine.update(["r1/base"], BodyProperties(mass=5.0, friction=0.2))
+    engine.delete([i.name for i in infos])
+    engine.step(10)
+    assert engine.get_states(["r2/base"])[0][0, 2] < 1.0
+
+
+def test_a_broken_model_changes_nothing(engine: MujocoEngine, tmp_path: Path) -> None:
+    engine.spawn([ball(z=2.0)])
+    engine.step(20)
+    before = engine.get_states(["ball"])
+    broken = [ROBOT.replace("</mujoco>", ""),
+              ROBOT.replace('size=".1 .1 .1"', 'size="-1"'),
+              "<mujoco><worldbody><geom type='plane' size='1 1 1'/></worldbody></mujoco>"]
+    for text in broken:
+        with pytest.raises(InvalidArgumentError, match="MJCF"):
+            engine.load_model("mjcf", text, None, "x/")
+    engine.load_model("mjcf", ROBOT, None, "x/")
+    with pytest.raises(InvalidArgumentError, match="repeated name"):
+        engine.load_model("mjcf", ROBOT, None, "x/")
+    with pytest.raises(InvalidArgumentError, match="x/arm"):
+        engine.spawn([ball("fine"), ball("x/arm")])
+    with pytest.raises(NotFoundError):
+        engine.get_states(["fine"])
+    with pytest.raises(InvalidArgumentError):
+        engine.load_model("mjcf", None, str(tmp_path / "missing.xml"), "y/")
+    with pytest.raises(FeatureUnsupportedError):
+        engine.load_model("sdf", "<sdf/>", None, "z/")
+    for got, want in zip(engine.get_states(["ball"]), before, strict=True):
+        np.testing.assert_array_equal(got, want)
+
+
+def test_a_model_loads_from_a_path(engine: MujocoEngine, tmp_path: Path) -> None:
+    path = tmp_path / "robot.xml"
+    path.write_text(ROBOT)
+    assert len(engine.load_model("mjcf", None, str(path), "p/")) == 3
+
+
+def test_divergence_is_reported_logged_and_recoverable(engine: MujocoEngine,
+                                                       monkeypatch: pytest.MonkeyPatch,
+                                                       tmp_path: Path,
+                                                       caplog: pytest.LogCaptureFixture) -> None:
+    monkeypatch.chdir(tmp_path)
+    engine.spawn([ground(), ball(z=0.5)])
+    start = engine.get_states(["ball"])
+    engine.set_states(["ball"], None, np.full((1, 6), 1e300))
+    engine.step(5)
+    assert not engine.state_is_finite()
+    assert "unstable" in caplog.text
+    assert not (tmp_path / "MUJOCO_LOG.TXT").exists()
+    engine.set_states(["ball"], *start)
+    engine.reset_dynamics()
+    engine.step(5)
+    assert engine.state_is_finite()
+    engine.set_states(["ball"], np.array([[0, 0, math.nan, *IDENTITY]]), None)
+    engine.step(1)
+    assert not engine.state_is_finite()
+
+
+def test_same_world_same_steps_same_state() -> None:
+    results = []
+    for _ in range(2):
+        world = MujocoEngine()
+        positions = [[i * 0.07, 0, 0.3 + 0.15 * i] for i in range(10)]
+        world.spawn([ground(), group("sphere", [f"b{i}" for i in range(10)], positions)])
+        world.step(400)
+        results.append(world.get_states([f"b{i}" for i in range(10)]))
+    for got, want in zip(*results, strict=True):
+        np.testing.assert_array_equal(got, want)
+
+
+def test_clear_empties_the_world_and_keeps_params(engine: MujocoEngine) -> None:
+    engine.set_params({"timestep": 0.004})
+    engine.spawn([ground(), ball()])
+    engine.clear()
+    with pytest.raises(NotFoundError):
+        engine.get_states(["ball"])
+    assert engine.timestep == 0.004
+    engine.spawn([ball()])
+    assert engine.get_states(["ball"])[0][0, 2] == 1.0

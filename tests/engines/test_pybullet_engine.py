@@ -1,0 +1,337 @@
+"""The PyBullet engine on its own, in-process: bodies, states, physics, parameters, models."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator
+from typing import Any
+
+import numpy as np
+import pytest
+
+from galton.daemon.engines.pybullet_engine import PybulletEngine
+from galton.protocol import (
+    BodyGroup,
+    BodyProperties,
+    FeatureUnsupportedError,
+    InvalidArgumentError,
+    NameNotUniqueError,
+    NotFoundError,
+)
+
+GRAVITY = 9.81
+RADIUS = 0.05
+TINY_URDF = """<robot name="crate_bot">
+  <link name="crate">
+    <inertial><mass value="2"/>
+      <inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial>
+    <collision><geometry><box size="0.2 0.2 0.2"/></geometry></collision>
+  </link>
+</robot>"""
+TINY_MJCF = """<mujoco model="pair">
+  <worldbody>
+    <geom type="plane" size="5 5 0.1"/>
+    <body name="ball" pos="0 0 1"><joint type="free"/><geom type="sphere" size="0.1"/></body>
+    <body name="ball" pos="1 0 1"><joint type="free"/><geom type="sphere" size="0.1"/></body>
+  </worldbody>
+</mujoco>"""
+
+
+@pytest.fixture
+def engine() -> Iterator[PybulletEngine]:
+    eng = PybulletEngine()
+    yield eng
+    eng.close()
+
+
+def poses_at(positions: Any) -> np.ndarray:
+    positions = np.atleast_2d(np.asarray(positions, dtype=float))
+    out = np.zeros((len(positions), 7))
+    out[:, :3] = positions
+    out[:, 6] = 1.0
+    return out
+
+
+def balls(names: list[str], positions: Any, **options: Any) -> BodyGroup:
+    return BodyGroup("sphere", (RADIUS,), names, poses_at(positions), **options)
+
+
+def ground() -> BodyGroup:
+    return BodyGroup("plane", (5.0, 5.0), ["ground"], poses_at([0, 0, 0]), static=True)
+
+
+def grid(count: int, spacing: float = 0.11, z: float = 0.5) -> np.ndarray:
+    i = np.arange(count)
+    return np.column_stack([i % 10 * spacing, i // 10 % 10 * spacing, z + i // 100 * spacing])
+
+
+def body_id(engine: PybulletEngine, name: str) -> int:
+    return engine._bodies[name].uid
+
+
+# -- description and parameters ----------------------------------------------------------
+def test_capabilities_name_every_shape_format_and_parameter(engine: PybulletEngine) -> None:
+    caps = engine.capabilities()
+    assert caps.engine == "pybullet" and caps.engine_version.startswith("3.")
+    assert set(caps.body_shapes) == {"sphere", "box", "cylinder", "capsule", "plane"}
+    assert caps.model_formats == ("urdf", "mjcf")
+    assert set(caps.params) == set(engine.get_params())
+    assert {"timestep", "gravity", "solver_iterations", "default_friction",
+            "default_restitution"} <= set(caps.params)
+    assert caps.params["gravity"]["default"] == [0.0, 0.0, -9.81]
+
+
+def test_params_apply_and_keep_the_world(engine: PybulletEngine) -> None:
+    engine.spawn([balls(["a"], [0, 0, 1])])
+    engine.step(10)
+    before = engine.get_states(["a"])
+    engine.set_params({"timestep": 0.002, "solver_iterations": 12, "gravity": [0, 0, -1.62],
+                       "pybullet.enable_cone_friction": False})
+    after = engine.get_states(["a"])
+    assert all(np.array_equal(x, y) for x, y in zip(before, after, strict=True))
+    world = engine._bc.getPhysicsEngineParameters()
+    assert world["fixedTimeStep"] == 0.002 and world["numSolverIterations"] == 12
+    assert world["gravityAccelerationZ"] == pytest.approx(-1.62)
+    assert engine.timestep == 0.002
+    assert engine.get_params()["gravity"] == [0.0, 0.0, -1.62]
+
+
+def test_params_are_all_or_none(engine: PybulletEngine) -> None:
+    with pytest.raises(InvalidArgumentError, match="solver_iterations"):
+        engine.set_params({"timestep": 0.01, "solver_iterations": 0})
+    assert engine.get_params()["timestep"] == pytest.approx(1 / 240)
+    assert engine._bc.getPhysicsEngineParameters()["fixedTimeStep"] == pytest.approx(1 / 240)
+
+
+def test_unknown_and_foreign_params_are_refused(engine: PybulletEngine) -> None:
+    with pytest.raises(InvalidArgumentError, match="did you mean 'timestep'"):
+        engine.set_params({"timestpe": 0.01})
+    with pytest.raises(FeatureUnsupportedError, match="mujoco"):
+        engine.set_params({"mujoco.solref": [0.02, 1.0]})
+    with pytest.raises(InvalidArgumentError):
+        engine.set_params({"pybullet.enable_cone_friction": 1})
+
+
+def test_default_friction_follows_bodies_that_set_none(engine: PybulletEngine) -> None:
+    engine.spawn([balls(["plain"], [0, 0, 1]), balls(["own"], [1, 0, 1], friction=0.9)])
+    engine.set_params({"default_friction": 0.2})
+    friction = {n: engine._bc.getDynamicsInfo(body_id(engine, n), -1)[1] for n in ("plain", "own")}
+    assert friction == {"plain": pytest.approx(0.2), "own": pytest.approx(0.9)}
+
+
+def test_collision_margin_reaches_shared_box_shapes(engine: PybulletEngine) -> None:
+    boxes = BodyGroup("box", (0.1, 0.1, 0.1), ["b0", "b1"], poses_at([[0, 0, 1], [1, 0, 1]]))
+    engine.spawn([boxes])
+    engine.set_params({"pybullet.collision_margin": 0.02})
+    margins = [engine._bc.getDynamicsInfo(body_id(engine, n), -1)[11] for n in ("b0", "b1")]
+    assert margins == [pytest.approx(0.02)] * 2
+    engine.spawn([BodyGroup("box", (0.1, 0.1, 0.1), ["b2"], poses_at([2, 0, 1]))])
+    assert engine._bc.getDynamicsInfo(body_id(engine, "b2"), -1)[11] == pytest.approx(0.02)
+
+
+# -- bodies and states -------------------------------------------------------------------
+def test_spawn_get_set_delete_round_trip(engine: PybulletEngine) -> None:
+    tilt = np.array([0.0, 0.0, math.sin(0.3), math.cos(0.3)])
+    groups = [
+        ground(),
+        BodyGroup("box", (0.1, 0.2, 0.3), ["box"], np.r_[[1, 0, 2], tilt][None]),
+        BodyGroup("cylinder", (0.1, 0.2), ["cyl"], poses_at([2, 0, 2])),
+        BodyGroup("capsule", (0.1, 0.2), ["cap"], poses_at([3, 0, 2]),
+                  twists=np.array([[1.0, 0, 0, 0, 0, 2.0]])),
+        balls(["s0", "s1"], [[4, 0, 2], [5, 0, 2]], mass=3.0, rgba=(1, 0, 0, 1)),
+    ]
+    engine.spawn(groups)
+    names = ["ground", "box", "cyl", "cap", "s0", "s1"]
+    poses, twists = engine.get_states(names)
+    assert np.allclose(poses, np.vstack([g.poses for g in groups]))
+    assert np.allclose(twists[3], [1, 0, 0, 0, 0, 2]) and not twists[[0, 1, 2, 4, 5]].any()
+
+    new_poses = poses_at([[0, 1, 3], [1, 1, 3]])
+    new_twists = np.array([[0, 0, 1.0, 0, 0, 0], [0, 0, 0, 1.0, 0, 0]])
+    engine.set_states(["s0", "cap"], new_poses, new_twists)
+    poses, twists = engine.get_states(["s0", "cap"])
+    assert np.allclose(poses, new_poses) and np.allclose(twists, new_twists)
+
+    engine.delete(["s0", "box"])
+    with pytest.raises(NotFoundError, match="s0"):
+        engine.get_states(["s0"])
+    assert engine.get_states(["s1"])[0][0, 0] == pytest.approx(5)
+
+
+def test_default_mass_is_water_density_and_capsule_inertia_is_exact(
+        engine: PybulletEngine) -> None:
+    engine.spawn([BodyGroup("box", (0.1, 0.2, 0.3), ["box"], poses_at([0, 0, 1])),
+                  BodyGroup("capsule", (0.1, 0.2), ["cap"], poses_at([1, 0, 1]))])
+    mass, _, inertia = engine._bc.getDynamicsInfo(body_id(engine, "box"), -1)[:3]
+    assert mass == pytest.approx(1000 * 0.2 * 0.4 * 0.6)
+    mass, _, inertia = engine._bc.getDynamicsInfo(body_id(engine, "cap"), -1)[:3]
+    assert mass == pytest.approx(1000 * (math.pi * 0.01 * 0.4 + 4 / 3 * math.pi * 0.001))
+    assert inertia[2] < inertia[0]  # slender along z; Bullet's own box estimate is 5x off
+
+
+def test_a_thousand_bodies_come_from_one_create_call(
+        engine: PybulletEngine, monkeypatch: pytest.MonkeyPatch) -> None:
+    calls = []
+    create = engine._bc.createMultiBody
+
+    def counting(*args: Any, **kwargs: Any) -> Any:
+        calls.append(len(kwargs.get("batchPositions", [None])))
+        return create(*args, **kwargs)
+
+    monkeypatch.setattr(engine._bc, "createMultiBody", counting)
+    names = [f"b{i}" for i in range(1000)]
+    engine.spawn([balls(names, grid(1000))])
+    assert calls == [1000]
+    poses, _ = engine.get_states(names)
+    assert np.array_equal(poses[:, :3], grid(1000))
+
+
+def test_spawning_after_deletes_finds_each_body(engine: PybulletEngine) -> None:
+    """PyBullet reuses removed bodies' ids, and its batch call then misreports the ids."""
+    engine.spawn([ground(), balls([f"a{i}" for i in range(20)], grid(20))])
+    engine.delete(["a3", "a4", "a11"])
+    engine._bc.removeBody(engine._bodies.pop("a7").uid)  # a hole the engine did not make
+    names = [f"b{i}" for i in range(30)]
+    engine.spawn([balls(names, grid(30, z=3.0))])
+    assert np.array_equal(engine.get_states(names)[0][:, :3], grid(30, z=3.0))
+    uids = [b.uid for b in engine._bodies.values()]
+    assert len(set(uids)) == len(uids) == 1 + 16 + 30
+
+
+def test_update_changes_dynamics_and_colour(engine: PybulletEngine) -> None:
+    engine.spawn([ground(), balls(["a", "b"], [[0, 0, 1], [1, 0, 1]])])
+    engine.update(["a"], BodyProperties(mass=2.0, friction=0.7, restitution=0.4,
+                                        rgba=(0, 1, 0, 1)))
+    uid = body_id(engine, "a")
+    mass, friction, inertia = engine._bc.getDynamicsInfo(uid, -1)[:3]
+    assert (mass, friction) == pytest.approx((2.0, 0.7))
+    assert inertia == pytest.approx([0.4 * 2.0 * RADIUS**2] * 3)
+    assert engine._bc.getVisualShapeData(uid)[0][7] == pytest.approx((0, 1, 0, 1))
+    with pytest.raises(InvalidArgumentError, match="static"):
+        engine.update(["ground"], BodyProperties(mass=1.0))
+
+
+def test_restitution_makes_a_ball_bounce(engine: PybulletEngine) -> None:
+    """Read back by its effect: getDynamicsInfo reports 0 for every rigid body."""
+    engine.spawn([ground(), balls(["a"], [0, 0, 1.0 + RADIUS])])
+    engine.update(["a", "ground"], BodyProperties(restitution=0.9))
+    rising = []
+    for _ in range(150):  # the ball lands after 0.45 s
+        engine.step(1)
+        rising.append(engine.get_states(["a"])[1][0, 2])
+    impact = math.sqrt(2 * GRAVITY * 1.0)
+    assert max(rising) / impact == pytest.approx(0.9 * 0.9, abs=0.1)  # the product, roughly
+
+
+def test_clear_empties_the_world_and_keeps_params(engine: PybulletEngine) -> None:
+    engine.set_params({"gravity": [0, 0, -3.0]})
+    engine.spawn([ground(), balls(["a"], [0, 0, 1])])
+    engine.clear()
+    assert engine._bc.getNumBodies() == 0
+    assert engine._bc.getPhysicsEngineParameters()["gravityAccelerationZ"] == pytest.approx(-3)
+    engine.spawn([balls(["a"], [0, 0, 1])])
+    assert engine.get_states(["a"])[0][0, 2] == pytest.approx(1)
+
+
+# -- physics -----------------------------------------------------------------------------
+def test_free_fall_matches_half_g_t_squared(engine: PybulletEngine) -> None:
+    engine.spawn([balls(["a"], [0, 0, 10])])
+    engine.step(240)  # 1 s
+    poses, twists = engine.get_states(["a"])
+    assert 10 - poses[0, 2] == pytest.approx(GRAVITY / 2, rel=0.01)
+    assert twists[0, 2] == pytest.approx(-GRAVITY, rel=0.01)
+
+
+def test_a_dropped_ball_rests_on_the_plane(engine: PybulletEngine) -> None:
+    engine.spawn([ground(), balls(["a"], [0, 0, 0.5])])
+    engine.step(480)
+    poses, twists = engine.get_states(["a"])
+    assert poses[0, 2] == pytest.approx(RADIUS, abs=0.002)
+    assert np.abs(twists[0]).max() < 0.01
+
+
+def test_ccd_stops_a_fast_ball_tunnelling(engine: PybulletEngine) -> None:
+    engine.set_params({"gravity": [0, 0, 0], "pybullet.ccd_swept_sphere_radius": 0.01})
+    wall = BodyGroup("box", (0.005, 1, 1), ["wall"], poses_at([0, 0, 0]), static=True)
+    shot = BodyGroup("sphere", (0.01,), ["shot"], poses_at([-0.5, 0, 0]),
+                     twists=np.array([[60.0, 0, 0, 0, 0, 0]]))
+    engine.spawn([wall, shot])
+    engine.step(60)
+    assert engine.get_states(["shot"])[0][0, 0] < 0
+
+
+def test_nan_velocity_makes_the_state_not_finite(engine: PybulletEngine) -> None:
+    engine.spawn([ground(), balls(["a", "b"], [[0, 0, 1], [1, 0, 1]])])
+    assert engine.state_is_finite()
+    engine.set_states(["a"], None, np.array([[math.nan, 0, 0, 0, 0, 0]]))
+    engine.step(1)
+    assert not engine.state_is_finite()
+
+
+def test_identical_runs_give_identical_arrays() -> None:
+    """Two layers of balls stacked exactly on top of each other: a touchy pile."""
+    names = [f"b{i}" for i in range(150)]
+    runs = []
+    for _ in range(2):
+        eng = PybulletEngine()
+        eng.spawn([ground(), balls(names, grid(150, spacing=0.104, z=0.3), restitution=0.5)])
+        eng.step(240)
+        runs.append(eng.get_states(names))
+        eng.close()
+    (p0, t0), (p1, t1) = runs
+    assert np.array_equal(p0, p1) and np.array_equal(t0, t1)
+    assert p0[:, 2].max() < 0.3  # the top layer came down onto the bottom one
+
+
+# -- models ------------------------------------------------------------------------------
+def test_load_urdf_text(engine: PybulletEngine) -> None:
+    engine.spawn([ground()])
+    (info,) = engine.load_model("urdf", TINY_URDF, None, "m1/")
+    assert (info.name, info.shape, info.source, info.static) == ("m1/crate", "model", "model",
+                                                                 False)
+    assert info.mass == pytest.approx(2.0)
+    engine.set_states([info.name], poses_at([0, 0, 1]), None)
+    engine.step(480)
+    assert engine.get_states([info.name])[0][0, 2] == pytest.approx(0.1, abs=0.005)
+    engine.delete([info.name])
+
+
+def test_a_model_name_in_use_is_refused(engine: PybulletEngine) -> None:
+    engine.load_model("urdf", TINY_URDF, None, "m/")
+    before = engine._maker.known_ids()
+    with pytest.raises(NameNotUniqueError, match="m/crate"):
+        engine.load_model("urdf", TINY_URDF, None, "m/")
+    assert engine._maker.known_ids() == before and list(engine._bodies) == ["m/crate"]
+
+
+@pytest.mark.parametrize(("text", "message"), [
+    ("<robot name='x'><link name='a'></robot>", "well-formed"),
+    ("<mujoco/>", "root element"),
+    ("<robot name='x'><link name='a'><collision><geometry><box size='a b'/></geometry>"
+     "</collision></link><joint/></robot>", "could not load"),
+])
+def test_a_broken_urdf_is_refused_and_changes_nothing(
+        engine: PybulletEngine, text: str, message: str) -> None:
+    engine.spawn([ground(), balls(["a"], [0, 0, 1])])
+    before = engine._maker.known_ids()
+    with pytest.raises(InvalidArgumentError, match=message):
+        engine.load_model("urdf", text, None, "")
+    assert engine._maker.known_ids() == before and set(engine._bodies) == {"ground", "a"}
+
+
+def test_load_mjcf_gives_one_entity_per_body(engine: PybulletEngine, tmp_path: Any) -> None:
+    path = tmp_path / "pair.xml"
+    path.write_text(TINY_MJCF)
+    infos = engine.load_model("mjcf", None, str(path), "p_")
+    names = [i.name for i in infos]
+    assert len(names) == 3 and {"p_ball", "p_ball_1"} <= set(names)
+    assert [i.static for i in infos if i.name.startswith("p_ball")] == [False, False]
+    engine.step(240)
+    assert engine.get_states(["p_ball"])[0][0, 2] == pytest.approx(0.1, abs=0.005)
+
+
+def test_unknown_format_and_missing_file(engine: PybulletEngine) -> None:
+    with pytest.raises(FeatureUnsupportedError):
+        engine.load_model("sdf", "<sdf/>", None, "")
+    with pytest.raises(InvalidArgumentError, match="cannot read"):
+        engine.load_model("urdf", None, "/nonexistent/model.urdf", "")

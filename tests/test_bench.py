@@ -1,0 +1,81 @@
+"""The Galton benchmark end to end on the small board, through real daemons."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+from galton.analysis.board import BoardSpec
+from galton.analysis.records import ExperimentResults
+from galton.client import Client, EmbeddedDaemon
+from galton.client.bench.trial import TrialConfig, run_trial
+from galton.client.cli import app
+from galton.protocol import InvalidArgumentError
+
+runner = CliRunner()
+EXPECTED_FILES = ("results.json", "results.csv", "report.md", "rtf_vs_balls.png",
+                  "resources_vs_balls.png")
+
+
+def test_a_small_trial_settles_every_ball_and_counts_them(sim: Client, engine: str) -> None:
+    board = BoardSpec.load("small")
+    record = run_trial(sim, TrialConfig(engine, board, repetition=0, seed=1))
+    assert record.engine == engine and record.balls == board.ball.count
+    assert len(record.counts) == board.bins
+    assert record.settled + record.lost + record.unsettled == record.balls
+    assert record.lost == 0 and record.unsettled == 0
+    assert record.rtf is not None and record.rtf > 0 and record.sim_time > 1.0
+    assert record.peak_rss_bytes and record.peak_rss_bytes > 10 * 2**20
+    assert record.settings["timestep"] > 0
+    assert sim.list(tag="ball") and len(sim.list(tag="board")) > 20
+
+
+def test_trials_are_reproducible(sim: Client, engine: str) -> None:
+    board = BoardSpec.load("small")
+    first, second = (run_trial(sim, TrialConfig(engine, board, repetition=3, seed=7))
+                     for _ in range(2))
+    assert first.counts == second.counts and first.sim_time == second.sim_time
+
+
+def test_bench_cli_writes_every_output(daemons: dict[str, EmbeddedDaemon],
+                                       tmp_path: Path) -> None:
+    from conftest import start_daemon
+
+    daemon = start_daemon(daemons, "mujoco")
+    out = tmp_path / "run"
+    result = runner.invoke(app, [
+        "bench", "--connect", daemon.endpoint, "--instances", daemon.instance,
+        "--board", "small", "--balls", "10,20", "--repetitions", "2", "--out", str(out),
+        "--json"])
+    assert result.exit_code == 0, result.output
+    summary = json.loads(result.output)
+    assert {e["engine"] for e in summary["engines"]} == {"mujoco", "pybullet"}
+    for name in (*EXPECTED_FILES, "histogram_mujoco.png", "histogram_pybullet.png"):
+        assert (out / name).stat().st_size > 0, name
+    results = ExperimentResults.from_json(out / "results.json")
+    assert len(results.trials) == 8
+    trial = results.trials[0].to_dict()
+    assert {"engine", "balls", "counts", "settled", "lost", "chi2", "rtf", "config"} <= set(trial)
+    assert "Webots" in (out / "report.md").read_text()
+
+    rerendered = tmp_path / "again"
+    again = runner.invoke(app, ["report", str(out / "results.json"), "--out", str(rerendered)])
+    assert again.exit_code == 0, again.output
+    assert (rerendered / "report.md").read_text() == (out / "report.md").read_text()
+
+
+def test_bench_rejects_bad_options() -> None:
+    result = runner.invoke(app, ["bench", "--board", "no-such-board"])
+    assert result.exit_code != 0 and "no-such-board" in result.output
+    result = runner.invoke(app, ["bench", "--release", "sometimes"])
+    assert result.exit_code != 0 and "all-at-once" in result.output
+
+
+def test_experiment_config_validates() -> None:
+    from galton.client.bench.experiment import ExperimentConfig
+
+    with pytest.raises(InvalidArgumentError):
+        ExperimentConfig(board=BoardSpec.load("small"), balls=(0,))
