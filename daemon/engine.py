@@ -57,8 +57,8 @@ class Engine(ABC):
 
         Every top-level body becomes an entity named ``prefix + body name``; return them
         (``source="model"``). Raise InvalidArgumentError for a model that does not parse,
-        NameNotUniqueError never (the World checks the returned names and calls
-        ``delete`` to undo on a clash).
+        and NameNotUniqueError (or InvalidArgumentError) when a body's name is taken; in
+        both cases leave the world unchanged.
         """
 
     @abstractmethod

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import logging
+import os
 import signal
 import threading
 from collections.abc import Callable
@@ -116,14 +117,21 @@ def _responder(query: zenoh.Query) -> Callable[[bytes], None]:
 
 
 def run_daemon(options: DaemonOptions, announce: Callable[[str], None] = print) -> int:
-    """Serve until SIGINT or SIGTERM; return the exit code (0 on a clean stop)."""
-    stop = threading.Event()
+    """Serve until SIGINT or SIGTERM; return the exit code (0 on a clean stop).
+
+    The signal handlers do nothing themselves: Python's C-level handler writes each signal
+    to a wakeup pipe, whichever thread the kernel chose, and the main thread waits on that
+    pipe. No Python code runs inside a lock, so a second signal cannot deadlock shutdown.
+    """
+    wake_read, wake_write = os.pipe()
+    os.set_blocking(wake_write, False)
+    signal.set_wakeup_fd(wake_write)
     for signum in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(signum, lambda *_: stop.set())
+        signal.signal(signum, lambda *_: None)
     daemon = Daemon(options)
     daemon.start()
     announce(f"galton-daemon ready: instance={options.instance} engine={options.engine} "
              f"listen={','.join(options.listen)} engines={','.join(ENGINE_CLASSES)}")
-    stop.wait()
+    os.read(wake_read, 1)
     daemon.close()
     return 0

@@ -108,10 +108,6 @@ class World:
     def load_model(self, fmt: str, text: str | None, path: str | None, prefix: str) -> list[str]:
         infos = self.engine.load_model(fmt, text, path, prefix)
         names = [info.name for info in infos]
-        clash = [n for n in names if n in self.entities]
-        if clash:
-            self.engine.delete(names)
-            self.require_new(clash)
         poses, twists = self.engine.get_states(names) if names else (
             np.zeros((0, POSE_WIDTH)), np.zeros((0, TWIST_WIDTH)))
         for i, info in enumerate(infos):

@@ -3,8 +3,11 @@
 Every spawn, delete or model load edits the spec and recompiles it once, in place
 (``MjSpec.recompile``), so the bodies already there keep their positions, velocities and
 warm starts. Dynamic bodies have a free joint; static ones are mocap bodies, so moving them
-needs no recompile. States are read and written through numpy index arrays rebuilt after each
-compile: nothing in Python runs per body per step.
+needs no recompile. States are read and written through numpy index arrays rebuilt after
+each compile: nothing in Python runs per body per step.
+
+Contacts: a contact takes the larger of its two geoms' frictions and the average of their
+solref (MuJoCo's rules); restitution maps to solref as ``mujoco_spec.damping_ratio`` says.
 """
 
 from __future__ import annotations
@@ -29,6 +32,7 @@ from galton.daemon.engine import (
     Engine,
 )
 from galton.daemon.engines import mujoco_spec as ms
+from galton.daemon.engines.mujoco_spec import FREE, JOINTED, MOCAP
 from galton.daemon.params import check_updates
 from galton.protocol import (
     BODY_SHAPES,
@@ -43,11 +47,14 @@ from galton.protocol import (
     OperationFailedError,
 )
 
-FREE, MOCAP, JOINTED = 1, 2, 3
+FEATURES = (FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDATE_MASS,
+            FEATURE_UPDATE_FRICTION, FEATURE_UPDATE_RESTITUTION, FEATURE_UPDATE_RGBA,
+            FEATURE_LOAD_MODEL, FEATURE_STATIC_POSE)
 _POSE = np.arange(7)
 _TWIST = np.arange(6)
 # How far a jointed body's requested pose may be from its initial one (m, quaternion units).
 _SAME_POSE = 1e-6
+_GEOM = mujoco.mjtObj.mjOBJ_GEOM
 
 
 @dataclass
@@ -61,6 +68,10 @@ class _Entity:
     restitution: float | None = None
     initial_pose: np.ndarray | None = None
 
+    def geoms(self) -> list[Any]:
+        return [self.body.first_geom()] if self.source == "spawn" else \
+            self.body.find_all(_GEOM)
+
 
 class MujocoEngine(Engine):
     """A MuJoCo world of named bodies; see the module docstring for how it is kept."""
@@ -68,6 +79,7 @@ class MujocoEngine(Engine):
     name: ClassVar[str] = "mujoco"
 
     def __init__(self) -> None:
+        ms.route_warnings()
         self._values: dict[str, Any] = {n: p.default for n, p in ms.PARAMS.items()}
         self._entities: dict[str, _Entity] = {}
         self._diverged = False
@@ -91,18 +103,28 @@ class MujocoEngine(Engine):
         self._reindex()
 
     def _reindex(self) -> None:
-        """Where each body's state lives in mjData, per body id, after a compile."""
-        m = self._model
-        jnt = np.maximum(m.body_jntadr, 0)
-        free = np.zeros(m.nbody, bool)
-        if m.njnt:
-            free = (m.body_jntnum == 1) & (m.jnt_type[jnt] == mujoco.mjtJoint.mjJNT_FREE)
-        self._kind = np.where(free, FREE, np.where(m.body_mocapid >= 0, MOCAP, JOINTED))
-        self._qadr = np.where(free, m.jnt_qposadr[jnt] if m.njnt else -1, -1)
-        self._vadr = np.where(free, m.jnt_dofadr[jnt] if m.njnt else -1, -1)
-        self._mocap = m.body_mocapid.copy()
+        self._index = ms.StateIndex.of(self._model)
         self._ids = {name: e.body.id for name, e in self._entities.items()}
         self._warnings = self._data.warning.number
+
+    def _commit(self, added: Sequence[str]) -> None:
+        """Recompile after adding these entities; on failure take them out again."""
+        try:
+            self._recompile()
+        except InvalidArgumentError:
+            self._remove_from_spec([self._entities.pop(n).body for n in added])
+            raise
+
+    def _remove_from_spec(self, bodies: Sequence[Any]) -> None:
+        """Delete bodies from the spec in one go: gathered under one frame, then it deleted.
+
+        (Deleting bodies one at a time copies the whole spec each time: 12 ms per body at
+        1,000 bodies; deleting one frame holding them all costs one copy.)
+        """
+        frame = self._spec.worldbody.add_frame()
+        for body in bodies:
+            body.set_frame(frame)
+        self._spec.delete(frame)
 
     def _body_ids(self, names: Sequence[str]) -> np.ndarray:
         try:
@@ -126,10 +148,7 @@ class MujocoEngine(Engine):
         return Capabilities(
             engine=self.name, engine_version=mujoco.__version__,
             protocol_version=PROTOCOL_VERSION, body_shapes=tuple(BODY_SHAPES),
-            model_formats=("mjcf",),
-            features=(FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDATE_MASS,
-                      FEATURE_UPDATE_FRICTION, FEATURE_UPDATE_RESTITUTION, FEATURE_UPDATE_RGBA,
-                      FEATURE_LOAD_MODEL, FEATURE_STATIC_POSE),
+            model_formats=("mjcf",), features=FEATURES,
             params={n: p.describe() for n, p in ms.PARAMS.items()})
 
     @property
@@ -151,34 +170,33 @@ class MujocoEngine(Engine):
         """Write friction, solref and solimp of these entities into the model and the spec.
 
         Spawned bodies follow the defaults where they were given none; a loaded model keeps
-        its file's values except those changed by ``update``.
+        its file's values except those set by ``update``.
         """
         m, v = self._model, self._values
+        solimp = v["mujoco.solimp"]
         for name in names:
             e = self._entities[name]
             spawned = e.source == "spawn"
-            friction = e.friction if e.friction is not None or not spawned \
-                else v["default_friction"]
-            restitution = e.restitution if e.restitution is not None or not spawned \
-                else v["default_restitution"]
+            friction = v["default_friction"] if e.friction is None and spawned else e.friction
+            restitution = v["default_restitution"] if e.restitution is None and spawned \
+                else e.restitution
             if friction is None and restitution is None:
                 continue
             gids = self._geom_ids([name])
-            geoms = [e.body.first_geom()] if spawned else e.body.find_all(mujoco.mjtObj.mjOBJ_GEOM)
             solref = None if restitution is None else ms.contact_solref(restitution, v)
             if friction is not None:
                 m.geom_friction[gids, 0] = friction
             if solref is not None:
                 m.geom_solref[gids] = solref
             if spawned:
-                m.geom_solimp[gids] = v["mujoco.solimp"]
-            for geom in geoms:
+                m.geom_solimp[gids] = solimp
+            for geom in e.geoms():
                 if friction is not None:
                     geom.friction[0] = friction
                 if solref is not None:
                     geom.solref = solref
                 if spawned:
-                    geom.solimp = v["mujoco.solimp"]
+                    geom.solimp = solimp
 
     # -- Engine: create & delete ---------------------------------------------------------
     def _material(self, group: BodyGroup) -> ms.Material:
@@ -190,63 +208,30 @@ class MujocoEngine(Engine):
                            solimp=tuple(v["mujoco.solimp"]), rgba=group.rgba, mass=group.mass)
 
     def spawn(self, groups: Sequence[BodyGroup]) -> None:
+        taken = [n for g in groups for n in g.names if self._spec.body(n) is not None]
+        if taken:  # a model's inner link, which is no entity of the World's
+            raise InvalidArgumentError(f"MuJoCo already has a body named {taken[0]!r} (a part "
+                                       "of a loaded model); choose another name")
         added: list[str] = []
         for group in groups:
-            bodies = ms.add_group(self._spec, group, self._material(group))
-            for name, body in zip(group.names, bodies, strict=True):
+            for name, body in ms.add_group(self._spec, group, self._material(group)):
                 self._entities[name] = _Entity(body, group.static, friction=group.friction,
                                                restitution=group.restitution)
-            added += group.names
+                added.append(name)
         self._commit(added)
         for group in groups:
             if group.twists is not None and not group.static:
                 self._write_twists(self._body_ids(group.names),
                                    np.asarray(group.twists, dtype=float), None)
 
-    def _commit(self, added: Sequence[str]) -> None:
-        """Recompile after adding these entities; on failure take them out again."""
-        try:
-            self._recompile()
-        except InvalidArgumentError:
-            self._remove_from_spec([self._entities.pop(n).body for n in added])
-            raise
-
-    def _remove_from_spec(self, bodies: Sequence[Any]) -> None:
-        """Delete bodies from the spec in one go: gathered under one frame, then it deleted.
-
-        (Deleting bodies one at a time copies the whole spec each time: 12 ms per body at
-        1,000 bodies; deleting one frame holding them all costs one copy.)
-        """
-        frame = self._spec.worldbody.add_frame()
-        for body in bodies:
-            body.set_frame(frame)
-        self._spec.delete(frame)
-
-    def delete(self, names: Sequence[str]) -> None:
-        self._body_ids(names)
-        self._remove_from_spec([self._entities[n].body for n in names])
-        for name in names:
-            del self._entities[name]
-        try:
-            self._recompile()
-        except InvalidArgumentError as exc:
-            raise OperationFailedError(f"MuJoCo failed to recompile after a delete: {exc}") \
-                from exc
-
-    def clear(self) -> None:
-        self._entities.clear()
-        self._diverged = False
-        self._build_empty()
-
     def load_model(self, fmt: str, text: str | None, path: str | None,
                    prefix: str) -> list[EntityInfo]:
         if fmt != "mjcf":
             raise FeatureUnsupportedError(f"model format {fmt!r} is not supported by MuJoCo "
                                           "here; supported: mjcf")
-        child = _parse_mjcf(text, path)
-        tops = list(child.worldbody.bodies)
-        names = [prefix + body.name for body in tops]
-        trial = self._spec.copy()
+        child = ms.parse_mjcf(text, path)
+        names = [prefix + body.name for body in child.worldbody.bodies]
+        trial = self._spec.copy()  # attaching cannot be undone: try it on a copy first
         try:
             trial.attach(child.copy(), prefix=prefix, frame=trial.worldbody.add_frame())
             trial.compile()
@@ -262,136 +247,116 @@ class MujocoEngine(Engine):
     def _model_info(self, name: str) -> EntityInfo:
         bid = self._ids[name]
         entity = self._entities[name]
-        if self._kind[bid] == JOINTED:
-            mujoco.mj_kinematics(self._model, self._data)
-            entity.initial_pose = self._jointed_poses(np.array([bid]))[0]
+        if self._index.kind[bid] == JOINTED:
+            poses, _ = ms.jointed_states(self._model, self._data, np.array([bid]))
+            entity.initial_pose = poses[0]
         return EntityInfo(name=name, shape="model", static=entity.static,
                           mass=float(self._model.body_subtreemass[bid]), source="model")
+
+    def delete(self, names: Sequence[str]) -> None:
+        self._body_ids(names)
+        self._remove_from_spec([self._entities.pop(n).body for n in names])
+        try:
+            self._recompile()
+        except InvalidArgumentError as exc:
+            raise OperationFailedError(f"MuJoCo failed to recompile after a delete: {exc}") \
+                from exc
+
+    def clear(self) -> None:
+        self._entities.clear()
+        self._diverged = False
+        self._build_empty()
 
     # -- Engine: state --------------------------------------------------------------------
     def get_states(self, names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
         ids = self._body_ids(names)
-        kind = self._kind[ids]
+        kind = self._index.kind[ids]
         d = self._data
         poses = np.empty((len(ids), 7))
         twists = np.zeros((len(ids), 6))
         free = kind == FREE
         if free.any():
-            q = d.qpos[self._qadr[ids[free]][:, None] + _POSE]
-            vel = d.qvel[self._vadr[ids[free]][:, None] + _TWIST]
+            q = d.qpos[self._index.qadr[ids[free]][:, None] + _POSE]
+            vel = d.qvel[self._index.vadr[ids[free]][:, None] + _TWIST]
             poses[free, :3] = q[:, :3]
             poses[free, 3:] = ms.to_xyzw(q[:, 3:])
             twists[free, :3] = vel[:, :3]
             twists[free, 3:] = ms.rotate(q[:, 3:], vel[:, 3:])
         mocap = kind == MOCAP
         if mocap.any():
-            mid = self._mocap[ids[mocap]]
+            mid = self._index.mocap[ids[mocap]]
             poses[mocap, :3] = d.mocap_pos[mid]
             poses[mocap, 3:] = ms.to_xyzw(d.mocap_quat[mid])
         jointed = kind == JOINTED
         if jointed.any():
-            poses[jointed], twists[jointed] = self._jointed_states(ids[jointed])
+            poses[jointed], twists[jointed] = ms.jointed_states(self._model, d, ids[jointed])
         return poses, twists
-
-    def _jointed_poses(self, ids: np.ndarray) -> np.ndarray:
-        d = self._data
-        return np.hstack([d.xpos[ids], ms.to_xyzw(d.xquat[ids])])
-
-    def _jointed_states(self, ids: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Pose and twist of bodies held by joints other than a free one (loaded models)."""
-        m, d = self._model, self._data
-        mujoco.mj_kinematics(m, d)
-        mujoco.mj_comPos(m, d)
-        mujoco.mj_comVel(m, d)
-        twists = np.empty((len(ids), 6))
-        velocity = np.empty(6)
-        for row, bid in enumerate(ids):
-            mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_BODY, int(bid), velocity, 0)
-            twists[row] = np.concatenate([velocity[3:], velocity[:3]])
-        return self._jointed_poses(ids), twists
 
     def set_states(self, names: Sequence[str], poses: np.ndarray | None,
                    twists: np.ndarray | None) -> None:
         ids = self._body_ids(names)
-        kind = self._kind[ids]
+        kind = self._index.kind[ids]
+        free, mocap, jointed = kind == FREE, kind == MOCAP, kind == JOINTED
         poses = None if poses is None else np.asarray(poses, dtype=float)
         twists = None if twists is None else np.asarray(twists, dtype=float)
-        mocap, jointed = kind == MOCAP, kind == JOINTED
         if twists is not None and np.any(twists[mocap]):
             bad = names[int(np.flatnonzero(mocap & np.any(twists, axis=1))[0])]
             raise InvalidArgumentError(f"entity {bad!r} is static: it cannot be given a "
                                        "non-zero twist")
-        if jointed.any():
-            self._check_jointed([names[i] for i in np.flatnonzero(jointed)],
-                                None if poses is None else poses[jointed],
-                                None if twists is None else twists[jointed])
-        free = kind == FREE
+        for row in np.flatnonzero(jointed):
+            self._check_jointed(names[row], None if poses is None else poses[row],
+                                None if twists is None else twists[row])
         d = self._data
         if poses is not None and free.any():
-            qadr = self._qadr[ids[free]][:, None] + _POSE
+            qadr = self._index.qadr[ids[free]][:, None] + _POSE
             d.qpos[qadr] = np.hstack([poses[free, :3], ms.to_wxyz(poses[free, 3:])])
         if twists is not None and free.any():
             self._write_twists(ids[free], twists[free], None if poses is None else poses[free])
         if poses is not None and mocap.any():
-            mid = self._mocap[ids[mocap]]
+            mid = self._index.mocap[ids[mocap]]
             d.mocap_pos[mid] = poses[mocap, :3]
             d.mocap_quat[mid] = ms.to_wxyz(poses[mocap, 3:])
-            self._wake_all()
+            ms.wake_all(self._model, d)
         if jointed.any():
-            self._reset_jointed(ids[jointed])
+            ms.reset_joints(self._model, d, ids[jointed])
 
     def _write_twists(self, ids: np.ndarray, twists: np.ndarray,
                       poses: np.ndarray | None) -> None:
         """World-frame twists into free-joint qvel, whose angular part is in the body frame."""
         d = self._data
         if poses is None:
-            quats = d.qpos[self._qadr[ids][:, None] + _POSE[3:]]
+            quats = d.qpos[self._index.qadr[ids][:, None] + _POSE[3:]]
         else:
             quats = ms.to_wxyz(poses[:, 3:])
         local = ms.rotate(quats, twists[:, 3:], inverse=True)
-        d.qvel[self._vadr[ids][:, None] + _TWIST] = np.hstack([twists[:, :3], local])
+        d.qvel[self._index.vadr[ids][:, None] + _TWIST] = np.hstack([twists[:, :3], local])
 
-    def _check_jointed(self, names: list[str], poses: np.ndarray | None,
-                       twists: np.ndarray | None) -> None:
-        """A body held by joints can only be put back at rest where it was loaded."""
-        for row, name in enumerate(names):
-            initial = self._entities[name].initial_pose
-            moved = poses is not None and initial is not None and not (
-                np.allclose(poses[row, :3], initial[:3], atol=_SAME_POSE)
-                and abs(abs(float(poses[row, 3:] @ initial[3:])) - 1) < _SAME_POSE)
-            if moved or (twists is not None and np.any(twists[row])):
-                raise FeatureUnsupportedError(
-                    f"entity {name!r} is held by joints of its model: it can only be reset to "
-                    "its initial pose at rest, not teleported")
-
-    def _reset_jointed(self, ids: np.ndarray) -> None:
-        """Put jointed model bodies' subtrees back to their initial joint values, at rest."""
-        m, d = self._model, self._data
-        joints = np.flatnonzero(np.isin(m.body_rootid[m.jnt_bodyid], ids))
-        for j in joints:
-            qadr, vadr = m.jnt_qposadr[j], m.jnt_dofadr[j]
-            width = {0: 7, 1: 4}.get(int(m.jnt_type[j]), 1)
-            d.qpos[qadr:qadr + width] = m.qpos0[qadr:qadr + width]
-            d.qvel[vadr:vadr + {0: 6, 1: 3}.get(int(m.jnt_type[j]), 1)] = 0.0
-
-    def _wake_all(self) -> None:
-        """Wake every sleeping tree: MuJoCo does not wake bodies when a static one moves."""
-        asleep = self._data.tree_asleep
-        asleep[asleep >= 0] = ms.AWAKE
+    def _check_jointed(self, name: str, pose: np.ndarray | None,
+                       twist: np.ndarray | None) -> None:
+        """A body held by joints can only be put back, at rest, where it was loaded."""
+        initial = self._entities[name].initial_pose
+        moved = pose is not None and initial is not None and not (
+            np.allclose(pose[:3], initial[:3], atol=_SAME_POSE)
+            and abs(abs(float(pose[3:] @ initial[3:])) - 1) < _SAME_POSE)
+        if moved or (twist is not None and np.any(twist)):
+            raise FeatureUnsupportedError(
+                f"entity {name!r} is held by joints of its model: it can only be reset to its "
+                "initial pose at rest, not teleported")
 
     def update(self, names: Sequence[str], props: BodyProperties) -> None:
         self._body_ids(names)
         for name in names:
             entity = self._entities[name]
-            entity.friction = entity.friction if props.friction is None else props.friction
-            entity.restitution = entity.restitution if props.restitution is None \
-                else props.restitution
+            if props.friction is not None:
+                entity.friction = props.friction
+            if props.restitution is not None:
+                entity.restitution = props.restitution
         if props.friction is not None or props.restitution is not None:
             self._apply_contacts(names)
         if props.rgba is not None:
             self._model.geom_rgba[self._geom_ids(names)] = props.rgba
             for name in names:
-                for geom in self._entities[name].body.find_all(mujoco.mjtObj.mjOBJ_GEOM):
+                for geom in self._entities[name].geoms():
                     geom.rgba = props.rgba
         if props.mass is not None:
             self._set_masses(names, props.mass)
@@ -404,8 +369,7 @@ class MujocoEngine(Engine):
             if entity.source == "spawn":
                 entity.body.first_geom().mass = mass
                 continue
-            root = self._ids[name]
-            scale = mass / max(float(m.body_subtreemass[root]), 1e-12)
+            scale = mass / max(float(m.body_subtreemass[self._ids[name]]), 1e-12)
             for body in [entity.body, *entity.body.find_all(mujoco.mjtObj.mjOBJ_BODY)]:
                 bid = body.id
                 body.mass = float(m.body_mass[bid]) * scale
@@ -427,33 +391,15 @@ class MujocoEngine(Engine):
             np.isfinite(a).all() for a in (d.qpos, d.qvel, d.mocap_pos, d.mocap_quat))
 
     def reset_dynamics(self) -> None:
-        """Forget warm starts; also clear what a divergence left outside the entities' roots."""
+        """Forget warm starts; also clear what a divergence left beyond the entities' roots."""
         m, d = self._model, self._data
-        bad_q = ~np.isfinite(d.qpos)
-        d.qpos[bad_q] = m.qpos0[bad_q]
+        bad = ~np.isfinite(d.qpos)
+        d.qpos[bad] = m.qpos0[bad]
         d.qvel[~np.isfinite(d.qvel)] = 0.0
         d.qacc_warmstart[:] = 0.0
         d.qacc[:] = 0.0
-        self._wake_all()
+        ms.wake_all(m, d)
         self._diverged = False
 
     def close(self) -> None:
         self._entities.clear()
-
-
-def _parse_mjcf(text: str | None, path: str | None) -> mujoco.MjSpec:
-    """Parse an MJCF model whose top-level bodies will become entities."""
-    try:
-        child = mujoco.MjSpec.from_string(text) if text is not None \
-            else mujoco.MjSpec.from_file(str(path))
-    except ValueError as exc:
-        raise InvalidArgumentError(f"the MJCF model does not parse: {exc}") from exc
-    if child.worldbody.geoms:
-        raise InvalidArgumentError(
-            "the MJCF model has geoms directly in <worldbody>; they would belong to no entity: "
-            "put them in a <body> (or spawn a plane for the ground)")
-    for i, body in enumerate(child.worldbody.bodies):
-        body.name = body.name or f"body{i}"
-        if not body.joints and not body.mocap:
-            body.mocap = True
-    return child

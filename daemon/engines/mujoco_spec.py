@@ -6,7 +6,9 @@ as the MuJoCo vocabulary it is written in.
 
 from __future__ import annotations
 
+import logging
 import math
+from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
 
@@ -15,6 +17,9 @@ import numpy as np
 
 from galton.daemon.params import ParamSpec, choice, integer, number, vector
 from galton.protocol import BodyGroup, InvalidArgumentError
+
+FREE, MOCAP, JOINTED = 1, 2, 3
+log = logging.getLogger("galton.daemon.mujoco")
 
 GEOM_TYPES: dict[str, int] = {
     "sphere": mujoco.mjtGeom.mjGEOM_SPHERE,
@@ -39,8 +44,6 @@ MIN_DAMPRATIO = 0.01
 DIVERGENCE_WARNINGS = np.array([int(w) for w in (
     mujoco.mjtWarning.mjWARN_BADQPOS, mujoco.mjtWarning.mjWARN_BADQVEL,
     mujoco.mjtWarning.mjWARN_BADQACC)])
-# tree_asleep value of a freshly woken tree (mirrors MuJoCo's own wake value).
-AWAKE = -(1 + mujoco.mjMINAWAKE)
 
 
 def _solref(value: Any, where: str) -> tuple[float, ...]:
@@ -93,6 +96,19 @@ CONTACT_PARAMS = frozenset({"timestep", "default_friction", "default_restitution
                             "mujoco.solref", "mujoco.solimp"})
 
 
+def route_warnings() -> None:
+    """Send MuJoCo's warnings to logging rather than to stdout and ./MUJOCO_LOG.TXT.
+
+    The handler is process-wide; one already set by someone else is left alone.
+    """
+    if mujoco.get_mju_user_warning() is None:
+        mujoco.set_mju_user_warning(_log_warning)
+
+
+def _log_warning(message: str) -> None:
+    log.warning("MuJoCo: %s", message)
+
+
 def damping_floor(values: dict[str, Any]) -> float:
     """The smallest damping ratio the current step integrates stably.
 
@@ -118,8 +134,8 @@ def damping_ratio(restitution: float, floor: float) -> float:
     """
     if restitution <= 0:
         return 1.0
-    log = -math.log(restitution)
-    return max(floor, log / math.sqrt(math.pi**2 + log**2))
+    decay = -math.log(restitution)
+    return max(floor, decay / math.sqrt(math.pi**2 + decay**2))
 
 
 def contact_solref(restitution: float, values: dict[str, Any]) -> tuple[float, float]:
@@ -189,8 +205,12 @@ def geom_size(shape: str, size: tuple[float, ...]) -> list[float]:
     return list(size)
 
 
-def add_group(spec: mujoco.MjSpec, group: BodyGroup, material: Material) -> list[Any]:
-    """Add one body per name: a free joint when dynamic, a mocap body when static."""
+def add_group(spec: mujoco.MjSpec, group: BodyGroup,
+              material: Material) -> Iterator[tuple[str, Any]]:
+    """Add one body per name, yielding each as it is made.
+
+    A dynamic body gets a free joint; a static one is a mocap body, movable without a compile.
+    """
     geom: dict[str, Any] = {
         "type": GEOM_TYPES[group.shape], "size": geom_size(group.shape, group.size),
         "friction": [material.friction, 0.005, 0.0001], "solref": list(material.solref),
@@ -199,14 +219,100 @@ def add_group(spec: mujoco.MjSpec, group: BodyGroup, material: Material) -> list
         geom["rgba"] = list(material.rgba)
     if material.mass is not None and not group.static:
         geom["mass"] = material.mass
+    else:
+        geom["density"] = DENSITY
     poses = np.asarray(group.poses, dtype=float)
     quats = to_wxyz(poses[:, 3:7])
-    bodies = []
     for i, name in enumerate(group.names):
         body = spec.worldbody.add_body(name=name, pos=poses[i, :3], quat=quats[i],
                                        mocap=group.static)
+        yield name, body
         if not group.static:
             body.add_freejoint()
         body.add_geom(**geom)
-        bodies.append(body)
-    return bodies
+
+
+# -- compiled model: where states live ---------------------------------------------------
+@dataclass(frozen=True)
+class StateIndex:
+    """Per body id: how it moves (FREE, MOCAP, JOINTED) and where its state lives."""
+
+    kind: np.ndarray
+    qadr: np.ndarray
+    vadr: np.ndarray
+    mocap: np.ndarray
+
+    @classmethod
+    def of(cls, m: mujoco.MjModel) -> StateIndex:
+        jnt = np.maximum(m.body_jntadr, 0)
+        free = np.zeros(m.nbody, dtype=bool)
+        qadr = vadr = np.full(m.nbody, -1)
+        if m.njnt:
+            free = (m.body_jntnum == 1) & (m.jnt_type[jnt] == mujoco.mjtJoint.mjJNT_FREE)
+            qadr = np.where(free, m.jnt_qposadr[jnt], -1)
+            vadr = np.where(free, m.jnt_dofadr[jnt], -1)
+        kind = np.where(free, FREE, np.where(m.body_mocapid >= 0, MOCAP, JOINTED))
+        return cls(kind=kind, qadr=qadr, vadr=vadr, mocap=m.body_mocapid.copy())
+
+
+def jointed_states(m: mujoco.MjModel, d: mujoco.MjData,
+                   ids: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Pose and world twist of bodies held by joints other than a free one."""
+    mujoco.mj_kinematics(m, d)
+    mujoco.mj_comPos(m, d)
+    mujoco.mj_comVel(m, d)
+    twists = np.empty((len(ids), 6))
+    velocity = np.empty(6)
+    for row, bid in enumerate(ids):
+        mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_BODY, int(bid), velocity, 0)
+        twists[row] = np.concatenate([velocity[3:], velocity[:3]])
+    return np.hstack([d.xpos[ids], to_xyzw(d.xquat[ids])]), twists
+
+
+_QPOS_WIDTH = {mujoco.mjtJoint.mjJNT_FREE: 7, mujoco.mjtJoint.mjJNT_BALL: 4}
+_QVEL_WIDTH = {mujoco.mjtJoint.mjJNT_FREE: 6, mujoco.mjtJoint.mjJNT_BALL: 3}
+
+
+def reset_joints(m: mujoco.MjModel, d: mujoco.MjData, roots: np.ndarray) -> None:
+    """Put every joint under these root bodies back to its initial value, at rest."""
+    for j in np.flatnonzero(np.isin(m.body_rootid[m.jnt_bodyid], roots)):
+        kind = int(m.jnt_type[j])
+        qadr, vadr = m.jnt_qposadr[j], m.jnt_dofadr[j]
+        width = _QPOS_WIDTH.get(kind, 1)
+        d.qpos[qadr:qadr + width] = m.qpos0[qadr:qadr + width]
+        d.qvel[vadr:vadr + _QVEL_WIDTH.get(kind, 1)] = 0.0
+
+
+def wake_all(m: mujoco.MjModel, d: mujoco.MjData) -> None:
+    """Wake every sleeping tree, keeping the state; MuJoCo wakes none when a static body moves.
+
+    mj_forward with sleeping switched off wakes all trees the way MuJoCo itself does
+    (writing tree_asleep alone leaves its derived awake lists stale).
+    """
+    flag = int(mujoco.mjtEnableBit.mjENBL_SLEEP)
+    if not m.opt.enableflags & flag or d.ntree_awake == m.ntree:
+        return  # with sleeping off MuJoCo wakes every tree at the next step itself
+    m.opt.enableflags &= ~flag
+    mujoco.mj_forward(m, d)
+    m.opt.enableflags |= flag
+
+
+# -- loaded models -----------------------------------------------------------------------
+def parse_mjcf(text: str | None, path: str | None) -> mujoco.MjSpec:
+    """Parse an MJCF model; its top-level bodies get names and, when jointless, mocap."""
+    if (text is None) == (path is None):
+        raise InvalidArgumentError("give the MJCF model as exactly one of text and path")
+    try:
+        child = mujoco.MjSpec.from_string(text) if text is not None \
+            else mujoco.MjSpec.from_file(str(path))
+    except ValueError as exc:
+        raise InvalidArgumentError(f"the MJCF model does not parse: {exc}") from exc
+    if child.worldbody.geoms:
+        raise InvalidArgumentError(
+            "the MJCF model has geoms directly in <worldbody>; they would belong to no entity: "
+            "put them in a <body> (or spawn a plane for the ground)")
+    for i, body in enumerate(child.worldbody.bodies):
+        body.name = body.name or f"body{i}"
+        if not body.joints and not body.mocap:
+            body.mocap = True
+    return child

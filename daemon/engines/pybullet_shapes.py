@@ -1,5 +1,6 @@
-"""What the PyBullet engine hands to PyBullet: primitive collision shapes shared through a
-cache, the mass properties PyBullet would otherwise approximate, and model files.
+"""What the PyBullet engine hands to PyBullet: collision shapes shared through a cache, the
+mass properties PyBullet would otherwise approximate, bodies made with their true ids, and
+model files.
 
 Sizes are the protocol's half sizes: sphere (radius,), box (hx, hy, hz), cylinder and
 capsule (radius, half_length) with the axis along local z, plane (hx, hy) for looks only
@@ -14,13 +15,15 @@ import math
 import os
 import tempfile
 import xml.etree.ElementTree as ElementTree
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from typing import Any
 
+import numpy as np
 import pybullet
+from pybullet_utils.bullet_client import BulletClient
 
-from galton.protocol import InvalidArgumentError
+from galton.protocol import InvalidArgumentError, OperationFailedError
 
 # Shapes whose collision margin is a free setting. A sphere's and a capsule's margin is
 # their radius (Bullet models them as a point or a segment grown by the margin), so
@@ -31,6 +34,8 @@ MARGIN_SHAPES = ("box", "cylinder", "plane")
 MARGIN_CAP = 0.5
 
 MODEL_ROOTS = {"urdf": "robot", "mjcf": "mujoco"}  # root element of each model format
+# Inertia from the file, and true cylinders rather than their convex hulls.
+URDF_FLAGS = pybullet.URDF_USE_INERTIA_FROM_FILE | pybullet.URDF_USE_IMPLICIT_CYLINDER
 DENSITY = 1000.0  # kg/m³, the protocol's default when a dynamic body has no mass
 
 
@@ -119,7 +124,7 @@ class ShapeCache:
         if uid is None:
             uid = self._create(**collision_args(shape, key[1]))
             if uid < 0:
-                raise RuntimeError(f"PyBullet could not create a {shape} of size {size}")
+                raise OperationFailedError(f"PyBullet could not create a {shape} of size {size}")
             self._ids[key] = uid
         return uid
 
@@ -129,6 +134,80 @@ class ShapeCache:
 
     def __len__(self) -> int:
         return len(self._ids)
+
+
+class BodyMaker:
+    """Makes and removes rigid bodies, knowing each one's true id.
+
+    createMultiBody(batchPositions=...) returns ids counted back from the last body it
+    made, which is right only when ids are handed out in sequence. PyBullet hands out the
+    ids of removed bodies first (last removed, first reused), so the holes that deletions
+    left are filled one body at a time, the rest comes in one batch, and the batch's ids
+    are checked against the positions just given.
+    """
+
+    def __init__(self, bc: BulletClient) -> None:
+        self._bc = bc
+        self._free: set[int] = set()  # ids of removed bodies, which PyBullet reuses first
+
+    def create(self, mass: float, shape: int, positions: list[list[float]], owned: set[int],
+               made: list[int]) -> list[int]:
+        """Bodies at these positions, appended to ``made`` as soon as each exists."""
+        def one(position: list[float]) -> int:
+            uid = self._bc.createMultiBody(mass, shape, -1, position, useMaximalCoordinates=True)
+            if uid < 0:
+                raise OperationFailedError("PyBullet could not create a body")
+            made.append(uid)
+            self._free.discard(uid)
+            return uid
+
+        holes = min(len(self._free), len(positions))
+        ids = [one(position) for position in positions[:holes]]
+        rest = positions[holes:]
+        if rest:
+            batch = self._bc.createMultiBody(mass, shape, -1, rest[0], useMaximalCoordinates=True,
+                                             batchPositions=rest)
+            batch = list(batch) if isinstance(batch, tuple | list) else [batch]
+            if self._is_true(batch, rest, owned.union(made)):
+                made.extend(batch)
+                ids.extend(batch)
+            else:  # holes it did not know of (a failed load?): find the batch, go slowly
+                self._bc.syncBodyInfo()
+                self.remove(list(self.known_ids() - owned.union(made)))
+                ids.extend(one(position) for position in rest)
+        return ids
+
+    def _is_true(self, ids: list[int], positions: list[list[float]], owned: set[int]) -> bool:
+        """Whether ``ids`` are new bodies standing exactly where the batch put them."""
+        if len(ids) != len(positions) or len(set(ids)) != len(ids) or min(ids) < 0:
+            return False
+        if any(uid in owned for uid in ids):
+            return False
+        try:
+            found = [self._bc.getBasePositionAndOrientation(uid)[0] for uid in ids]
+        except pybullet.error:
+            return False
+        return np.array_equal(np.array(found), np.array(positions))
+
+    def remove(self, ids: Sequence[int]) -> None:
+        """removeBody each, keeping the freed ids."""
+        for uid in ids:
+            self._bc.removeBody(uid)
+            self._free.add(uid)
+
+    def reused(self, ids: Sequence[int]) -> None:
+        """Ids that a model load took (loads return true ids, holes or not)."""
+        self._free.difference_update(ids)
+
+    def forget(self) -> None:
+        """After resetSimulation: no holes left."""
+        self._free.clear()
+
+    def known_ids(self) -> set[int]:
+        """Bodies PyBullet's client knows: loads register each, batch spawns do not (until
+        syncBodyInfo)."""
+        bc = self._bc
+        return {bc.getBodyUniqueId(i) for i in range(bc.getNumBodies())}
 
 
 def read_text(path: str) -> str:
@@ -163,6 +242,26 @@ def model_file(fmt: str, text: str | None, path: str | None) -> Iterator[str]:
         with open(file_name, "w", encoding="utf-8") as handle:
             handle.write(text)
         yield file_name
+
+
+def load_bodies(bc: BulletClient, maker: BodyMaker, fmt: str, text: str | None,
+                path: str | None) -> list[int]:
+    """Load a URDF or MJCF model; a model PyBullet refuses leaves no body behind."""
+    check_xml(fmt, text if text is not None else read_text(path or ""))
+    before = maker.known_ids()
+    try:
+        with model_file(fmt, text, path) as file_name:
+            if fmt == "urdf":
+                ids = [bc.loadURDF(file_name, flags=URDF_FLAGS)]
+            else:
+                ids = list(bc.loadMJCF(file_name, flags=pybullet.MJCF_COLORS_FROM_FILE))
+    except pybullet.error as exc:
+        maker.remove(list(maker.known_ids() - before))  # what a half-done load left
+        raise InvalidArgumentError(
+            f"PyBullet could not load this {fmt.upper()} model ({exc}); its importer "
+            "printed the reason on the daemon's output") from exc
+    maker.reused(ids)
+    return ids
 
 
 def unique_name(name: str, taken: set[str]) -> str:
