@@ -4,8 +4,9 @@ Usage: python benchmarks/memory_churn.py [--rounds 20] [--bodies 1000] [--json F
 
 Three ways of churning, each in a fresh daemon: delete by name with the world emptied,
 delete by name with a static plane kept (so the world is never empty), and
-reset(scope="spawned"). Prints RSS after the first and the last round, and the growth per 1,000 bodies deleted
-over the second half of the rounds (after allocator warm-up: 0 means bounded).
+reset(scope="spawned"). Prints RSS after the first and the last round, and the growth
+per 1,000 bodies deleted over the second half of the rounds (after allocator warm-up:
+0 means bounded).
 """
 
 from __future__ import annotations
