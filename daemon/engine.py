@@ -85,7 +85,9 @@ class Engine(ABC):
     @abstractmethod
     def state_is_finite(self) -> bool:
         """False when any body's position or velocity is NaN or infinite, or the engine
-        detected a divergence during the last ``step``."""
+        detected a divergence in any ``step`` since the last ``reset_dynamics``/``clear``.
+
+        The World calls it once per batch of steps, not after every step."""
 
     @abstractmethod
     def clear(self) -> None:

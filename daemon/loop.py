@@ -35,7 +35,8 @@ from galton.protocol.errors import did_you_mean
 
 log = logging.getLogger("galton.daemon")
 
-CHUNK_WALL_S = 0.002  # physics work between two looks at the inbox
+CHUNK_WALL_S = 0.005  # physics work between two looks at the inbox
+VERIFY_PERIOD_S = 0.05  # the state is checked finite at least this often while stepping
 
 
 
@@ -61,6 +62,7 @@ class SimLoop(StateOps):
         self.telemetry_period = 1.0 / telemetry_rate_hz if telemetry_rate_hz > 0 else math.inf
         self.engine_factory = engine_factory
         self._step_cost = 1e-4
+        self._last_verify = 0.0
         self._seq = 0
         self._stopping = False
         self.rtf = 0.0
@@ -187,23 +189,33 @@ class SimLoop(StateOps):
 
     def _run_steps(self, count: int) -> None:
         started = time.perf_counter()
-        try:
-            self.world.step(count)
-        except PhysicsError as error:
-            self._fault(error)
+        self.world.step(count)
+        now = time.perf_counter()
+        self._step_cost = 0.8 * self._step_cost + 0.2 * max((now - started) / count, 1e-7)
+        job_done = self.job is not None and self.job.remaining == count
+        due = job_done or now - self._last_verify >= VERIFY_PERIOD_S
+        if due and not self.verify_physics():
             return
-        finally:
-            self.refresh_clock()
-        elapsed = (time.perf_counter() - started) / count
-        self._step_cost = 0.8 * self._step_cost + 0.2 * max(elapsed, 1e-7)
+        self.refresh_clock()
         if self.job is not None:
             self.job.remaining -= count
-            if self.job.remaining == 0:
+            if job_done:
                 job, self.job = self.job, None
                 self._reply_ok(job.call, {"steps": job.total})
 
+    def verify_physics(self) -> bool:
+        """Check the unchecked steps; on a divergence, fault and return False."""
+        self._last_verify = time.perf_counter()
+        try:
+            self.world.verify()
+        except PhysicsError as error:
+            self._fault(error)
+            return False
+        return True
+
     def _fault(self, error: PhysicsError) -> None:
         """A diverged step: pause, tell subscribers, fail the step job; never publish it."""
+        self.refresh_clock()
         self.state = "paused"
         self.publish_event({"kind": "physics_error", "message": error.message,
                             "step": self.world.step_index, "sim_time": self.world.sim_time})
@@ -240,6 +252,8 @@ class SimLoop(StateOps):
         self._send(call, encode_reply(reply))
 
     def _publish_telemetry(self, now: float) -> None:
+        if not self.world.faulted:
+            self.verify_physics()
         cpu, rss, peak = self.monitor.sample()
         rtf = self.rtf = self.rtf_window.add(now, self.world.sim_time)
         self._seq += 1

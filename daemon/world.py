@@ -6,6 +6,7 @@ engine never receives an unknown or duplicate name, and a rejected request chang
 
 from __future__ import annotations
 
+import contextlib
 import fnmatch
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -48,6 +49,7 @@ class World:
         self.entities: dict[str, Entity] = {}
         self.step_index = 0
         self.faulted = False
+        self.verified_step = 0  # the last step whose state was checked finite
         self._time_base = (0, 0.0, engine.timestep)  # (step, sim time, dt) since dt changed
 
     # -- lookup -------------------------------------------------------------------------
@@ -123,7 +125,7 @@ class World:
     # -- state --------------------------------------------------------------------------
     def get_states(self, names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
         self.require_known(names)
-        self.require_valid()
+        self.verify()
         return self.engine.get_states(names)
 
     def set_states(self, names: Sequence[str], poses: np.ndarray | None,
@@ -169,31 +171,46 @@ class World:
         self._time_base = (self.step_index, now, self.engine.timestep)
 
     def step(self, count: int) -> None:
-        """Advance ``count`` steps; a non-finite state faults the world and raises."""
+        """Advance ``count`` steps, unchecked: ``verify`` before anything reads the state."""
         self.require_valid()
         if self.engine.timestep != self._time_base[2]:
             self._rebase_clock()
         self.engine.step(count)
         self.step_index += count
+
+    def verify(self) -> None:
+        """Check the steps taken since the last check; a non-finite state faults the world.
+
+        Checking reads every body on some engines, so it runs once per batch of steps and
+        before any state leaves the daemon, never per step.
+        """
+        self.require_valid()
+        if self.verified_step == self.step_index:
+            return
         if not self.engine.state_is_finite():
             self.faulted = True
             raise PhysicsError(
                 f"the simulation diverged (NaN or infinite state) within steps "
-                f"{self.step_index - count + 1}..{self.step_index}; the world is paused and "
+                f"{self.verified_step + 1}..{self.step_index}; the world is paused and "
                 "its states will not be served until a reset")
+        self.verified_step = self.step_index
 
     def reset(self, scope: str) -> None:
         if scope not in RESET_SCOPES:
             raise InvalidArgumentError(
                 f"reset scope {scope!r} is not one of {', '.join(RESET_SCOPES)}"
                 f"{did_you_mean(scope, RESET_SCOPES)}")
+        with contextlib.suppress(PhysicsError):
+            self.verify()  # a divergence in unchecked steps must not be forgotten
         if scope in ("time", "all"):
             self.step_index = 0
+            self.verified_step = 0
             self._rebase_clock(0.0)
         if scope in ("spawned", "all"):
             self.engine.clear()
             self.entities.clear()
             self.faulted = False
+            self.verified_step = self.step_index
         if scope == "state":
             self.restore_initial_states()
 
@@ -205,3 +222,4 @@ class World:
             self.engine.set_states(names, poses, twists)
         self.engine.reset_dynamics()
         self.faulted = False
+        self.verified_step = self.step_index

@@ -7,7 +7,7 @@ quaternion, as ROS and scipy), a twist 6 floats ``vx vy vz wx wy wz`` in the wor
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, fields
 from typing import Any
 
 import numpy as np
@@ -134,6 +134,11 @@ def check_rgba(value: Any, where: str) -> tuple[float, float, float, float] | No
         raise InvalidArgumentError(f"{where} must hold 4 numbers (r g b a in 0..1)")
     r, g, b, a = (finite_number(v, f"{where}[{i}]", low=0, high=1) for i, v in enumerate(value))
     return (r, g, b, a)
+
+
+def shallow_dict(record: Any) -> dict[str, Any]:
+    """A flat record's fields as a dict, without ``asdict``'s deep copy (hot paths)."""
+    return {f.name: getattr(record, f.name) for f in fields(record)}
 
 
 @dataclass
@@ -287,7 +292,7 @@ class SimStatus:
     faulted: bool = False
 
     def to_wire(self) -> dict[str, Any]:
-        return asdict(self)
+        return shallow_dict(self)
 
     @classmethod
     def from_wire(cls, body: dict[str, Any]) -> SimStatus:
@@ -315,7 +320,7 @@ class Telemetry:
     world: str = "default"
 
     def to_wire(self) -> dict[str, Any]:
-        return asdict(self)
+        return shallow_dict(self)
 
     @classmethod
     def from_wire(cls, body: dict[str, Any]) -> Telemetry:

@@ -1,0 +1,123 @@
+"""What the bridge costs: the same Galton trial through a daemon and in-process.
+
+Usage: python benchmarks/bridge_overhead.py [--balls 100] [--rounds 3] [--json FILE]
+
+The in-process side drives the daemon's own ``World`` over the same engine with exactly the
+requests a trial sends (spawn, run_until in 0.5 s chunks, batch state reads), so the only
+difference is Zenoh, msgpack and the physics thread hand-off. Runs
+alternate (in-process, bridge, ...) to spread the machine's noise; the ratio of medians
+is reported. Target (issue 6): bridge ≤ 1.05 × in-process wall time.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import math
+import statistics
+import time
+from collections.abc import Iterator
+from typing import Any
+
+from common import ENGINES, daemon_client, machine, write_json
+
+from galton.analysis.board import BallSpec, BoardSpec
+from galton.client.bench.trial import TrialConfig, run_trial
+from galton.client.sdk import Stamp, States
+from galton.daemon.engines import create_engine
+from galton.daemon.world import World
+from galton.protocol import BodyGroup, Capabilities, SimStatus
+
+
+class LocalSim:
+    """The subset of ``Client`` a trial uses, served by a World in this process."""
+
+    def __init__(self) -> None:
+        self.world: World | None = None
+
+    @contextlib.contextmanager
+    def on_telemetry(self, callback: Any) -> Iterator[None]:
+        yield None
+
+    def load_world(self, engine: str, params: dict[str, Any] | None = None) -> None:
+        if self.world is not None:
+            self.world.engine.close()
+        self.world = World(create_engine(engine))
+        if params:
+            self.world.engine.set_params(params)
+
+    def spawn(self, *groups: BodyGroup, timeout: float | None = None) -> list[str]:
+        assert self.world is not None
+        return self.world.spawn(groups)
+
+    def run_until(self, sim_time: float) -> Stamp:
+        assert self.world is not None
+        dt = self.world.engine.timestep
+        self.world.step(math.ceil((sim_time - self.world.sim_time) / dt - 1e-9))
+        return Stamp(self.world.step_index, self.world.sim_time)
+
+    def get_states(self, names: list[str]) -> States:
+        assert self.world is not None
+        poses, twists = self.world.get_states(names)
+        return States(list(names), poses, twists, self.world.step_index, self.world.sim_time)
+
+    def status(self) -> SimStatus:
+        assert self.world is not None
+        return SimStatus("paused", self.world.step_index, self.world.sim_time,
+                         self.world.engine.timestep, 0.0, 0.0, len(self.world.entities),
+                         self.world.engine.name, "local")
+
+    def get_params(self) -> dict[str, Any]:
+        assert self.world is not None
+        return self.world.engine.get_params()
+
+    def capabilities(self) -> Capabilities:
+        assert self.world is not None
+        return self.world.engine.capabilities()
+
+
+def trial_config(engine: str, balls: int) -> TrialConfig:
+    board = BoardSpec.load("paper")
+    board = board.replace(ball=BallSpec(board.ball.radius, board.ball.mass, balls))
+    return TrialConfig(engine, board, repetition=0, seed=0)
+
+
+def wall(sim: Any, config: TrialConfig) -> tuple[float, float]:
+    started = time.perf_counter()
+    record = run_trial(sim, config)
+    return time.perf_counter() - started, record.sim_time
+
+
+def measure(engine: str, balls: int, rounds: int) -> dict:
+    config = trial_config(engine, balls)
+    local_walls, bridge_walls = [], []
+    with daemon_client(engine) as (_, sim):
+        wall(sim, config)  # warm both paths once
+        wall(LocalSim(), config)
+        for _ in range(rounds):
+            local_walls.append(wall(LocalSim(), config)[0])
+            bridge_walls.append(wall(sim, config)[0])
+    local, bridge = statistics.median(local_walls), statistics.median(bridge_walls)
+    return {"engine": engine, "balls": balls, "rounds": rounds, "local_s": local_walls,
+            "bridge_s": bridge_walls, "ratio": bridge / local}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--balls", type=int, default=100)
+    parser.add_argument("--rounds", type=int, default=3)
+    parser.add_argument("--json")
+    args = parser.parse_args()
+    results = [measure(engine, args.balls, args.rounds) for engine in ENGINES]
+    print(f"# bridge overhead on {machine()}: paper board, {args.balls} balls, "
+          f"{args.rounds} alternating rounds")
+    print("| engine | in-process median (s) | through the bridge median (s) | ratio |")
+    print("| --- | --- | --- | --- |")
+    for r in results:
+        print(f"| {r['engine']} | {statistics.median(r['local_s']):.3f} | "
+              f"{statistics.median(r['bridge_s']):.3f} | {r['ratio']:.3f} |")
+    write_json(args.json, results)
+
+
+if __name__ == "__main__":
+    main()
