@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import json
 from pathlib import Path
 from typing import Annotated
@@ -17,6 +18,7 @@ from galton.analysis.published import PUBLISHED_LABEL, PUBLISHED_TABLE2
 from galton.analysis.records import ExperimentResults, TrialRecord
 from galton.analysis.stats import critical_value
 from galton.analysis.summary import EngineSummary, summarise
+from galton.analysis.sweep import plot_sweep, sweep_cells, sweep_table
 from galton.client.bench.daemons import bench_clients
 from galton.client.bench.experiment import (
     DEFAULT_BALLS,
@@ -25,9 +27,9 @@ from galton.client.bench.experiment import (
     ExperimentConfig,
     run_experiment,
 )
+from galton.client.bench.sweep import parse_axis, run_sweep
 from galton.client.bench.trial import DEFAULT_MAX_SIM_TIME_S, TrialConfig
 from galton.client.cli import JsonOpt, app, console, run_guarded
-from galton.protocol import GaltonError
 
 DEFAULT_OUT = Path("galton-results")
 
@@ -95,8 +97,7 @@ def _run(config: ExperimentConfig, connect: list[str] | None, instances: list[st
          timeout: float, quiet: bool) -> ExperimentResults:
     plan = config.trials()
     with bench_clients(config.engines, connect, instances, max(timeout, 30.0)) as clients, \
-            Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
-                     TimeElapsedColumn(), console=console, disable=quiet) as progress:
+            _progress(quiet) as progress:
         task = progress.add_task("Galton trials", total=len(plan))
 
         def advance(trial: TrialConfig, record: TrialRecord) -> None:
@@ -170,4 +171,57 @@ def report(
     _finish(load(), out or results_json.parent, as_json)
 
 
-__all__ = ["GaltonError", "bench", "report", "table2"]
+
+
+@app.command()
+def sweep(
+    ctx: typer.Context,
+    param: Annotated[list[str], typer.Option(
+        help="NAME=V1,V2,... engine parameter values (one or two --param); e.g. "
+             "default_restitution=0.3,0.5,0.7 or 'mujoco.solref=[0.02,0.3];[0.02,0.5]'.")],
+    engines: Annotated[str, typer.Option(help="Comma-separated engines.")] = ",".join(
+        DEFAULT_ENGINES),
+    connect: Annotated[str | None, typer.Option(help="Endpoint(s) of remote daemons.")] = None,
+    instances: Annotated[str | None, typer.Option(help="Daemon instances to use.")] = None,
+    board: Annotated[str, typer.Option(help="Preset or TOML/JSON file.")] = "paper",
+    balls: Annotated[int, typer.Option(min=1)] = 100,
+    repetitions: Annotated[int, typer.Option(min=1)] = 3,
+    release: Annotated[str | None, typer.Option(help="all-at-once or stream.")] = None,
+    seed: Annotated[int, typer.Option(min=0)] = 0,
+    max_sim_time: Annotated[float, typer.Option(min=0.1)] = DEFAULT_MAX_SIM_TIME_S,
+    out: Annotated[Path, typer.Option(help="Output folder.")] = Path("galton-sweep"),
+    as_json: JsonOpt = False,
+) -> None:
+    """The benchmark over a grid of one or two parameters: a fidelity map per engine."""
+    axes = run_guarded(lambda: [parse_axis(p) for p in param])
+    config = run_guarded(lambda: ExperimentConfig(
+        board=load_board(board), engines=tuple(_csv(engines, "--engines")), balls=(balls,),
+        repetitions=repetitions, release=release, seed=seed, max_sim_time=max_sim_time))
+    endpoints = connect.split(",") if connect else ctx.obj.connect
+    names = _csv(instances, "--instances") if instances else None
+    total = len(config.trials()) * len(list(itertools.product(*(a.values for a in axes))))
+
+    def go() -> ExperimentResults:
+        with bench_clients(config.engines, endpoints, names, max(ctx.obj.timeout, 30.0)) as \
+                clients, _progress(as_json) as progress:
+            task = progress.add_task("sweep", total=total)
+            return run_sweep(clients, config, axes,
+                             lambda t, r: progress.update(task, advance=1))
+    results = run_guarded(go)
+    out.mkdir(parents=True, exist_ok=True)
+    results.to_json(out / "results.json")
+    cells = sweep_cells(results.trials, axes)
+    table = sweep_table(cells, axes)
+    (out / "sweep.md").write_text(f"# Fidelity sweep\n\n{table}", encoding="utf-8")
+    plots = [plot_sweep(cells, axes, engine, out) for engine in config.engines]
+    if as_json:
+        typer.echo(json.dumps({"cells": [c.to_dict() for c in cells],
+                               "files": [str(p) for p in plots]}, indent=2))
+    else:
+        console.print(table)
+        console.print(f"Fidelity maps and results in {out}/")
+
+
+def _progress(quiet: bool) -> Progress:
+    return Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
+                    TimeElapsedColumn(), console=console, disable=quiet)

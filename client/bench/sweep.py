@@ -1,0 +1,64 @@
+"""The benchmark over a grid of one or two engine parameters (a fidelity map)."""
+
+from __future__ import annotations
+
+import itertools
+import json
+from collections.abc import Callable, Sequence
+from dataclasses import replace
+from typing import Any
+
+from galton.analysis.board import BoardSpec, EngineContacts
+from galton.analysis.records import ExperimentResults, TrialRecord
+from galton.analysis.sweep import SweepAxis
+from galton.client.bench.experiment import ExperimentConfig, run_experiment
+from galton.client.bench.trial import TrialConfig
+from galton.client.sdk import Client
+from galton.protocol import InvalidArgumentError
+
+
+def parse_axis(text: str) -> SweepAxis:
+    """``NAME=V1,V2,...`` (values as JSON; separate by ';' when values hold commas)."""
+    name, sep, raw = text.partition("=")
+    if not sep or not name or not raw:
+        raise InvalidArgumentError(f"--param {text!r} is not NAME=V1,V2,...")
+    parts = raw.split(";") if ";" in raw else raw.split(",")
+    values = []
+    for part in (p.strip() for p in parts if p.strip()):
+        try:
+            value = json.loads(part)
+        except json.JSONDecodeError:
+            value = part
+        values.append(tuple(value) if isinstance(value, list) else value)
+    return SweepAxis(name.strip(), tuple(values))
+
+
+def with_params(board: BoardSpec, engine: str, params: dict[str, Any]) -> BoardSpec:
+    """The board with these engine parameters added to its contact settings."""
+    contacts = dict(board.contacts)
+    current = contacts.get(engine, EngineContacts())
+    merged = {**current.params, **{k: list(v) if isinstance(v, tuple) else v
+                                   for k, v in params.items()}}
+    contacts[engine] = EngineContacts(merged, dict(current.bodies))
+    return board.replace(contacts=contacts)
+
+
+def run_sweep(clients: dict[str, Client], base: ExperimentConfig, axes: Sequence[SweepAxis],
+              on_trial: Callable[[TrialConfig, TrialRecord], None] | None = None,
+              ) -> ExperimentResults:
+    """Run the base experiment at every grid point, per engine; one results set."""
+    if not 1 <= len(axes) <= 2:
+        raise InvalidArgumentError(f"a sweep takes one or two --param axes, got {len(axes)}")
+    trials: list[TrialRecord] = []
+    results = None
+    for engine in base.engines:
+        for point in itertools.product(*(a.values for a in axes)):
+            params = {a.name: v for a, v in zip(axes, point, strict=True)}
+            config = replace(base, engines=(engine,),
+                             board=with_params(base.board, engine, params))
+            results = run_experiment(clients, config, on_trial)
+            trials.extend(results.trials)
+    assert results is not None
+    sweep = {"axes": [{"name": a.name, "values": [list(v) if isinstance(v, tuple) else v
+                                                   for v in a.values]} for a in axes]}
+    return replace(results, trials=trials, extra={**results.extra, "sweep": sweep})
