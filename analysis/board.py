@@ -275,7 +275,26 @@ def small_board() -> BoardSpec:
     )
 
 
-PRESETS: dict[str, Callable[[], BoardSpec]] = {"paper": paper_board, "small": small_board}
+def paper_webots_board() -> BoardSpec:
+    """The paper's own set-up, for comparison: the paper board, all balls released at once,
+    and a Webots-like contact (Webots' default bounce 0.5, Coulomb friction 1).
+
+    Engines combine two bodies' coefficients differently, so the same physical contact
+    needs different raw values: MuJoCo maps a body's restitution to its contact damping and
+    averages the two bodies' (0.5 on every body gives a bounce of about 0.5); PyBullet
+    multiplies them (0.707 on every body: 0.707² ≈ 0.5). MuJoCo takes the larger friction
+    of the two bodies, PyBullet their product: 1.0 on every body gives 1 on both. The
+    engines' timesteps stay at their defaults: Webots' 32 ms step would tunnel here.
+    """
+    return BoardSpec(name="paper-webots", contacts={
+        "mujoco": EngineContacts(params={"default_restitution": 0.5, "default_friction": 1.0}),
+        "pybullet": EngineContacts(params={"default_restitution": 0.707,
+                                           "default_friction": 1.0}),
+    })
+
+
+PRESETS: dict[str, Callable[[], BoardSpec]] = {
+    "paper": paper_board, "paper-webots": paper_webots_board, "small": small_board}
 
 
 # --- (de)serialisation ---------------------------------------------------------------------
