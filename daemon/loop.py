@@ -19,6 +19,7 @@ from galton.daemon.monitor import Pacer, ProcessMonitor, RtfWindow
 from galton.daemon.ops import MUTATING_OPS, SCENE_OPS
 from galton.daemon.world import World
 from galton.protocol import (
+    NotFoundError,
     OperationFailedError,
     PhysicsError,
     RemoteError,
@@ -132,6 +133,7 @@ class SimLoop(StateOps):
         """Answer one call (or start its step job); never raises."""
         try:
             request = decode_request(call.payload, call.op)
+            self._require_world(request.args)
             state_op = self.STATE_OPS.get(request.op)
             if state_op is not None:
                 result = state_op(self, call, request.args)
@@ -154,6 +156,13 @@ class SimLoop(StateOps):
         except Exception as exc:  # the daemon keeps serving whatever an engine does
             log.exception("operation %s failed", call.op)
             self._reply_error(call, OperationFailedError(f"{type(exc).__name__}: {exc}"))
+
+    def _require_world(self, args: dict[str, Any]) -> None:
+        """Requests may name a world; this daemon serves one (room for several later)."""
+        world = args.get("world", self.world.name)
+        if world != self.world.name:
+            raise NotFoundError(f"no world named {world!r}: this daemon serves one world, "
+                                f"{self.world.name!r}")
 
     def _reply_ok(self, call: Call, result: dict[str, Any]) -> None:
         self.refresh_clock()
