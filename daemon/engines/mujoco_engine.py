@@ -2,9 +2,11 @@
 
 Every spawn, delete or model load edits the spec and recompiles it once, in place
 (``MjSpec.recompile``), so the bodies already there keep their positions, velocities and
-warm starts. Dynamic bodies have a free joint; static ones are mocap bodies, so moving them
-needs no recompile. States are read and written through numpy index arrays rebuilt after
-each compile: nothing in Python runs per body per step.
+warm starts. Dynamic bodies have a free joint; static ones are jointless children of the
+world whose pose is written into the compiled model (and the spec), so moving them needs no
+recompile, and balls resting on them can sleep (see ``mujoco_spec.add_group``). States are
+read and written through numpy index arrays rebuilt after each compile: nothing in Python
+runs per body per step.
 
 Contacts: a contact takes the larger of its two geoms' frictions and the average of their
 solref (MuJoCo's rules); restitution maps to solref as ``mujoco_spec.damping_ratio`` says.
@@ -32,7 +34,7 @@ from galton.daemon.engine import (
     Engine,
 )
 from galton.daemon.engines import mujoco_spec as ms
-from galton.daemon.engines.mujoco_spec import FREE, JOINTED, MOCAP
+from galton.daemon.engines.mujoco_spec import FREE, JOINTED, MOCAP, STATIC
 from galton.daemon.params import check_updates
 from galton.protocol import (
     BODY_SHAPES,
@@ -167,13 +169,14 @@ class MujocoEngine(Engine):
             self._apply_contacts(list(self._entities))
 
     def _apply_contacts(self, names: Sequence[str]) -> None:
-        """Write friction, solref and solimp of these entities into the model and the spec.
+        """Write these entities' contact values into the model and the spec: friction
+        (sliding, torsional, rolling), condim, solref, solimp.
 
         Spawned bodies follow the defaults where they were given none; a loaded model keeps
         its file's values except those set by ``update``.
         """
         m, v = self._model, self._values
-        solimp = v["mujoco.solimp"]
+        solimp, spin = v["mujoco.solimp"], ms.spin_friction(v)
         for name in names:
             e = self._entities[name]
             spawned = e.source == "spawn"
@@ -190,6 +193,8 @@ class MujocoEngine(Engine):
                 m.geom_solref[gids] = solref
             if spawned:
                 m.geom_solimp[gids] = solimp
+                m.geom_friction[gids, 1:] = spin
+                m.geom_condim[gids] = v["mujoco.condim"]
             for geom in e.geoms():
                 if friction is not None:
                     geom.friction[0] = friction
@@ -197,6 +202,8 @@ class MujocoEngine(Engine):
                     geom.solref = solref
                 if spawned:
                     geom.solimp = solimp
+                    geom.friction[1:] = spin
+                    geom.condim = v["mujoco.condim"]
 
     # -- Engine: create & delete ---------------------------------------------------------
     def _material(self, group: BodyGroup) -> ms.Material:
@@ -204,7 +211,8 @@ class MujocoEngine(Engine):
         friction = v["default_friction"] if group.friction is None else group.friction
         restitution = v["default_restitution"] if group.restitution is None \
             else group.restitution
-        return ms.Material(friction=friction, solref=ms.contact_solref(restitution, v),
+        return ms.Material(friction=friction, spin=ms.spin_friction(v),
+                           condim=v["mujoco.condim"], solref=ms.contact_solref(restitution, v),
                            solimp=tuple(v["mujoco.solimp"]), rgba=group.rgba, mass=group.mass)
 
     def spawn(self, groups: Sequence[BodyGroup]) -> None:
@@ -287,6 +295,10 @@ class MujocoEngine(Engine):
             mid = self._index.mocap[ids[mocap]]
             poses[mocap, :3] = d.mocap_pos[mid]
             poses[mocap, 3:] = ms.to_xyzw(d.mocap_quat[mid])
+        static = kind == STATIC
+        if static.any():
+            poses[static, :3] = self._model.body_pos[ids[static]]
+            poses[static, 3:] = ms.to_xyzw(self._model.body_quat[ids[static]])
         jointed = kind == JOINTED
         if jointed.any():
             poses[jointed], twists[jointed] = ms.jointed_states(self._model, d, ids[jointed])
@@ -297,10 +309,12 @@ class MujocoEngine(Engine):
         ids = self._body_ids(names)
         kind = self._index.kind[ids]
         free, mocap, jointed = kind == FREE, kind == MOCAP, kind == JOINTED
+        static = kind == STATIC
         poses = None if poses is None else np.asarray(poses, dtype=float)
         twists = None if twists is None else np.asarray(twists, dtype=float)
-        if twists is not None and np.any(twists[mocap]):
-            bad = names[int(np.flatnonzero(mocap & np.any(twists, axis=1))[0])]
+        fixed = mocap | static
+        if twists is not None and np.any(twists[fixed]):
+            bad = names[int(np.flatnonzero(fixed & np.any(twists, axis=1))[0])]
             raise InvalidArgumentError(f"entity {bad!r} is static: it cannot be given a "
                                        "non-zero twist")
         for row in np.flatnonzero(jointed):
@@ -316,9 +330,23 @@ class MujocoEngine(Engine):
             mid = self._index.mocap[ids[mocap]]
             d.mocap_pos[mid] = poses[mocap, :3]
             d.mocap_quat[mid] = ms.to_wxyz(poses[mocap, 3:])
+        if poses is not None and static.any():
+            self._move_static([names[i] for i in np.flatnonzero(static)], ids[static],
+                              poses[static])
+        if poses is not None and fixed.any():
             ms.wake_all(self._model, d)
         if jointed.any():
             ms.reset_joints(self._model, d, ids[jointed])
+
+    def _move_static(self, names: Sequence[str], ids: np.ndarray, poses: np.ndarray) -> None:
+        """Pose static bodies in the compiled model and in the spec (kept by recompiles)."""
+        quats = ms.to_wxyz(poses[:, 3:])
+        self._model.body_pos[ids] = poses[:, :3]
+        self._model.body_quat[ids] = quats
+        for row, name in enumerate(names):
+            body = self._entities[name].body
+            body.pos = poses[row, :3]
+            body.quat = quats[row]
 
     def _write_twists(self, ids: np.ndarray, twists: np.ndarray,
                       poses: np.ndarray | None) -> None:
@@ -383,7 +411,7 @@ class MujocoEngine(Engine):
     def step(self, count: int) -> None:
         self._warnings[ms.DIVERGENCE_WARNINGS] = 0
         mujoco.mj_step(self._model, self._data, count)
-        self._diverged = bool(self._warnings[ms.DIVERGENCE_WARNINGS].any())
+        self._diverged |= bool(self._warnings[ms.DIVERGENCE_WARNINGS].any())
 
     def state_is_finite(self) -> bool:
         d = self._data

@@ -18,7 +18,7 @@ import numpy as np
 from galton.daemon.params import ParamSpec, choice, integer, number, vector
 from galton.protocol import BodyGroup, InvalidArgumentError
 
-FREE, MOCAP, JOINTED = 1, 2, 3
+FREE, MOCAP, JOINTED, STATIC = 1, 2, 3, 4
 log = logging.getLogger("galton.daemon.mujoco")
 
 GEOM_TYPES: dict[str, int] = {
@@ -63,16 +63,25 @@ def _solimp(value: Any, where: str) -> tuple[float, ...]:
     return (dmin, dmax, width, mid, power)
 
 
+def _condim(value: Any, where: str) -> int:
+    condim = integer(1, 6)(value, where)
+    if condim not in CONDIMS:
+        raise InvalidArgumentError(f"{where} must be one of {', '.join(map(str, CONDIMS))} "
+                                   f"(MuJoCo's contact dimensions), got {value!r}")
+    return condim
+
+
+CONDIMS = (1, 3, 4, 6)
 PARAMS: dict[str, ParamSpec] = {p.name: p for p in (
-    ParamSpec("timestep", 0.002, "s", "physics step", number(0.0, 1.0, low_open=True)),
+    ParamSpec("timestep", 0.004, "s", "physics step", number(0.0, 1.0, low_open=True)),
     ParamSpec("gravity", (0.0, 0.0, -9.81), "m/s²", "gravity vector, world frame",
               vector(3, -1e3, 1e3)),
-    ParamSpec("solver_iterations", 100, "", "constraint solver iterations (option iterations)",
+    ParamSpec("solver_iterations", 50, "", "constraint solver iterations (option iterations)",
               integer(1, 10_000)),
-    ParamSpec("default_friction", 1.0, "",
+    ParamSpec("default_friction", 0.3, "",
               "sliding friction of bodies spawned without one, also when changed later; a "
               "contact uses the larger of its two geoms' values", number(0.0, 100.0)),
-    ParamSpec("default_restitution", 0.0, "",
+    ParamSpec("default_restitution", 0.4, "",
               "restitution of bodies spawned without one, also when changed later; 0 means "
               "MuJoCo's own contact (mujoco.solref as given)", number(0.0, 1.0)),
     ParamSpec("mujoco.solref", (0.02, 1.0), "s, 1",
@@ -81,19 +90,33 @@ PARAMS: dict[str, ParamSpec] = {p.name: p for p in (
     ParamSpec("mujoco.solimp", (0.9, 0.95, 0.001, 0.5, 2.0), "",
               "[dmin, dmax, width, midpoint, power] impedance of spawned bodies' contacts",
               _solimp),
-    ParamSpec("mujoco.solver", "newton", "", "constraint solver", choice(*SOLVERS)),
-    ParamSpec("mujoco.cone", "pyramidal", "", "friction cone", choice(*CONES)),
-    ParamSpec("mujoco.ls_iterations", 50, "", "line-search iterations (newton, cg)",
+    ParamSpec("mujoco.condim", 4, "",
+              "contact dimensions of spawned bodies: 1 frictionless, 3 sliding, 4 + spin "
+              "(torsional), 6 + rolling friction; a contact takes the larger of its geoms'",
+              _condim),
+    ParamSpec("mujoco.torsional_friction", 0.005, "m",
+              "torsional (spin) friction of spawned bodies: torque = value x normal force "
+              "(condim 4 and 6)", number(0.0, 1.0)),
+    ParamSpec("mujoco.rolling_friction", 0.0001, "m",
+              "rolling friction of spawned bodies: torque = value x normal force (condim 6); "
+              "value / radius is the rolling-resistance coefficient", number(0.0, 1.0)),
+    ParamSpec("mujoco.solver", "cg", "", "constraint solver", choice(*SOLVERS)),
+    ParamSpec("mujoco.cone", "elliptic", "", "friction cone", choice(*CONES)),
+    ParamSpec("mujoco.tolerance", 1e-4, "",
+              "solver stops early once its relative improvement is below this (option "
+              "tolerance)", number(0.0, 1.0)),
+    ParamSpec("mujoco.ls_iterations", 5, "", "line-search iterations (newton, cg)",
               integer(1, 10_000)),
     ParamSpec("mujoco.noslip_iterations", 0, "", "no-slip solver iterations (0 = off)",
               integer(0, 10_000)),
     ParamSpec("mujoco.integrator", "euler", "", "numerical integrator", choice(*INTEGRATORS)),
-    ParamSpec("mujoco.sleep_tolerance", 0.0, "m/s",
+    ParamSpec("mujoco.sleep_tolerance", 0.01, "m/s",
               "island sleeping: trees slower than this fall asleep (0 = sleeping off)",
               number(0.0, 10.0)),
 )}
 CONTACT_PARAMS = frozenset({"timestep", "default_friction", "default_restitution",
-                            "mujoco.solref", "mujoco.solimp"})
+                            "mujoco.solref", "mujoco.solimp", "mujoco.condim",
+                            "mujoco.torsional_friction", "mujoco.rolling_friction"})
 
 
 def route_warnings() -> None:
@@ -146,12 +169,17 @@ def contact_solref(restitution: float, values: dict[str, Any]) -> tuple[float, f
     return (timeconst, damping_ratio(restitution, damping_floor(values)))
 
 
+def spin_friction(values: dict[str, Any]) -> tuple[float, float]:
+    return (values["mujoco.torsional_friction"], values["mujoco.rolling_friction"])
+
+
 def write_options(option: Any, values: dict[str, Any]) -> None:
     """Copy the global parameters onto an mjOption (the spec's or the compiled model's)."""
     option.timestep = values["timestep"]
     option.gravity = values["gravity"]
     option.iterations = values["solver_iterations"]
     option.ls_iterations = values["mujoco.ls_iterations"]
+    option.tolerance = values["mujoco.tolerance"]
     option.noslip_iterations = values["mujoco.noslip_iterations"]
     option.solver = SOLVERS[values["mujoco.solver"]]
     option.cone = CONES[values["mujoco.cone"]]
@@ -188,6 +216,8 @@ class Material:
     """Per-geom values shared by a spawned group, resolved once for the whole group."""
 
     friction: float
+    spin: tuple[float, float]  # torsional and rolling friction, m
+    condim: int
     solref: tuple[float, float]
     solimp: tuple[float, ...]
     rgba: tuple[float, float, float, float] | None
@@ -209,11 +239,15 @@ def add_group(spec: mujoco.MjSpec, group: BodyGroup,
               material: Material) -> Iterator[tuple[str, Any]]:
     """Add one body per name, yielding each as it is made.
 
-    A dynamic body gets a free joint; a static one is a mocap body, movable without a compile.
+    A dynamic body gets a free joint. A static one is a jointless child of the world, not a
+    mocap body: MuJoCo counts mocap bodies as always awake and wakes every sleeping ball
+    touching one, so a board of mocap bodies would never let its piles sleep. A static body
+    still moves without a compile: its pose lives in the model (body_pos, body_quat).
     """
     geom: dict[str, Any] = {
         "type": GEOM_TYPES[group.shape], "size": geom_size(group.shape, group.size),
-        "friction": [material.friction, 0.005, 0.0001], "solref": list(material.solref),
+        "friction": [material.friction, *material.spin], "condim": material.condim,
+        "solref": list(material.solref),
         "solimp": list(material.solimp)}
     if material.rgba is not None:
         geom["rgba"] = list(material.rgba)
@@ -224,8 +258,7 @@ def add_group(spec: mujoco.MjSpec, group: BodyGroup,
     poses = np.asarray(group.poses, dtype=float)
     quats = to_wxyz(poses[:, 3:7])
     for i, name in enumerate(group.names):
-        body = spec.worldbody.add_body(name=name, pos=poses[i, :3], quat=quats[i],
-                                       mocap=group.static)
+        body = spec.worldbody.add_body(name=name, pos=poses[i, :3], quat=quats[i])
         yield name, body
         if not group.static:
             body.add_freejoint()
@@ -235,7 +268,10 @@ def add_group(spec: mujoco.MjSpec, group: BodyGroup,
 # -- compiled model: where states live ---------------------------------------------------
 @dataclass(frozen=True)
 class StateIndex:
-    """Per body id: how it moves (FREE, MOCAP, JOINTED) and where its state lives."""
+    """Per body id: how it moves (FREE, MOCAP, JOINTED, STATIC) and where its state lives.
+
+    STATIC: a jointless, non-mocap child of the world, posed by the model's body_pos/quat.
+    """
 
     kind: np.ndarray
     qadr: np.ndarray
@@ -251,7 +287,10 @@ class StateIndex:
             free = (m.body_jntnum == 1) & (m.jnt_type[jnt] == mujoco.mjtJoint.mjJNT_FREE)
             qadr = np.where(free, m.jnt_qposadr[jnt], -1)
             vadr = np.where(free, m.jnt_dofadr[jnt], -1)
-        kind = np.where(free, FREE, np.where(m.body_mocapid >= 0, MOCAP, JOINTED))
+        static = (m.body_parentid == 0) & (m.body_jntnum == 0) & (m.body_mocapid < 0)
+        static[0] = False
+        kind = np.where(free, FREE, np.where(m.body_mocapid >= 0, MOCAP,
+                                             np.where(static, STATIC, JOINTED)))
         return cls(kind=kind, qadr=qadr, vadr=vadr, mocap=m.body_mocapid.copy())
 
 

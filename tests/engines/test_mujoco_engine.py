@@ -25,6 +25,7 @@ from galton.protocol import (
 )
 
 GRAVITY = 9.81
+DEFAULT_STEP = 0.004
 RADIUS = 0.05
 IDENTITY = (0.0, 0.0, 0.0, 1.0)
 ROBOT = """<mujoco>
@@ -68,7 +69,7 @@ def test_capabilities_describe_the_engine(engine: MujocoEngine) -> None:
     assert caps.engine == "mujoco" and caps.engine_version
     assert set(caps.body_shapes) == set(BODY_SHAPES) and caps.model_formats == ("mjcf",)
     assert {FEATURE_LOAD_MODEL, FEATURE_STATIC_POSE} <= set(caps.features)
-    assert caps.params["timestep"]["default"] == 0.002
+    assert caps.params["timestep"]["default"] == DEFAULT_STEP
     assert set(caps.params) == set(engine.get_params())
 
 
@@ -275,7 +276,7 @@ def test_params_are_all_or_none(engine: MujocoEngine) -> None:
     with pytest.raises(FeatureUnsupportedError, match="pybullet"):
         engine.set_params({"pybullet.collision_margin": 0.01})
     assert engine.get_params() == before
-    assert engine.timestep == 0.002
+    assert engine.timestep == DEFAULT_STEP
 
 
 def test_load_model_makes_top_level_bodies_entities(engine: MujocoEngine) -> None:
@@ -373,3 +374,43 @@ def test_clear_empties_the_world_and_keeps_params(engine: MujocoEngine) -> None:
     assert engine.timestep == 0.004
     engine.spawn([ball()])
     assert engine.get_states(["ball"])[0][0, 2] == 1.0
+
+
+def test_defaults_bounce_like_a_hard_ball_and_slide_with_moderate_friction(
+        engine: MujocoEngine) -> None:
+    """The drop test behind docs/physics/mujoco.md: e ≈ 0.5 from 1 m, μ ≈ 0.3 sliding."""
+    floor = group("box", ["floor"], [[0, 0, -0.05]], size=(2, 2, 0.05), static=True)
+    engine.spawn([floor, group("sphere", ["ball"], [[0, 0, 1.045]], size=(0.045,), mass=0.38)])
+    speeds = []
+    for _ in range(round(1.0 / engine.timestep)):
+        engine.step(1)
+        speeds.append(engine.get_states(["ball"])[1][0, 2])
+    impact = int(np.argmax(np.array(speeds) > 0))
+    bounce = max(speeds[impact:]) / -min(speeds[:impact])
+    assert 0.4 < bounce < 0.65
+    engine.spawn([group("box", ["crate"], [[1, 1, 0.05]], size=(0.05, 0.05, 0.05), mass=1.0)])
+    run(engine, 0.2)
+    engine.set_states(["crate"], None, np.array([[1.0, 0, 0, 0, 0, 0]]))
+    run(engine, 0.1)
+    friction = (1.0 - engine.get_states(["crate"])[1][0, 0]) / 0.1 / GRAVITY
+    assert 0.25 < friction < 0.4
+
+
+def test_balls_at_rest_on_static_bodies_fall_asleep(engine: MujocoEngine) -> None:
+    """Static bodies are not mocap bodies, which MuJoCo keeps awake with all they touch."""
+    engine.set_params({"mujoco.sleep_tolerance": 0.02})
+    engine.spawn([group("box", ["floor"], [[0, 0, -0.05]], size=(2, 2, 0.05), static=True),
+                  group("cylinder", ["pin"], [[1, 0, 0.5]], size=(0.1, 0.3), static=True),
+                  ball("a", z=RADIUS)])
+    run(engine, 1.0)
+    assert not engine.get_states(["a"])[1].any()  # asleep: exactly at rest
+    engine.set_states(["pin"], np.array([[1, 0, 2.0, *IDENTITY]]), None)
+    np.testing.assert_array_equal(engine.get_states(["pin"])[0][0, :3], [1, 0, 2.0])
+
+
+def test_contact_dimension_must_be_one_mujoco_has(engine: MujocoEngine) -> None:
+    with pytest.raises(InvalidArgumentError, match="1, 3, 4, 6"):
+        engine.set_params({"mujoco.condim": 5})
+    engine.spawn([ball()])
+    engine.set_params({"mujoco.condim": 6, "mujoco.rolling_friction": 0.001})
+    assert engine.get_params()["mujoco.condim"] == 6
