@@ -5,8 +5,8 @@ Every spawn, delete or model load edits the spec and recompiles it once, in plac
 warm starts. Dynamic bodies have a free joint; static ones are jointless children of the
 world whose pose is written into the compiled model (and the spec), so moving them needs no
 recompile, and balls resting on them can sleep (see ``mujoco_spec.add_group``). States are
-read and written through numpy index arrays rebuilt after each compile: nothing in Python
-runs per body per step.
+read and written in batches through numpy index arrays (``mujoco_state``) rebuilt after each
+compile: nothing in Python runs per body per step.
 
 Contacts: a contact takes the larger of its two geoms' frictions and the average of their
 solref (MuJoCo's rules); restitution maps to solref as ``mujoco_spec.damping_ratio`` says.
@@ -34,7 +34,8 @@ from galton.daemon.engine import (
     Engine,
 )
 from galton.daemon.engines import mujoco_spec as ms
-from galton.daemon.engines.mujoco_spec import FREE, JOINTED, MOCAP, STATIC
+from galton.daemon.engines import mujoco_state as mst
+from galton.daemon.engines.mujoco_state import FREE, JOINTED, MOCAP, STATIC
 from galton.daemon.params import check_updates
 from galton.protocol import (
     BODY_SHAPES,
@@ -52,8 +53,6 @@ from galton.protocol import (
 FEATURES = (FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDATE_MASS,
             FEATURE_UPDATE_FRICTION, FEATURE_UPDATE_RESTITUTION, FEATURE_UPDATE_RGBA,
             FEATURE_LOAD_MODEL, FEATURE_STATIC_POSE)
-_POSE = np.arange(7)
-_TWIST = np.arange(6)
 # How far a jointed body's requested pose may be from its initial one (m, quaternion units).
 _SAME_POSE = 1e-6
 _GEOM = mujoco.mjtObj.mjOBJ_GEOM
@@ -105,7 +104,7 @@ class MujocoEngine(Engine):
         self._reindex()
 
     def _reindex(self) -> None:
-        self._index = ms.StateIndex.of(self._model)
+        self._index = mst.StateIndex.of(self._model)
         self._ids = {name: e.body.id for name, e in self._entities.items()}
         self._warnings = self._data.warning.number
 
@@ -229,8 +228,8 @@ class MujocoEngine(Engine):
         self._commit(added)
         for group in groups:
             if group.twists is not None and not group.static:
-                self._write_twists(self._body_ids(group.names),
-                                   np.asarray(group.twists, dtype=float), None)
+                mst.write_twists(self._data, self._index, self._body_ids(group.names),
+                                 np.asarray(group.twists, dtype=float), None)
 
     def load_model(self, fmt: str, text: str | None, path: str | None,
                    prefix: str) -> list[EntityInfo]:
@@ -256,7 +255,7 @@ class MujocoEngine(Engine):
         bid = self._ids[name]
         entity = self._entities[name]
         if self._index.kind[bid] == JOINTED:
-            poses, _ = ms.jointed_states(self._model, self._data, np.array([bid]))
+            poses, _ = mst.jointed_states(self._model, self._data, np.array([bid]))
             entity.initial_pose = poses[0]
         return EntityInfo(name=name, shape="model", static=entity.static,
                           mass=float(self._model.body_subtreemass[bid]), source="model")
@@ -277,32 +276,7 @@ class MujocoEngine(Engine):
 
     # -- Engine: state --------------------------------------------------------------------
     def get_states(self, names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
-        ids = self._body_ids(names)
-        kind = self._index.kind[ids]
-        d = self._data
-        poses = np.empty((len(ids), 7))
-        twists = np.zeros((len(ids), 6))
-        free = kind == FREE
-        if free.any():
-            q = d.qpos[self._index.qadr[ids[free]][:, None] + _POSE]
-            vel = d.qvel[self._index.vadr[ids[free]][:, None] + _TWIST]
-            poses[free, :3] = q[:, :3]
-            poses[free, 3:] = ms.to_xyzw(q[:, 3:])
-            twists[free, :3] = vel[:, :3]
-            twists[free, 3:] = ms.rotate(q[:, 3:], vel[:, 3:])
-        mocap = kind == MOCAP
-        if mocap.any():
-            mid = self._index.mocap[ids[mocap]]
-            poses[mocap, :3] = d.mocap_pos[mid]
-            poses[mocap, 3:] = ms.to_xyzw(d.mocap_quat[mid])
-        static = kind == STATIC
-        if static.any():
-            poses[static, :3] = self._model.body_pos[ids[static]]
-            poses[static, 3:] = ms.to_xyzw(self._model.body_quat[ids[static]])
-        jointed = kind == JOINTED
-        if jointed.any():
-            poses[jointed], twists[jointed] = ms.jointed_states(self._model, d, ids[jointed])
-        return poses, twists
+        return mst.read_states(self._model, self._data, self._index, self._body_ids(names))
 
     def set_states(self, names: Sequence[str], poses: np.ndarray | None,
                    twists: np.ndarray | None) -> None:
@@ -322,42 +296,29 @@ class MujocoEngine(Engine):
                                 None if twists is None else twists[row])
         d = self._data
         if poses is not None and free.any():
-            qadr = self._index.qadr[ids[free]][:, None] + _POSE
-            d.qpos[qadr] = np.hstack([poses[free, :3], ms.to_wxyz(poses[free, 3:])])
+            mst.write_free_poses(d, self._index, ids[free], poses[free])
         if twists is not None and free.any():
-            self._write_twists(ids[free], twists[free], None if poses is None else poses[free])
+            mst.write_twists(d, self._index, ids[free], twists[free],
+                             None if poses is None else poses[free])
         if poses is not None and mocap.any():
-            mid = self._index.mocap[ids[mocap]]
-            d.mocap_pos[mid] = poses[mocap, :3]
-            d.mocap_quat[mid] = ms.to_wxyz(poses[mocap, 3:])
+            mst.write_mocap_poses(d, self._index, ids[mocap], poses[mocap])
         if poses is not None and static.any():
             self._move_static([names[i] for i in np.flatnonzero(static)], ids[static],
                               poses[static])
         if poses is not None and fixed.any():
-            ms.wake_all(self._model, d)
+            mst.wake_all(self._model, d)
         if jointed.any():
-            ms.reset_joints(self._model, d, ids[jointed])
+            mst.reset_joints(self._model, d, ids[jointed])
 
     def _move_static(self, names: Sequence[str], ids: np.ndarray, poses: np.ndarray) -> None:
         """Pose static bodies in the compiled model and in the spec (kept by recompiles)."""
-        quats = ms.to_wxyz(poses[:, 3:])
+        quats = mst.to_wxyz(poses[:, 3:])
         self._model.body_pos[ids] = poses[:, :3]
         self._model.body_quat[ids] = quats
         for row, name in enumerate(names):
             body = self._entities[name].body
             body.pos = poses[row, :3]
             body.quat = quats[row]
-
-    def _write_twists(self, ids: np.ndarray, twists: np.ndarray,
-                      poses: np.ndarray | None) -> None:
-        """World-frame twists into free-joint qvel, whose angular part is in the body frame."""
-        d = self._data
-        if poses is None:
-            quats = d.qpos[self._index.qadr[ids][:, None] + _POSE[3:]]
-        else:
-            quats = ms.to_wxyz(poses[:, 3:])
-        local = ms.rotate(quats, twists[:, 3:], inverse=True)
-        d.qvel[self._index.vadr[ids][:, None] + _TWIST] = np.hstack([twists[:, :3], local])
 
     def _check_jointed(self, name: str, pose: np.ndarray | None,
                        twist: np.ndarray | None) -> None:
@@ -426,7 +387,7 @@ class MujocoEngine(Engine):
         d.qvel[~np.isfinite(d.qvel)] = 0.0
         d.qacc_warmstart[:] = 0.0
         d.qacc[:] = 0.0
-        ms.wake_all(m, d)
+        mst.wake_all(m, d)
         self._diverged = False
 
     def close(self) -> None:

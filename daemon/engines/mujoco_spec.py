@@ -15,10 +15,10 @@ from typing import Any
 import mujoco
 import numpy as np
 
+from galton.daemon.engines.mujoco_state import to_wxyz
 from galton.daemon.params import ParamSpec, choice, integer, number, vector
 from galton.protocol import BodyGroup, InvalidArgumentError
 
-FREE, MOCAP, JOINTED, STATIC = 1, 2, 3, 4
 log = logging.getLogger("galton.daemon.mujoco")
 
 GEOM_TYPES: dict[str, int] = {
@@ -78,7 +78,7 @@ PARAMS: dict[str, ParamSpec] = {p.name: p for p in (
               vector(3, -1e3, 1e3)),
     ParamSpec("solver_iterations", 50, "", "constraint solver iterations (option iterations)",
               integer(1, 10_000)),
-    ParamSpec("default_friction", 0.3, "",
+    ParamSpec("default_friction", 0.15, "",
               "sliding friction of bodies spawned without one, also when changed later; a "
               "contact uses the larger of its two geoms' values", number(0.0, 100.0)),
     ParamSpec("default_restitution", 0.4, "",
@@ -110,7 +110,7 @@ PARAMS: dict[str, ParamSpec] = {p.name: p for p in (
     ParamSpec("mujoco.noslip_iterations", 0, "", "no-slip solver iterations (0 = off)",
               integer(0, 10_000)),
     ParamSpec("mujoco.integrator", "euler", "", "numerical integrator", choice(*INTEGRATORS)),
-    ParamSpec("mujoco.sleep_tolerance", 0.01, "m/s",
+    ParamSpec("mujoco.sleep_tolerance", 0.005, "m/s",
               "island sleeping: trees slower than this fall asleep (0 = sleeping off)",
               number(0.0, 10.0)),
 )}
@@ -193,23 +193,6 @@ def write_options(option: Any, values: dict[str, Any]) -> None:
         option.enableflags &= ~int(mujoco.mjtEnableBit.mjENBL_SLEEP)
 
 
-# -- quaternions: MuJoCo is w x y z, the wire x y z w -----------------------------------
-def to_wxyz(xyzw: np.ndarray) -> np.ndarray:
-    return xyzw[..., [3, 0, 1, 2]]
-
-
-def to_xyzw(wxyz: np.ndarray) -> np.ndarray:
-    return wxyz[..., [1, 2, 3, 0]]
-
-
-def rotate(wxyz: np.ndarray, vec: np.ndarray, *, inverse: bool = False) -> np.ndarray:
-    """Rotate rows of vectors by rows of unit quaternions (or by their inverses)."""
-    w = wxyz[:, :1]
-    u = -wxyz[:, 1:] if inverse else wxyz[:, 1:]
-    t = 2.0 * np.cross(u, vec)
-    return vec + w * t + np.cross(u, t)
-
-
 # -- bodies ---------------------------------------------------------------------------
 @dataclass(frozen=True)
 class Material:
@@ -263,77 +246,6 @@ def add_group(spec: mujoco.MjSpec, group: BodyGroup,
         if not group.static:
             body.add_freejoint()
         body.add_geom(**geom)
-
-
-# -- compiled model: where states live ---------------------------------------------------
-@dataclass(frozen=True)
-class StateIndex:
-    """Per body id: how it moves (FREE, MOCAP, JOINTED, STATIC) and where its state lives.
-
-    STATIC: a jointless, non-mocap child of the world, posed by the model's body_pos/quat.
-    """
-
-    kind: np.ndarray
-    qadr: np.ndarray
-    vadr: np.ndarray
-    mocap: np.ndarray
-
-    @classmethod
-    def of(cls, m: mujoco.MjModel) -> StateIndex:
-        jnt = np.maximum(m.body_jntadr, 0)
-        free = np.zeros(m.nbody, dtype=bool)
-        qadr = vadr = np.full(m.nbody, -1)
-        if m.njnt:
-            free = (m.body_jntnum == 1) & (m.jnt_type[jnt] == mujoco.mjtJoint.mjJNT_FREE)
-            qadr = np.where(free, m.jnt_qposadr[jnt], -1)
-            vadr = np.where(free, m.jnt_dofadr[jnt], -1)
-        static = (m.body_parentid == 0) & (m.body_jntnum == 0) & (m.body_mocapid < 0)
-        static[0] = False
-        kind = np.where(free, FREE, np.where(m.body_mocapid >= 0, MOCAP,
-                                             np.where(static, STATIC, JOINTED)))
-        return cls(kind=kind, qadr=qadr, vadr=vadr, mocap=m.body_mocapid.copy())
-
-
-def jointed_states(m: mujoco.MjModel, d: mujoco.MjData,
-                   ids: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Pose and world twist of bodies held by joints other than a free one."""
-    mujoco.mj_kinematics(m, d)
-    mujoco.mj_comPos(m, d)
-    mujoco.mj_comVel(m, d)
-    twists = np.empty((len(ids), 6))
-    velocity = np.empty(6)
-    for row, bid in enumerate(ids):
-        mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_BODY, int(bid), velocity, 0)
-        twists[row] = np.concatenate([velocity[3:], velocity[:3]])
-    return np.hstack([d.xpos[ids], to_xyzw(d.xquat[ids])]), twists
-
-
-_QPOS_WIDTH = {mujoco.mjtJoint.mjJNT_FREE: 7, mujoco.mjtJoint.mjJNT_BALL: 4}
-_QVEL_WIDTH = {mujoco.mjtJoint.mjJNT_FREE: 6, mujoco.mjtJoint.mjJNT_BALL: 3}
-
-
-def reset_joints(m: mujoco.MjModel, d: mujoco.MjData, roots: np.ndarray) -> None:
-    """Put every joint under these root bodies back to its initial value, at rest."""
-    for j in np.flatnonzero(np.isin(m.body_rootid[m.jnt_bodyid], roots)):
-        kind = int(m.jnt_type[j])
-        qadr, vadr = m.jnt_qposadr[j], m.jnt_dofadr[j]
-        width = _QPOS_WIDTH.get(kind, 1)
-        d.qpos[qadr:qadr + width] = m.qpos0[qadr:qadr + width]
-        d.qvel[vadr:vadr + _QVEL_WIDTH.get(kind, 1)] = 0.0
-
-
-def wake_all(m: mujoco.MjModel, d: mujoco.MjData) -> None:
-    """Wake every sleeping tree, keeping the state; MuJoCo wakes none when a static body moves.
-
-    mj_forward with sleeping switched off wakes all trees the way MuJoCo itself does
-    (writing tree_asleep alone leaves its derived awake lists stale).
-    """
-    flag = int(mujoco.mjtEnableBit.mjENBL_SLEEP)
-    if not m.opt.enableflags & flag or d.ntree_awake == m.ntree:
-        return  # with sleeping off MuJoCo wakes every tree at the next step itself
-    m.opt.enableflags &= ~flag
-    mujoco.mj_forward(m, d)
-    m.opt.enableflags |= flag
 
 
 # -- loaded models -----------------------------------------------------------------------

@@ -1,0 +1,161 @@
+"""Where a compiled MuJoCo world keeps each body's state, and reading and writing it in batches.
+
+Poses on the wire are [x y z qx qy qz qw] and twists [vx vy vz wx wy wz], both in the world
+frame; MuJoCo keeps quaternions w x y z and a free joint's angular velocity in the body frame.
+Everything here works on index arrays, one numpy operation per kind of body, never per body
+per step.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+FREE, MOCAP, JOINTED, STATIC = 1, 2, 3, 4
+POSE = np.arange(7)
+TWIST = np.arange(6)
+
+
+# -- quaternions: MuJoCo is w x y z, the wire x y z w -----------------------------------
+def to_wxyz(xyzw: np.ndarray) -> np.ndarray:
+    return xyzw[..., [3, 0, 1, 2]]
+
+
+def to_xyzw(wxyz: np.ndarray) -> np.ndarray:
+    return wxyz[..., [1, 2, 3, 0]]
+
+
+def rotate(wxyz: np.ndarray, vec: np.ndarray, *, inverse: bool = False) -> np.ndarray:
+    """Rotate rows of vectors by rows of unit quaternions (or by their inverses)."""
+    w = wxyz[:, :1]
+    u = -wxyz[:, 1:] if inverse else wxyz[:, 1:]
+    t = 2.0 * np.cross(u, vec)
+    return vec + w * t + np.cross(u, t)
+
+
+# -- compiled model: where states live ---------------------------------------------------
+@dataclass(frozen=True)
+class StateIndex:
+    """Per body id: how it moves (FREE, MOCAP, JOINTED, STATIC) and where its state lives.
+
+    STATIC: a jointless, non-mocap child of the world, posed by the model's body_pos/quat.
+    """
+
+    kind: np.ndarray
+    qadr: np.ndarray
+    vadr: np.ndarray
+    mocap: np.ndarray
+
+    @classmethod
+    def of(cls, m: mujoco.MjModel) -> StateIndex:
+        jnt = np.maximum(m.body_jntadr, 0)
+        free = np.zeros(m.nbody, dtype=bool)
+        qadr = vadr = np.full(m.nbody, -1)
+        if m.njnt:
+            free = (m.body_jntnum == 1) & (m.jnt_type[jnt] == mujoco.mjtJoint.mjJNT_FREE)
+            qadr = np.where(free, m.jnt_qposadr[jnt], -1)
+            vadr = np.where(free, m.jnt_dofadr[jnt], -1)
+        static = (m.body_parentid == 0) & (m.body_jntnum == 0) & (m.body_mocapid < 0)
+        static[0] = False
+        kind = np.where(free, FREE, np.where(m.body_mocapid >= 0, MOCAP,
+                                             np.where(static, STATIC, JOINTED)))
+        return cls(kind=kind, qadr=qadr, vadr=vadr, mocap=m.body_mocapid.copy())
+
+
+def jointed_states(m: mujoco.MjModel, d: mujoco.MjData,
+                   ids: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Pose and world twist of bodies held by joints other than a free one."""
+    mujoco.mj_kinematics(m, d)
+    mujoco.mj_comPos(m, d)
+    mujoco.mj_comVel(m, d)
+    twists = np.empty((len(ids), 6))
+    velocity = np.empty(6)
+    for row, bid in enumerate(ids):
+        mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_BODY, int(bid), velocity, 0)
+        twists[row] = np.concatenate([velocity[3:], velocity[:3]])
+    return np.hstack([d.xpos[ids], to_xyzw(d.xquat[ids])]), twists
+
+
+_QPOS_WIDTH = {mujoco.mjtJoint.mjJNT_FREE: 7, mujoco.mjtJoint.mjJNT_BALL: 4}
+_QVEL_WIDTH = {mujoco.mjtJoint.mjJNT_FREE: 6, mujoco.mjtJoint.mjJNT_BALL: 3}
+
+
+def reset_joints(m: mujoco.MjModel, d: mujoco.MjData, roots: np.ndarray) -> None:
+    """Put every joint under these root bodies back to its initial value, at rest."""
+    for j in np.flatnonzero(np.isin(m.body_rootid[m.jnt_bodyid], roots)):
+        kind = int(m.jnt_type[j])
+        qadr, vadr = m.jnt_qposadr[j], m.jnt_dofadr[j]
+        width = _QPOS_WIDTH.get(kind, 1)
+        d.qpos[qadr:qadr + width] = m.qpos0[qadr:qadr + width]
+        d.qvel[vadr:vadr + _QVEL_WIDTH.get(kind, 1)] = 0.0
+
+
+def wake_all(m: mujoco.MjModel, d: mujoco.MjData) -> None:
+    """Wake every sleeping tree, keeping the state; MuJoCo wakes none when a static body moves.
+
+    mj_forward with sleeping switched off wakes all trees the way MuJoCo itself does
+    (writing tree_asleep alone leaves its derived awake lists stale).
+    """
+    flag = int(mujoco.mjtEnableBit.mjENBL_SLEEP)
+    if not m.opt.enableflags & flag or d.ntree_awake == m.ntree:
+        return  # with sleeping off MuJoCo wakes every tree at the next step itself
+    m.opt.enableflags &= ~flag
+    mujoco.mj_forward(m, d)
+    m.opt.enableflags |= flag
+
+
+def read_states(m: mujoco.MjModel, d: mujoco.MjData, index: StateIndex,
+                ids: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """World-frame poses (n, 7) and twists (n, 6) of these bodies; fixed ones have no twist."""
+    kind = index.kind[ids]
+    poses = np.empty((len(ids), 7))
+    twists = np.zeros((len(ids), 6))
+    free = kind == FREE
+    if free.any():
+        q = d.qpos[index.qadr[ids[free]][:, None] + POSE]
+        vel = d.qvel[index.vadr[ids[free]][:, None] + TWIST]
+        poses[free, :3] = q[:, :3]
+        poses[free, 3:] = to_xyzw(q[:, 3:])
+        twists[free, :3] = vel[:, :3]
+        twists[free, 3:] = rotate(q[:, 3:], vel[:, 3:])
+    mocap = kind == MOCAP
+    if mocap.any():
+        mid = index.mocap[ids[mocap]]
+        poses[mocap, :3] = d.mocap_pos[mid]
+        poses[mocap, 3:] = to_xyzw(d.mocap_quat[mid])
+    static = kind == STATIC
+    if static.any():
+        poses[static, :3] = m.body_pos[ids[static]]
+        poses[static, 3:] = to_xyzw(m.body_quat[ids[static]])
+    jointed = kind == JOINTED
+    if jointed.any():
+        poses[jointed], twists[jointed] = jointed_states(m, d, ids[jointed])
+    return poses, twists
+
+
+def write_free_poses(d: mujoco.MjData, index: StateIndex, ids: np.ndarray,
+                     poses: np.ndarray) -> None:
+    """Free bodies' world poses into qpos."""
+    qadr = index.qadr[ids][:, None] + POSE
+    d.qpos[qadr] = np.hstack([poses[:, :3], to_wxyz(poses[:, 3:])])
+
+
+def write_mocap_poses(d: mujoco.MjData, index: StateIndex, ids: np.ndarray,
+                      poses: np.ndarray) -> None:
+    mid = index.mocap[ids]
+    d.mocap_pos[mid] = poses[:, :3]
+    d.mocap_quat[mid] = to_wxyz(poses[:, 3:])
+
+
+def write_twists(d: mujoco.MjData, index: StateIndex, ids: np.ndarray, twists: np.ndarray,
+                 poses: np.ndarray | None) -> None:
+    """World-frame twists into free-joint qvel, whose angular part is in the body frame.
+
+    The frame is the new pose's when one is given, else the body's current one.
+    """
+    quats = d.qpos[index.qadr[ids][:, None] + POSE[3:]] if poses is None \
+        else to_wxyz(poses[:, 3:])
+    local = rotate(quats, twists[:, 3:], inverse=True)
+    d.qvel[index.vadr[ids][:, None] + TWIST] = np.hstack([twists[:, :3], local])
