@@ -7,9 +7,15 @@ multibody has 0.04, which slows a free fall by 7 % in one second), and they step
 faster. Loaded models are multibodies (their joints need it), with damping set to zero.
 
 Contacts: PyBullet multiplies the two bodies' values at a contact, for friction and for
-restitution alike, so the default friction 0.5 on both bodies is 0.25 in effect, and a
-body with restitution 0.9 bounces off a body with restitution 0 hardly at all. Restitution
-is also zero below ``pybullet.restitution_velocity_threshold``.
+restitution alike, so a body with restitution 0.9 bounces off a body with restitution 0
+hardly at all. Restitution is also zero below ``pybullet.restitution_velocity_threshold``.
+The defaults (restitution 0.8275, friction 0.5 on every body: e = 0.685, mu = 0.25 for
+any pair; early contacts from 0.01 m instead of Bullet's 0.02, so that slow balls keep
+their bounce) are calibrated on the Galton board in both release modes; the solver
+settings (10 iterations, pyramid friction) are the cheapest that keep it.
+docs/physics/pybullet.md has the measurements. ``contactBreakingThreshold`` is a global of
+the PyBullet module: every engine sets its own value when it starts, and the last
+``set_params`` wins for all engines of the process.
 
 Memory: removeBody keeps about 0.85 kB per body even with shared collision shapes; only
 resetSimulation frees it, which ``clear`` does, and ``delete`` does when the world empties.
@@ -41,6 +47,7 @@ from galton.daemon.engine import (
     FEATURE_UPDATE_RGBA,
     Engine,
 )
+from galton.daemon.engines.pybullet_params import SPECS, WORLD_PARAMS
 from galton.daemon.engines.pybullet_shapes import (
     DENSITY,
     BodyMaker,
@@ -51,7 +58,7 @@ from galton.daemon.engines.pybullet_shapes import (
     unit_inertia,
     volume,
 )
-from galton.daemon.params import ParamSpec, check_updates, flag, integer, number, vector
+from galton.daemon.params import check_updates
 from galton.protocol import (
     PROTOCOL_VERSION,
     BodyGroup,
@@ -67,49 +74,6 @@ from galton.protocol import (
 from galton.protocol.model import BODY_SHAPES, POSE_WIDTH, TWIST_WIDTH
 
 MODEL_FORMATS = ("urdf", "mjcf")
-
-SPECS: dict[str, ParamSpec] = {spec.name: spec for spec in (
-    ParamSpec("timestep", 1 / 240, "s", "Simulated time per step.",
-              number(0, 1, low_open=True)),
-    ParamSpec("gravity", (0.0, 0.0, -9.81), "m/s²", "Gravity vector, world frame.",
-              vector(3, -1000, 1000)),
-    ParamSpec("solver_iterations", 50, "", "Constraint solver iterations per step "
-              "(numSolverIterations).", integer(1, 10_000)),
-    ParamSpec("default_friction", 0.5, "", "Lateral friction of spawned bodies that set none, "
-              "now and after a change. PyBullet multiplies both bodies' values at a contact.",
-              number(0, 100)),
-    ParamSpec("default_restitution", 0.0, "", "Restitution of spawned bodies that set none, "
-              "now and after a change. PyBullet multiplies both bodies' values at a contact.",
-              number(0, 1)),
-    ParamSpec("pybullet.restitution_velocity_threshold", 0.2, "m/s", "Contacts approaching "
-              "slower than this do not bounce.", number(0, 1000)),
-    ParamSpec("pybullet.ccd_swept_sphere_radius", 0.0, "m", "Continuous collision detection "
-              "for every dynamic body (0 = off): about the smallest ball's radius. Acts on "
-              "spawned bodies only (Bullet has no CCD for the multibodies of models).",
-              number(0, 10)),
-    ParamSpec("pybullet.collision_margin", 0.001, "m", "Margin of spawned boxes, cylinders "
-              "and planes: rounds box edges, capped at half the smallest half size. Spheres "
-              "and capsules keep their radius as margin; models keep theirs.", number(0, 1)),
-    ParamSpec("pybullet.enable_cone_friction", True, "", "Implicit cone friction; false uses "
-              "the cheaper pyramid approximation.", flag),
-    ParamSpec("pybullet.erp", 0.2, "", "Error reduction of non-contact constraints (the "
-              "joints of loaded models).", number(0, 1)),
-    ParamSpec("pybullet.contact_erp", 0.08, "", "Error reduction of contacts: the share of a "
-              "penetration corrected per step.", number(0, 1)),
-    ParamSpec("pybullet.deterministic_overlapping_pairs", True, "", "Sort overlapping pairs, "
-              "so that identical runs give identical results.", flag),
-)}
-
-# Parameters that are setPhysicsEngineParameter keywords (booleans go as 0/1).
-WORLD_PARAMS = {
-    "timestep": "fixedTimeStep",
-    "solver_iterations": "numSolverIterations",
-    "pybullet.restitution_velocity_threshold": "restitutionVelocityThreshold",
-    "pybullet.enable_cone_friction": "enableConeFriction",
-    "pybullet.erp": "erp",
-    "pybullet.contact_erp": "contactERP",
-    "pybullet.deterministic_overlapping_pairs": "deterministicOverlappingPairs",
-}
 
 _P = typing.ParamSpec("_P")
 _R = TypeVar("_R")
@@ -157,7 +121,7 @@ class PybulletEngine(Engine):
         self._reset_velocity = bc.resetBaseVelocity
         self._change = bc.changeDynamics
         self._step = bc.stepSimulation
-        self._shapes = ShapeCache(bc.createCollisionShape)
+        self._shapes = ShapeCache(bc)
         self._bodies: dict[str, _Body] = {}
         self._maker = BodyMaker(bc)
         self._values: dict[str, Any] = {name: spec.default for name, spec in SPECS.items()}
@@ -260,8 +224,11 @@ class PybulletEngine(Engine):
         poses = np.asarray(group.poses, dtype=float).reshape(-1, POSE_WIDTH).tolist()
         mass = 0.0 if group.static else (
             group.mass if group.mass is not None else DENSITY * volume(group.shape, size))
+        quaternions = np.asarray(group.poses, dtype=float).reshape(-1, POSE_WIDTH)[:, 3:]
+        shared = bool((quaternions == quaternions[0]).all())  # one turn for all: no resets
         ids = self._maker.create(mass, self._shapes.get(group.shape, size),
-                                 [pose[:3] for pose in poses], self._owned(), made)
+                                 self._shapes.visual(group.shape, size, group.rgba),
+                                 [pose[:3] for pose in poses], poses[0][3:], self._owned(), made)
         friction = group.friction if group.friction is not None else (
             self._values["default_friction"])
         restitution = group.restitution if group.restitution is not None else (
@@ -276,12 +243,11 @@ class PybulletEngine(Engine):
         twists = None if group.twists is None else np.asarray(
             group.twists, dtype=float).reshape(-1, TWIST_WIDTH).tolist()
         for k, uid in enumerate(ids):
-            self._reset_pose(uid, poses[k][:3], poses[k][3:])
+            if not shared:
+                self._reset_pose(uid, poses[k][:3], poses[k][3:])
             if twists is not None:
                 self._reset_velocity(uid, twists[k][:3], twists[k][3:])
             self._change(uid, -1, **dynamics)
-            if group.rgba is not None:
-                self._bc.changeVisualShape(uid, -1, rgbaColor=list(group.rgba))
         self._set_margin(ids[0], group.shape, size)
         return {name: _Body(uid, group.static, group.shape, size, inertia,
                             follows_friction=group.friction is None,

@@ -223,6 +223,67 @@ def test_restitution_makes_a_ball_bounce(engine: PybulletEngine) -> None:
     assert max(rising) / impact == pytest.approx(0.9 * 0.9, abs=0.1)  # the product, roughly
 
 
+def drop_bounce(engine: PybulletEngine, height: float) -> float:
+    """Coefficient of restitution of a ball dropped from rest ``height`` above a plane:
+    the square root of the rebound height over the drop height."""
+    engine.clear()
+    engine.spawn([ground(), balls(["a"], [0, 0, RADIUS + height])])
+    rebound, rising = 0.0, False
+    for _ in range(int(2.2 * math.sqrt(2 * height / GRAVITY) / engine.timestep) + 24):
+        engine.step(1)
+        poses, twists = engine.get_states(["a"])
+        rising = rising or twists[0, 2] > 0
+        if rising:
+            rebound = max(rebound, poses[0, 2] - RADIUS)
+    return math.sqrt(rebound / height)
+
+
+def mean_bounce(engine: PybulletEngine, height: float) -> float:
+    """Mean of 8 drops from about ``height``: one drop alone varies by +-0.05 with where the
+    impact falls within a step."""
+    return float(np.mean([drop_bounce(engine, height * (1 + k / 97)) for k in range(8)]))
+
+
+@pytest.mark.parametrize("height", [0.05, 0.5, 2.5])
+def test_default_bounce_is_a_hard_ball_on_a_hard_floor(engine: PybulletEngine,
+                                                       height: float) -> None:
+    """default_restitution 0.8275 on both bodies (0.8275² = 0.685): e about 0.70-0.72 at 1,
+    3 and 7 m/s (docs/physics/pybullet.md)."""
+    assert mean_bounce(engine, height) == pytest.approx(0.71, abs=0.04)
+
+
+def test_early_contacts_take_the_bounce_of_slow_balls(engine: PybulletEngine) -> None:
+    """At a small step, a slow ball loses its bounce in contacts made before it touches
+    (Bullet's 0.02 m); the default 0.01 m keeps most of it, 0.001 m all of it."""
+    bounces = {}
+    for gap in (0.02, 0.01, 0.001):
+        engine.set_params({"timestep": 1 / 480, "pybullet.contact_breaking_threshold": gap})
+        bounces[gap] = mean_bounce(engine, 0.05)
+    assert bounces[0.02] < bounces[0.01] - 0.05
+    assert bounces[0.001] == pytest.approx(mean_bounce(engine, 2.5), abs=0.03)
+
+
+def test_default_friction_combines_to_the_product(engine: PybulletEngine) -> None:
+    """A ball thrown flat along the plane slides first: its deceleration is mu g, with mu the
+    product of both bodies' default friction, 0.5 x 0.5 = 0.25."""
+    engine.spawn([ground(), BodyGroup("sphere", (RADIUS,), ["a"], poses_at([0, 0, RADIUS]),
+                                      twists=np.array([[2.0, 0, 0, 0, 0, 0]]))])
+    engine.step(12)
+    speed = engine.get_states(["a"])[1][0, 0]
+    assert (2.0 - speed) / (12 * engine.timestep) / GRAVITY == pytest.approx(0.5**2, abs=0.01)
+
+
+def test_bodies_share_one_mesh_look_per_shape_size_and_colour(engine: PybulletEngine) -> None:
+    """Spawns give each body a cached mesh as its look: PyBullet would otherwise build one
+    per body from the collision shape (a convex hull, 0.4 ms per sphere)."""
+    engine.spawn([balls([f"b{i}" for i in range(20)], grid(20), rgba=(1, 0, 0, 1)),
+                  balls(["c"], [5, 5, 1], rgba=(0, 0, 1, 1))])
+    looks = {engine._bc.getVisualShapeData(body_id(engine, n))[0][2] for n in ("b0", "b19", "c")}
+    assert looks == {5}  # GEOM_MESH
+    assert engine._bc.getVisualShapeData(body_id(engine, "c"))[0][7] == pytest.approx((0, 0, 1, 1))
+    assert len(engine._shapes) == 1
+
+
 def test_clear_empties_the_world_and_keeps_params(engine: PybulletEngine) -> None:
     engine.set_params({"gravity": [0, 0, -3.0]})
     engine.spawn([ground(), balls(["a"], [0, 0, 1])])

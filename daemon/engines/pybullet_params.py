@@ -1,0 +1,60 @@
+"""The PyBullet engine's parameters: name, default, unit, meaning and check of each, and the
+setPhysicsEngineParameter keyword of those that are world settings.
+
+The contact defaults are calibrated on the Galton board (docs/physics/pybullet.md): restitution
+0.8275 and friction 0.5 on every body (PyBullet multiplies both bodies' values: e = 0.685,
+mu = 0.25), contacts made from 0.01 m, 10 solver iterations and pyramid friction.
+"""
+
+from __future__ import annotations
+
+from galton.daemon.params import ParamSpec, flag, integer, number, vector
+
+SPECS: dict[str, ParamSpec] = {spec.name: spec for spec in (
+    ParamSpec("timestep", 1 / 240, "s", "Simulated time per step.",
+              number(0, 1, low_open=True)),
+    ParamSpec("gravity", (0.0, 0.0, -9.81), "m/s²", "Gravity vector, world frame.",
+              vector(3, -1000, 1000)),
+    ParamSpec("solver_iterations", 10, "", "Constraint solver iterations per step "
+              "(numSolverIterations; PyBullet's own default is 50).", integer(1, 10_000)),
+    ParamSpec("default_friction", 0.5, "", "Lateral friction of spawned bodies that set "
+              "none, now and after a change. PyBullet multiplies both bodies' values at a "
+              "contact: 0.5 on both is mu = 0.25.", number(0, 100)),
+    ParamSpec("default_restitution", 0.8275, "", "Restitution of spawned bodies that set "
+              "none, now and after a change. PyBullet multiplies both bodies' values at a "
+              "contact: 0.8275 on both is e = 0.685.", number(0, 1)),
+    ParamSpec("pybullet.restitution_velocity_threshold", 0.2, "m/s", "Contacts approaching "
+              "slower than this do not bounce.", number(0, 1000)),
+    ParamSpec("pybullet.contact_breaking_threshold", 0.01, "m", "Gap at which Bullet makes a "
+              "contact before two solids touch. Such early contacts lose their bounce once a "
+              "few steps old, so a slow ball bounces less off a plane, box or cylinder, the "
+              "more so at small timesteps; 0.001 gives the same bounce at every speed and step.",
+              number(0, 1, low_open=True)),
+    ParamSpec("pybullet.ccd_swept_sphere_radius", 0.0, "m", "Continuous collision detection "
+              "for every dynamic body (0 = off): about the smallest ball's radius. Acts on "
+              "spawned bodies only (Bullet has no CCD for the multibodies of models).",
+              number(0, 10)),
+    ParamSpec("pybullet.collision_margin", 0.001, "m", "Margin of spawned boxes, cylinders "
+              "and planes: rounds box edges, capped at half the smallest half size. Spheres "
+              "and capsules keep their radius as margin; models keep theirs.", number(0, 1)),
+    ParamSpec("pybullet.enable_cone_friction", False, "", "Implicit cone friction; false "
+              "(the default here, not PyBullet's) uses the cheaper pyramid approximation.", flag),
+    ParamSpec("pybullet.erp", 0.2, "", "Error reduction of non-contact constraints (the "
+              "joints of loaded models).", number(0, 1)),
+    ParamSpec("pybullet.contact_erp", 0.08, "", "Error reduction of contacts: the share of a "
+              "penetration corrected per step.", number(0, 1)),
+    ParamSpec("pybullet.deterministic_overlapping_pairs", True, "", "Sort overlapping pairs, "
+              "so that identical runs give identical results.", flag),
+)}
+
+# Parameters that are setPhysicsEngineParameter keywords (booleans go as 0/1).
+WORLD_PARAMS = {
+    "timestep": "fixedTimeStep",
+    "solver_iterations": "numSolverIterations",
+    "pybullet.restitution_velocity_threshold": "restitutionVelocityThreshold",
+    "pybullet.contact_breaking_threshold": "contactBreakingThreshold",
+    "pybullet.enable_cone_friction": "enableConeFriction",
+    "pybullet.erp": "erp",
+    "pybullet.contact_erp": "contactERP",
+    "pybullet.deterministic_overlapping_pairs": "deterministicOverlappingPairs",
+}
