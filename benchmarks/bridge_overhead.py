@@ -4,7 +4,8 @@ Usage: python benchmarks/bridge_overhead.py [--balls 100] [--rounds 3] [--json F
 
 The in-process side drives the daemon's own ``World`` over the same engine with exactly the
 requests a trial sends (spawn, run_until in 0.5 s chunks, batch state reads), so the only
-difference is Zenoh, msgpack and the physics thread hand-off. Runs
+difference is Zenoh, msgpack and the physics thread hand-off; the script checks that both
+sides simulated the identical trial (same sim time, same bins). Runs
 alternate (in-process, bridge, ...) to spread the machine's noise; the ratio of medians
 is reported. Target (issue 6): bridge ≤ 1.05 × in-process wall time.
 """
@@ -47,8 +48,10 @@ class LocalSim:
             self.world.engine.set_params(params)
 
     def spawn(self, *groups: BodyGroup, timeout: float | None = None) -> list[str]:
+        """Through the wire encoding, as the daemon sees them (quaternions normalised the
+        same way), so that both sides simulate bit-identical worlds."""
         assert self.world is not None
-        return self.world.spawn(groups)
+        return self.world.spawn([BodyGroup.from_wire(g.to_wire()) for g in groups])
 
     def run_until(self, sim_time: float) -> Stamp:
         assert self.world is not None
@@ -82,18 +85,20 @@ def trial_config(engine: str, balls: int) -> TrialConfig:
     return TrialConfig(engine, board, repetition=0, seed=0)
 
 
-def wall(sim: Any, config: TrialConfig) -> tuple[float, float]:
+def wall(sim: Any, config: TrialConfig) -> tuple[float, float, list[int]]:
     started = time.perf_counter()
     record = run_trial(sim, config)
-    return time.perf_counter() - started, record.sim_time
+    return time.perf_counter() - started, record.sim_time, record.counts
 
 
 def measure(engine: str, balls: int, rounds: int) -> dict:
     config = trial_config(engine, balls)
     local_walls, bridge_walls = [], []
     with daemon_client(engine) as (_, sim):
-        wall(sim, config)  # warm both paths once
-        wall(LocalSim(), config)
+        _, bridge_time, bridge_counts = wall(sim, config)  # warm both paths once
+        _, local_time, local_counts = wall(LocalSim(), config)
+        if (bridge_time, bridge_counts) != (local_time, local_counts):
+            raise SystemExit(f"{engine}: the two sides simulated different trials")
         for _ in range(rounds):
             local_walls.append(wall(LocalSim(), config)[0])
             bridge_walls.append(wall(sim, config)[0])

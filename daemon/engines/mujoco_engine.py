@@ -1,8 +1,12 @@
 """The MuJoCo engine: a world built with ``mujoco.MjSpec`` and edited while it runs.
 
-Every spawn, delete or model load edits the spec and recompiles it once, in place
+Every delete or model load edits the spec and recompiles it once, in place
 (``MjSpec.recompile``), so the bodies already there keep their positions, velocities and
-warm starts. Dynamic bodies have a free joint; static ones are jointless children of the
+warm starts. A spawn does too unless the pool holds enough parked, pre-compiled bodies of the
+group's kind: then it binds the names to them, no compile (``mujoco_pool``); a compiling spawn
+adds spare parked twins, and delete and clear park spawned bodies again.
+
+Dynamic bodies have a free joint; static ones are jointless children of the
 world whose pose is written into the compiled model (and the spec), so moving them needs no
 recompile, and balls resting on them can sleep (see ``mujoco_spec.add_group``). States are
 read and written in batches through numpy index arrays (``mujoco_state``) rebuilt after each
@@ -33,6 +37,7 @@ from galton.daemon.engine import (
     FEATURE_UPDATE_RGBA,
     Engine,
 )
+from galton.daemon.engines import mujoco_pool as mp
 from galton.daemon.engines import mujoco_spec as ms
 from galton.daemon.engines import mujoco_state as mst
 from galton.daemon.engines.mujoco_state import FREE, JOINTED, MOCAP, STATIC
@@ -53,8 +58,6 @@ from galton.protocol import (
 FEATURES = (FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDATE_MASS,
             FEATURE_UPDATE_FRICTION, FEATURE_UPDATE_RESTITUTION, FEATURE_UPDATE_RGBA,
             FEATURE_LOAD_MODEL, FEATURE_STATIC_POSE)
-# How far a jointed body's requested pose may be from its initial one (m, quaternion units).
-_SAME_POSE = 1e-6
 _GEOM = mujoco.mjtObj.mjOBJ_GEOM
 
 
@@ -68,6 +71,7 @@ class _Entity:
     friction: float | None = None
     restitution: float | None = None
     initial_pose: np.ndarray | None = None
+    key: mp.Key | None = None  # its pool kind while its compiled values are still that kind's
 
     def geoms(self) -> list[Any]:
         return [self.body.first_geom()] if self.source == "spawn" else \
@@ -88,6 +92,7 @@ class MujocoEngine(Engine):
 
     # -- compile & index ----------------------------------------------------------------
     def _build_empty(self) -> None:
+        self._pool = mp.Pool()
         self._spec = mujoco.MjSpec()
         self._spec.modelname = "galton"
         ms.write_options(self._spec.option, self._values)
@@ -108,24 +113,15 @@ class MujocoEngine(Engine):
         self._ids = {name: e.body.id for name, e in self._entities.items()}
         self._warnings = self._data.warning.number
 
-    def _commit(self, added: Sequence[str]) -> None:
-        """Recompile after adding these entities; on failure take them out again."""
+    def _commit(self, added: Sequence[str], spares: Sequence[Any] = ()) -> None:
+        """Recompile after adding these entities (and parked spares); on failure take them
+        out again."""
         try:
             self._recompile()
         except InvalidArgumentError:
-            self._remove_from_spec([self._entities.pop(n).body for n in added])
+            self._pool.forget(spares)
+            ms.remove_bodies(self._spec, [*(self._entities.pop(n).body for n in added), *spares])
             raise
-
-    def _remove_from_spec(self, bodies: Sequence[Any]) -> None:
-        """Delete bodies from the spec in one go: gathered under one frame, then it deleted.
-
-        (Deleting bodies one at a time copies the whole spec each time: 12 ms per body at
-        1,000 bodies; deleting one frame holding them all costs one copy.)
-        """
-        frame = self._spec.worldbody.add_frame()
-        for body in bodies:
-            body.set_frame(frame)
-        self._spec.delete(frame)
 
     def _body_ids(self, names: Sequence[str]) -> np.ndarray:
         try:
@@ -165,6 +161,8 @@ class MujocoEngine(Engine):
         ms.write_options(self._spec.option, self._values)
         ms.write_options(self._model.opt, self._values)
         if ms.CONTACT_PARAMS & clean.keys():
+            for entity in self._entities.values():
+                entity.key = None  # its values are rewritten: it no longer matches its kind
             self._apply_contacts(list(self._entities))
 
     def _apply_contacts(self, names: Sequence[str]) -> None:
@@ -175,7 +173,6 @@ class MujocoEngine(Engine):
         its file's values except those set by ``update``.
         """
         m, v = self._model, self._values
-        solimp, spin = v["mujoco.solimp"], ms.spin_friction(v)
         for name in names:
             e = self._entities[name]
             spawned = e.source == "spawn"
@@ -184,52 +181,59 @@ class MujocoEngine(Engine):
                 else e.restitution
             if friction is None and restitution is None:
                 continue
-            gids = self._geom_ids([name])
-            solref = None if restitution is None else ms.contact_solref(restitution, v)
-            if friction is not None:
-                m.geom_friction[gids, 0] = friction
-            if solref is not None:
-                m.geom_solref[gids] = solref
-            if spawned:
-                m.geom_solimp[gids] = solimp
-                m.geom_friction[gids, 1:] = spin
-                m.geom_condim[gids] = v["mujoco.condim"]
-            for geom in e.geoms():
-                if friction is not None:
-                    geom.friction[0] = friction
-                if solref is not None:
-                    geom.solref = solref
-                if spawned:
-                    geom.solimp = solimp
-                    geom.friction[1:] = spin
-                    geom.condim = v["mujoco.condim"]
+            ms.write_contacts(m, e.geoms(), self._geom_ids([name]), v, friction, restitution,
+                              spawned)
 
     # -- Engine: create & delete ---------------------------------------------------------
-    def _material(self, group: BodyGroup) -> ms.Material:
-        v = self._values
-        friction = v["default_friction"] if group.friction is None else group.friction
-        restitution = v["default_restitution"] if group.restitution is None \
-            else group.restitution
-        return ms.Material(friction=friction, spin=ms.spin_friction(v),
-                           condim=v["mujoco.condim"], solref=ms.contact_solref(restitution, v),
-                           solimp=tuple(v["mujoco.solimp"]), rgba=group.rgba, mass=group.mass)
-
     def spawn(self, groups: Sequence[BodyGroup]) -> None:
-        taken = [n for g in groups for n in g.names if self._spec.body(n) is not None]
+        """Bind parked bodies where the pool has enough of a group's kind; compile the other
+        groups (with spare parked twins) in one recompile."""
+        names = [n for g in groups for n in g.names]
+        taken = [n for n in names if self._spec.body(n) is not None]
         if taken:  # a model's inner link, which is no entity of the World's
             raise InvalidArgumentError(f"MuJoCo already has a body named {taken[0]!r} (a part "
                                        "of a loaded model); choose another name")
+        if len(set(names)) != len(names):
+            raise InvalidArgumentError("MuJoCo rejected the change: a name is repeated")
         added: list[str] = []
+        spares: list[Any] = []
+        pooled: list[tuple[BodyGroup, mp.Key]] = []
+        wanted: dict[mp.Key, int] = {}
         for group in groups:
-            for name, body in ms.add_group(self._spec, group, self._material(group)):
+            material = ms.material(group, self._values)
+            key = mp.key_of(group, material)
+            if self._pool.available(key) >= wanted.get(key, 0) + len(group):
+                wanted[key] = wanted.get(key, 0) + len(group)
+                pooled.append((group, key))
+                continue
+            for name, body in ms.add_group(self._spec, group, material):
                 self._entities[name] = _Entity(body, group.static, friction=group.friction,
-                                               restitution=group.restitution)
+                                               restitution=group.restitution, key=key)
                 added.append(name)
-        self._commit(added)
+            spares += self._pool.add_spares(self._spec, group, material, key,
+                                            self._pool.spares(len(group)))
+        if added:
+            self._commit(added, spares)
+        for group, key in pooled:
+            self._bind(group, key)
+        if pooled:
+            mp.refresh(self._model, self._data)
         for group in groups:
             if group.twists is not None and not group.static:
                 mst.write_twists(self._data, self._index, self._body_ids(group.names),
                                  np.asarray(group.twists, dtype=float), None)
+
+    def _bind(self, group: BodyGroup, key: mp.Key) -> None:
+        """Give a group's names to parked bodies of its kind and release them: no compile."""
+        bodies = self._pool.take(key, len(group))
+        poses = np.asarray(group.poses, dtype=float)
+        mp.bind_spec(bodies, group.names, poses)
+        for name, body in zip(group.names, bodies, strict=True):
+            self._entities[name] = _Entity(body, group.static, friction=group.friction,
+                                           restitution=group.restitution, key=key)
+            self._ids[name] = body.id
+        mp.bind_arrays(self._model, self._data, self._index, self._body_ids(group.names),
+                       poses)
 
     def load_model(self, fmt: str, text: str | None, path: str | None,
                    prefix: str) -> list[EntityInfo]:
@@ -261,18 +265,31 @@ class MujocoEngine(Engine):
                           mass=float(self._model.body_subtreemass[bid]), source="model")
 
     def delete(self, names: Sequence[str]) -> None:
+        """One recompile; spawned bodies still of their kind go back to the pool, parked."""
         self._body_ids(names)
-        self._remove_from_spec([self._entities.pop(n).body for n in names])
+        parked = self._pool.park_or_remove(self._spec, [self._entities.pop(n) for n in names])
         try:
             self._recompile()
         except InvalidArgumentError as exc:
             raise OperationFailedError(f"MuJoCo failed to recompile after a delete: {exc}") \
                 from exc
+        mp.park_arrays(self._model, self._data, self._index, parked)
 
     def clear(self) -> None:
+        """An empty world at time 0; the pool stays warm: every spawned body is parked."""
+        entities = list(self._entities.values())
         self._entities.clear()
         self._diverged = False
-        self._build_empty()
+        if any(e.source != "spawn" for e in entities):
+            self._build_empty()  # a model may bring more than bodies: start afresh
+            return
+        parked = self._pool.park_or_remove(self._spec, entities)
+        if len(parked) < len(entities) or (  # removed some; or gravcomp was compiled out
+                self._model.ngravcomp == 0 and not all(e.static for e in entities)):
+            self._recompile()
+        mp.park_arrays(self._model, self._data, self._index, parked)
+        mujoco.mj_resetData(self._model, self._data)
+        self._reindex()
 
     # -- Engine: state --------------------------------------------------------------------
     def get_states(self, names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
@@ -292,8 +309,9 @@ class MujocoEngine(Engine):
             raise InvalidArgumentError(f"entity {bad!r} is static: it cannot be given a "
                                        "non-zero twist")
         for row in np.flatnonzero(jointed):
-            self._check_jointed(names[row], None if poses is None else poses[row],
-                                None if twists is None else twists[row])
+            mst.check_jointed(names[row], self._entities[names[row]].initial_pose,
+                              None if poses is None else poses[row],
+                              None if twists is None else twists[row])
         d = self._data
         if poses is not None and free.any():
             mst.write_free_poses(d, self._index, ids[free], poses[free])
@@ -320,22 +338,11 @@ class MujocoEngine(Engine):
             body.pos = poses[row, :3]
             body.quat = quats[row]
 
-    def _check_jointed(self, name: str, pose: np.ndarray | None,
-                       twist: np.ndarray | None) -> None:
-        """A body held by joints can only be put back, at rest, where it was loaded."""
-        initial = self._entities[name].initial_pose
-        moved = pose is not None and initial is not None and not (
-            np.allclose(pose[:3], initial[:3], atol=_SAME_POSE)
-            and abs(abs(float(pose[3:] @ initial[3:])) - 1) < _SAME_POSE)
-        if moved or (twist is not None and np.any(twist)):
-            raise FeatureUnsupportedError(
-                f"entity {name!r} is held by joints of its model: it can only be reset to its "
-                "initial pose at rest, not teleported")
-
     def update(self, names: Sequence[str], props: BodyProperties) -> None:
         self._body_ids(names)
         for name in names:
             entity = self._entities[name]
+            entity.key = None  # no longer like its parked twins: deleting it removes it
             if props.friction is not None:
                 entity.friction = props.friction
             if props.restitution is not None:

@@ -13,7 +13,11 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
+from galton.protocol import FeatureUnsupportedError
+
 FREE, MOCAP, JOINTED, STATIC = 1, 2, 3, 4
+# How far a jointed body's requested pose may be from its initial one (m, quaternion units).
+_SAME_POSE = 1e-6
 POSE = np.arange(7)
 TWIST = np.arange(6)
 
@@ -76,6 +80,18 @@ def jointed_states(m: mujoco.MjModel, d: mujoco.MjData,
         mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_BODY, int(bid), velocity, 0)
         twists[row] = np.concatenate([velocity[3:], velocity[:3]])
     return np.hstack([d.xpos[ids], to_xyzw(d.xquat[ids])]), twists
+
+
+def check_jointed(name: str, initial: np.ndarray | None, pose: np.ndarray | None,
+                  twist: np.ndarray | None) -> None:
+    """A body held by joints can only be put back, at rest, where it was loaded."""
+    moved = pose is not None and initial is not None and not (
+        np.allclose(pose[:3], initial[:3], atol=_SAME_POSE)
+        and abs(abs(float(pose[3:] @ initial[3:])) - 1) < _SAME_POSE)
+    if moved or (twist is not None and np.any(twist)):
+        raise FeatureUnsupportedError(
+            f"entity {name!r} is held by joints of its model: it can only be reset to its "
+            "initial pose at rest, not teleported")
 
 
 _QPOS_WIDTH = {mujoco.mjtJoint.mjJNT_FREE: 7, mujoco.mjtJoint.mjJNT_BALL: 4}

@@ -416,3 +416,103 @@ def test_contact_dimension_must_be_one_mujoco_has(engine: MujocoEngine) -> None:
     engine.spawn([ball()])
     engine.set_params({"mujoco.condim": 6, "mujoco.rolling_friction": 0.001})
     assert engine.get_params()["mujoco.condim"] == 6
+
+
+# -- the pool of parked bodies -----------------------------------------------------------
+def _count_compiles(monkeypatch: pytest.MonkeyPatch) -> list[int]:
+    calls: list[int] = []
+    original = MujocoEngine._recompile
+
+    def counting(self: MujocoEngine) -> None:
+        calls.append(1)
+        original(self)
+
+    monkeypatch.setattr(MujocoEngine, "_recompile", counting)
+    return calls
+
+
+def _grid(n: int, z: float = 1.0) -> list[list[float]]:
+    return [[i % 10 * 0.2, i // 10 * 0.2, z] for i in range(n)]
+
+
+def test_a_spawn_of_a_kind_with_parked_twins_needs_no_compile(
+        engine: MujocoEngine, monkeypatch: pytest.MonkeyPatch) -> None:
+    calls = _count_compiles(monkeypatch)
+    engine.spawn([ground(), group("sphere", ["a", "b"], _grid(2))])
+    assert len(calls) == 1
+    names = [f"ball_{i}" for i in range(10)]
+    engine.spawn([group("sphere", names, _grid(10, 2.0), twists=np.tile([1.0, 0, 0, 0, 0, 0],
+                                                                           (10, 1)))])
+    assert len(calls) == 1  # bound to parked spares
+    poses, twists = engine.get_states(names)
+    np.testing.assert_allclose(poses[:, :3], _grid(10, 2.0))
+    np.testing.assert_allclose(twists[:, 0], 1.0)
+    run(engine, 2.0)
+    poses, _ = engine.get_states(names)
+    np.testing.assert_allclose(poses[:, 2], RADIUS, atol=5e-3)  # they collide with the ground
+    engine.spawn([group("sphere", ["big"], _grid(1, 3.0), size=(0.2,))])
+    assert len(calls) == 2  # another kind: compiled
+
+
+def test_parked_bodies_are_invisible(engine: MujocoEngine) -> None:
+    engine.spawn([ground(), ball("ball", z=0.5)])
+    engine.delete(["ball"])
+    engine.spawn([ball("other", z=0.3)])
+    run(engine, 3.0)
+    pose, _ = engine.get_states(["other"])
+    np.testing.assert_allclose(pose[0, 2], RADIUS, atol=5e-3)
+    engine.set_states(["other"], np.array([[0, 0, RADIUS * 0.99, *IDENTITY]]), None)
+    engine.step(1)
+    touching = engine._model.geom_bodyid[engine._data.contact.geom[:engine._data.ncon]]
+    assert engine._data.ncon == 1  # the ground and "other" only: no parked body touches
+    assert set(touching.ravel()) == {engine._ids["other"], engine._ids["ground"]}
+    for name in ("ball", "ball_0"):
+        with pytest.raises(NotFoundError):
+            engine.get_states([name])
+    m, d = engine._model, engine._data
+    parked = [b for b in range(1, m.nbody) if b not in engine._ids.values()]
+    assert parked and not m.body_contype[parked].any() and not m.body_conaffinity[parked].any()
+    heights = d.xpos[parked, 2].copy()
+    run(engine, 1.0)
+    np.testing.assert_array_equal(d.xpos[parked, 2], heights)  # gravity does not pull them
+
+
+def test_delete_then_respawn_reuses_and_keeps_other_states(
+        engine: MujocoEngine, monkeypatch: pytest.MonkeyPatch) -> None:
+    engine.spawn([ball("keep", z=5.0, twists=np.array([[0.3, 0, 0, 0, 0, 2.0]])),
+                  ball("gone", z=1.0)])
+    run(engine, 0.2)
+    calls = _count_compiles(monkeypatch)
+    engine.delete(["gone"])
+    before = engine.get_states(["keep"])
+    engine.spawn([ball("again", z=1.0)])
+    assert not calls[1:]  # the delete's one compile; the respawn none
+    for got, want in zip(engine.get_states(["keep"]), before, strict=True):
+        np.testing.assert_array_equal(got, want)
+
+
+def test_a_cleared_world_respawns_without_compiling_and_repeats_itself(
+        engine: MujocoEngine, monkeypatch: pytest.MonkeyPatch) -> None:
+    names = [f"b{i}" for i in range(10)]
+    results, calls = [], _count_compiles(monkeypatch)
+    for _ in range(3):
+        engine.clear()
+        engine.spawn([ground()])
+        engine.spawn([group("sphere", names, [[i * 0.07, 0, 0.3 + 0.15 * i]
+                                              for i in range(10)])])
+        run(engine, 1.0)
+        results.append(engine.get_states(names))
+        assert engine.get_states(names)[0].shape == (10, 7)
+    assert len(calls) == 2  # the first ground, the first balls; then all from the pool
+    for again in results[1:]:  # pooled after a clear, the same as compiled afresh
+        for got, want in zip(again, results[0], strict=True):
+            np.testing.assert_array_equal(got, want)
+
+
+def test_an_updated_body_is_not_parked_as_its_kind(engine: MujocoEngine) -> None:
+    engine.spawn([ball("ball")])
+    engine.update(["ball"], BodyProperties(friction=0.9))
+    engine.delete(["ball"])
+    engine.spawn([ball("next")])
+    gid = engine._model.body_geomadr[engine._ids["next"]]
+    assert engine._model.geom_friction[gid, 0] == engine.get_params()["default_friction"]
