@@ -18,7 +18,8 @@ the PyBullet module: every engine sets its own value when it starts, and the las
 ``set_params`` wins for all engines of the process.
 
 Memory: removeBody keeps about 0.85 kB per body even with shared collision shapes; only
-resetSimulation frees it, which ``clear`` does, and ``delete`` does when the world empties.
+resetSimulation frees it, which ``clear`` does, and ``delete`` does when the world empties
+or, past a count of removed bodies, by rebuilding the world (pybullet_rebuild.py).
 """
 
 from __future__ import annotations
@@ -28,7 +29,6 @@ import importlib.metadata
 import itertools
 import typing
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
 from typing import Any, TypeVar
 
 import numpy as np
@@ -47,7 +47,9 @@ from galton.daemon.engine import (
     FEATURE_UPDATE_RGBA,
     Engine,
 )
+from galton.daemon.engines import pybullet_rebuild as rebuild
 from galton.daemon.engines.pybullet_params import SPECS, WORLD_PARAMS
+from galton.daemon.engines.pybullet_rebuild import Body as _Body
 from galton.daemon.engines.pybullet_shapes import (
     DENSITY,
     BodyMaker,
@@ -91,20 +93,6 @@ def _engine_call(method: Callable[_P, _R]) -> Callable[_P, _R]:
     return wrapper
 
 
-@dataclass(slots=True)
-class _Body:
-    """What the engine keeps per entity beyond PyBullet's body id."""
-
-    uid: int
-    static: bool
-    shape: str  # a protocol shape, or "model"
-    size: tuple[float, ...]
-    unit_inertia: tuple[float, float, float] | None  # None for static bodies
-    links: int = 0  # a model's links beside the base
-    follows_friction: bool = False  # set by default_friction, now and after a change
-    follows_restitution: bool = False
-
-
 class PybulletEngine(Engine):
     """Named rigid bodies in a headless PyBullet world."""
 
@@ -125,6 +113,9 @@ class PybulletEngine(Engine):
         self._bodies: dict[str, _Body] = {}
         self._maker = BodyMaker(bc)
         self._values: dict[str, Any] = {name: spec.default for name, spec in SPECS.items()}
+        self._removed = 0  # bodies removed since resetSimulation last ran
+        self._held: dict[str, rebuild.Held] = {}  # states a rebuild could not set bit for bit
+        self.rebuilds = 0
         self._configure_world()
 
     # -- description ----------------------------------------------------------------------
@@ -174,11 +165,13 @@ class PybulletEngine(Engine):
         if "default_friction" in values:
             for body in bodies:
                 if body.follows_friction:
-                    self._change(body.uid, -1, lateralFriction=values["default_friction"])
+                    body.friction = values["default_friction"]
+                    self._change(body.uid, -1, lateralFriction=body.friction)
         if "default_restitution" in values:
             for body in bodies:
                 if body.follows_restitution:
-                    self._change(body.uid, -1, restitution=values["default_restitution"])
+                    body.restitution = values["default_restitution"]
+                    self._change(body.uid, -1, restitution=body.restitution)
         if "pybullet.ccd_swept_sphere_radius" in values:
             radius = values["pybullet.ccd_swept_sphere_radius"]
             for body in bodies:
@@ -249,27 +242,45 @@ class PybulletEngine(Engine):
                 self._reset_velocity(uid, twists[k][:3], twists[k][3:])
             self._change(uid, -1, **dynamics)
         self._set_margin(ids[0], group.shape, size)
+        rgba = None if group.rgba is None else tuple(float(c) for c in group.rgba)
         return {name: _Body(uid, group.static, group.shape, size, inertia,
                             follows_friction=group.friction is None,
-                            follows_restitution=group.restitution is None)
+                            follows_restitution=group.restitution is None, mass=mass,
+                            friction=friction, restitution=restitution, rgba=rgba)
                 for name, uid in zip(group.names, ids, strict=True)}
 
     @_engine_call
     def delete(self, names: Sequence[str]) -> None:
         bodies = self._lookup(names)
         self._maker.remove([b.uid for b in bodies])
+        self._removed += len(bodies)
         for name in names:
             del self._bodies[name]
+            self._held.pop(name, None)
+        # removeBody keeps about 0.85 kB per body (measured with shared shapes) until
+        # resetSimulation: an empty world is reset for free, a fuller one rebuilt now and then.
         if not self._bodies:
-            # removeBody keeps about 0.85 kB per body (measured with shared shapes) until
-            # resetSimulation; an empty world can be rebuilt for free, so do it now.
             self.clear()
+        elif rebuild.due(self._removed, self._bodies):
+            self._rebuild()
+
+    def _rebuild(self) -> None:
+        """resetSimulation, keeping every (spawned) body as the protocol sees it."""
+        kept = dict(self._bodies)
+        states = rebuild.read_states(self._bc, kept)
+        self.clear()
+        self._held = rebuild.recreate(self._bc, self._maker, self._shapes, kept, states,
+                                      self._values)
+        self._bodies.update(kept)
+        self.rebuilds += 1
 
     @_engine_call
     def clear(self) -> None:
         """resetSimulation: the only call that frees PyBullet's collision shapes."""
         self._bc.resetSimulation()
         self._bodies.clear()
+        self._held.clear()
+        self._removed = 0
         self._maker.forget()
         self._shapes.forget()
         self._configure_world()
@@ -288,17 +299,19 @@ class PybulletEngine(Engine):
         for body in bodies:
             dynamics: dict[str, Any] = {}
             if props.mass is not None and body.unit_inertia is not None:
+                body.mass = props.mass
                 dynamics.update(mass=props.mass,
                                 localInertiaDiagonal=[props.mass * i for i in body.unit_inertia])
             if props.friction is not None:
-                dynamics["lateralFriction"] = props.friction
+                dynamics["lateralFriction"] = body.friction = props.friction
                 body.follows_friction = False
             if props.restitution is not None:
-                dynamics["restitution"] = props.restitution
+                dynamics["restitution"] = body.restitution = props.restitution
                 body.follows_restitution = False
             if dynamics:
                 self._change(body.uid, -1, **dynamics)
             if props.rgba is not None:
+                body.rgba = tuple(float(c) for c in props.rgba)
                 for link in range(-1, body.links):
                     self._bc.changeVisualShape(body.uid, link, rgbaColor=list(props.rgba))
 
@@ -314,7 +327,10 @@ class PybulletEngine(Engine):
     # -- state ----------------------------------------------------------------------------
     @_engine_call
     def get_states(self, names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
-        return self._read([b.uid for b in self._lookup(names)])
+        poses, twists = self._read([b.uid for b in self._lookup(names)])
+        if self._held:  # right after a rebuild: the states as they were before it
+            rebuild.report_held(self._held, names, poses, twists)
+        return poses, twists
 
     def _read(self, ids: list[int]) -> tuple[np.ndarray, np.ndarray]:
         """One call per body and per quantity (PyBullet has no batch getter): the nested
@@ -328,6 +344,8 @@ class PybulletEngine(Engine):
     def set_states(self, names: Sequence[str], poses: np.ndarray | None,
                    twists: np.ndarray | None) -> None:
         ids = [b.uid for b in self._lookup(names)]
+        if self._held:
+            rebuild.release_held(self._held, names, poses is not None, twists is not None)
         if poses is not None:
             for uid, pose in zip(ids, np.asarray(poses, dtype=float).tolist(), strict=True):
                 self._reset_pose(uid, pose[:3], pose[3:])
@@ -338,6 +356,7 @@ class PybulletEngine(Engine):
     @_engine_call
     def step(self, count: int) -> None:
         step = self._step
+        self._held.clear()
         for _ in range(count):
             step()
 

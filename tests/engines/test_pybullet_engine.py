@@ -396,3 +396,73 @@ def test_unknown_format_and_missing_file(engine: PybulletEngine) -> None:
         engine.load_model("sdf", "<sdf/>", None, "")
     with pytest.raises(InvalidArgumentError, match="cannot read"):
         engine.load_model("urdf", None, "/nonexistent/model.urdf", "")
+
+
+# -- memory: rebuilding the world --------------------------------------------------------
+def seen(engine: PybulletEngine, names: list[str]) -> tuple[Any, ...]:
+    """What the protocol (and the engine's own bookkeeping) can tell of these bodies."""
+    bc = engine._bc
+    looks = [bc.getVisualShapeData(body_id(engine, n))[0][7] for n in names]
+    dynamics = [bc.getDynamicsInfo(body_id(engine, n), -1) for n in names]
+    kept = [(b.static, b.shape, b.size, b.mass, b.friction, b.restitution, b.rgba,
+             b.follows_friction, b.follows_restitution) for b in map(engine._bodies.get, names)]
+    return *engine.get_states(names), looks, dynamics, kept
+
+
+def test_a_rebuild_keeps_every_body_as_it_was(engine: PybulletEngine, monkeypatch: Any) -> None:
+    monkeypatch.setattr("galton.daemon.engines.pybullet_rebuild.REBUILD_AFTER", 10)
+    engine.set_params({"pybullet.collision_margin": 0.003,
+                       "pybullet.ccd_swept_sphere_radius": 0.02})
+    engine.spawn([ground(), balls(["ball"], [0, 0, 0.3]),
+                  balls(["own"], [1, 0, 1], friction=0.9, restitution=0.3, mass=0.2,
+                        rgba=(1, 0, 0, 1)),
+                  BodyGroup("box", (0.1, 0.2, 0.05), ["crate"], poses_at([0, 1, 1]),
+                            twists=[[1, 0, 2, 3, -1, 0.5]]),
+                  BodyGroup("capsule", (0.05, 0.1), ["pill"], poses_at([1, 1, 1])),
+                  BodyGroup("box", (0.5, 0.5, 0.1), ["step"], poses_at([3, 3, 0.1]),
+                            static=True)])
+    engine.update(["pill"], BodyProperties(mass=3.0, rgba=(0, 0, 1, 1)))
+    engine.step(40)  # turned, moving bodies
+    junk = [f"j{i}" for i in range(20)]
+    engine.spawn([balls(junk, grid(20, z=4.0))])
+    engine.delete(junk[:5])
+    assert engine.rebuilds == 0
+    kept = ["ground", "ball", "own", "crate", "pill", "step"]
+    before = seen(engine, kept)
+    engine.delete(junk[5:])  # 20 removed >= max(10, 2 * 6 left)
+    assert engine.rebuilds == 1 and engine._removed == 0
+    after = seen(engine, kept)
+    assert list(engine._bodies) == kept and engine._bc.getNumBodies() == len(kept)
+    assert np.array_equal(after[0], before[0]) and np.array_equal(after[1], before[1])
+    assert after[2:] == before[2:]
+    engine.set_params({"default_friction": 0.3})  # followers still follow, others keep theirs
+    friction = {n: engine._bc.getDynamicsInfo(body_id(engine, n), -1)[1] for n in kept}
+    assert friction["ball"] == pytest.approx(0.3) and friction["own"] == pytest.approx(0.9)
+    engine.step(480)  # the ball rests on the kept plane, the others fell or stood
+    poses, twists = engine.get_states(["ball"])
+    assert poses[0, 2] == pytest.approx(RADIUS, abs=0.002) and np.abs(twists[0]).max() < 0.01
+    assert engine.state_is_finite() and not engine._held
+
+
+def test_churn_rebuilds_every_five_thousand_deleted(engine: PybulletEngine) -> None:
+    engine.spawn([ground()])
+    names = [f"b{i}" for i in range(1000)]
+    for round_ in range(1, 12):
+        engine.spawn([balls(names, grid(1000))])
+        engine.delete(names)
+        assert engine.rebuilds == round_ // 5 and engine._removed == round_ % 5 * 1000
+    assert list(engine._bodies) == ["ground"] and engine._bc.getNumBodies() == 1
+
+
+def test_a_world_with_a_model_is_not_rebuilt(engine: PybulletEngine, monkeypatch: Any) -> None:
+    monkeypatch.setattr("galton.daemon.engines.pybullet_rebuild.REBUILD_AFTER", 10)
+    engine.spawn([ground()])
+    (info,) = engine.load_model("urdf", TINY_URDF, None, "m/")
+    junk = [f"j{i}" for i in range(20)]
+    engine.spawn([balls(junk, grid(20, z=4.0))])
+    uid = body_id(engine, info.name)
+    engine.delete(junk)
+    assert engine.rebuilds == 0 and engine._removed == 20
+    assert body_id(engine, info.name) == uid and set(engine._bodies) == {"ground", info.name}
+    engine.delete([info.name])  # the model gone, the count so far brings the rebuild
+    assert engine.rebuilds == 1 and set(engine._bodies) == {"ground"}
