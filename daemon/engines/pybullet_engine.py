@@ -362,9 +362,12 @@ class PybulletEngine(Engine):
 
     @_engine_call
     def state_is_finite(self) -> bool:
-        if not self._bodies:
+        """Static bodies cannot move in a step (and set_states takes only finite values),
+        so only the others are read: a board's hundreds of pins cost nothing here."""
+        moving = [b.uid for b in self._bodies.values() if not b.static]
+        if not moving:
             return True
-        poses, twists = self._read([b.uid for b in self._bodies.values()])
+        poses, twists = self._read(moving)
         return bool(np.isfinite(poses).all() and np.isfinite(twists).all())
 
     # -- models ---------------------------------------------------------------------------
