@@ -40,7 +40,6 @@ CHUNK_WALL_S = 0.005  # physics work between two looks at the inbox
 VERIFY_PERIOD_S = 0.05  # the state is checked finite at least this often while stepping
 
 
-
 class SimLoop(StateOps):
     """Owns the World and the simulation state machine (stopped / playing / paused)."""
 
@@ -225,7 +224,7 @@ class SimLoop(StateOps):
     def _fault(self, error: PhysicsError) -> None:
         """A diverged step: pause, tell subscribers, fail the step job; never publish it."""
         self.refresh_clock()
-        self.state = "paused"
+        self._set_state("paused")
         self.publish_event({"kind": "physics_error", "message": error.message,
                             "step": self.world.step_index, "sim_time": self.world.sim_time})
         if self.job is not None:
@@ -253,7 +252,7 @@ class SimLoop(StateOps):
         """Answer a status request on the caller's thread, from the atomic snapshot."""
         status = self.status()
         try:
-            decode_request(call.payload, call.op)
+            self._require_world(decode_request(call.payload, call.op).args)
             reply = Reply(ResultCode.OK, result=status.to_wire(), step=status.step,
                           sim_time=status.sim_time)
         except RemoteError as error:

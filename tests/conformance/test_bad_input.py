@@ -85,6 +85,8 @@ BAD_REQUESTS = {
                       ResultCode.INVALID_ARGUMENT),
     "unknown-engine": ("load_world", request("load_world", {"engine": "bullet"}),
                        ResultCode.INVALID_ARGUMENT),
+    "unknown-world-status": ("status", request("status", {"world": "other"}),
+                             ResultCode.NOT_FOUND),
     "unknown-world": ("step", request("step", {"count": 1, "world": "other"}),
                       ResultCode.NOT_FOUND),
     "unknown-format": ("load_model", request("load_model", {"format": "sdf", "text": "<x/>"}),

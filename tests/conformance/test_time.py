@@ -164,3 +164,10 @@ def _step_and_pause(sim: Client) -> None:
         sim.step(100_000_000, timeout=60)
     finally:
         thread.join(30)
+
+
+def test_set_rtf_changes_the_target_not_the_state(sim: Client) -> None:
+    status = sim.set_rtf(2.5)
+    assert (status.target_rtf, status.state) == (2.5, "stopped")
+    assert sim.play().target_rtf == 2.5
+    sim.pause()
