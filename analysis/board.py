@@ -280,17 +280,22 @@ def paper_webots_board() -> BoardSpec:
     and a Webots-like contact (Webots' default bounce 0.5, Coulomb friction 1).
 
     Engines combine two bodies' coefficients differently, so the same physical contact
-    needs different raw values: MuJoCo maps a body's restitution to its contact damping and
-    averages the two bodies' (0.5 on every body gives a bounce of about 0.5); PyBullet
-    multiplies them (0.707 on every body: 0.707² ≈ 0.5). MuJoCo takes the larger friction
-    of the two bodies, PyBullet their product: 1.0 on every body gives 1 on both. The
-    engines' timesteps stay at their defaults: Webots' 32 ms step would tunnel here.
+    needs different raw values: MuJoCo maps a body's restitution to its contact damping (a
+    ball on a static body feels the static body's surface; 0.5 gives a bounce of about 0.5);
+    PyBullet multiplies them (0.707 on every body: 0.707² ≈ 0.5). Friction 1 on every body
+    is 1 on MuJoCo and 1 × 1 on PyBullet. Moving and static bodies both get these values.
+    The engines' timesteps stay at their defaults: Webots' 32 ms step would tunnel here.
     """
     return BoardSpec(name="paper-webots", contacts={
-        "mujoco": EngineContacts(params={"default_restitution": 0.5, "default_friction": 1.0}),
-        "pybullet": EngineContacts(params={"default_restitution": 0.707,
-                                           "default_friction": 1.0}),
+        "mujoco": EngineContacts(params=webots_params(0.5)),
+        "pybullet": EngineContacts(params=webots_params(0.707)),
     })
+
+
+def webots_params(restitution: float) -> dict[str, float]:
+    """Webots' default contact (bounce 0.5, friction 1) on moving and static bodies alike."""
+    return {"default_restitution": restitution, "default_friction": 1.0,
+            "default_static_restitution": restitution, "default_static_friction": 1.0}
 
 
 PRESETS: dict[str, Callable[[], BoardSpec]] = {

@@ -18,10 +18,14 @@ RADIUS = 0.045
 DROP_HEIGHT = 0.5  # m between the ball's bottom and the plane
 # Documented drop-test bounce of the daemon defaults (docs/PHYSICS.md), and its tolerance.
 DEFAULT_BOUNCE = {"mujoco": 0.50, "pybullet": 0.72}
+# Documented bounce of two balls meeting head-on with the defaults: MuJoCo's moving bodies
+# have their own, dead surface (restitution 0.1); PyBullet's multiply like any contact.
+DEFAULT_BALL_BOUNCE = {"mujoco": 0.22, "pybullet": 0.73}
 TOLERANCE = 0.05
 # The paper-webots preset's contact: a Webots-like bounce of 0.5 on both engines.
-WEBOTS_PARAMS = {"mujoco": {"default_restitution": 0.5},
-                 "pybullet": {"default_restitution": 0.707}}
+WEBOTS_PARAMS = {"mujoco": {"default_restitution": 0.5, "default_static_restitution": 0.5},
+                 "pybullet": {"default_restitution": 0.707,
+                              "default_static_restitution": 0.707}}
 WEBOTS_BOUNCE = 0.5
 
 
@@ -43,6 +47,16 @@ def measured_bounce(sim: Client) -> float:
     return float(np.sqrt(max(apex, 0.0) / DROP_HEIGHT))
 
 
+def ball_on_ball_bounce(sim: Client, speed: float = 1.0) -> float:
+    """Two balls meet head-on in zero gravity: their separating over approaching speed."""
+    sim.set_params({"gravity": [0.0, 0.0, 0.0]})
+    sim.spawn(spheres(["a", "b"], [[-0.2, 0, 1], [0.2, 0, 1]], RADIUS, mass=0.38,
+                      twists=[[speed, 0, 0, 0, 0, 0], [-speed, 0, 0, 0, 0, 0]]))
+    sim.step(math.ceil(0.5 / sim.status().timestep))
+    velocity = sim.get_states(["a", "b"]).twists[:, 0]
+    return float((velocity[1] - velocity[0]) / (2 * speed))
+
+
 def test_default_contact_bounces_as_documented(sim: Client, engine: str) -> None:
     assert measured_bounce(sim) == pytest.approx(DEFAULT_BOUNCE[engine], abs=TOLERANCE)
 
@@ -50,3 +64,8 @@ def test_default_contact_bounces_as_documented(sim: Client, engine: str) -> None
 def test_paper_webots_contact_bounces_half(sim: Client, engine: str) -> None:
     sim.set_params(WEBOTS_PARAMS[engine])
     assert measured_bounce(sim) == pytest.approx(WEBOTS_BOUNCE, abs=0.1)
+
+
+def test_two_balls_bounce_off_each_other_as_documented(sim: Client, engine: str) -> None:
+    assert ball_on_ball_bounce(sim) == pytest.approx(DEFAULT_BALL_BOUNCE[engine],
+                                                     abs=TOLERANCE)

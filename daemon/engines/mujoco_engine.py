@@ -176,8 +176,9 @@ class MujocoEngine(Engine):
         for name in names:
             e = self._entities[name]
             spawned = e.source == "spawn"
-            friction = v["default_friction"] if e.friction is None and spawned else e.friction
-            restitution = v["default_restitution"] if e.restitution is None and spawned \
+            default_friction, default_restitution = ms.default_surface(e.static, v)
+            friction = default_friction if e.friction is None and spawned else e.friction
+            restitution = default_restitution if e.restitution is None and spawned \
                 else e.restitution
             if friction is None and restitution is None:
                 continue

@@ -38,6 +38,10 @@ INTEGRATORS = {"euler": mujoco.mjtIntegrator.mjINT_EULER,
 
 # Bodies given no mass get MuJoCo's default density, water's.
 DENSITY = 1000.0
+# A contact between geoms of different priority takes the higher one's friction, solref and
+# solimp (MuJoCo's rule); static bodies outrank moving ones, so a ball on a pin feels the
+# pin's surface and two balls their own (see docs/PHYSICS.md).
+STATIC_PRIORITY = 1
 # The smallest damping ratio a restitution may map to, whatever the step allows.
 MIN_DAMPRATIO = 0.01
 # MuJoCo's warnings that mean the state blew up during a step.
@@ -78,12 +82,20 @@ PARAMS: dict[str, ParamSpec] = {p.name: p for p in (
               vector(3, -1e3, 1e3)),
     ParamSpec("solver_iterations", 50, "", "constraint solver iterations (option iterations)",
               integer(1, 10_000)),
-    ParamSpec("default_friction", 0.15, "",
-              "sliding friction of bodies spawned without one, also when changed later; a "
-              "contact uses the larger of its two geoms' values", number(0.0, 100.0)),
-    ParamSpec("default_restitution", 0.4, "",
-              "restitution of bodies spawned without one, also when changed later; 0 means "
-              "MuJoCo's own contact (mujoco.solref as given)", number(0.0, 1.0)),
+    ParamSpec("default_friction", 0.5, "",
+              "sliding friction of moving bodies spawned without one, also when changed "
+              "later; between two moving bodies a contact uses the larger value",
+              number(0.0, 100.0)),
+    ParamSpec("default_restitution", 0.1, "",
+              "restitution of moving bodies spawned without one, also when changed later; 0 "
+              "means MuJoCo's own contact (mujoco.solref as given)", number(0.0, 1.0)),
+    ParamSpec("default_static_friction", 0.1, "",
+              "sliding friction of static bodies (the scenery) spawned without one, also when "
+              "changed later; a contact with a static body uses the static body's surface",
+              number(0.0, 100.0)),
+    ParamSpec("default_static_restitution", 0.4, "",
+              "restitution of static bodies spawned without one, also when changed later; a "
+              "contact with a static body uses the static body's surface", number(0.0, 1.0)),
     ParamSpec("mujoco.solref", (0.02, 1.0), "s, 1",
               "[timeconst, dampratio] of spawned bodies' contacts; a restitution e > 0 "
               "replaces the dampratio (see mujoco_spec.damping_ratio)", _solref),
@@ -115,6 +127,7 @@ PARAMS: dict[str, ParamSpec] = {p.name: p for p in (
               number(0.0, 10.0)),
 )}
 CONTACT_PARAMS = frozenset({"timestep", "default_friction", "default_restitution",
+                            "default_static_friction", "default_static_restitution",
                             "mujoco.solref", "mujoco.solimp", "mujoco.condim",
                             "mujoco.torsional_friction", "mujoco.rolling_friction"})
 
@@ -207,11 +220,20 @@ class Material:
     mass: float | None
 
 
+def default_surface(static: bool, v: dict[str, Any]) -> tuple[float, float]:
+    """The friction and restitution a body given none gets: the scenery has its own."""
+    if static:
+        return v["default_static_friction"], v["default_static_restitution"]
+    return v["default_friction"], v["default_restitution"]
+
+
 def material(group: BodyGroup, v: dict[str, Any]) -> Material:
     """A group's per-geom values, the defaults where it gives none."""
-    friction = v["default_friction"] if group.friction is None else group.friction
-    restitution = v["default_restitution"] if group.restitution is None \
-        else group.restitution
+    friction, restitution = default_surface(group.static, v)
+    if group.friction is not None:
+        friction = group.friction
+    if group.restitution is not None:
+        restitution = group.restitution
     return Material(friction=friction, spin=spin_friction(v), condim=v["mujoco.condim"],
                     solref=contact_solref(restitution, v), solimp=tuple(v["mujoco.solimp"]),
                     rgba=group.rgba, mass=group.mass)
@@ -265,7 +287,7 @@ def add_group(spec: mujoco.MjSpec, group: BodyGroup,
         "type": GEOM_TYPES[group.shape], "size": geom_size(group.shape, group.size),
         "friction": [material.friction, *material.spin], "condim": material.condim,
         "solref": list(material.solref),
-        "solimp": list(material.solimp)}
+        "solimp": list(material.solimp), "priority": STATIC_PRIORITY if group.static else 0}
     if material.rgba is not None:
         geom["rgba"] = list(material.rgba)
     if material.mass is not None and not group.static:

@@ -48,7 +48,7 @@ from galton.daemon.engine import (
     Engine,
 )
 from galton.daemon.engines import pybullet_rebuild as rebuild
-from galton.daemon.engines.pybullet_params import SPECS, WORLD_PARAMS
+from galton.daemon.engines.pybullet_params import SPECS, WORLD_PARAMS, default_keys
 from galton.daemon.engines.pybullet_rebuild import Body as _Body
 from galton.daemon.engines.pybullet_shapes import (
     DENSITY,
@@ -162,16 +162,14 @@ class PybulletEngine(Engine):
         if "gravity" in values:
             self._bc.setGravity(*values["gravity"])
         bodies = list(self._bodies.values())
-        if "default_friction" in values:
-            for body in bodies:
-                if body.follows_friction:
-                    body.friction = values["default_friction"]
-                    self._change(body.uid, -1, lateralFriction=body.friction)
-        if "default_restitution" in values:
-            for body in bodies:
-                if body.follows_restitution:
-                    body.restitution = values["default_restitution"]
-                    self._change(body.uid, -1, restitution=body.restitution)
+        for body in bodies:
+            friction_key, restitution_key = default_keys(body.static)
+            if body.follows_friction and friction_key in values:
+                body.friction = values[friction_key]
+                self._change(body.uid, -1, lateralFriction=body.friction)
+            if body.follows_restitution and restitution_key in values:
+                body.restitution = values[restitution_key]
+                self._change(body.uid, -1, restitution=body.restitution)
         if "pybullet.ccd_swept_sphere_radius" in values:
             radius = values["pybullet.ccd_swept_sphere_radius"]
             for body in bodies:
@@ -222,10 +220,11 @@ class PybulletEngine(Engine):
         ids = self._maker.create(mass, self._shapes.get(group.shape, size),
                                  self._shapes.visual(group.shape, size, group.rgba),
                                  [pose[:3] for pose in poses], poses[0][3:], self._owned(), made)
+        friction_key, restitution_key = default_keys(group.static)
         friction = group.friction if group.friction is not None else (
-            self._values["default_friction"])
+            self._values[friction_key])
         restitution = group.restitution if group.restitution is not None else (
-            self._values["default_restitution"])
+            self._values[restitution_key])
         dynamics: dict[str, Any] = {"lateralFriction": friction, "restitution": restitution}
         inertia = None
         if not group.static:

@@ -17,12 +17,17 @@ SPECS: dict[str, ParamSpec] = {spec.name: spec for spec in (
               vector(3, -1000, 1000)),
     ParamSpec("solver_iterations", 10, "", "Constraint solver iterations per step "
               "(numSolverIterations; PyBullet's own default is 50).", integer(1, 10_000)),
-    ParamSpec("default_friction", 0.5, "", "Lateral friction of spawned bodies that set "
+    ParamSpec("default_friction", 0.5, "", "Lateral friction of moving bodies that set "
               "none, now and after a change. PyBullet multiplies both bodies' values at a "
               "contact: 0.5 on both is mu = 0.25.", number(0, 100)),
-    ParamSpec("default_restitution", 0.8275, "", "Restitution of spawned bodies that set "
+    ParamSpec("default_restitution", 0.8275, "", "Restitution of moving bodies that set "
               "none, now and after a change. PyBullet multiplies both bodies' values at a "
               "contact: 0.8275 on both is e = 0.685.", number(0, 1)),
+    ParamSpec("default_static_friction", 0.5, "", "Lateral friction of static bodies (the "
+              "scenery) that set none, now and after a change; combined with the other body's "
+              "value as a product, like every PyBullet contact.", number(0, 100)),
+    ParamSpec("default_static_restitution", 0.8275, "", "Restitution of static bodies that "
+              "set none, now and after a change; combined as a product.", number(0, 1)),
     ParamSpec("pybullet.restitution_velocity_threshold", 0.2, "m/s", "Contacts approaching "
               "slower than this do not bounce.", number(0, 1000)),
     ParamSpec("pybullet.contact_breaking_threshold", 0.01, "m", "Gap at which Bullet makes a "
@@ -58,3 +63,10 @@ WORLD_PARAMS = {
     "pybullet.contact_erp": "contactERP",
     "pybullet.deterministic_overlapping_pairs": "deterministicOverlappingPairs",
 }
+
+
+def default_keys(static: bool) -> tuple[str, str]:
+    """The parameters a body that sets no friction or restitution follows."""
+    if static:
+        return "default_static_friction", "default_static_restitution"
+    return "default_friction", "default_restitution"

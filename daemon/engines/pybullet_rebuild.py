@@ -48,7 +48,7 @@ class Body:
     size: tuple[float, ...]
     unit_inertia: tuple[float, float, float] | None  # None for static bodies
     links: int = 0  # a model's links beside the base
-    follows_friction: bool = False  # set by default_friction, now and after a change
+    follows_friction: bool = False  # set by default_(static_)friction, now and after a change
     follows_restitution: bool = False
     mass: float = 0.0  # spawned bodies: what PyBullet was last given (0 when static)
     friction: float = 0.0
