@@ -1,0 +1,20 @@
+"""docs/ENGINES.md lists every engine parameter with its current default."""
+
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+
+from galton.daemon.engines import ENGINE_CLASSES
+
+GENERATOR = Path(__file__).parents[1] / "docs" / "make_engines_md.py"
+
+
+def test_engines_page_tables_match_the_engines_specs() -> None:
+    spec = importlib.util.spec_from_file_location("make_engines_md", GENERATOR)
+    assert spec is not None and spec.loader is not None
+    generator = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(generator)
+    page = generator.PAGE.read_text()
+    for name in ENGINE_CLASSES:
+        assert generator.table(name) in page, f"run python docs/make_engines_md.py ({name})"
