@@ -3,7 +3,7 @@
 Usage: python benchmarks/bridge_overhead.py [--balls 100] [--rounds 3] [--json FILE]
 
 The in-process side drives the daemon's own ``World`` over the same engine with exactly the
-requests a trial sends (spawn, run_until in 0.5 s chunks, batch state reads), so the only
+requests a trial sends (spawn, run_until in 0.5 s chunks each reading the balls back), so the only
 difference is Zenoh, msgpack and the physics thread hand-off; the script checks that both
 sides simulated the identical trial (same sim time, same bins). Runs
 alternate (in-process, bridge, ...) to spread the machine's noise; the ratios of the
@@ -59,6 +59,10 @@ class LocalSim:
         dt = self.world.engine.timestep
         self.world.step(math.ceil((sim_time - self.world.sim_time) / dt - 1e-9))
         return Stamp(self.world.step_index, self.world.sim_time)
+
+    def run_until_and_read(self, sim_time: float, names: list[str]) -> States:
+        self.run_until(sim_time)
+        return self.get_states(names)
 
     def get_states(self, names: list[str]) -> States:
         assert self.world is not None

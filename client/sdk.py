@@ -137,6 +137,25 @@ class Client:
                   DEFAULT_STEP_TIMEOUT_S if timeout is None else timeout)
         return self.last_stamp
 
+    def step_and_read(self, count: int, names: Sequence[str],
+                      timeout: float | None = None) -> States:
+        """Advance ``count`` steps and return these bodies' states after the last one: one
+        round trip, as a control loop wants (step, then observe)."""
+        result = self.call("step", {"count": count, "read": list(names)},
+                           DEFAULT_STEP_TIMEOUT_S if timeout is None else timeout)
+        return self._states(result)
+
+    def run_until_and_read(self, sim_time: float, names: Sequence[str],
+                           timeout: float | None = None) -> States:
+        """``run_until`` and ``get_states(names)`` in one round trip."""
+        result = self.call("run_until", {"sim_time": sim_time, "read": list(names)},
+                           DEFAULT_STEP_TIMEOUT_S if timeout is None else timeout)
+        return self._states(result)
+
+    def _states(self, result: dict[str, Any]) -> States:
+        return States(result["names"], unpack_f64(result["poses"], POSE_WIDTH),
+                      unpack_f64(result["twists"], TWIST_WIDTH), *_stamp(self.last_stamp))
+
     def reset(self, scope: str = "all") -> SimStatus:
         """Scopes: time, state (entities to their created state), spawned, all."""
         return SimStatus.from_wire(self.call("reset", {"scope": scope}))
@@ -174,9 +193,8 @@ class Client:
 
     def get_states(self, names: Sequence[str] | None = None) -> States:
         """States of these bodies (all when None) in one request."""
-        result = self.call("get_states", {} if names is None else {"names": list(names)})
-        return States(result["names"], unpack_f64(result["poses"], POSE_WIDTH),
-                      unpack_f64(result["twists"], TWIST_WIDTH), *_stamp(self.last_stamp))
+        return self._states(
+            self.call("get_states", {} if names is None else {"names": list(names)}))
 
     def set_states(self, names: Sequence[str], poses: np.ndarray | None = None,
                    twists: np.ndarray | None = None) -> Stamp:

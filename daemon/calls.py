@@ -22,3 +22,4 @@ class StepJob:
     call: Call
     total: int
     remaining: int
+    read: list[str] | None = None  # entities whose states the reply carries, checked up front

@@ -16,7 +16,7 @@ from typing import Any
 from galton.daemon.calls import Call, StepJob
 from galton.daemon.loop_state import StateOps
 from galton.daemon.monitor import Pacer, ProcessMonitor, RtfWindow
-from galton.daemon.ops import MUTATING_OPS, SCENE_OPS
+from galton.daemon.ops import MUTATING_OPS, SCENE_OPS, get_states
 from galton.daemon.world import World
 from galton.protocol import (
     NotFoundError,
@@ -209,7 +209,20 @@ class SimLoop(StateOps):
             self.job.remaining -= count
             if job_done:
                 job, self.job = self.job, None
-                self._reply_ok(job.call, {"steps": job.total})
+                self._finish_job(job)
+
+    def _finish_job(self, job: StepJob) -> None:
+        """Answer a finished step request: {steps}, and the states it asked to read (after
+        the last step, verified). A body deleted meanwhile fails the read, not the steps."""
+        result: dict[str, Any] = {"steps": job.total}
+        if job.read is not None:
+            try:
+                result.update(get_states(self.world, {"names": job.read}))
+            except RemoteError as error:
+                error.details["steps_done"] = job.total
+                self._reply_error(job.call, error)
+                return
+        self._reply_ok(job.call, result)
 
     def verify_physics(self) -> bool:
         """Check the unchecked steps; on a divergence, fault and return False."""

@@ -18,7 +18,7 @@ from galton.protocol import (
     InvalidArgumentError,
     OperationFailedError,
 )
-from galton.protocol.model import check_type, finite_number
+from galton.protocol.model import check_names, check_type, finite_number
 
 if TYPE_CHECKING:
     from galton.daemon.loop import SimLoop
@@ -74,7 +74,7 @@ class StateOps:
 
     def op_step(self: SimLoop, call: Call, args: dict[str, Any]) -> None:
         count = _check_count(args.get("count", 1))
-        self._start_job(call, count)
+        self._start_job(call, count, self._read_list(args, "step"))
 
     def op_run_until(self: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any] | None:
         target = finite_number(args.get("sim_time"), "run_until.sim_time", low=0.0)
@@ -84,7 +84,7 @@ class StateOps:
             raise InvalidArgumentError(
                 f"run_until.sim_time {target} is not after the current sim time "
                 f"{self.world.sim_time}")
-        self._start_job(call, _check_count(count))
+        self._start_job(call, _check_count(count), self._read_list(args, "run_until"))
         return None
 
     def op_reset(self: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
@@ -115,7 +115,18 @@ class StateOps:
         return self.status().to_wire()
 
     # -- helpers ------------------------------------------------------------------------
-    def _start_job(self: SimLoop, call: Call, count: int) -> None:
+    def _read_list(self: SimLoop, args: dict[str, Any], where: str) -> list[str] | None:
+        """The entities a step request wants read back when done; unknown names reject the
+        request before any step is taken."""
+        read = args.get("read")
+        if read is None:
+            return None
+        names = check_names(read, f"{where}.read")
+        self.world.require_known(names)
+        return names
+
+    def _start_job(self: SimLoop, call: Call, count: int,
+                   read: list[str] | None = None) -> None:
         if self.state == "playing":
             raise IncorrectStateError("cannot step while playing: pause first")
         if self.job is not None:
@@ -123,7 +134,7 @@ class StateOps:
         self.world.require_valid()
         if self.state == "stopped":
             self._set_state("paused")
-        self.job = StepJob(call, count, count)
+        self.job = StepJob(call, count, count, read)
 
     def _cancel_job(self: SimLoop, reason: str) -> None:
         if self.job is None:

@@ -15,7 +15,7 @@ from galton.analysis.board_release import Perturbation, perturbation
 from galton.analysis.board_scoring import DEFAULT_SETTLE_SPEED, BallOutcomes, classify_balls
 from galton.analysis.records import TrialRecord
 from galton.client.bench.build import ball_group, ball_names, board_groups
-from galton.client.sdk import Client
+from galton.client.sdk import Client, States
 from galton.protocol import Telemetry
 
 DEFAULT_MAX_SIM_TIME_S = 120.0
@@ -71,6 +71,13 @@ class PhysicsClock:
         self.wall += time.perf_counter() - started
         return stamp.sim_time
 
+    def run_until_and_read(self, sim_time: float, names: list[str]) -> States:
+        """Run, then read these balls, in one round trip (the read is timed as physics)."""
+        started = time.perf_counter()
+        states = self.sim.run_until_and_read(sim_time, names)
+        self.wall += time.perf_counter() - started
+        return states
+
 
 def prepare_world(sim: Client, config: TrialConfig) -> tuple[Perturbation, list[str]]:
     """A fresh world on the engine with the board's settings, the board built, no balls yet."""
@@ -87,8 +94,10 @@ def release_and_settle(sim: Client, config: TrialConfig, shake: Perturbation,
     """Release the balls (all at once, or each at its time), then run until none moves."""
     released, now = release(sim, config, shake, names, clock)
     while True:
-        now = clock.run_until(min(now + config.check_interval, config.max_sim_time))
-        outcomes = score(sim, config, shake, names[:released])
+        states = clock.run_until_and_read(min(now + config.check_interval, config.max_sim_time),
+                                          names[:released])
+        now = states.sim_time
+        outcomes = classify(config, shake, states)
         if outcomes.reasons.get("moving", 0) == 0 or now >= config.max_sim_time - 1e-9:
             return outcomes
 
@@ -110,10 +119,8 @@ def release(sim: Client, config: TrialConfig, shake: Perturbation, names: list[s
     return released, now
 
 
-def score(sim: Client, config: TrialConfig, shake: Perturbation,
-          names: list[str]) -> BallOutcomes:
-    """Every released ball's state in one call, classified against the board."""
-    states = sim.get_states(names)
+def classify(config: TrialConfig, shake: Perturbation, states: States) -> BallOutcomes:
+    """Every released ball's state, classified against the board."""
     return classify_balls(config.board, states.positions, states.speeds,
                           shake.board_offset_x, config.settle_speed)
 

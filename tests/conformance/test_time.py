@@ -7,7 +7,12 @@ import pytest
 from support import ball_row, ground_and_balls
 
 from galton.client import Client, spheres
-from galton.protocol import IncorrectStateError, InvalidArgumentError, OperationFailedError
+from galton.protocol import (
+    IncorrectStateError,
+    InvalidArgumentError,
+    OperationFailedError,
+    ResultCode,
+)
 
 RTF_TOLERANCE = 0.05
 
@@ -171,3 +176,27 @@ def test_set_rtf_changes_the_target_not_the_state(sim: Client) -> None:
     assert (status.target_rtf, status.state) == (2.5, "stopped")
     assert sim.play().target_rtf == 2.5
     sim.pause()
+
+
+def test_step_and_read_returns_the_states_after_the_last_step(sim: Client) -> None:
+    names = ground_and_balls(sim, count=5)
+    states = sim.step_and_read(40, names[1:4])
+    status = sim.status()
+    assert states.step == status.step == 40
+    assert states.names == names[1:4]
+    again = sim.get_states(names[1:4])
+    assert np.array_equal(states.poses, again.poses)
+    assert np.array_equal(states.twists, again.twists)
+    states = sim.run_until_and_read(status.sim_time + 0.2, names)
+    assert states.sim_time == pytest.approx(status.sim_time + 0.2)
+    assert np.array_equal(states.poses, sim.get_states(names).poses)
+
+
+@pytest.mark.parametrize("read", [["ball_0", "nobody"], "ball_0", [], [1]])
+def test_a_bad_read_list_rejects_the_step_before_any_step(sim: Client, read: object) -> None:
+    ground_and_balls(sim, count=2)
+    before = sim.status().step
+    reply = sim.request("step", {"count": 10, "read": read})
+    assert reply.code in (ResultCode.NOT_FOUND, ResultCode.INVALID_ARGUMENT)
+    assert "read" in reply.message or "nobody" in reply.message
+    assert sim.status().step == before
