@@ -18,9 +18,9 @@ RADIUS = 0.045
 DROP_HEIGHT = 0.5  # m between the ball's bottom and the plane
 # Documented drop-test bounce of the daemon defaults (docs/PHYSICS.md), and its tolerance.
 DEFAULT_BOUNCE = {"mujoco": 0.50, "pybullet": 0.72}
-# Documented bounce of two balls meeting head-on with the defaults: MuJoCo's moving bodies
-# have their own, dead surface (restitution 0.1); PyBullet's multiply like any contact.
-DEFAULT_BALL_BOUNCE = {"mujoco": 0.22, "pybullet": 0.73}
+# Documented bounce of two balls meeting head-on at 1 m/s with the defaults (MuJoCo: the
+# moving bodies' own surface; PyBullet: the product of both, like any contact).
+DEFAULT_BALL_BOUNCE = {"mujoco": 0.38, "pybullet": 0.73}
 TOLERANCE = 0.05
 # The paper-webots preset's contact: a Webots-like bounce of 0.5 on both engines.
 WEBOTS_PARAMS = {"mujoco": {"default_restitution": 0.5, "default_static_restitution": 0.5},

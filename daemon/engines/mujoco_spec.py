@@ -82,14 +82,14 @@ PARAMS: dict[str, ParamSpec] = {p.name: p for p in (
               vector(3, -1e3, 1e3)),
     ParamSpec("solver_iterations", 50, "", "constraint solver iterations (option iterations)",
               integer(1, 10_000)),
-    ParamSpec("default_friction", 0.5, "",
+    ParamSpec("default_friction", 0.15, "",
               "sliding friction of moving bodies spawned without one, also when changed "
               "later; between two moving bodies a contact uses the larger value",
               number(0.0, 100.0)),
-    ParamSpec("default_restitution", 0.1, "",
+    ParamSpec("default_restitution", 0.4, "",
               "restitution of moving bodies spawned without one, also when changed later; 0 "
               "means MuJoCo's own contact (mujoco.solref as given)", number(0.0, 1.0)),
-    ParamSpec("default_static_friction", 0.1, "",
+    ParamSpec("default_static_friction", 0.15, "",
               "sliding friction of static bodies (the scenery) spawned without one, also when "
               "changed later; a contact with a static body uses the static body's surface",
               number(0.0, 100.0)),

@@ -385,7 +385,7 @@ def slide_friction(engine: MujocoEngine, crate: str) -> float:
 
 def test_defaults_bounce_like_a_hard_ball_and_slide_with_low_friction(
         engine: MujocoEngine) -> None:
-    """The drop test behind docs/physics/mujoco.md: e ≈ 0.4-0.5 on the scenery, μ ≈ 0.1."""
+    """The drop test behind docs/physics/mujoco.md: e ≈ 0.5 from 1 m, μ ≈ 0.15 sliding."""
     floor = group("box", ["floor"], [[0, 0, -0.05]], size=(2, 2, 0.05), static=True)
     engine.spawn([floor, group("sphere", ["ball"], [[0, 0, 1.045]], size=(0.045,), mass=0.38)])
     speeds = []
@@ -394,10 +394,10 @@ def test_defaults_bounce_like_a_hard_ball_and_slide_with_low_friction(
         speeds.append(engine.get_states(["ball"])[1][0, 2])
     impact = int(np.argmax(np.array(speeds) > 0))
     bounce = max(speeds[impact:]) / -min(speeds[:impact])
-    assert 0.3 < bounce < 0.6
+    assert 0.4 < bounce < 0.65
     engine.spawn([group("box", ["crate"], [[1, 1, 0.05]], size=(0.05, 0.05, 0.05), mass=1.0)])
     run(engine, 0.2)
-    assert 0.07 < slide_friction(engine, "crate") < 0.13
+    assert 0.1 < slide_friction(engine, "crate") < 0.22
 
 
 def test_a_contact_with_a_static_body_takes_the_static_surface(engine: MujocoEngine) -> None:
@@ -407,7 +407,7 @@ def test_a_contact_with_a_static_body_takes_the_static_surface(engine: MujocoEng
                   group("box", ["crate"], [[0, 0, 0.05]], size=(0.05, 0.05, 0.05), mass=1.0,
                         friction=1.0)])
     run(engine, 0.2)
-    assert slide_friction(engine, "crate") < 0.13  # the floor's 0.1, not 1.0
+    assert slide_friction(engine, "crate") < 0.22  # the floor's 0.15, not 1.0
     engine.update(["floor"], BodyProperties(friction=0.5))
     engine.set_states(["crate"], np.array([[0, 0, 0.05, *IDENTITY]]), None)
     run(engine, 0.2)
@@ -419,11 +419,11 @@ def test_a_contact_with_a_static_body_takes_the_static_surface(engine: MujocoEng
 
 
 def test_moving_bodies_collide_with_their_own_surface(engine: MujocoEngine) -> None:
-    """Two balls meeting head-on bounce with the moving bodies' default restitution (0.1:
-    measured e ≈ 0.2), not the scenery's; raising it raises their bounce."""
-    engine.set_params({"gravity": (0.0, 0.0, 0.0)})
+    """Two balls meeting head-on bounce with the moving bodies' default restitution (0.4:
+    measured e ≈ 0.45), whatever the scenery's; lowering it to 0.1 deadens them (e ≈ 0.2)."""
+    engine.set_params({"gravity": (0.0, 0.0, 0.0), "default_static_restitution": 0.0})
     bounces = []
-    for restitution in (None, 0.5):
+    for restitution in (None, 0.1):
         if restitution is not None:
             engine.set_params({"default_restitution": restitution})
         poses = np.array([[-0.2, 0, 1, *IDENTITY], [0.2, 0, 1, *IDENTITY]])
@@ -434,8 +434,8 @@ def test_moving_bodies_collide_with_their_own_surface(engine: MujocoEngine) -> N
         velocity = engine.get_states(["a", "b"])[1][:, 0]
         bounces.append((velocity[1] - velocity[0]) / 2.0)
         engine.delete(["a", "b"])
-    assert 0.1 < bounces[0] < 0.3
-    assert bounces[1] > bounces[0] + 0.2
+    assert 0.3 < bounces[0] < 0.6
+    assert 0.1 < bounces[1] < 0.3
 
 
 def test_balls_at_rest_on_static_bodies_fall_asleep(engine: MujocoEngine) -> None:
