@@ -103,8 +103,13 @@ class SimLoop(StateOps):
         return until_telemetry
 
     def _take_calls(self, timeout: float) -> None:
+        """Answer what is in the inbox, waiting up to ``timeout`` s for the first call
+        (for ever when infinite: nothing due, e.g. paused with telemetry off)."""
         try:
-            call = self.inbox.get(timeout=timeout) if timeout > 0 else self.inbox.get_nowait()
+            if timeout <= 0:
+                call = self.inbox.get_nowait()
+            else:
+                call = self.inbox.get(timeout=None if math.isinf(timeout) else timeout)
         except queue.Empty:
             return
         while call is not None:

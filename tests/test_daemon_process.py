@@ -100,3 +100,18 @@ def test_the_quickstart_example_runs(daemons: dict) -> None:
 
     daemon = start_daemon(daemons, "mujoco")
     load_example("quickstart").main([daemon.endpoint, daemon.instance])
+
+
+def test_a_daemon_without_telemetry_still_serves() -> None:
+    """--telemetry-rate 0 means no telemetry, not a physics thread waiting for ever on it."""
+    with EmbeddedDaemon("mujoco", instance="quiet", telemetry_rate=0.0) as daemon, \
+            Client(daemon.instance, daemon.endpoint, timeout=10.0) as client:
+        wait_for_daemon(client.session, daemon.instance, 30)
+        samples: list[Telemetry] = []
+        with client.on_telemetry(samples.append):
+            client.load_world("mujoco")
+            assert client.step(25).step == 25
+            client.pause()
+            assert client.status().state == "paused"
+            assert client.step(5).step == 30
+        assert samples == []
