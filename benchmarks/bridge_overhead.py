@@ -3,7 +3,7 @@
 Usage: python benchmarks/bridge_overhead.py [--balls 100] [--rounds 3] [--json FILE]
 
 The in-process side drives the daemon's own ``World`` over the same engine with exactly the
-requests a trial sends (spawn, run_until in 0.5 s chunks each reading the balls back), so the only
+requests a trial sends (spawn, then run until the balls rest, checked every 0.5 s), so the only
 difference is Zenoh, msgpack and the physics thread hand-off; the script checks that both
 sides simulated the identical trial (same sim time, same bins). Runs
 alternate (in-process, bridge, ...) to spread the machine's noise; the ratios of the
@@ -60,9 +60,21 @@ class LocalSim:
         self.world.step(math.ceil((sim_time - self.world.sim_time) / dt - 1e-9))
         return Stamp(self.world.step_index, self.world.sim_time)
 
-    def run_until_and_read(self, sim_time: float, names: list[str]) -> States:
-        self.run_until(sim_time)
-        return self.get_states(names)
+    def run_until_rest(self, sim_time: float, names: list[str], speed: float,
+                       every: float) -> tuple[States, bool]:
+        """The daemon's until_rest loop: step to each check, read, stop once all rest."""
+        assert self.world is not None
+        dt = self.world.engine.timestep
+        total = math.ceil((sim_time - self.world.sim_time) / dt - 1e-9)
+        every_steps, done = max(1, round(every / dt)), 0
+        while True:
+            count = min(total - done, every_steps - done % every_steps)
+            self.world.step(count)
+            done += count
+            states = self.get_states(names)
+            at_rest = bool((states.speeds < speed).all())
+            if at_rest or done == total:
+                return states, at_rest
 
     def get_states(self, names: list[str]) -> States:
         assert self.world is not None

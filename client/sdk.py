@@ -152,6 +152,16 @@ class Client:
                            DEFAULT_STEP_TIMEOUT_S if timeout is None else timeout)
         return self._states(result)
 
+    def run_until_rest(self, sim_time: float, names: Sequence[str], speed: float,
+                       every: float, timeout: float | None = None) -> tuple[States, bool]:
+        """Run until every named body moves slower than ``speed`` m/s (looked at every
+        ``every`` s of sim time) or until ``sim_time``; return their states and whether they
+        came to rest. One round trip for a whole settling phase."""
+        result = self.call("run_until", {"sim_time": sim_time, "read": list(names),
+                                         "until_rest": {"speed": speed, "every": every}},
+                           DEFAULT_STEP_TIMEOUT_S if timeout is None else timeout)
+        return self._states(result), bool(result["at_rest"])
+
     def _states(self, result: dict[str, Any]) -> States:
         return States(result["names"], unpack_f64(result["poses"], POSE_WIDTH),
                       unpack_f64(result["twists"], TWIST_WIDTH), *_stamp(self.last_stamp))

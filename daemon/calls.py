@@ -16,6 +16,15 @@ class Call:
 
 
 @dataclass
+class RestCheck:
+    """Stop a step request early once every body it reads moves slower than ``speed`` m/s,
+    looked at every ``every`` steps."""
+
+    speed: float
+    every: int
+
+
+@dataclass
 class StepJob:
     """A step or run_until request still in progress; answered when ``remaining`` is 0."""
 
@@ -23,3 +32,14 @@ class StepJob:
     total: int
     remaining: int
     read: list[str] | None = None  # entities whose states the reply carries, checked up front
+    rest: RestCheck | None = None
+
+    @property
+    def done(self) -> int:
+        return self.total - self.remaining
+
+    def steps_to_next_check(self) -> int:
+        """Steps until the next rest check (all remaining ones when there is none)."""
+        if self.rest is None:
+            return self.remaining
+        return min(self.remaining, self.rest.every - self.done % self.rest.every)

@@ -13,6 +13,8 @@ import time
 from collections.abc import Callable
 from typing import Any
 
+import numpy as np
+
 from galton.daemon.calls import Call, StepJob
 from galton.daemon.loop_state import StateOps
 from galton.daemon.monitor import Pacer, ProcessMonitor, RtfWindow
@@ -189,7 +191,7 @@ class SimLoop(StateOps):
     def _advance(self) -> None:
         """Run one chunk of steps: a pending step job's, or the paced playing clock's."""
         if self.job is not None:
-            self._run_steps(min(self.job.remaining, self._chunk_size()))
+            self._run_steps(min(self.job.steps_to_next_check(), self._chunk_size()))
         elif self.state == "playing":
             due = self.pacer.steps_due(time.monotonic(), self.world.sim_time,
                                        self.world.engine.timestep)
@@ -205,28 +207,43 @@ class SimLoop(StateOps):
         self.world.step(count)
         now = time.perf_counter()
         self._step_cost = 0.8 * self._step_cost + 0.2 * max((now - started) / count, 1e-7)
-        job_done = self.job is not None and self.job.remaining == count
-        due = job_done or now - self._last_verify >= VERIFY_PERIOD_S
+        job = self.job
+        job_done = job is not None and job.remaining == count
+        checking = job is not None and job.rest is not None and (
+            (job.done + count) % job.rest.every == 0)
+        due = job_done or checking or now - self._last_verify >= VERIFY_PERIOD_S
         if due and not self.verify_physics():
             return
         self.refresh_clock()
-        if self.job is not None:
-            self.job.remaining -= count
-            if job_done:
-                job, self.job = self.job, None
+        if job is not None:
+            job.remaining -= count
+            if job_done or (checking and self._at_rest(job)):
+                self.job = None
                 self._finish_job(job)
+
+    def _at_rest(self, job: StepJob) -> bool:
+        """Whether every body the job reads moves slower than its rest speed."""
+        assert job.rest is not None and job.read is not None
+        try:
+            _, twists = self.world.get_states(job.read)
+        except RemoteError:
+            return True  # one was deleted: finish now, the reply says which
+        return bool((np.linalg.norm(twists[:, :3], axis=1) < job.rest.speed).all())
 
     def _finish_job(self, job: StepJob) -> None:
         """Answer a finished step request: {steps}, and the states it asked to read (after
-        the last step, verified). A body deleted meanwhile fails the read, not the steps."""
-        result: dict[str, Any] = {"steps": job.total}
+        the last step, verified), and with until_rest whether they rest. A body deleted
+        meanwhile fails the read, not the steps."""
+        result: dict[str, Any] = {"steps": job.done}
         if job.read is not None:
             try:
                 result.update(get_states(self.world, {"names": job.read}))
             except RemoteError as error:
-                error.details["steps_done"] = job.total
+                error.details["steps_done"] = job.done
                 self._reply_error(job.call, error)
                 return
+        if job.rest is not None:
+            result["at_rest"] = self._at_rest(job)
         self._reply_ok(job.call, result)
 
     def verify_physics(self) -> bool:

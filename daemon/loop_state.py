@@ -11,7 +11,7 @@ import time
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, ClassVar
 
-from galton.daemon.calls import Call, StepJob
+from galton.daemon.calls import Call, RestCheck, StepJob
 from galton.daemon.world import World
 from galton.protocol import (
     IncorrectStateError,
@@ -36,6 +36,26 @@ def _check_count(value: Any) -> int:
 
 def _check_rtf(value: Any, where: str) -> float:
     return finite_number(value, where, low=0.0, high=MAX_RTF)
+
+
+def _rest_check(args: dict[str, Any], read: list[str] | None,
+                timestep: float) -> RestCheck | None:
+    """run_until's optional ``until_rest: {speed, every}``: stop once the read bodies rest."""
+    rest = args.get("until_rest")
+    if rest is None:
+        return None
+    check_type(rest, dict, "run_until.until_rest")
+    unknown = set(rest) - {"speed", "every"}
+    if unknown:
+        raise InvalidArgumentError(f"run_until.until_rest has unknown fields {sorted(unknown)}; "
+                                   "allowed: speed, every")
+    if read is None:
+        raise InvalidArgumentError("run_until.until_rest needs 'read': the bodies that must rest")
+    speed = finite_number(rest.get("speed"), "run_until.until_rest.speed", low=0.0,
+                          low_open=True)
+    every = finite_number(rest.get("every"), "run_until.until_rest.every", low=0.0,
+                          low_open=True)
+    return RestCheck(speed, max(1, round(every / timestep)))
 
 
 class StateOps:
@@ -84,7 +104,8 @@ class StateOps:
             raise InvalidArgumentError(
                 f"run_until.sim_time {target} is not after the current sim time "
                 f"{self.world.sim_time}")
-        self._start_job(call, _check_count(count), self._read_list(args, "run_until"))
+        read = self._read_list(args, "run_until")
+        self._start_job(call, _check_count(count), read, _rest_check(args, read, dt))
         return None
 
     def op_reset(self: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
@@ -125,8 +146,8 @@ class StateOps:
         self.world.require_known(names)
         return names
 
-    def _start_job(self: SimLoop, call: Call, count: int,
-                   read: list[str] | None = None) -> None:
+    def _start_job(self: SimLoop, call: Call, count: int, read: list[str] | None = None,
+                   rest: RestCheck | None = None) -> None:
         if self.state == "playing":
             raise IncorrectStateError("cannot step while playing: pause first")
         if self.job is not None:
@@ -134,7 +155,7 @@ class StateOps:
         self.world.require_valid()
         if self.state == "stopped":
             self._set_state("paused")
-        self.job = StepJob(call, count, count, read)
+        self.job = StepJob(call, count, count, read, rest)
 
     def _cancel_job(self: SimLoop, reason: str) -> None:
         if self.job is None:

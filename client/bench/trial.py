@@ -20,6 +20,9 @@ from galton.protocol import Telemetry
 
 DEFAULT_MAX_SIM_TIME_S = 120.0
 DEFAULT_CHECK_INTERVAL_S = 0.5
+# The daemon checks for rest every check interval; the bench looks itself this often, so a
+# lost ball falling for ever (never at rest) stops the trial within this much sim time.
+SETTLE_SEGMENT_S = 10.0
 
 
 @dataclass
@@ -71,12 +74,13 @@ class PhysicsClock:
         self.wall += time.perf_counter() - started
         return stamp.sim_time
 
-    def run_until_and_read(self, sim_time: float, names: list[str]) -> States:
-        """Run, then read these balls, in one round trip (the read is timed as physics)."""
+    def run_until_rest(self, sim_time: float, names: list[str], speed: float,
+                       every: float) -> tuple[States, bool]:
+        """Run until these balls rest or ``sim_time``, in one round trip (timed as physics)."""
         started = time.perf_counter()
-        states = self.sim.run_until_and_read(sim_time, names)
+        states, at_rest = self.sim.run_until_rest(sim_time, names, speed, every)
         self.wall += time.perf_counter() - started
-        return states
+        return states, at_rest
 
 
 def prepare_world(sim: Client, config: TrialConfig) -> tuple[Perturbation, list[str]]:
@@ -94,11 +98,14 @@ def release_and_settle(sim: Client, config: TrialConfig, shake: Perturbation,
     """Release the balls (all at once, or each at its time), then run until none moves."""
     released, now = release(sim, config, shake, names, clock)
     while True:
-        states = clock.run_until_and_read(min(now + config.check_interval, config.max_sim_time),
-                                          names[:released])
+        if now >= config.max_sim_time - 1e-9:
+            return classify(config, shake, sim.get_states(names[:released]))
+        states, at_rest = clock.run_until_rest(
+            min(now + SETTLE_SEGMENT_S, config.max_sim_time), names[:released],
+            config.settle_speed, config.check_interval)
         now = states.sim_time
         outcomes = classify(config, shake, states)
-        if outcomes.reasons.get("moving", 0) == 0 or now >= config.max_sim_time - 1e-9:
+        if at_rest or outcomes.reasons.get("moving", 0) == 0:
             return outcomes
 
 

@@ -200,3 +200,37 @@ def test_a_bad_read_list_rejects_the_step_before_any_step(sim: Client, read: obj
     assert reply.code in (ResultCode.NOT_FOUND, ResultCode.INVALID_ARGUMENT)
     assert "read" in reply.message or "nobody" in reply.message
     assert sim.status().step == before
+
+
+def test_run_until_rest_stops_once_the_bodies_rest(sim: Client) -> None:
+    names = ground_and_balls(sim, count=3)
+    states, at_rest = sim.run_until_rest(10.0, names, speed=0.05, every=0.25)
+    assert at_rest
+    assert states.sim_time < 10.0
+    assert (states.speeds < 0.05).all()
+    steps = round(states.sim_time / sim.status().timestep)
+    assert steps % round(0.25 / sim.status().timestep) == 0  # stopped at a check
+
+
+def test_run_until_rest_runs_to_the_end_when_bodies_keep_moving(sim: Client) -> None:
+    sim.set_params({"gravity": [0.0, 0.0, 0.0]})
+    names, group = ball_row(2)
+    sim.spawn(group)
+    sim.set_states(names, twists=np.tile([0.5, 0, 0, 0, 0, 0], (2, 1)))
+    states, at_rest = sim.run_until_rest(1.0, names, speed=0.05, every=0.25)
+    assert not at_rest
+    assert states.sim_time == pytest.approx(1.0, abs=sim.status().timestep)
+
+
+@pytest.mark.parametrize("args", [
+    {"until_rest": {"speed": 0.05, "every": 0.25}},  # nothing to read
+    {"read": ["ball_0"], "until_rest": {"speed": 0.05}},
+    {"read": ["ball_0"], "until_rest": {"speed": -1, "every": 0.25}},
+    {"read": ["ball_0"], "until_rest": {"speed": 0.05, "every": 0.25, "when": 1}},
+])
+def test_a_bad_until_rest_is_rejected_before_any_step(sim: Client, args: dict) -> None:
+    ground_and_balls(sim, count=1)
+    reply = sim.request("run_until", {"sim_time": 1.0, **args})
+    assert reply.code == ResultCode.INVALID_ARGUMENT
+    assert "until_rest" in reply.message
+    assert sim.status().step == 0
