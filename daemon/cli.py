@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 import logging
-import sys
 from pathlib import Path
 from typing import Annotated
 
@@ -51,7 +50,6 @@ def serve(
     """Serve one world on ENGINE as INSTANCE until SIGINT or SIGTERM."""
     logging.basicConfig(level=log_level.upper(), format="%(asctime)s %(name)s %(message)s")
     zenoh.init_log_from_env_or("error")
-    sys.setswitchinterval(0.0005)  # let Zenoh's threads in promptly while physics runs
     try:
         validate_instance_name(instance)
         options = DaemonOptions(

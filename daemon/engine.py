@@ -36,6 +36,10 @@ class Engine(ABC):
     """A physics world holding named rigid bodies, stepped with a fixed timestep."""
 
     name: ClassVar[str]
+    # Whether ``step`` lets other Python threads run while it computes. An engine that holds
+    # the GIL needs a short switch interval so that status requests (answered on Zenoh's
+    # threads) get in between its steps; one that releases it runs faster without.
+    releases_gil_while_stepping: ClassVar[bool] = False
 
     @abstractmethod
     def capabilities(self) -> Capabilities:

@@ -131,6 +131,7 @@ class StateOps:
         self._cancel_job("world replaced")
         old, self.world = self.world, World(engine, self.world.name)
         old.engine.close()
+        self.tune_switch_interval()
         self._after_reset()
         self._set_state("stopped")
         return self.status().to_wire()

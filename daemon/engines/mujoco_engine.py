@@ -82,6 +82,7 @@ class MujocoEngine(Engine):
     """A MuJoCo world of named bodies; see the module docstring for how it is kept."""
 
     name: ClassVar[str] = "mujoco"
+    releases_gil_while_stepping: ClassVar[bool] = True  # mj_step runs without the GIL
 
     def __init__(self) -> None:
         ms.route_warnings()
