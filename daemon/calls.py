@@ -26,7 +26,8 @@ class RestCheck:
 
 @dataclass
 class StepJob:
-    """A step or run_until request still in progress; answered when ``remaining`` is 0."""
+    """A step or run_until request still in progress; answered when ``remaining`` is 0, or
+    earlier once the bodies it reads rest (``rest``)."""
 
     call: Call
     total: int

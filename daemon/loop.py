@@ -19,7 +19,7 @@ import numpy as np
 from galton.daemon.calls import Call, StepJob
 from galton.daemon.loop_state import StateOps
 from galton.daemon.monitor import Pacer, ProcessMonitor, RtfWindow
-from galton.daemon.ops import MUTATING_OPS, SCENE_OPS, get_states
+from galton.daemon.ops import MUTATING_OPS, SCENE_OPS
 from galton.daemon.world import World
 from galton.protocol import (
     NotFoundError,
@@ -34,6 +34,7 @@ from galton.protocol import (
     decode_request,
     encode_reply,
     error_reply,
+    pack_f64,
 )
 from galton.protocol.errors import did_you_mean
 
@@ -236,12 +237,11 @@ class SimLoop(StateOps):
 
     def _at_rest(self, job: StepJob) -> bool:
         """Whether every body the job reads moves slower than its rest speed."""
-        assert job.rest is not None and job.read is not None
         try:
-            _, twists = self.world.get_states(job.read)
+            _, twists = self.world.get_states(job.read or [])
         except RemoteError:
             return True  # one was deleted: finish now, the reply says which
-        return bool((np.linalg.norm(twists[:, :3], axis=1) < job.rest.speed).all())
+        return _resting(twists, job)
 
     def _finish_job(self, job: StepJob) -> None:
         """Answer a finished step request: {steps}, and the states it asked to read (after
@@ -250,13 +250,14 @@ class SimLoop(StateOps):
         result: dict[str, Any] = {"steps": job.done}
         if job.read is not None:
             try:
-                result.update(get_states(self.world, {"names": job.read}))
+                poses, twists = self.world.get_states(job.read)
             except RemoteError as error:
                 error.details["steps_done"] = job.done
                 self._reply_error(job.call, error)
                 return
-        if job.rest is not None:
-            result["at_rest"] = self._at_rest(job)
+            result.update(names=job.read, poses=pack_f64(poses), twists=pack_f64(twists))
+            if job.rest is not None:
+                result["at_rest"] = _resting(twists, job)
         self._reply_ok(job.call, result)
 
     def verify_physics(self) -> bool:
@@ -324,3 +325,9 @@ class SimLoop(StateOps):
             self.publish_telemetry(sample)
         except Exception:
             log.exception("could not publish telemetry")
+
+
+def _resting(twists: np.ndarray, job: StepJob) -> bool:
+    """Every body's linear speed under the job's rest speed."""
+    assert job.rest is not None
+    return bool((np.linalg.norm(twists[:, :3], axis=1) < job.rest.speed).all())
