@@ -93,6 +93,9 @@ class StateOps:
         return self.status().to_wire()
 
     def op_step(self: SimLoop, call: Call, args: dict[str, Any]) -> None:
+        if "until_rest" in args:
+            raise InvalidArgumentError("step takes no until_rest: use run_until with "
+                                       "until_rest and read to stop once bodies rest")
         count = _check_count(args.get("count", 1))
         self._start_job(call, count, self._read_list(args, "step"))
 

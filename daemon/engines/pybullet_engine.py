@@ -48,7 +48,12 @@ from galton.daemon.engine import (
     Engine,
 )
 from galton.daemon.engines import pybullet_rebuild as rebuild
-from galton.daemon.engines.pybullet_params import SPECS, WORLD_PARAMS, default_keys
+from galton.daemon.engines.pybullet_params import (
+    SPECS,
+    SURFACE_DEFAULTS,
+    WORLD_PARAMS,
+    default_keys,
+)
 from galton.daemon.engines.pybullet_rebuild import Body as _Body
 from galton.daemon.engines.pybullet_shapes import (
     DENSITY,
@@ -162,14 +167,8 @@ class PybulletEngine(Engine):
         if "gravity" in values:
             self._bc.setGravity(*values["gravity"])
         bodies = list(self._bodies.values())
-        for body in bodies:
-            friction_key, restitution_key = default_keys(body.static)
-            if body.follows_friction and friction_key in values:
-                body.friction = values[friction_key]
-                self._change(body.uid, -1, lateralFriction=body.friction)
-            if body.follows_restitution and restitution_key in values:
-                body.restitution = values[restitution_key]
-                self._change(body.uid, -1, restitution=body.restitution)
+        if values.keys() & SURFACE_DEFAULTS:
+            self._follow_surface_defaults(bodies, values)
         if "pybullet.ccd_swept_sphere_radius" in values:
             radius = values["pybullet.ccd_swept_sphere_radius"]
             for body in bodies:
@@ -181,6 +180,17 @@ class PybulletEngine(Engine):
                 if (body.shape, body.size) not in done:
                     done.add((body.shape, body.size))
                     self._set_margin(body.uid, body.shape, body.size)
+
+    def _follow_surface_defaults(self, bodies: list[_Body], values: dict[str, Any]) -> None:
+        """Bodies spawned without a friction or restitution take their kind's new default."""
+        for body in bodies:
+            friction_key, restitution_key = default_keys(body.static)
+            if body.follows_friction and friction_key in values:
+                body.friction = values[friction_key]
+                self._change(body.uid, -1, lateralFriction=body.friction)
+            if body.follows_restitution and restitution_key in values:
+                body.restitution = values[restitution_key]
+                self._change(body.uid, -1, restitution=body.restitution)
 
     def _set_margin(self, uid: int, shape: str, size: tuple[float, ...]) -> None:
         margin = margin_for(shape, size, self._values["pybullet.collision_margin"])

@@ -64,6 +64,9 @@ WORLD_PARAMS = {
     "pybullet.deterministic_overlapping_pairs": "deterministicOverlappingPairs",
 }
 
+SURFACE_DEFAULTS = frozenset({"default_friction", "default_restitution",
+                              "default_static_friction", "default_static_restitution"})
+
 
 def default_keys(static: bool) -> tuple[str, str]:
     """The parameters a body that sets no friction or restitution follows."""

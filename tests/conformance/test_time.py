@@ -233,4 +233,7 @@ def test_a_bad_until_rest_is_rejected_before_any_step(sim: Client, args: dict) -
     reply = sim.request("run_until", {"sim_time": 1.0, **args})
     assert reply.code == ResultCode.INVALID_ARGUMENT
     assert "until_rest" in reply.message
+    reply = sim.request("step", {"count": 10, **args})  # step has no until_rest at all
+    assert reply.code == ResultCode.INVALID_ARGUMENT
+    assert "until_rest" in reply.message
     assert sim.status().step == 0
