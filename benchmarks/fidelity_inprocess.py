@@ -13,7 +13,7 @@ and a trial here is bit-identical to the same trial through a daemon
 ``--surfaces`` sets per-role surfaces (roles: ball, pin, funnel, divider, wall, glass,
 floor). The script prints one JSON line: the pooled width (standard deviation of the bin
 index; the binomial's is 1.658), the Monte Carlo p, the median per-trial chi-squared, lost
-and unsettled balls, the median RTF and the pooled counts.
+and unsettled balls, the median RTF and sim time of a trial, and the pooled counts.
 """
 
 from __future__ import annotations
@@ -66,6 +66,7 @@ def main() -> None:
                                                for r in records), 2),
         "lost": sum(r.lost for r in records), "unsettled": sum(r.unsettled for r in records),
         "rtf_median": round(statistics.median(r.rtf or 0.0 for r in records), 2),
+        "sim_time_median": round(statistics.median(r.sim_time for r in records), 1),
         "pooled": pooled.tolist()}))
 
 

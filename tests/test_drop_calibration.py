@@ -17,7 +17,7 @@ from galton.client import Client, plane, spheres
 RADIUS = 0.045
 DROP_HEIGHT = 0.5  # m between the ball's bottom and the plane
 # Documented drop-test bounce of the daemon defaults (docs/PHYSICS.md), and its tolerance.
-DEFAULT_BOUNCE = {"mujoco": 0.50, "pybullet": 0.72}
+DEFAULT_BOUNCE = {"mujoco": 0.70, "pybullet": 0.72}
 # Documented bounce of two balls meeting head-on at 1 m/s with the defaults (MuJoCo: the
 # moving bodies' own surface; PyBullet: the product of both, like any contact).
 DEFAULT_BALL_BOUNCE = {"mujoco": 0.38, "pybullet": 0.73}

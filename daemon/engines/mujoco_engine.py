@@ -78,6 +78,12 @@ class _Entity:
             self.body.find_all(_GEOM)
 
 
+# Contacts at which MuJoCo's worker threads start helping, and below which they stop.
+WORKERS_ON_CONTACTS = 400
+WORKERS_OFF_CONTACTS = 200
+CROWDING_CHECK_STEPS = 50  # steps between looks at the contact count
+
+
 class MujocoEngine(Engine):
     """A MuJoCo world of named bodies; see the module docstring for how it is kept."""
 
@@ -89,6 +95,8 @@ class MujocoEngine(Engine):
         self._values: dict[str, Any] = {n: p.default for n, p in ms.PARAMS.items()}
         self._entities: dict[str, _Entity] = {}
         self._diverged = False
+        self._crowded = False
+        self._workers = 0
         self._build_empty()
 
     # -- compile & index ----------------------------------------------------------------
@@ -99,6 +107,8 @@ class MujocoEngine(Engine):
         ms.write_options(self._spec.option, self._values)
         self._model = self._spec.compile()
         self._data = mujoco.MjData(self._model)
+        self._workers = 0  # a new MjData has no thread pool
+        self._start_workers()
         self._reindex()
 
     def _recompile(self) -> None:
@@ -107,7 +117,29 @@ class MujocoEngine(Engine):
             self._model, self._data = self._spec.recompile(self._model, self._data)
         except ValueError as exc:
             raise InvalidArgumentError(f"MuJoCo rejected the change: {exc}") from exc
+        self._workers = 0  # the recompiled MjData has no thread pool
+        self._start_workers()
         self._reindex()
+
+    def _start_workers(self) -> None:
+        """Size the current MjData's thread pool (a new MjData starts with none).
+
+        Workers pay off only in a crowded world: at 100 falling balls their hand-off made
+        trials 20 % slower, at 500 piled balls they made them 16-21 % faster. So they run
+        while the last step had at least WORKERS_ON_CONTACTS contacts, and stop below
+        WORKERS_OFF_CONTACTS. Results are bit-identical either way.
+        """
+        wanted = self._values["mujoco.threads"] if self._crowded else 0
+        if wanted != self._workers:
+            mujoco.mju_threadpool(self._data, wanted)
+            self._workers = wanted
+
+    def _track_crowding(self) -> None:
+        ncon = self._data.ncon
+        crowded = ncon >= WORKERS_ON_CONTACTS or (self._crowded and ncon >= WORKERS_OFF_CONTACTS)
+        if crowded != self._crowded:
+            self._crowded = crowded
+            self._start_workers()
 
     def _reindex(self) -> None:
         self._index = mst.StateIndex.of(self._model)
@@ -161,6 +193,8 @@ class MujocoEngine(Engine):
         self._values.update(clean)
         ms.write_options(self._spec.option, self._values)
         ms.write_options(self._model.opt, self._values)
+        if "mujoco.threads" in clean:
+            self._start_workers()
         if ms.CONTACT_PARAMS & clean.keys():
             for entity in self._entities.values():
                 entity.key = None  # its values are rewritten: it no longer matches its kind
@@ -380,7 +414,9 @@ class MujocoEngine(Engine):
     # -- Engine: time ---------------------------------------------------------------------
     def step(self, count: int) -> None:
         self._warnings[ms.DIVERGENCE_WARNINGS] = 0
-        mujoco.mj_step(self._model, self._data, count)
+        for start in range(0, count, CROWDING_CHECK_STEPS):
+            self._track_crowding()
+            mujoco.mj_step(self._model, self._data, min(CROWDING_CHECK_STEPS, count - start))
         self._diverged |= bool(self._warnings[ms.DIVERGENCE_WARNINGS].any())
 
     def state_is_finite(self) -> bool:

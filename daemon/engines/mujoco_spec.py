@@ -77,29 +77,29 @@ def _condim(value: Any, where: str) -> int:
 
 CONDIMS = (1, 3, 4, 6)
 PARAMS: dict[str, ParamSpec] = {p.name: p for p in (
-    ParamSpec("timestep", 0.004, "s", "physics step", number(0.0, 1.0, low_open=True)),
+    ParamSpec("timestep", 0.002, "s", "physics step", number(0.0, 1.0, low_open=True)),
     ParamSpec("gravity", (0.0, 0.0, -9.81), "m/s²", "gravity vector, world frame",
               vector(3, -1e3, 1e3)),
     ParamSpec("solver_iterations", 50, "", "constraint solver iterations (option iterations)",
               integer(1, 10_000)),
-    ParamSpec("default_friction", 0.15, "",
+    ParamSpec("default_friction", 0.5, "",
               "sliding friction of moving bodies spawned without one, also when changed "
               "later; between two moving bodies a contact uses the larger value",
               number(0.0, 100.0)),
-    ParamSpec("default_restitution", 0.4, "",
+    ParamSpec("default_restitution", 0.3, "",
               "restitution of moving bodies spawned without one, also when changed later; 0 "
               "means MuJoCo's own contact (mujoco.solref as given)", number(0.0, 1.0)),
-    ParamSpec("default_static_friction", 0.15, "",
+    ParamSpec("default_static_friction", 0.5, "",
               "sliding friction of static bodies (the scenery) spawned without one, also when "
               "changed later; a contact with a static body uses the static body's surface",
               number(0.0, 100.0)),
-    ParamSpec("default_static_restitution", 0.4, "",
+    ParamSpec("default_static_restitution", 0.61, "",
               "restitution of static bodies spawned without one, also when changed later; a "
               "contact with a static body uses the static body's surface", number(0.0, 1.0)),
     ParamSpec("mujoco.solref", (0.02, 1.0), "s, 1",
               "[timeconst, dampratio] of spawned bodies' contacts; a restitution e > 0 "
               "replaces the dampratio (see mujoco_spec.damping_ratio)", _solref),
-    ParamSpec("mujoco.solimp", (0.9, 0.95, 0.001, 0.5, 2.0), "",
+    ParamSpec("mujoco.solimp", (0.8, 0.95, 0.001, 0.5, 2.0), "",
               "[dmin, dmax, width, midpoint, power] impedance of spawned bodies' contacts",
               _solimp),
     ParamSpec("mujoco.condim", 4, "",
@@ -122,6 +122,10 @@ PARAMS: dict[str, ParamSpec] = {p.name: p for p in (
     ParamSpec("mujoco.noslip_iterations", 0, "", "no-slip solver iterations (0 = off)",
               integer(0, 10_000)),
     ParamSpec("mujoco.integrator", "euler", "", "numerical integrator", choice(*INTEGRATORS)),
+    ParamSpec("mujoco.threads", 1, "",
+              "worker threads MuJoCo adds to the physics thread: collision detection and the "
+              "constraint solver of separate islands run in parallel, with bit-identical "
+              "results; 0 = none", integer(0, 64)),
     ParamSpec("mujoco.sleep_tolerance", 0.005, "m/s",
               "island sleeping: trees slower than this fall asleep (0 = sleeping off)",
               number(0.0, 10.0)),
