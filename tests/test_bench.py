@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from pathlib import Path
 
@@ -31,6 +32,17 @@ def test_a_small_trial_settles_every_ball_and_counts_them(sim: Client, engine: s
     assert record.peak_rss_bytes and record.peak_rss_bytes > 10 * 2**20
     assert record.settings["timestep"] > 0
     assert sim.list(tag="ball") and len(sim.list(tag="board")) > 20
+
+
+def test_a_lone_ball_bouncing_on_the_top_pin_is_not_taken_for_stuck(sim: Client,
+                                                                     engine: str) -> None:
+    """One ball released over the paper board's funnel bounces on the top pin's apex; a
+    rest check can catch it at the top of a bounce, slower than the settle speed."""
+    board = BoardSpec.load("paper")
+    board = board.replace(ball=dataclasses.replace(board.ball, count=1))
+    for repetition in range(3):
+        record = run_trial(sim, TrialConfig(engine, board, repetition=repetition, seed=0))
+        assert (record.settled, record.unsettled, record.lost) == (1, 0, 0)
 
 
 def test_trials_are_reproducible(sim: Client, engine: str) -> None:

@@ -95,8 +95,13 @@ def prepare_world(sim: Client, config: TrialConfig) -> tuple[Perturbation, list[
 
 def release_and_settle(sim: Client, config: TrialConfig, shake: Perturbation,
                        names: list[str], clock: PhysicsClock) -> BallOutcomes:
-    """Release the balls (all at once, or each at its time), then run until none moves."""
+    """Release the balls (all at once, or each at its time), then run until none moves.
+
+    A ball caught at the top of a bounce on a pin looks at rest, and stuck, for one check;
+    so balls seen stuck must still be stuck at a later rest before the trial ends.
+    """
     released, now = release(sim, config, shake, names, clock)
+    stuck_seen = False
     while True:
         if now >= config.max_sim_time - 1e-9:
             return classify(config, shake, sim.get_states(names[:released]))
@@ -105,8 +110,11 @@ def release_and_settle(sim: Client, config: TrialConfig, shake: Perturbation,
             config.settle_speed, config.check_interval)
         now = states.sim_time
         outcomes = classify(config, shake, states)
-        if at_rest or outcomes.reasons.get("moving", 0) == 0:
+        if not (at_rest or outcomes.reasons.get("moving", 0) == 0):
+            continue
+        if outcomes.reasons.get("stuck", 0) == 0 or stuck_seen:
             return outcomes
+        stuck_seen = True
 
 
 def release(sim: Client, config: TrialConfig, shake: Perturbation, names: list[str],
