@@ -123,9 +123,10 @@ PARAMS: dict[str, ParamSpec] = {p.name: p for p in (
               integer(0, 10_000)),
     ParamSpec("mujoco.integrator", "euler", "", "numerical integrator", choice(*INTEGRATORS)),
     ParamSpec("mujoco.threads", 1, "",
-              "worker threads MuJoCo adds to the physics thread: collision detection and the "
-              "constraint solver of separate islands run in parallel, with bit-identical "
-              "results; 0 = none", integer(0, 64)),
+              "worker threads MuJoCo adds to the physics thread while the world is crowded "
+              "(from 400 contacts until below 200): collision detection and the constraint "
+              "solver of separate islands run in parallel, with bit-identical results; "
+              "0 = none", integer(0, 64)),
     ParamSpec("mujoco.sleep_tolerance", 0.005, "m/s",
               "island sleeping: trees slower than this fall asleep (0 = sleeping off)",
               number(0.0, 10.0)),
