@@ -299,6 +299,18 @@ def test_worker_threads_start_only_in_a_crowded_world() -> None:
     assert _piles_after(2, 0.5)[1] == 0
 
 
+def test_worker_threads_stop_when_the_crowd_thins(engine: MujocoEngine,
+                                                  monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(mujoco_engine, "WORKERS_ON_CONTACTS", 1)
+    monkeypatch.setattr(mujoco_engine, "WORKERS_OFF_CONTACTS", 1)
+    engine.spawn([ground(), ball(z=RADIUS, twists=[[1.0, 0, 0, 0, 0, 0]])])  # rolls: 1 contact
+    run(engine, 0.2)
+    assert engine._workers == 1
+    engine.set_states(["ball"], np.array([[0, 0, 50.0, *IDENTITY]]), None)  # no contact left
+    run(engine, 0.2)
+    assert engine._workers == 0
+
+
 def test_worker_threads_can_change_at_run_time(engine: MujocoEngine,
                                                monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(mujoco_engine, "WORKERS_ON_CONTACTS", 1)
