@@ -13,7 +13,8 @@ and a trial here is bit-identical to the same trial through a daemon
 ``--surfaces`` sets per-role surfaces (roles: ball, pin, funnel, divider, wall, glass,
 floor). The script prints one JSON line: the pooled width (standard deviation of the bin
 index; the binomial's is 1.658), the Monte Carlo p, the median per-trial chi-squared, lost
-and unsettled balls, the median RTF and sim time of a trial, and the pooled counts.
+and unsettled balls, the median RTF and sim time of a trial, each trial's width, and the
+pooled counts.
 """
 
 from __future__ import annotations
@@ -40,6 +41,11 @@ def board_for(engine: str, balls: int, mode: str, params: dict, surfaces: dict) 
     return board.replace(contacts={**board.contacts, engine: contacts})
 
 
+def width(counts: np.ndarray | list[int]) -> float:
+    """The standard deviation of the bin index over these balls (the binomial's: 1.658)."""
+    return round(float(np.repeat(np.arange(len(counts)), counts).std()), 3)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("engine")
@@ -60,13 +66,14 @@ def main() -> None:
         "engine": args.engine, "balls": args.balls, "reps": args.reps, "mode": args.mode,
         "params": json.loads(args.params), "surfaces": json.loads(args.surfaces),
         "seed": args.seed,
-        "width": round(float(np.repeat(np.arange(len(pooled)), pooled).std()), 3),
+        "width": width(pooled),
         "p_mc": round(stats.p_monte_carlo(pooled), 3),
         "median_chi2": round(statistics.median(stats.chi2_statistic(r.counts)
                                                for r in records), 2),
         "lost": sum(r.lost for r in records), "unsettled": sum(r.unsettled for r in records),
         "rtf_median": round(statistics.median(r.rtf or 0.0 for r in records), 2),
         "sim_time_median": round(statistics.median(r.sim_time for r in records), 1),
+        "trial_widths": [width(r.counts) for r in records],
         "pooled": pooled.tolist()}))
 
 
