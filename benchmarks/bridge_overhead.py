@@ -23,7 +23,7 @@ from typing import Any
 
 from common import ENGINES, daemon_client, machine, write_json
 
-from galton.analysis.board import BallSpec, BoardSpec
+from galton.analysis.board import BallSpec, BoardSpec, EngineContacts
 from galton.client.bench.trial import TrialConfig, run_trial
 from galton.client.sdk import Stamp, States
 from galton.daemon.engines import create_engine
@@ -96,9 +96,13 @@ class LocalSim:
         return self.world.engine.capabilities()
 
 
-def trial_config(engine: str, balls: int) -> TrialConfig:
+def trial_config(engine: str, balls: int, params: dict[str, Any] | None = None) -> TrialConfig:
+    """Repetition 0 of the paper board with this many balls, on the daemon defaults plus
+    ``params``."""
     board = BoardSpec.load("paper")
     board = board.replace(ball=BallSpec(board.ball.radius, board.ball.mass, balls))
+    if params:
+        board = board.replace(contacts={**board.contacts, engine: EngineContacts(params=params)})
     return TrialConfig(engine, board, repetition=0, seed=0)
 
 
