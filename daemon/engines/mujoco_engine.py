@@ -40,6 +40,7 @@ from galton.daemon.engine import (
 from galton.daemon.engines import mujoco_pool as mp
 from galton.daemon.engines import mujoco_spec as ms
 from galton.daemon.engines import mujoco_state as mst
+from galton.daemon.engines.mujoco_balance import BalanceGuard
 from galton.daemon.engines.mujoco_state import FREE, JOINTED, MOCAP, STATIC
 from galton.daemon.params import check_updates
 from galton.protocol import (
@@ -143,6 +144,8 @@ class MujocoEngine(Engine):
 
     def _reindex(self) -> None:
         self._index = mst.StateIndex.of(self._model)
+        self._balance = BalanceGuard(self._model) if self._values["mujoco.wake_balanced"] \
+            else None
         self._ids = {name: e.body.id for name, e in self._entities.items()}
         self._warnings = self._data.warning.number
 
@@ -195,6 +198,11 @@ class MujocoEngine(Engine):
         ms.write_options(self._model.opt, self._values)
         if "mujoco.threads" in clean:
             self._start_workers()
+        if "mujoco.wake_balanced" in clean:
+            if self._balance is not None:
+                self._balance.release_all(self._model)
+            self._balance = BalanceGuard(self._model) if clean["mujoco.wake_balanced"] \
+                else None
         if ms.CONTACT_PARAMS & clean.keys():
             for entity in self._entities.values():
                 entity.key = None  # its values are rewritten: it no longer matches its kind
@@ -417,6 +425,8 @@ class MujocoEngine(Engine):
         for start in range(0, count, CROWDING_CHECK_STEPS):
             self._track_crowding()
             mujoco.mj_step(self._model, self._data, min(CROWDING_CHECK_STEPS, count - start))
+            if self._balance is not None:
+                self._balance.check(self._model, self._data)
         self._diverged |= bool(self._warnings[ms.DIVERGENCE_WARNINGS].any())
 
     def state_is_finite(self) -> bool:

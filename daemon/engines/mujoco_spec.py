@@ -16,7 +16,7 @@ import mujoco
 import numpy as np
 
 from galton.daemon.engines.mujoco_state import to_wxyz
-from galton.daemon.params import ParamSpec, choice, integer, number, vector
+from galton.daemon.params import ParamSpec, choice, flag, integer, number, vector
 from galton.protocol import BodyGroup, InvalidArgumentError
 
 log = logging.getLogger("galton.daemon.mujoco")
@@ -130,6 +130,10 @@ PARAMS: dict[str, ParamSpec] = {p.name: p for p in (
     ParamSpec("mujoco.sleep_tolerance", 0.005, "m/s",
               "island sleeping: trees slower than this fall asleep (0 = sleeping off)",
               number(0.0, 10.0)),
+    ParamSpec("mujoco.wake_balanced", True, "",
+              "wake a ball that fell asleep balanced on a single round support (a pin's "
+              "apex, another ball's crown) and keep it awake until it rolls off: real balls "
+              "cannot rest there (mujoco_balance)", flag),
 )}
 CONTACT_PARAMS = frozenset({"timestep", "default_friction", "default_restitution",
                             "default_static_friction", "default_static_restitution",

@@ -511,6 +511,62 @@ def test_balls_at_rest_on_static_bodies_fall_asleep(engine: MujocoEngine) -> Non
     np.testing.assert_array_equal(engine.get_states(["pin"])[0][0, :3], [1, 0, 2.0])
 
 
+ALONG_Y = (math.sqrt(0.5), 0.0, 0.0, math.sqrt(0.5))  # a cylinder's axis turned onto y
+
+
+def _posed(shape: str, name: str, pose: Sequence[float], size: Sequence[float],
+           **options: Any) -> BodyGroup:
+    return BodyGroup(shape=shape, size=tuple(size), names=[name],
+                     poses=np.array([pose], dtype=float), **options)
+
+
+def _crown_scene(support: str) -> list[BodyGroup]:
+    """A ball set down 0.3 mm off the top of a lying pin, or of a ball resting on a floor."""
+    floor = group("box", ["floor"], [[0, 0, -0.05]], size=(2, 2, 0.05), static=True)
+    if support == "pin":
+        below = _posed("cylinder", "below", (0, 0, 1.0, *ALONG_Y), (0.1, 0.3), static=True)
+        top = 1.0 + 0.1 + 0.045
+    else:
+        below = group("sphere", ["below"], [[0, 0, 0.045]], size=(0.045,), mass=0.38)
+        top = 0.045 + 0.09
+    return [floor, below, group("sphere", ["a"], [[0.0003, 0, top]], size=(0.045,), mass=0.38)]
+
+
+@pytest.mark.parametrize("support", ["pin", "ball"])
+def test_a_ball_asleep_on_a_crown_is_woken_and_rolls_off(engine: MujocoEngine,
+                                                         support: str) -> None:
+    """Sleeping would keep a ball balanced on a pin's apex for ever (about one ball in 5,000
+    on the paper board); mujoco.wake_balanced wakes it and it rolls off, as a real one would.
+    """
+    start = _crown_scene(support)[2].poses[0, 2]
+    engine.set_params({"mujoco.wake_balanced": False})
+    engine.spawn(_crown_scene(support))
+    run(engine, 2.0)
+    pose, twist = engine.get_states(["a"])
+    assert not twist.any() and pose[0, 2] == pytest.approx(start, abs=2e-3)  # asleep on top
+    engine.set_params({"mujoco.wake_balanced": True})
+    run(engine, 3.0)
+    assert engine.get_states(["a"])[0][0, 2] < start - 0.05  # rolled off the crown
+    assert engine._balance is not None and not engine._balance.held
+
+
+def test_balls_at_a_stable_rest_still_sleep_with_the_balance_guard(
+        engine: MujocoEngine) -> None:
+    """On a flat cap, a floor, or between two pins, nothing is held awake."""
+    engine.spawn([
+        group("box", ["floor"], [[0, 0, -0.05]], size=(2, 2, 0.05), static=True),
+        group("cylinder", ["post"], [[1, 0, 0.5]], size=(0.1, 0.5), static=True),
+        _posed("cylinder", "left", (-1.12, 0, 1.0, *ALONG_Y), (0.1, 0.3), static=True),
+        _posed("cylinder", "right", (-0.88, 0, 1.0, *ALONG_Y), (0.1, 0.3), static=True),
+        group("sphere", ["on_cap", "on_floor", "wedged"],
+              [[1.02, 0, 1.05], [0, 0, 0.05], [-1.0, 0, 1.2]], size=(0.045,), mass=0.38)])
+    run(engine, 3.0)
+    poses, twists = engine.get_states(["on_cap", "on_floor", "wedged"])
+    assert not twists.any()  # all three asleep
+    assert poses[0, 2] > 1.0 and poses[2, 2] > 1.0
+    assert engine._balance is not None and not engine._balance.held
+
+
 def test_contact_dimension_must_be_one_mujoco_has(engine: MujocoEngine) -> None:
     with pytest.raises(InvalidArgumentError, match="1, 3, 4, 6"):
         engine.set_params({"mujoco.condim": 5})

@@ -1,0 +1,132 @@
+"""No sleeping balanced on a crown: MuJoCo's island sleeping can freeze a ball at an unstable
+rest, and this wakes it.
+
+A ball that arrives almost exactly on top of a round support (a pin's apex, another ball's
+crown) slows there below ``sleep_tolerance`` for MuJoCo's ten steps and falls asleep. Real
+balls roll off such a crown: the rest is unstable, only sleeping keeps it. On the paper board
+about one ball in 5,000 ended its trial asleep on a pin's top that way.
+
+So every few steps the engine looks at the balls that fell asleep since its last look. One
+held up by a single contact, with a round geom, whose normal is within APEX_DEGREES of
+straight up, is woken and kept awake (sleep policy "never") until it rolls off that crown;
+then it may sleep again like any other ball. Balls at rest in a pile, on a floor or wedged
+between two supports are never touched, so the guard changes nothing else. Only the balls
+that have just fallen asleep are examined, a few geometric queries each.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator
+
+import mujoco
+import numpy as np
+
+APEX_DEGREES = 5.0  # a lone round support this close to vertical is a crown, not a rest
+SUPPORT_COSINE = 0.17  # a contact whose normal is within 80 degrees of up bears weight
+TOUCH = 1e-3  # m: geoms closer than this touch
+_SPHERE = int(mujoco.mjtGeom.mjGEOM_SPHERE)
+_ROUND = frozenset(int(t) for t in (mujoco.mjtGeom.mjGEOM_SPHERE, mujoco.mjtGeom.mjGEOM_CAPSULE,
+                                    mujoco.mjtGeom.mjGEOM_ELLIPSOID,
+                                    mujoco.mjtGeom.mjGEOM_CYLINDER))
+_CYLINDER = int(mujoco.mjtGeom.mjGEOM_CYLINDER)
+_NEVER = int(mujoco.mjtSleepPolicy.mjSLEEP_NEVER)
+
+
+class BalanceGuard:
+    """Watches one compiled model's single-sphere trees; build a new one after a compile."""
+
+    def __init__(self, m: mujoco.MjModel) -> None:
+        bodies = m.tree_bodyadr
+        geoms = m.body_geomadr[bodies]
+        lone_sphere = (m.tree_bodynum == 1) & (m.body_geomnum[bodies] == 1) & \
+            (m.geom_type[np.maximum(geoms, 0)] == _SPHERE)
+        self._trees = np.flatnonzero(lone_sphere)
+        self._geoms = geoms[self._trees]
+        self._was_asleep = np.zeros(len(self._trees), dtype=bool)
+        self._held: dict[int, tuple[int, int]] = {}  # tree -> (its geom, its own policy)
+
+    @property
+    def held(self) -> list[int]:
+        """Trees kept awake now (for tests and diagnostics)."""
+        return sorted(self._held)
+
+    def check(self, m: mujoco.MjModel, d: mujoco.MjData) -> None:
+        """Wake balls that fell asleep on a crown; free those that have rolled off one."""
+        if not len(self._trees) or not m.opt.enableflags & mujoco.mjtEnableBit.mjENBL_SLEEP:
+            return
+        up = _up(m)
+        if up is None:
+            return
+        asleep = d.tree_asleep[self._trees] >= 0
+        for i in np.flatnonzero(asleep & ~self._was_asleep):
+            tree, geom = int(self._trees[i]), int(self._geoms[i])
+            if tree not in self._held and on_a_crown(m, d, geom, up):
+                self._held[tree] = (geom, int(m.tree_sleep_policy[tree]))
+                m.tree_sleep_policy[tree] = _NEVER  # MuJoCo wakes it at the next step
+        self._was_asleep = asleep
+        for tree, (geom, _) in list(self._held.items()):
+            if not on_a_crown(m, d, geom, up):
+                self._release(m, tree)
+
+    def release_all(self, m: mujoco.MjModel) -> None:
+        """Give every held ball its own sleep policy back (the guard is being switched off)."""
+        for tree in list(self._held):
+            self._release(m, tree)
+
+    def _release(self, m: mujoco.MjModel, tree: int) -> None:
+        m.tree_sleep_policy[tree] = self._held.pop(tree)[1]
+
+
+def _up(m: mujoco.MjModel) -> np.ndarray | None:
+    norm = float(np.linalg.norm(m.opt.gravity))
+    return None if norm == 0.0 else -np.asarray(m.opt.gravity) / norm
+
+
+def on_a_crown(m: mujoco.MjModel, d: mujoco.MjData, geom: int, up: np.ndarray) -> bool:
+    """Whether this sphere's weight rests on one round geom, within APEX_DEGREES of its top."""
+    supports = list(_supports(m, d, geom, up))
+    if len(supports) != 1:
+        return False
+    other, normal = supports[0]
+    return _is_round_there(m, d, other, normal) and \
+        float(normal @ up) >= math.cos(math.radians(APEX_DEGREES))
+
+
+def _supports(m: mujoco.MjModel, d: mujoco.MjData, geom: int,
+              up: np.ndarray) -> Iterator[tuple[int, np.ndarray]]:
+    """(geom, unit normal towards the sphere) of each contact bearing the sphere's weight."""
+    centre = d.geom_xpos[geom]
+    radius = float(m.geom_size[geom, 0])
+    fromto = np.empty(6)
+    for other in _neighbours(m, d, geom, centre, radius):
+        if mujoco.mj_geomDistance(m, d, geom, int(other), TOUCH, fromto) >= TOUCH:
+            continue
+        offset = centre - fromto[3:]
+        length = float(np.linalg.norm(offset))
+        if length == 0.0:
+            continue
+        normal = offset / length
+        if float(normal @ up) >= SUPPORT_COSINE:
+            yield int(other), normal
+
+
+def _neighbours(m: mujoco.MjModel, d: mujoco.MjData, geom: int, centre: np.ndarray,
+                radius: float) -> np.ndarray:
+    """Geoms that can collide with this one and whose bounding spheres reach it."""
+    collides = ((m.geom_contype & m.geom_conaffinity[geom]) != 0) | \
+        ((m.geom_conaffinity & m.geom_contype[geom]) != 0)
+    reach = np.linalg.norm(d.geom_xpos - centre, axis=1) <= radius + m.geom_rbound + TOUCH
+    unbounded = m.geom_rbound == 0  # planes and height fields
+    near = collides & (reach | unbounded) & (m.geom_bodyid != m.geom_bodyid[geom])
+    return np.flatnonzero(near)
+
+
+def _is_round_there(m: mujoco.MjModel, d: mujoco.MjData, geom: int, normal: np.ndarray) -> bool:
+    """Whether the geom's surface is curved where this normal leaves it (a cylinder's caps
+    are flat)."""
+    kind = int(m.geom_type[geom])
+    if kind != _CYLINDER:
+        return kind in _ROUND
+    axis = d.geom_xmat[geom].reshape(3, 3)[:, 2]
+    return abs(float(normal @ axis)) < 0.5
