@@ -55,7 +55,8 @@ def _histogram_axes(ax: Axes, trials: Sequence[TrialRecord], draws: int, seed: i
     title = f"{balls_text(first.balls)} × {len(trials)} trials"
     if pooled.sum() > 0:
         rng = np.random.default_rng(trial_seed(seed, *config_key(first), first.balls))
-        fit = stats.goodness_of_fit(pooled, first.rows, draws, rng)
+        fit = stats.goodness_of_fit(pooled, first.rows, draws * stats.POOLED_DRAWS_FACTOR,
+                                    rng)
         title += f"\npooled χ² = {fit.chi2:.1f}, Monte Carlo {p_equals(fit.p_monte_carlo)}"
     ax.set_title(title, fontsize=9)
     ax.set_xticks(bins)

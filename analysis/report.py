@@ -141,7 +141,8 @@ def _calibration(summaries: Sequence[EngineSummary], draws: int, seed: int) -> l
             "counts are below 5 and a single ball in an outer bin adds 18.5 to the statistic; "
             "the chi-squared approximation fails there and a perfect board fails the test far "
             "more often than 5 %. We therefore report, beside the paper's statistic, a Monte "
-            f"Carlo p-value ({draws} multinomial tables drawn under the binomial, p = (k + 1) / "
+            f"Carlo p-value ({draws} multinomial tables drawn under the binomial per trial, "
+            f"{draws * stats.POOLED_DRAWS_FACTOR} for the pooled counts; p = (k + 1) / "
             f"(N + 1)) and an asymptotic p after merging tail bins until every expected count "
             f"is >= {stats.MIN_EXPECTED:g}. The fidelity verdict uses the Monte Carlo p. How "
             "often the paper's test rejects a perfect board (Monte Carlo, all balls settled):",

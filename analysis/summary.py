@@ -114,7 +114,8 @@ def _pooled_test(trials: Sequence[TrialRecord], draws: int,
     if sum(t.settled for t in trials) == 0:
         return None
     rows = trials[0].rows
-    return stats.pooled_over_repetitions([t.counts for t in trials], rows, draws,
+    return stats.pooled_over_repetitions([t.counts for t in trials], rows,
+                                         draws * stats.POOLED_DRAWS_FACTOR,
                                          np.random.default_rng(rng))
 
 
