@@ -321,6 +321,8 @@ class MujocoEngine(Engine):
 
     def clear(self) -> None:
         """An empty world at time 0; the pool stays warm: every spawned body is parked."""
+        if self._balance is not None:
+            self._balance.release_all(self._model)  # the model may outlive this clear
         entities = list(self._entities.values())
         self._entities.clear()
         self._diverged = False

@@ -8,6 +8,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
+import mujoco
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
@@ -548,6 +549,17 @@ def test_a_ball_asleep_on_a_crown_is_woken_and_rolls_off(engine: MujocoEngine,
     run(engine, 3.0)
     assert engine.get_states(["a"])[0][0, 2] < start - 0.05  # rolled off the crown
     assert engine._balance is not None and not engine._balance.held
+
+
+def test_clearing_the_world_gives_a_held_ball_its_sleep_policy_back(
+        engine: MujocoEngine) -> None:
+    """clear() parks bodies in the same compiled model: none may stay barred from sleep."""
+    engine.spawn(_crown_scene("pin"))
+    run(engine, 0.2)
+    assert engine._balance is not None and engine._balance.held  # still on the crown
+    engine.clear()
+    never = int(mujoco.mjtSleepPolicy.mjSLEEP_NEVER)
+    assert not (engine._model.tree_sleep_policy == never).any()
 
 
 def test_balls_at_a_stable_rest_still_sleep_with_the_balance_guard(
