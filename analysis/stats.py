@@ -22,6 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy import stats as sps
+from scipy.optimize import brentq
 
 from galton.analysis.errors import CountsError, NoSettledBallsError, TooFewBallsError
 
@@ -239,6 +240,37 @@ def goodness_of_fit(counts: Sequence[int] | np.ndarray, rows: int = ROWS,
         p_pooled_tails=tails_p,
         pooled_tails_dof=tails_dof,
     )
+
+
+def effect_size(counts: Sequence[int] | np.ndarray, rows: int = ROWS) -> float:
+    """How far the counts' law is from the binomial, whatever the number of balls.
+
+    Cohen's w, sqrt(sum (q - p)^2 / p) over the bins, estimated without its sampling bias as
+    sqrt(max(0, chi2 - dof) / N): a test's p falls as balls are added, w does not, so runs of
+    different sizes and seeds compare. A perfect board gives about 0.
+    """
+    table = check_counts(counts, rows)
+    settled = int(table.sum())
+    if settled < 1:
+        raise NoSettledBallsError("an effect size needs >= 1 settled ball")
+    return math.sqrt(max(0.0, chi2_statistic(table, rows) - rows) / settled)
+
+
+def detectable_effect(settled: int, rows: int = ROWS, alpha: float = ALPHA,
+                      power: float = 0.5) -> float:
+    """The effect size w that the chi-squared test at ``alpha`` rejects with this ``power``
+    for ``settled`` balls (noncentral chi-squared with noncentrality N w^2).
+
+    A board whose w is near this value passes or fails with the seed: half the time at the
+    default power of 0.5.
+    """
+    if settled < 1:
+        raise NoSettledBallsError(f"a detectable effect needs >= 1 ball, got {settled}")
+    if not 0 < alpha < 1 or not alpha < power < 1:
+        raise CountsError(f"need 0 < alpha < power < 1, got alpha {alpha}, power {power}")
+    critical = critical_value(alpha, rows)
+    noncentrality = brentq(lambda lam: sps.ncx2.sf(critical, rows, lam) - power, 1e-9, 1e4)
+    return math.sqrt(noncentrality / settled)
 
 
 def sum_over_repetitions(tables: Sequence[Sequence[int] | np.ndarray],

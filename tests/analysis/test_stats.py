@@ -160,3 +160,44 @@ def test_errors_share_one_root_and_other_boards_work() -> None:
     with pytest.raises(AnalysisError):
         stats.sum_over_repetitions([])
     assert stats.chi2_statistic([1, 3, 3, 1], rows=3) == 0.0
+
+
+def _tilted_law(w: float) -> np.ndarray:
+    """Binomial(11, 1/2) moved towards the tails until its Cohen's w is exactly ``w``."""
+    p = stats.bin_probabilities()
+    direction = (np.arange(12) - 5.5) ** 2 - np.sum(p * (np.arange(12) - 5.5) ** 2)
+    direction = direction * p  # sums to 0: the law stays a law
+    return p + w * direction / math.sqrt(np.sum(direction**2 / p))
+
+
+def test_effect_size_is_near_zero_for_a_perfect_board_and_finds_a_known_tilt() -> None:
+    rng = np.random.default_rng(5)
+    perfect = rng.multinomial(100_000, stats.bin_probabilities())
+    assert stats.effect_size(perfect) < 0.01
+    tilted = rng.multinomial(100_000, _tilted_law(0.05))
+    assert stats.effect_size(tilted) == pytest.approx(0.05, abs=0.006)
+
+
+def test_effect_size_does_not_grow_with_the_balls() -> None:
+    law = _tilted_law(0.04)
+    sizes = [stats.effect_size(np.random.default_rng(n).multinomial(n, law))
+             for n in (20_000, 80_000, 320_000)]
+    assert max(sizes) - min(sizes) < 0.01
+
+
+def test_detectable_effect_is_rejected_at_its_power() -> None:
+    """At w = detectable_effect(5,000), the 5 % chi-squared test rejects about half of the
+    tables: measured on 2,000 seeded multinomial draws."""
+    w = stats.detectable_effect(5_000)
+    assert stats.detectable_effect(20_000) == pytest.approx(w / 2)
+    tables = np.random.default_rng(11).multinomial(5_000, _tilted_law(w), size=2_000)
+    expected = stats.expected_counts(5_000)
+    chi2 = np.sum((tables - expected) ** 2 / expected, axis=1)
+    assert np.mean(chi2 > stats.critical_value()) == pytest.approx(0.5, abs=0.05)
+
+
+def test_detectable_effect_checks_its_arguments() -> None:
+    with pytest.raises(CountsError, match="alpha"):
+        stats.detectable_effect(5_000, power=0.01)
+    with pytest.raises(NoSettledBallsError):
+        stats.detectable_effect(0)

@@ -1,0 +1,67 @@
+"""How a fidelity verdict depends on the seed, and how far each engine is from the binomial.
+
+Usage: python benchmarks/seed_spread.py FILE [FILE ...]
+
+Each FILE holds JSON lines printed by ``benchmarks/fidelity_inprocess.py`` (other lines are
+skipped). Runs are grouped by engine, balls, release mode and parameters; for each group the
+script prints every seed's pooled Monte Carlo p, width and effect size w (Cohen's w, see
+``galton.analysis.stats.effect_size``), then w over all its seeds' balls together, beside
+the w that one run of that size detects half the time (``detectable_effect``). A group
+whose w is near that line passes or fails with the seed; one well below it passes.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from collections import defaultdict
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from galton.analysis import stats
+
+
+def read_runs(paths: list[str]) -> list[dict[str, Any]]:
+    runs = []
+    for path in paths:
+        for line in Path(path).read_text().splitlines():
+            if line.startswith("{") and '"pooled"' in line:
+                runs.append(json.loads(line))
+    return runs
+
+
+def group_key(run: dict[str, Any]) -> tuple[str, int, str, str]:
+    return (run["engine"], run["balls"], run["mode"],
+            json.dumps(run.get("params", {}), sort_keys=True))
+
+
+def describe(key: tuple[str, int, str, str], runs: list[dict[str, Any]]) -> str:
+    engine, balls, mode, params = key
+    runs = sorted(runs, key=lambda r: r["seed"])
+    per_run = int(sum(runs[0]["pooled"]))
+    lines = [f"{engine} {mode} {balls} x {runs[0]['reps']} {params}"]
+    for run in runs:
+        lines.append(f"  seed {run['seed']}: p {run['p_mc']:.3f}  width {run['width']:.3f}  "
+                     f"w {stats.effect_size(run['pooled']):.3f}")
+    together = np.sum([r["pooled"] for r in runs], axis=0)
+    lines.append(f"  all {len(runs)} seeds ({int(together.sum())} balls): "
+                 f"w {stats.effect_size(together):.3f}; one run of {per_run} balls detects "
+                 f"w {stats.detectable_effect(per_run):.3f} half the time")
+    return "\n".join(lines)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("files", nargs="+")
+    args = parser.parse_args()
+    groups: dict[tuple[str, int, str, str], list[dict[str, Any]]] = defaultdict(list)
+    for run in read_runs(args.files):
+        groups[group_key(run)].append(run)
+    for key in sorted(groups):
+        print(describe(key, groups[key]))
+
+
+if __name__ == "__main__":
+    main()
