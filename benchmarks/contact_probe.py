@@ -11,7 +11,9 @@ Prints one JSON line:
 - ``asleep_after_s``: when a ball dropped 0.3 to 2 m onto a plane stops for good (its
   speed reads exactly 0; ``null``: still moving after 5 s);
 - ``apex_kept``: of N balls dropped onto the top of a pin (offsets within ±2 mm, heights
-  0.02 to 0.5 m, seeded), how many are still on the pin after 4 s.
+  0.02 to 0.5 m, seeded), how many are still on the pin after 4 s;
+- ``never_asleep``: of balls dropped from 0.05 to 0.99 m in 1 cm steps onto a box floor,
+  how many still move after 8 s (a hop that never ends), and from which heights.
 
 docs/physics/mujoco.md quotes these figures for the defaults.
 """
@@ -112,6 +114,18 @@ def apex_kept(name: str, params: dict[str, Any], drops: int) -> int:
     return kept
 
 
+def never_asleep(name: str, params: dict[str, Any]) -> list[float]:
+    heights = []
+    for height in np.round(np.arange(0.05, 1.0, 0.01), 2):
+        engine = fresh(name, params,
+                       body("box", "floor", (0, 0, -0.05), (5, 5, 0.05), static=True),
+                       body("sphere", "ball", (0, 0, RADIUS + height), (RADIUS,), mass=MASS))
+        run(engine, 8.0)
+        if engine.get_states(["ball"])[1].any():
+            heights.append(float(height))
+    return heights
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--engine", default="mujoco")
@@ -119,6 +133,7 @@ def main() -> None:
     parser.add_argument("--apex-drops", type=int, default=150)
     args = parser.parse_args()
     name, params = args.engine, json.loads(args.params)
+    hops = never_asleep(name, params)
     print(json.dumps({
         "engine": name, "params": params,
         "drop_bounce": {h: round(drop_bounce(name, params, h), 3) for h in (0.5, 1.0, 2.0)},
@@ -128,6 +143,7 @@ def main() -> None:
         "asleep_after_s": {h: asleep_after(name, params, h)
                            for h in (0.3, 0.5, 0.7, 1.0, 1.5, 2.0)},
         "apex_kept": f"{apex_kept(name, params, args.apex_drops)} of {args.apex_drops}",
+        "never_asleep": f"{len(hops)} of 95: {hops}",
     }))
 
 
