@@ -96,6 +96,7 @@ def _group_row(g: GroupSummary) -> list[str]:
         fmt(g.chi2_mean, 4), f"{g.trials_over_critical}/{g.trials}",
         MISSING if p is None else f"{p.chi2:.2f}", fmt_p(None if p is None else p.p_monte_carlo),
         fmt_p(None if p is None else p.p_asymptotic), tails,
+        MISSING if p is None else f"{p.effect_size:.3f} [{p.detectable_effect:.3f}]",
         f"{g.lost_percent_mean:.2f} / {g.lost_percent_pooled:.2f}", str(g.unsettled),
         f"{fmt(g.rtf_mean)} [{fmt(g.rtf_min)}–{fmt(g.rtf_max)}]", fmt(rss), fmt(g.cpu_percent_mean),
     ]
@@ -103,7 +104,8 @@ def _group_row(g: GroupSummary) -> list[str]:
 
 DETAIL_HEADER = (
     "balls", "trials", "χ² median/trial", "χ² mean/trial", "trials > crit.", "χ² pooled",
-    "pooled p (MC)", "pooled p (asympt.)", "pooled-tails p (dof)", "lost % mean/pooled",
+    "pooled p (MC)", "pooled p (asympt.)", "pooled-tails p (dof)", "effect w [detectable]",
+    "lost % mean/pooled",
     "unsettled", "RTF mean [min–max]", "peak RSS (MB)", "CPU % mean",
 )
 
@@ -144,7 +146,11 @@ def _calibration(summaries: Sequence[EngineSummary], draws: int, seed: int) -> l
             f"Carlo p-value ({draws} multinomial tables drawn under the binomial per trial, "
             f"{draws * stats.POOLED_DRAWS_FACTOR} for the pooled counts; p = (k + 1) / "
             f"(N + 1)) and an asymptotic p after merging tail bins until every expected count "
-            f"is >= {stats.MIN_EXPECTED:g}. The fidelity verdict uses the Monte Carlo p. How "
+            f"is >= {stats.MIN_EXPECTED:g}. The fidelity verdict uses the Monte Carlo p. A p "
+            "falls as balls are added; the effect w does not: Cohen's w of the pooled counts, "
+            "sqrt(max(0, chi2 - d.o.f.) / N), how far the law is from the binomial (about 0 "
+            "for a perfect board). In brackets, the w that the 5 % test detects half the time "
+            "with that many balls: a w near it passes or fails with the seed. How "
             "often the paper's test rejects a perfect board (Monte Carlo, all balls settled):",
             "", *_table(["balls", "bins expected < 5", "paper's test rejects"], rows)]
 

@@ -222,6 +222,8 @@ class GoodnessOfFit:
     p_monte_carlo: float
     p_pooled_tails: float | None
     pooled_tails_dof: int | None
+    effect_size: float  # Cohen's w, bias-corrected: how far from the binomial (effect_size)
+    detectable_effect: float  # the w this many balls detect half the time at 5 %
 
 
 def goodness_of_fit(counts: Sequence[int] | np.ndarray, rows: int = ROWS,
@@ -239,6 +241,8 @@ def goodness_of_fit(counts: Sequence[int] | np.ndarray, rows: int = ROWS,
         p_monte_carlo=p_monte_carlo(table, rows, draws, seed),
         p_pooled_tails=tails_p,
         pooled_tails_dof=tails_dof,
+        effect_size=effect_size(table, rows),
+        detectable_effect=detectable_effect(int(table.sum()), rows),
     )
 
 

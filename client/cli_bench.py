@@ -129,6 +129,7 @@ def _headline(summary: EngineSummary) -> dict:
     return {"engine": summary.label, "chi2_median": group.chi2_median,
             "chi2_pooled": group.pooled.chi2 if group.pooled else None,
             "p_monte_carlo_pooled": group.pooled.p_monte_carlo if group.pooled else None,
+            "effect_size_pooled": group.pooled.effect_size if group.pooled else None,
             "lost_percent": group.lost_percent_pooled, "rtf_mean": group.rtf_mean,
             "rtf_min": group.rtf_min, "rtf_max": group.rtf_max}
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import json
+import math
 import subprocess
 import sys
 from pathlib import Path
@@ -98,6 +99,10 @@ def test_summary_numbers(results: ExperimentResults) -> None:
     pooled_counts = np.sum([t.counts for t in trials], axis=0)
     assert group.pooled is not None
     assert group.pooled.chi2 == pytest.approx(stats.chi2_statistic(pooled_counts))
+    assert group.pooled.effect_size == pytest.approx(math.sqrt(
+        max(0.0, group.pooled.chi2 - 11) / pooled_counts.sum()))
+    assert group.pooled.detectable_effect == pytest.approx(
+        stats.detectable_effect(int(pooled_counts.sum())))
     assert group.rtf_min == group.rtf_max == pytest.approx(2.9)
     assert mujoco.overall.peak_rss_bytes == 150_250_000
     assert pybullet.overall.lost == 6
@@ -135,6 +140,9 @@ def test_report_has_our_rows_and_the_published_ones(results: ExperimentResults) 
         assert PUBLISHED_LABEL in line and f"{row.chi2:.2f}" in line
     assert "| mujoco | this project |" in text and "median per trial" in text
     assert "19.675" in text and "19.68" in text
+    assert "effect w [detectable]" in text
+    w = summaries[0].groups[0].pooled.effect_size
+    assert f"| {w:.3f} [" in text
     assert "**not suitable**" in text and "500 MB" in text
     assert "[rtf_vs_balls.png](rtf_vs_balls.png)" in text
 
