@@ -67,7 +67,8 @@ def main() -> None:
         "params": json.loads(args.params), "surfaces": json.loads(args.surfaces),
         "seed": args.seed,
         "width": width(pooled),
-        "p_mc": round(stats.p_monte_carlo(pooled), 3),
+        "p_mc": round(stats.p_monte_carlo(
+            pooled, draws=stats.DEFAULT_DRAWS * stats.POOLED_DRAWS_FACTOR), 3),
         "median_chi2": round(statistics.median(stats.chi2_statistic(r.counts)
                                                for r in records), 2),
         "lost": sum(r.lost for r in records), "unsettled": sum(r.unsettled for r in records),

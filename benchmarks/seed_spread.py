@@ -4,9 +4,11 @@ Usage: python benchmarks/seed_spread.py FILE [FILE ...]
 
 Each FILE holds JSON lines printed by ``benchmarks/fidelity_inprocess.py`` (other lines are
 skipped). Runs are grouped by engine, balls, release mode and parameters; for each group the
-script prints every seed's pooled Monte Carlo p, width and effect size w (Cohen's w, see
+script prints every seed's pooled Monte Carlo p (recomputed with the bench's 200,000
+draws), width and effect size w (Cohen's w, see
 ``galton.analysis.stats.effect_size``), then w over all its seeds' balls together, beside
-the w that one run of that size detects half the time (``detectable_effect``). A group
+the w that one run of that size detects half the time (``detectable_effect``), and the
+standardised residual of each bin over all seeds (where the law departs). A group
 whose w is near that line passes or fails with the seed; one well below it passes.
 """
 
@@ -42,13 +44,19 @@ def describe(key: tuple[str, int, str, str], runs: list[dict[str, Any]]) -> str:
     runs = sorted(runs, key=lambda r: r["seed"])
     per_run = int(sum(runs[0]["pooled"]))
     lines = [f"{engine} {mode} {balls} x {runs[0]['reps']} {params}"]
+    draws = stats.DEFAULT_DRAWS * stats.POOLED_DRAWS_FACTOR  # the bench's pooled test
     for run in runs:
-        lines.append(f"  seed {run['seed']}: p {run['p_mc']:.3f}  width {run['width']:.3f}  "
-                     f"w {stats.effect_size(run['pooled']):.3f}")
+        p = stats.p_monte_carlo(run["pooled"], draws=draws)
+        lines.append(f"  seed {run['seed']}: p {p:.3f}  width {run['width']:.3f}  "
+                     f"w {stats.effect_size(run['pooled']):.3f}  ({run.get('source', '')})")
     together = np.sum([r["pooled"] for r in runs], axis=0)
     lines.append(f"  all {len(runs)} seeds ({int(together.sum())} balls): "
                  f"w {stats.effect_size(together):.3f}; one run of {per_run} balls detects "
                  f"w {stats.detectable_effect(per_run):.3f} half the time")
+    expected = stats.expected_counts(int(together.sum()))
+    residuals = (together - expected) / np.sqrt(expected)
+    lines.append("  residuals (O - E) / sqrt(E) by bin: "
+                 + " ".join(f"{r:+.1f}" for r in residuals))
     return "\n".join(lines)
 
 
