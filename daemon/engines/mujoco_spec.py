@@ -131,8 +131,8 @@ PARAMS: dict[str, ParamSpec] = {p.name: p for p in (
               "island sleeping: trees slower than this fall asleep (0 = sleeping off)",
               number(0.0, 10.0)),
     ParamSpec("mujoco.wake_balanced", True, "",
-              "wake a ball that fell asleep balanced on a single round support (a pin's "
-              "apex, another ball's crown) and keep it awake until it rolls off: real balls "
+              "wake a ball that fell asleep balanced on a single fixed round support (a "
+              "pin's apex) and keep it awake until it rolls off, for at most 3 s: real balls "
               "cannot rest there (mujoco_balance)", flag),
 )}
 CONTACT_PARAMS = frozenset({"timestep", "default_friction", "default_restitution",

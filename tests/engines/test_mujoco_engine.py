@@ -15,6 +15,7 @@ from scipy.spatial.transform import Rotation
 
 from galton.daemon.engine import FEATURE_LOAD_MODEL, FEATURE_STATIC_POSE
 from galton.daemon.engines import mujoco_engine
+from galton.daemon.engines.mujoco_balance import HOLD_LIMIT_S
 from galton.daemon.engines.mujoco_engine import MujocoEngine
 from galton.daemon.engines.mujoco_spec import damping_ratio
 from galton.protocol import (
@@ -533,22 +534,50 @@ def _crown_scene(support: str) -> list[BodyGroup]:
     return [floor, below, group("sphere", ["a"], [[0.0003, 0, top]], size=(0.045,), mass=0.38)]
 
 
-@pytest.mark.parametrize("support", ["pin", "ball"])
-def test_a_ball_asleep_on_a_crown_is_woken_and_rolls_off(engine: MujocoEngine,
-                                                         support: str) -> None:
-    """Sleeping would keep a ball balanced on a pin's apex for ever (about one ball in 5,000
-    on the paper board); mujoco.wake_balanced wakes it and it rolls off, as a real one would.
-    """
-    start = _crown_scene(support)[2].poses[0, 2]
+def _asleep_on_top(engine: MujocoEngine, support: str) -> float:
+    """Spawn the crown scene with the guard off, let the ball fall asleep on top; its z."""
+    start = float(_crown_scene(support)[2].poses[0, 2])
     engine.set_params({"mujoco.wake_balanced": False})
     engine.spawn(_crown_scene(support))
     run(engine, 2.0)
     pose, twist = engine.get_states(["a"])
     assert not twist.any() and pose[0, 2] == pytest.approx(start, abs=2e-3)  # asleep on top
+    return start
+
+
+def test_a_ball_asleep_on_a_pins_apex_is_woken_and_rolls_off(engine: MujocoEngine) -> None:
+    """Sleeping would keep a ball balanced on a pin's apex for ever (about one ball in 5,000
+    on the paper board); mujoco.wake_balanced wakes it and it rolls off, as a real one would.
+    """
+    start = _asleep_on_top(engine, "pin")
     engine.set_params({"mujoco.wake_balanced": True})
     run(engine, 3.0)
     assert engine.get_states(["a"])[0][0, 2] < start - 0.05  # rolled off the crown
     assert engine._balance is not None and not engine._balance.held
+
+
+def test_a_ball_asleep_on_another_balls_crown_is_left_alone(engine: MujocoEngine) -> None:
+    """Only fixed crowns count: a ball on a ball is in a pile, whose island it would keep
+    awake."""
+    start = _asleep_on_top(engine, "ball")
+    engine.set_params({"mujoco.wake_balanced": True})
+    run(engine, 1.0)
+    pose, twist = engine.get_states(["a"])
+    assert not twist.any() and pose[0, 2] == pytest.approx(start, abs=2e-3)
+
+
+def test_a_ball_that_stays_on_its_crown_is_let_go_and_sleeps(engine: MujocoEngine) -> None:
+    """Exactly on top, nothing tips the ball off; after HOLD_LIMIT_S the guard stops keeping
+    it (and its pile) awake, and does not hold it again while it sleeps."""
+    scene = _crown_scene("pin")
+    scene[2].poses[0, 0] = 0.0  # dead centre: perfect balance
+    engine.spawn(scene)
+    run(engine, 1.0)
+    assert engine._balance is not None and engine._balance.held
+    run(engine, HOLD_LIMIT_S + 1.0)
+    pose, twist = engine.get_states(["a"])
+    assert not engine._balance.held
+    assert not twist.any() and pose[0, 2] > 1.1  # asleep on the crown after all
 
 
 def test_clearing_the_world_gives_a_held_ball_its_sleep_policy_back(
