@@ -144,10 +144,13 @@ class MujocoEngine(Engine):
 
     def _reindex(self) -> None:
         self._index = mst.StateIndex.of(self._model)
-        self._balance = BalanceGuard(self._model) if self._values["mujoco.wake_balanced"] \
-            else None
+        self._balance = self._balance_guard()
         self._ids = {name: e.body.id for name, e in self._entities.items()}
         self._warnings = self._data.warning.number
+
+    def _balance_guard(self) -> BalanceGuard | None:
+        """A guard for the compiled model, if wanted (see mujoco_balance)."""
+        return BalanceGuard(self._model) if self._values["mujoco.wake_balanced"] else None
 
     def _commit(self, added: Sequence[str], spares: Sequence[Any] = ()) -> None:
         """Recompile after adding these entities (and parked spares); on failure take them
@@ -201,8 +204,7 @@ class MujocoEngine(Engine):
         if "mujoco.wake_balanced" in clean:
             if self._balance is not None:
                 self._balance.release_all(self._model)
-            self._balance = BalanceGuard(self._model) if clean["mujoco.wake_balanced"] \
-                else None
+            self._balance = self._balance_guard()
         if ms.CONTACT_PARAMS & clean.keys():
             for entity in self._entities.values():
                 entity.key = None  # its values are rewritten: it no longer matches its kind
