@@ -8,13 +8,15 @@ script prints every seed's pooled Monte Carlo p (recomputed with the bench's 200
 draws), width and effect size w (Cohen's w, see
 ``galton.analysis.stats.effect_size``), then w over all its seeds' balls together, beside
 the w that one run of that size detects half the time (``detectable_effect``), and the
-standardised residual of each bin over all seeds (where the law departs). A group
+standardised residual of each bin over all seeds (where the law departs), and how each
+trial's width follows its board shift. A group
 whose w is near that line passes or fails with the seed; one well below it passes.
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 from collections import defaultdict
 from pathlib import Path
@@ -23,6 +25,8 @@ from typing import Any
 import numpy as np
 
 from galton.analysis import stats
+from galton.analysis.board import BoardSpec
+from galton.analysis.board_release import perturbation
 
 
 def read_runs(paths: list[str]) -> list[dict[str, Any]]:
@@ -53,11 +57,30 @@ def describe(key: tuple[str, int, str, str], runs: list[dict[str, Any]]) -> str:
     lines.append(f"  all {len(runs)} seeds ({int(together.sum())} balls): "
                  f"w {stats.effect_size(together):.3f}; one run of {per_run} balls detects "
                  f"w {stats.detectable_effect(per_run):.3f} half the time")
+    lines.extend(shift_line(runs))
     expected = stats.expected_counts(int(together.sum()))
     residuals = (together - expected) / np.sqrt(expected)
     lines.append("  residuals (O - E) / sqrt(E) by bin: "
                  + " ".join(f"{r:+.1f}" for r in residuals))
     return "\n".join(lines)
+
+
+def shift_line(runs: list[dict[str, Any]]) -> list[str]:
+    """How the trials' widths follow their board shifts (runs that list trial widths)."""
+    shifts, widths = [], []
+    for run in runs:
+        board = BoardSpec.load("paper")
+        board = board.replace(release=dataclasses.replace(board.release, mode=run["mode"]))
+        for rep, trial_width in enumerate(run.get("trial_widths", [])):
+            shake = perturbation(board, rep, run["seed"], run["balls"])
+            shifts.append(1000 * shake.board_offset_x)
+            widths.append(trial_width)
+    if len(widths) < 3:
+        return []
+    slope = np.polyfit(shifts, widths, 1)[0]
+    r = np.corrcoef(shifts, widths)[0, 1]
+    return [f"  trial width against board shift: {slope:+.4f} per mm, r {r:+.2f} over "
+            f"{len(widths)} trials"]
 
 
 def main() -> None:

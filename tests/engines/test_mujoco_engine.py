@@ -591,6 +591,13 @@ def test_clearing_the_world_gives_a_held_ball_its_sleep_policy_back(
     assert not (engine._model.tree_sleep_policy == never).any()
 
 
+def test_wake_balanced_takes_only_a_boolean(engine: MujocoEngine) -> None:
+    guard = engine._balance
+    with pytest.raises(InvalidArgumentError, match=r"mujoco\.wake_balanced"):
+        engine.set_params({"mujoco.wake_balanced": 1})
+    assert engine.get_params()["mujoco.wake_balanced"] is True and engine._balance is guard
+
+
 def test_balls_at_a_stable_rest_still_sleep_with_the_balance_guard(
         engine: MujocoEngine) -> None:
     """On a flat cap, a floor, or between two pins, nothing is held awake."""
