@@ -2,31 +2,37 @@
 
 Usage: python benchmarks/latency.py [--calls 2000] [--json FILE]
 
-For each engine: a raw ``session.get`` to a do-nothing queryable in another process (the
-floor), ``Client.status()``, a raw get of ``status`` (no SDK), ``Client.step(1)`` on a
-paused world holding a plane and 20 balls, and one engine step of the same world measured
-in-process. Targets (issue 6): status p50 ≤ 1.3 × raw get p50, status p99 < 2 ms, step(1)
+For each engine, once per round in a shuffled order (so that noise falls on all alike): a raw
+``session.get`` to a do-nothing queryable in another process (the floor), ``Client.status()``,
+a raw get of ``status`` (no SDK), ``Client.step(1)`` on a paused world holding a plane and
+20 balls, and one engine step of the same world measured in this process.
+Targets (issue 6): status p50 ≤ 1.3 × raw get p50, status p99 < 2 ms, step(1)
 p50 ≤ raw get p50 + one engine step.
 """
 
 from __future__ import annotations
 
 import argparse
+import random
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
-from common import ENGINES, daemon_client, machine, percentiles_ms, timed, write_json
+import zenoh
+from common import ENGINES, daemon_client, machine, percentiles_ms, write_json
 
-from galton.client import Client, plane, spheres
+from galton.client import plane, spheres
 from galton.client.embedded import free_loopback_port
 from galton.client.session import open_session
+from galton.daemon.engine import Engine
 from galton.daemon.engines import create_engine
-from galton.protocol import encode_request
+from galton.protocol import BodyGroup, encode_request
 
 BALLS = 20
+WARM_UP_ROUNDS = 100
 
 
 def start_null_queryable() -> tuple[subprocess.Popen[str], str]:
@@ -38,56 +44,69 @@ def start_null_queryable() -> tuple[subprocess.Popen[str], str]:
     return process, endpoint
 
 
-def raw_get_samples(endpoint: str, key: str, calls: int) -> list[float]:
-    session = open_session(endpoint)
+def raw_get(session: zenoh.Session, key: str) -> Callable[[], None]:
+    """A get of ``status`` on ``key`` without the SDK, waiting for the end of replies."""
     payload = encode_request("status")
 
     def get() -> None:
         replies = list(session.get(key, payload=payload, timeout=5))
         assert replies and replies[0].ok is not None
-
-    try:
-        timed(get, 100)
-        return timed(get, calls)
-    finally:
-        session.close()
+    return get
 
 
-def scene(sim: Client) -> None:
+def scene_groups() -> list[BodyGroup]:
     names = [f"b{i}" for i in range(BALLS)]
-    sim.spawn(plane(), spheres(names, np.column_stack(
-        [np.arange(BALLS) * 0.2, np.zeros(BALLS), np.full(BALLS, 0.05)]), 0.05))
-    sim.step(200)
-
-
-def engine_step_samples(engine_name: str, calls: int) -> list[float]:
-    """One engine step of the same scene, in this process: what step(1) cannot avoid."""
-    from galton.client import plane as plane_group
-
-    engine = create_engine(engine_name)
-    groups = [plane_group(), spheres([f"b{i}" for i in range(BALLS)], np.column_stack(
+    return [plane(), spheres(names, np.column_stack(
         [np.arange(BALLS) * 0.2, np.zeros(BALLS), np.full(BALLS, 0.05)]), 0.05)]
-    engine.spawn(groups)
+
+
+def local_engine(engine_name: str) -> Engine:
+    """The same scene in this process: one step of it is what step(1) cannot avoid."""
+    engine = create_engine(engine_name)
+    engine.spawn(scene_groups())
     engine.step(200)
-    samples = timed(lambda: engine.step(1), calls)
-    engine.close()
+    return engine
+
+
+def interleaved(actions: dict[str, Callable[[], object]], rounds: int) -> dict[str, list[float]]:
+    """Each action once per round, in a shuffled order: machine noise, and whatever one call
+    leaves cold for the next, fall on all of them alike."""
+    samples: dict[str, list[float]] = {name: [] for name in actions}
+    order = list(actions)
+    rng = random.Random(0)
+    for _ in range(rounds):
+        rng.shuffle(order)
+        for name in order:
+            started = time.perf_counter()
+            actions[name]()
+            samples[name].append(time.perf_counter() - started)
     return samples
 
 
 def measure(engine: str, null_endpoint: str, calls: int) -> dict:
-    raw_null = percentiles_ms(raw_get_samples(null_endpoint, "null/@ctl/status", calls))
-    with daemon_client(engine) as (daemon, sim):
-        scene(sim)
-        timed(sim.status, 100)
-        status = percentiles_ms(timed(sim.status, calls))
-        raw_status = percentiles_ms(raw_get_samples(daemon.endpoint,
-                                                    sim.keys.control("status"), calls))
-        step = percentiles_ms(timed(lambda: sim.step(1), calls))
-    engine_step = percentiles_ms(engine_step_samples(engine, calls))
-    return {"engine": engine, "raw_get_null": raw_null, "status_sdk": status,
-            "status_raw_get": raw_status, "step1_sdk": step, "engine_step": engine_step,
-            "status_ratio_p50": status["p50"] / raw_null["p50"],
-            "step1_budget_p50": raw_null["p50"] + engine_step["p50"]}
+    null_session = open_session(null_endpoint)
+    local = local_engine(engine)
+    try:
+        with daemon_client(engine) as (_daemon, sim):
+            sim.spawn(*scene_groups())
+            sim.step(200)
+            actions = {
+                "raw_get_null": raw_get(null_session, "null/@ctl/status"),
+                "status_sdk": sim.status,
+                "status_raw_get": raw_get(sim.session, sim.keys.control("status")),
+                "step1_sdk": lambda: sim.step(1),
+                "engine_step": lambda: local.step(1),
+            }
+            interleaved(actions, WARM_UP_ROUNDS)
+            samples = interleaved(actions, calls)
+    finally:
+        local.close()
+        null_session.close()
+    result: dict = {name: percentiles_ms(values) for name, values in samples.items()}
+    raw_null = result["raw_get_null"]["p50"]
+    result.update(engine=engine, status_ratio_p50=result["status_sdk"]["p50"] / raw_null,
+                  step1_budget_p50=raw_null + result["engine_step"]["p50"])
+    return result
 
 
 def main() -> None:

@@ -76,6 +76,7 @@ class SimLoop(StateOps):
         self._seq = 0
         self._stopping = False
         self.rtf = 0.0
+        self._status_reply: tuple[bytes, tuple[Any, ...], bytes] | None = None
         self.clock: tuple[int, float, float, int, bool] = (0, 0.0, 0.0, 0, False)
         self.refresh_clock()
         self.tune_switch_interval()
@@ -289,24 +290,42 @@ class SimLoop(StateOps):
 
     def status(self) -> SimStatus:
         """Safe to call from any thread: reads only values swapped atomically."""
-        step, sim_time, timestep, count, faulted = self.clock
-        world = self.world
+        return self._status_from(self._status_snapshot())
+
+    def _status_snapshot(self) -> tuple[Any, ...]:
+        """Everything a status reply says, read once: equal snapshots give equal replies."""
+        return (self.clock, self.state, self.target_rtf, self.rtf, self.world)
+
+    def _status_from(self, snapshot: tuple[Any, ...]) -> SimStatus:
+        (step, sim_time, timestep, count, faulted), state, target_rtf, rtf, world = snapshot
         return SimStatus(
-            state=self.state, step=step, sim_time=sim_time, timestep=timestep,
-            target_rtf=self.target_rtf, rtf=self.rtf, entity_count=count,
-            engine=world.engine.name, instance=self.instance, world=world.name,
-            faulted=faulted)
+            state=state, step=step, sim_time=sim_time, timestep=timestep,
+            target_rtf=target_rtf, rtf=rtf, entity_count=count, engine=world.engine.name,
+            instance=self.instance, world=world.name, faulted=faulted)
 
     def handle_readonly(self, call: Call) -> None:
-        """Answer a status request on the caller's thread, from the atomic snapshot."""
-        status = self.status()
+        """Answer a status request on the caller's thread, from the atomic snapshot.
+
+        A controller polling a paused or idle daemon asks the same thing of the same
+        snapshot again and again, so the last reply's bytes are kept with the request and
+        snapshot they answer: a repeated poll costs one comparison, not a decode and an
+        encode (about 30 µs of a 0.3 ms round trip, docs/PERFORMANCE.md)."""
+        snapshot = self._status_snapshot()
+        cached = self._status_reply
+        if cached is not None and cached[0] == call.payload and cached[1] == snapshot:
+            self._send(call, cached[2])
+            return
+        status = self._status_from(snapshot)
         try:
             self._require_world(decode_request(call.payload, call.op).args)
             reply = Reply(ResultCode.OK, result=status.to_wire(), step=status.step,
                           sim_time=status.sim_time)
         except RemoteError as error:
-            reply = error_reply(error, status.step, status.sim_time)
-        self._send(call, encode_reply(reply))
+            self._send(call, encode_reply(error_reply(error, status.step, status.sim_time)))
+            return
+        data = encode_reply(reply)
+        self._status_reply = (call.payload, snapshot, data)
+        self._send(call, data)
 
     def _publish_telemetry(self, now: float) -> None:
         if not self.world.faulted:
