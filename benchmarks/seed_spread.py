@@ -8,8 +8,9 @@ script prints every seed's pooled Monte Carlo p (recomputed with the bench's 200
 draws), width and effect size w (Cohen's w, see
 ``galton.analysis.stats.effect_size``), then w over all its seeds' balls together, beside
 the w that one run of that size detects half the time (``detectable_effect``), and the
-standardised residual of each bin over all seeds (where the law departs), and how each
-trial's width follows its board shift. A group
+standardised residual of each bin over all seeds (where the law departs), how flat the law
+is (excess kurtosis, read as a number of independent rows: ``galton.analysis.shape``), and
+how each trial's width follows its board shift. A group
 whose w is near that line passes or fails with the seed; one well below it passes.
 """
 
@@ -24,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from galton.analysis import stats
+from galton.analysis import shape, stats
 from galton.analysis.board import BoardSpec
 from galton.analysis.board_release import perturbation
 
@@ -52,17 +53,29 @@ def describe(key: tuple[str, int, str, str], runs: list[dict[str, Any]]) -> str:
     for run in runs:
         p = stats.p_monte_carlo(run["pooled"], draws=draws)
         lines.append(f"  seed {run['seed']}: p {p:.3f}  width {run['width']:.3f}  "
-                     f"w {stats.effect_size(run['pooled']):.3f}  ({run.get('source', '')})")
+                     f"w {stats.effect_size(run['pooled']):.3f}  "
+                     f"kurtosis {shape.excess_kurtosis(run['pooled']):+.3f}  "
+                     f"({run.get('source', '')})")
     together = np.sum([r["pooled"] for r in runs], axis=0)
     lines.append(f"  all {len(runs)} seeds ({int(together.sum())} balls): "
                  f"w {stats.effect_size(together):.3f}; one run of {per_run} balls detects "
                  f"w {stats.detectable_effect(per_run):.3f} half the time")
+    lines.append(flatness_line(together))
     lines.extend(shift_line(runs))
     expected = stats.expected_counts(int(together.sum()))
     residuals = (together - expected) / np.sqrt(expected)
     lines.append("  residuals (O - E) / sqrt(E) by bin: "
                  + " ".join(f"{r:+.1f}" for r in residuals))
     return "\n".join(lines)
+
+
+def flatness_line(together: np.ndarray) -> str:
+    """How flat the law of all seeds' balls is, read as a number of independent rows."""
+    flat = shape.flatness(together)
+    return (f"  excess kurtosis {flat.excess_kurtosis:+.3f} (binomial "
+            f"{flat.binomial_excess_kurtosis:+.3f}; a binomial board with as many balls gives "
+            f"{flat.null_low:+.3f}..{flat.null_high:+.3f}): as flat as "
+            f"{flat.effective_rows:.1f} independent rows")
 
 
 def shift_line(runs: list[dict[str, Any]]) -> list[str]:
