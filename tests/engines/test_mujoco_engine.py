@@ -591,6 +591,25 @@ def test_clearing_the_world_gives_a_held_ball_its_sleep_policy_back(
     assert not (engine._model.tree_sleep_policy == never).any()
 
 
+def test_how_steps_are_split_into_requests_does_not_change_the_trajectory() -> None:
+    """The guard's looks fall on the world's own steps: a controller stepping one step at a
+    time and a trial stepping in long runs see the same ball roll off the same crown."""
+    trajectories = []
+    for pieces in ([1] * 1500, [7, 50, 443, 1000], [1500]):
+        engine = MujocoEngine()
+        engine.spawn(_crown_scene("pin"))
+        held = False
+        for count in pieces:
+            engine.step(count)
+            held |= bool(engine._balance is not None and engine._balance.held)
+        trajectories.append(engine.get_states(["a"]))
+        assert held or pieces == [1500]  # the guard acted (seen between requests)
+    for poses, twists in trajectories[1:]:
+        np.testing.assert_array_equal(poses, trajectories[0][0])
+        np.testing.assert_array_equal(twists, trajectories[0][1])
+    assert trajectories[0][0][0, 2] < 1.1  # rolled off the crown
+
+
 def test_wake_balanced_takes_only_a_boolean(engine: MujocoEngine) -> None:
     guard = engine._balance
     with pytest.raises(InvalidArgumentError, match=r"mujoco\.wake_balanced"):
