@@ -327,12 +327,10 @@ class MujocoEngine(Engine):
 
     def clear(self) -> None:
         """An empty world at time 0; the pool stays warm: every spawned body is parked."""
-        if self._balance is not None:
-            self._balance.release_all(self._model)  # the model may outlive this clear
+        self._restart_looks()  # held balls get their sleep policy back: the model may stay
         entities = list(self._entities.values())
         self._entities.clear()
         self._diverged = False
-        self._steps_since_look = 0  # a fresh world looks on the same steps as the last one
         if any(e.source != "spawn" for e in entities):
             self._build_empty()  # a model may bring more than bodies: start afresh
             return
@@ -463,6 +461,15 @@ class MujocoEngine(Engine):
         d.qacc[:] = 0.0
         mst.wake_all(m, d)
         self._diverged = False
+        self._restart_looks()
+
+    def _restart_looks(self) -> None:
+        """The periodic looks start over, with a fresh balance guard: a rewound or cleared
+        world replays its trajectory exactly."""
+        self._steps_since_look = 0
+        if self._balance is not None:
+            self._balance.release_all(self._model)
+            self._balance = self._balance_guard()
 
     def close(self) -> None:
         self._entities.clear()

@@ -610,6 +610,23 @@ def test_how_steps_are_split_into_requests_does_not_change_the_trajectory() -> N
     assert trajectories[0][0][0, 2] < 1.1  # rolled off the crown
 
 
+def test_a_rewound_world_replays_the_same_trajectory(engine: MujocoEngine) -> None:
+    """stop (every body back to its created state, then reset_dynamics) replays the run
+    exactly, even where the guard acted and the periodic looks were mid-period."""
+    engine.spawn(_crown_scene("pin"))
+    names = ["a", "below", "floor"]
+    created = engine.get_states(names)
+    runs = []
+    for _ in range(2):
+        engine.step(1525)  # not a multiple of the looks' period
+        runs.append(engine.get_states(["a"]))
+        engine.set_states(names, *created)
+        engine.reset_dynamics()
+    np.testing.assert_array_equal(runs[0][0], runs[1][0])
+    np.testing.assert_array_equal(runs[0][1], runs[1][1])
+    assert runs[0][0][0, 2] < 1.1  # the guard made it roll off the crown
+
+
 def test_wake_balanced_takes_only_a_boolean(engine: MujocoEngine) -> None:
     guard = engine._balance
     with pytest.raises(InvalidArgumentError, match=r"mujoco\.wake_balanced"):
