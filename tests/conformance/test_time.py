@@ -8,6 +8,7 @@ from support import ball_row, ground_and_balls
 
 from galton.client import Client, plane, spheres
 from galton.protocol import (
+    BodyGroup,
     IncorrectStateError,
     InvalidArgumentError,
     OperationFailedError,
@@ -142,15 +143,22 @@ def test_stop_rewinds_and_keeps_entities(sim: Client) -> None:
     np.testing.assert_allclose(sim.get_states(names).poses, group.poses, atol=1e-9)
 
 
+def _colliding_balls(sim: Client) -> tuple[list[str], BodyGroup]:
+    """Six balls dropped onto a ground, touching their neighbours and pushed along the row:
+    contacts, collisions and rolling in the first few hundred steps."""
+    sim.spawn(plane())
+    names, group = ball_row(6, z=0.3)
+    group.poses[:, 0] = np.linspace(0.0, 0.45, 6)
+    group.twists = np.tile([0.5, 0.0, 0.0, 0.0, 0.0, 0.0], (6, 1))
+    sim.spawn(group)
+    return names, group
+
+
 def test_a_stopped_world_replays_the_same_trajectory(sim: Client) -> None:
     """stop rewinds to the created state: the same steps then give the same states, bit
     for bit, contacts and collisions included (a model run ahead of reality must be
     repeatable)."""
-    sim.spawn(plane())
-    names, group = ball_row(6, z=0.3)
-    group.poses[:, 0] = np.linspace(0.0, 0.45, 6)  # touching neighbours: they collide
-    group.twists = np.tile([0.5, 0.0, 0.0, 0.0, 0.0, 0.0], (6, 1))
-    sim.spawn(group)
+    names, group = _colliding_balls(sim)
     runs = []
     for _ in range(2):
         sim.step(333)
@@ -160,6 +168,22 @@ def test_a_stopped_world_replays_the_same_trajectory(sim: Client) -> None:
     np.testing.assert_array_equal(runs[0][0], runs[1][0])
     np.testing.assert_array_equal(runs[0][1], runs[1][1])
     assert not np.allclose(runs[0][0][:, :3], group.poses[:, :3], atol=1e-3)  # they moved
+
+
+def test_how_steps_are_split_into_requests_does_not_change_the_trajectory(
+        sim: Client) -> None:
+    """One step(300) and 300 step(1) requests give the same states, bit for bit: the
+    daemon's chunking and the engines' periodic work follow the world's steps, not the
+    requests."""
+    names, _ = _colliding_balls(sim)
+    sim.step(300)
+    whole = sim.get_states(names)
+    sim.stop()
+    for _ in range(300):
+        sim.step(1)
+    pieces = sim.get_states(names)
+    np.testing.assert_array_equal(whole.poses, pieces.poses)
+    np.testing.assert_array_equal(whole.twists, pieces.twists)
 
 
 def test_a_long_step_is_interrupted_by_pause(sim: Client) -> None:
