@@ -1,0 +1,129 @@
+"""Is MuJoCo's physics itself slower inside the daemon? mj_step's wall and CPU time per trial,
+through a daemon and in-process, for the same bit-identical trial.
+
+Usage: python benchmarks/physics_cpu.py [--balls 100] [--trials 10] [--params JSON]
+                                        [--daemon-args "..."] [--json FILE]
+
+A daemon is started by this script (``--serve``) with ``mujoco.mj_step`` wrapped by a timer
+that adds up its wall time (``perf_counter``) and the calling thread's CPU time
+(``thread_time``); this process wraps its own ``mj_step`` the same way and runs the in-process
+loop of ``benchmarks/bridge_overhead.py``. Trials alternate between the two. Where the
+daemon's CPU time per trial is higher than in-process for the same work, the physics itself
+runs slower there (not a wait for the GIL, which CPU time does not count).
+``--daemon-args`` passes options to the daemon (e.g. "--telemetry-rate 0").
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import shlex
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import mujoco
+from bridge_overhead import LocalSim, trial_config, wall
+from common import machine, write_json
+
+from galton.client import Client
+from galton.client.embedded import free_loopback_port
+
+INSTANCE = "physics-cpu"
+
+
+class StepTimer:
+    """Wraps mujoco.mj_step in this process: calls, wall and thread CPU seconds."""
+
+    def __init__(self) -> None:
+        self.calls, self.wall, self.cpu = 0, 0.0, 0.0
+        original = mujoco.mj_step
+
+        def timed(m: Any, d: Any, nstep: int = 1) -> None:
+            started, cpu = time.perf_counter(), time.thread_time()
+            original(m, d, nstep)
+            self.cpu += time.thread_time() - cpu
+            self.wall += time.perf_counter() - started
+            self.calls += 1
+        mujoco.mj_step = timed
+
+    def totals(self) -> dict[str, float]:
+        return {"calls": self.calls, "wall_s": self.wall, "cpu_s": self.cpu}
+
+
+def serve(report: str, daemon_args: list[str]) -> None:
+    """The daemon side: galton-daemon's own entry point, with mj_step timed; the totals are
+    written to ``report`` when it shuts down."""
+    timer = StepTimer()
+    from galton.daemon import cli, server
+
+    close = server.Daemon.close
+
+    def close_and_report(daemon: server.Daemon) -> None:
+        Path(report).write_text(json.dumps(timer.totals()))
+        close(daemon)
+    server.Daemon.close = close_and_report  # type: ignore[method-assign]
+    sys.argv = ["galton-daemon", *daemon_args]
+    cli.main()
+
+
+def measure(balls: int, trials: int, params: dict[str, Any] | None,
+            daemon_args: list[str]) -> dict[str, Any]:
+    timer = StepTimer()
+    endpoint = f"tcp/127.0.0.1:{free_loopback_port()}"
+    report = Path(f"/tmp/physics_cpu_{endpoint.rsplit(':', 1)[-1]}.json")
+    args = ["--engine", "mujoco", "--instance", INSTANCE, "--listen", endpoint, *daemon_args]
+    daemon = subprocess.Popen([sys.executable, __file__, "--serve", str(report), "--",
+                               *args], stdout=subprocess.PIPE, text=True)
+    assert daemon.stdout is not None
+    daemon.stdout.readline()  # "galton-daemon ready: ..."
+    config = trial_config("mujoco", balls, params)
+    local_walls, bridge_walls = [], []
+    try:
+        with Client(INSTANCE, endpoint, timeout=120) as sim:
+            for _ in range(trials):
+                local_walls.append(wall(LocalSim(), config)[0])
+                bridge_walls.append(wall(sim, config)[0])
+    finally:
+        daemon.send_signal(2)
+        daemon.wait(30)
+    served = json.loads(report.read_text())
+    report.unlink()
+    local = timer.totals()
+    per_trial = {side: {k: v / trials for k, v in totals.items()}
+                 for side, totals in (("in_process", local), ("daemon", served))}
+    return {"balls": balls, "trials": trials, "params": params or {},
+            "daemon_args": daemon_args, "per_trial": per_trial,
+            "wall_median_s": {"in_process": statistics.median(local_walls),
+                              "daemon": statistics.median(bridge_walls)}}
+
+
+def main() -> None:
+    if len(sys.argv) > 2 and sys.argv[1] == "--serve":
+        serve(sys.argv[2], sys.argv[4:])
+        return
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--balls", type=int, default=100)
+    parser.add_argument("--trials", type=int, default=10)
+    parser.add_argument("--params", default="{}", help="daemon parameters as JSON")
+    parser.add_argument("--daemon-args", default="")
+    parser.add_argument("--json")
+    args = parser.parse_args()
+    result = measure(args.balls, args.trials, json.loads(args.params) or None,
+                     shlex.split(args.daemon_args))
+    print(f"# mj_step per trial on {machine()}: paper board, {args.balls} balls, "
+          f"{args.trials} alternating trials")
+    print("| side | trial wall median (s) | mj_step calls | mj_step wall (ms) | "
+          "mj_step thread CPU (ms) |\n| --- | --- | --- | --- | --- |")
+    for side in ("in_process", "daemon"):
+        t = result["per_trial"][side]
+        print(f"| {side} | {result['wall_median_s'][side]:.3f} | {t['calls']:.0f} | "
+              f"{t['wall_s'] * 1e3:.1f} | {t['cpu_s'] * 1e3:.1f} |")
+    write_json(args.json, result)
+
+
+if __name__ == "__main__":
+    main()
