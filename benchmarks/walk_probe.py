@@ -1,12 +1,13 @@
 """Follow balls down the board, row by row: are their left/right choices fair and independent?
 
 Usage: python benchmarks/walk_probe.py ENGINE [--balls 500] [--seed 0] [--params JSON]
-                                      [--crowd stream|all-at-once]
+                                      [--crowd stream|all-at-once] [--board NAME_OR_TOML]
 
 A binomial board needs each ball to make one fair, independent left/right choice per row.
 The 500-ball runs come out flatter than the binomial (``benchmarks/seed_spread.py``: like
 6-7 independent rows, not 11). This probe looks at the walk itself. It builds the ``paper``
-board in-process (the bench's world, repetition 0 of ``--seed``). Without ``--crowd`` it
+board (or ``--board``: a preset name or a TOML/JSON file, e.g. ``benchmarks/boards/*.toml``)
+in-process (the bench's world, repetition 0 of ``--seed``). Without ``--crowd`` it
 drops the stream release's balls one at a time, each alone on the board (no ball-ball
 contact, no piles); with ``--crowd MODE`` it releases them as the bench does in that mode.
 It steps one step at a time and notes, for every ball, its x each time it goes down
@@ -58,9 +59,10 @@ SHUFFLE_SEED = 0
 
 
 def build(engine: str, balls: int, seed: int, params: dict[str, Any],
-          mode: str = "stream") -> tuple[World, BoardSpec, Perturbation]:
-    """The bench's world for repetition 0 of ``seed``: board built, no balls yet."""
-    board = BoardSpec.load("paper")
+          mode: str = "stream", source: str = "paper") -> tuple[World, BoardSpec, Perturbation]:
+    """The bench's world for repetition 0 of ``seed`` on board ``source`` (a preset name or
+    a file, as ``BoardSpec.load`` reads it): board built, no balls yet."""
+    board = BoardSpec.load(source)
     board = board.replace(release=dataclasses.replace(board.release, mode=mode))
     board = board.replace(ball=dataclasses.replace(board.ball, count=balls))
     world = World(create_engine(engine))
@@ -246,14 +248,17 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--params", default="{}")
     parser.add_argument("--crowd", choices=["stream", "all-at-once"])
+    parser.add_argument("--board", default="paper",
+                        help="a preset name or a board TOML/JSON file (default: paper)")
     args = parser.parse_args()
     params = json.loads(args.params)
     world, board, shake = build(args.engine, args.balls, args.seed, params,
-                                args.crowd or "stream")
+                                args.crowd or "stream", args.board)
     seen = (follow_crowd if args.crowd else follow_lone)(world, board, shake)
     world.engine.close()
-    print(json.dumps({"engine": args.engine, "seed": args.seed, "params": params,
-                      "crowd": args.crowd, **summarise(seen, board, shake)}))
+    print(json.dumps({"engine": args.engine, "board": board.name, "seed": args.seed,
+                      "params": params, "crowd": args.crowd,
+                      **summarise(seen, board, shake)}))
 
 
 if __name__ == "__main__":
