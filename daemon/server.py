@@ -71,21 +71,34 @@ class Daemon:
         self._events_pub = self.session.declare_publisher(self.keys.events)
         self.loop = SimLoop(World(engine), options.instance, self._publish_telemetry,
                             self._publish_event, options.telemetry_rate_hz, create_engine)
-        self._thread = threading.Thread(target=self.loop.run, name="physics", daemon=True)
+        self._thread: threading.Thread | None = None
         self._queryable: Any = None
         self._token: Any = None
 
-    def start(self) -> None:
-        self._thread.start()
+    def open(self) -> None:
+        """Declare the control queryable and the liveliness token: clients can reach us."""
         self._queryable = self.session.declare_queryable(self.keys.control_all, self._on_query)
         self._token = self.session.liveliness().declare_token(self.keys.alive)
 
-    def close(self) -> None:
-        """Withdraw liveliness first, answer what is pending, then close the session."""
+    def start(self) -> None:
+        """Serve with the physics loop on a thread of its own (for embedding in a process
+        that has other work on its main thread)."""
+        self._thread = threading.Thread(target=self.loop.run, name="physics", daemon=True)
+        self._thread.start()
+        self.open()
+
+    def withdraw(self) -> None:
+        """Withdraw liveliness and stop the physics loop; it answers what is pending."""
         if self._token is not None:
             self._token.undeclare()
+            self._token = None
         self.loop.stop()
-        self._thread.join(timeout=10)
+
+    def close(self) -> None:
+        """Withdraw liveliness first, answer what is pending, then close the session."""
+        self.withdraw()
+        if self._thread is not None:
+            self._thread.join(timeout=10)
         if self._queryable is not None:
             self._queryable.undeclare()
         self.loop.world.engine.close()
@@ -119,9 +132,12 @@ def _responder(query: zenoh.Query) -> Callable[[bytes], None]:
 def run_daemon(options: DaemonOptions, announce: Callable[[str], None] = print) -> int:
     """Serve until SIGINT or SIGTERM; return the exit code (0 on a clean stop).
 
-    The signal handlers do nothing themselves: Python's C-level handler writes each signal
-    to a wakeup pipe, whichever thread the kernel chose, and the main thread waits on that
-    pipe. No Python code runs inside a lock, so a second signal cannot deadlock shutdown.
+    The physics loop runs on the main thread, which has nothing else to do: on the
+    long-lived thread it had before, the same MuJoCo trial cost about 4 % more CPU, for
+    reasons not found (docs/PERFORMANCE.md, "Bridge overhead"). The signal handlers do
+    nothing themselves: Python's C-level handler writes each signal to a wakeup pipe,
+    whichever thread the kernel chose, and a watcher thread waiting on that pipe stops the
+    loop. No Python code runs inside a lock, so a second signal cannot deadlock shutdown.
     """
     wake_read, wake_write = os.pipe()
     os.set_blocking(wake_write, False)
@@ -129,9 +145,16 @@ def run_daemon(options: DaemonOptions, announce: Callable[[str], None] = print) 
     for signum in (signal.SIGINT, signal.SIGTERM):
         signal.signal(signum, lambda *_: None)
     daemon = Daemon(options)
-    daemon.start()
+    daemon.open()
+
+    def stop_on_signal() -> None:
+        os.read(wake_read, 1)
+        daemon.withdraw()
+    threading.Thread(target=stop_on_signal, name="signals", daemon=True).start()
     announce(f"galton-daemon ready: instance={options.instance} engine={options.engine} "
              f"listen={','.join(options.listen)} engines={','.join(ENGINE_CLASSES)}")
-    os.read(wake_read, 1)
-    daemon.close()
+    try:
+        daemon.loop.run()
+    finally:
+        daemon.close()
     return 0
