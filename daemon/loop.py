@@ -1,6 +1,7 @@
 """The physics thread: applies requests between steps, paces the clock, publishes telemetry.
 
-Everything that touches the engine runs here, on one thread. Zenoh callbacks only put
+Everything that touches the engine runs here, on one thread (galton-daemon's main thread;
+``Daemon.start`` gives it a thread of its own when embedded). Zenoh callbacks only put
 ``Call`` objects into the inbox; this loop answers each of them exactly once.
 """
 
