@@ -10,8 +10,8 @@ from pathlib import Path
 import pytest
 import zenoh
 
-from galton.client import Client, EmbeddedDaemon, instances, wait_for_daemon
-from galton.protocol import DaemonUnreachableError, Telemetry
+from galton.client import Client, EmbeddedDaemon, instances, plane, spheres, wait_for_daemon
+from galton.protocol import DaemonUnreachableError, OperationFailedError, Telemetry
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -41,6 +41,34 @@ def test_sigint_also_exits_zero() -> None:
     daemon = EmbeddedDaemon("mujoco", instance="interrupted").start()
     daemon.process.send_signal(signal.SIGINT)
     assert daemon.stop() == 0
+
+
+def test_a_step_job_in_flight_at_sigterm_is_answered_and_the_daemon_exits_zero() -> None:
+    """The physics loop runs on the daemon's main thread; a signal must still stop it
+    between chunks and answer the request it was serving."""
+    daemon = EmbeddedDaemon("mujoco", instance="busy-at-exit").start()
+    outcome: list[Exception | None] = []
+    with Client(daemon.instance, daemon.endpoint) as sim, \
+            Client(daemon.instance, session=sim.session) as probe:
+        sim.spawn(plane(), spheres(["b"], [[0.0, 0.0, 0.5]], 0.05))
+
+        def long_run() -> None:
+            try:
+                sim.run_until(1e6, timeout=60)
+                outcome.append(None)
+            except Exception as error:
+                outcome.append(error)
+        stepping = threading.Event()
+        with probe.on_telemetry(lambda t: stepping.set() if t.step > 0 else None):
+            runner = threading.Thread(target=long_run)
+            runner.start()
+            assert stepping.wait(30), "the long run never started"
+        daemon.process.send_signal(signal.SIGTERM)
+        runner.join(30)
+        assert daemon.stop() == 0
+    assert len(outcome) == 1
+    assert isinstance(outcome[0], OperationFailedError)
+    assert "shutting down" in str(outcome[0])
 
 
 def test_unreachable_daemon_is_its_own_error() -> None:
