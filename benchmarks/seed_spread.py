@@ -1,6 +1,6 @@
 """How a fidelity verdict depends on the seed, and how far each engine is from the binomial.
 
-Usage: python benchmarks/seed_spread.py FILE [FILE ...]
+Usage: python benchmarks/seed_spread.py [--summary] FILE [FILE ...]
 
 Each FILE holds JSON lines printed by ``benchmarks/fidelity_inprocess.py`` (other lines are
 skipped). Runs are grouped by engine, balls, release mode and parameters; for each group the
@@ -12,6 +12,10 @@ standardised residual of each bin over all seeds (where the law departs), how fl
 is (excess kurtosis, read as a number of independent rows: ``galton.analysis.shape``), and
 how each trial's width follows its board shift. A group
 whose w is near that line passes or fails with the seed; one well below it passes.
+
+``--summary`` prints one line per group instead: how many of its seeds pass the pooled
+test, w and excess kurtosis over all its balls, the width, and lost and unsettled balls.
+Groups are told apart by engine, balls, release mode, parameters and per-role surfaces.
 """
 
 from __future__ import annotations
@@ -40,8 +44,10 @@ def read_runs(paths: list[str]) -> list[dict[str, Any]]:
 
 
 def group_key(run: dict[str, Any]) -> tuple[str, int, str, str]:
-    return (run["engine"], run["balls"], run["mode"],
-            json.dumps(run.get("params", {}), sort_keys=True))
+    settings = json.dumps(run.get("params", {}), sort_keys=True)
+    if run.get("surfaces"):
+        settings += " surfaces " + json.dumps(run["surfaces"], sort_keys=True)
+    return (run["engine"], run["balls"], run["mode"], settings)
 
 
 def describe(key: tuple[str, int, str, str], runs: list[dict[str, Any]]) -> str:
@@ -67,6 +73,24 @@ def describe(key: tuple[str, int, str, str], runs: list[dict[str, Any]]) -> str:
     lines.append("  residuals (O - E) / sqrt(E) by bin: "
                  + " ".join(f"{r:+.1f}" for r in residuals))
     return "\n".join(lines)
+
+
+def summary_line(key: tuple[str, int, str, str], runs: list[dict[str, Any]]) -> str:
+    """One group in one line: its seeds' pass count and how far all its balls are from the
+    binomial (w, kurtosis with the binomial's 95 % range at as many balls, width)."""
+    engine, balls, mode, settings = key
+    draws = stats.DEFAULT_DRAWS * stats.POOLED_DRAWS_FACTOR
+    passed = sum(stats.p_monte_carlo(run["pooled"], draws=draws) > stats.ALPHA
+                 for run in runs)
+    together = np.sum([r["pooled"] for r in runs], axis=0)
+    flat = shape.flatness(together)
+    spread = np.repeat(np.arange(len(together)), together).std()
+    return (f"{engine:8s} {mode:11s} {balls:4d} x {runs[0]['reps']:2d}  {settings}: "
+            f"{passed}/{len(runs)} seeds pass; {int(together.sum())} balls: "
+            f"w {stats.effect_size(together):.3f}, kurtosis {flat.excess_kurtosis:+.2f} "
+            f"[{flat.null_low:+.2f}, {flat.null_high:+.2f}], width {spread:.3f}, "
+            f"lost {sum(r['lost'] for r in runs)}, "
+            f"unsettled {sum(r['unsettled'] for r in runs)}")
 
 
 def flatness_line(together: np.ndarray) -> str:
@@ -99,12 +123,15 @@ def shift_line(runs: list[dict[str, Any]]) -> list[str]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("files", nargs="+")
+    parser.add_argument("--summary", action="store_true",
+                        help="one line per group: pass count over seeds, w, kurtosis, width")
     args = parser.parse_args()
     groups: dict[tuple[str, int, str, str], list[dict[str, Any]]] = defaultdict(list)
     for run in read_runs(args.files):
         groups[group_key(run)].append(run)
     for key in sorted(groups):
-        print(describe(key, groups[key]))
+        runs = sorted(groups[key], key=lambda r: r["seed"])
+        print(summary_line(key, runs) if args.summary else describe(key, runs))
 
 
 if __name__ == "__main__":
