@@ -22,7 +22,6 @@ import argparse
 import json
 import os
 import shlex
-import signal
 import statistics
 import subprocess
 import sys
@@ -62,12 +61,8 @@ class StepTimer:
 def serve_on_own_thread(options: Any, announce: Any = print) -> int:
     """run_daemon as it was before 2026-11-24: the physics loop on a thread of its own,
     the main thread waiting for SIGINT/SIGTERM."""
-    from galton.daemon.server import Daemon
-    wake_read, wake_write = os.pipe()
-    os.set_blocking(wake_write, False)
-    signal.set_wakeup_fd(wake_write)
-    for signum in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(signum, lambda *_: None)
+    from galton.daemon.server import Daemon, signal_wakeup_pipe
+    wake_read = signal_wakeup_pipe()
     daemon = Daemon(options)
     daemon.start()
     announce("galton-daemon ready: physics loop on its own thread")

@@ -129,6 +129,17 @@ def _responder(query: zenoh.Query) -> Callable[[bytes], None]:
     return respond
 
 
+def signal_wakeup_pipe() -> int:
+    """Route SIGINT and SIGTERM to a pipe and return its read end: a thread blocked reading
+    it wakes on either signal, and the handlers themselves run no Python code that matters."""
+    wake_read, wake_write = os.pipe()
+    os.set_blocking(wake_write, False)
+    signal.set_wakeup_fd(wake_write)
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, lambda *_: None)
+    return wake_read
+
+
 def run_daemon(options: DaemonOptions, announce: Callable[[str], None] = print) -> int:
     """Serve until SIGINT or SIGTERM; return the exit code (0 on a clean stop).
 
@@ -139,11 +150,7 @@ def run_daemon(options: DaemonOptions, announce: Callable[[str], None] = print) 
     whichever thread the kernel chose, and a watcher thread waiting on that pipe stops the
     loop. No Python code runs inside a lock, so a second signal cannot deadlock shutdown.
     """
-    wake_read, wake_write = os.pipe()
-    os.set_blocking(wake_write, False)
-    signal.set_wakeup_fd(wake_write)
-    for signum in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(signum, lambda *_: None)
+    wake_read = signal_wakeup_pipe()
     daemon = Daemon(options)
     daemon.open()
 
