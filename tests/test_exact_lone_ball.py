@@ -1,0 +1,104 @@
+"""The exact (event-driven) lone-ball model behind docs/PHYSICS.md's engine-free reference.
+
+``benchmarks/exact_lone_ball.py`` follows a solid sphere between rigid impacts, so its law
+is set by mechanics alone. These tests hold its pieces to textbook results: a bounce keeps
+e of the normal speed, friction either stops the contact point's slip (a solid sphere then
+rolls, v = omega r) or slides by mu times the normal impulse, a ball rolling off the top of
+a cylinder leaves where cos(phi) = 10/17, and on the paper board every walk ends in its bin.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import importlib
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from galton.analysis.board import BoardSpec
+from galton.analysis.board_release import Perturbation, perturbation
+
+BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
+
+
+@pytest.fixture(scope="module")
+def exact():
+    sys.path.insert(0, str(BENCHMARKS))
+    try:
+        yield importlib.import_module("exact_lone_ball")
+    finally:
+        sys.path.remove(str(BENCHMARKS))
+
+
+FLOOR = np.array([0.0, 1.0])
+RADIUS = 0.045
+
+
+def test_a_head_on_bounce_keeps_e_of_the_speed(exact):
+    ball = exact.Ball(np.zeros(2), np.array([0.0, -3.0]), 0.0)
+    leaving = exact.impact(ball, FLOOR, RADIUS, exact.Contact(0.7, 0.25, 0.2))
+    assert leaving == pytest.approx(2.1)
+    assert ball.v == pytest.approx([0.0, 2.1])
+    assert ball.spin == 0.0
+
+
+def test_below_the_threshold_a_contact_does_not_bounce(exact):
+    ball = exact.Ball(np.zeros(2), np.array([0.0, -0.1]), 0.0)
+    assert exact.impact(ball, FLOOR, RADIUS, exact.Contact(0.7, 0.25, 0.2)) == 0.0
+    assert ball.v[1] == pytest.approx(0.0)
+
+
+def test_enough_friction_leaves_a_solid_sphere_rolling(exact):
+    """Slip stopped in one impact: v_x falls to 5/7 of itself and v = omega r."""
+    ball = exact.Ball(np.zeros(2), np.array([1.4, -2.0]), 0.0)
+    exact.impact(ball, FLOOR, RADIUS, exact.Contact(0.5, 1.0, 0.2))
+    assert ball.v[0] == pytest.approx(1.0)
+    assert ball.spin * RADIUS == pytest.approx(ball.v[0])
+
+
+def test_too_little_friction_slides_by_mu_times_the_normal_impulse(exact):
+    ball = exact.Ball(np.zeros(2), np.array([3.0, -2.0]), 0.0)
+    exact.impact(ball, FLOOR, RADIUS, exact.Contact(0.5, 0.1, 0.2))
+    normal_impulse = 1.5 * 2.0
+    assert ball.v[0] == pytest.approx(3.0 - 0.1 * normal_impulse)
+    assert ball.spin == pytest.approx(0.1 * normal_impulse * RADIUS / (0.4 * RADIUS ** 2))
+
+
+@pytest.mark.parametrize("side", [1.0, -1.0])
+def test_a_ball_rolls_off_a_pin_where_gravity_cannot_hold_it(exact, side):
+    reach, centre = 0.145, np.array([0.0, 4.0])
+    ball = exact.Ball(centre + reach * np.array([side * 1e-6, 1.0]), np.zeros(2), 0.0)
+    exact.roll_off(ball, centre, reach, RADIUS)
+    offset = (ball.p - centre) / np.linalg.norm(ball.p - centre)
+    assert offset[1] == pytest.approx(10 / 17, abs=1e-6)
+    assert math.copysign(1.0, offset[0]) == side
+    assert np.linalg.norm(ball.v) == pytest.approx(math.sqrt(9.81 * reach * 10 / 17), rel=1e-5)
+    assert ball.v @ offset == pytest.approx(0.0, abs=1e-9)  # leaves along the surface
+    assert ball.v[1] < 0 and math.copysign(1.0, ball.v[0]) == side
+
+
+def test_every_walk_on_the_paper_board_ends_in_its_bin(exact):
+    board, shake = _stream("paper", 30)
+    seen, impacts = exact.run(board, shake, exact.Contact(0.7, 0.25, 0.2))
+    assert (seen.bins >= 0).all() and max(impacts) < exact.MAX_EVENTS
+    summary = exact.walk_probe.summarise(seen, board, shake)
+    assert summary["balls"] == 30 and summary["walk_bin_mismatch"] == 0
+    assert sum(summary["bins"]["counts"]) == 30
+
+
+def test_a_dead_board_sends_no_ball_far(exact):
+    """With no bounce a ball rolls off each pin beside the one above: the walk is narrow."""
+    board, shake = _stream("paper", 40)
+    seen, _ = exact.run(board, shake, exact.Contact(0.0, 0.5, 0.2))
+    lively, _ = exact.run(board, shake, exact.Contact(0.7, 0.25, 0.2))
+    assert seen.bins.std() < lively.bins.std()
+
+
+def _stream(name: str, balls: int) -> tuple[BoardSpec, Perturbation]:
+    board = BoardSpec.load(name)
+    board = board.replace(release=dataclasses.replace(board.release, mode="stream"))
+    board = board.replace(ball=dataclasses.replace(board.ball, count=balls))
+    return board, perturbation(board, 0, 0, balls)
