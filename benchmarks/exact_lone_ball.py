@@ -2,7 +2,7 @@
 
 Usage: python benchmarks/exact_lone_ball.py [--balls 1000] [--seed 0] [--restitution 0.70]
                                             [--friction 0.25] [--threshold 0.2]
-                                            [--board NAME_OR_TOML]
+                                            [--restitution-at-3 E3] [--board NAME_OR_TOML]
 
 Both engines' lone (streamed, one at a time) balls come out with a law of the right width
 but disagree on its shape: PyBullet's is flat (excess kurtosis -0.38), MuJoCo's is the
@@ -14,7 +14,8 @@ board's x-z plane (the pins span the cavity's depth, so a lone ball's y plays no
 
 The contact law is the rigid one both engines aim at: at each impact the normal velocity
 reverses with restitution e (e = 0 when the ball approaches slower than ``--threshold``,
-PyBullet's restitution velocity threshold); Coulomb friction mu stops the contact point's
+PyBullet's restitution velocity threshold; ``--restitution-at-3`` makes e depend on the
+approach speed, as a real ball's does); Coulomb friction mu stops the contact point's
 slip if mu times the normal impulse suffices, else slides. A ball that ends an impact on a
 pin's upper half without bouncing rolls on it without slipping (closed form: it leaves the
 pin where gravity can no longer hold it on the curve), so a trial never needs a time step.
@@ -59,6 +60,16 @@ class Contact:
     restitution: float
     friction: float
     threshold: float
+    restitution_at_3: float | None = None  # e at 3 m/s; linear in the approach speed from 1 m/s
+
+    def bounce(self, approach: float) -> float:
+        """e for this approach speed: 0 below the threshold, else constant or speed-dependent."""
+        if approach < self.threshold:
+            return 0.0
+        if self.restitution_at_3 is None:
+            return self.restitution
+        slope = (self.restitution_at_3 - self.restitution) / 2.0
+        return min(0.95, max(0.0, self.restitution + slope * (approach - 1.0)))
 
 
 @dataclass
@@ -184,7 +195,7 @@ def impact(ball: Ball, normal: np.ndarray, radius: float, law: Contact) -> float
     """Apply one rigid impact (per unit mass); returns the normal speed it leaves with."""
     tangent = np.array([-normal[1], normal[0]])
     approach = -ball.v @ normal
-    e = law.restitution if approach >= law.threshold else 0.0
+    e = law.bounce(approach)
     normal_impulse = (1 + e) * approach
     slip = ball.v @ tangent + ball.spin * radius
     stick = -slip * STICK_FACTOR
@@ -290,13 +301,16 @@ def main() -> None:
     parser.add_argument("--restitution", type=float, default=0.70)
     parser.add_argument("--friction", type=float, default=0.25)
     parser.add_argument("--threshold", type=float, default=0.2)
+    parser.add_argument("--restitution-at-3", type=float, default=None,
+                        help="e at 3 m/s: e then falls (or rises) linearly with the approach "
+                             "speed from --restitution at 1 m/s (clipped to 0..0.95)")
     parser.add_argument("--board", default="paper")
     args = parser.parse_args()
     board = BoardSpec.load(args.board)
     board = board.replace(release=dataclasses.replace(board.release, mode="stream"))
     board = board.replace(ball=dataclasses.replace(board.ball, count=args.balls))
     shake = perturbation(board, 0, args.seed, args.balls)
-    law = Contact(args.restitution, args.friction, args.threshold)
+    law = Contact(args.restitution, args.friction, args.threshold, args.restitution_at_3)
     seen, impacts = run(board, shake, law)
     print(json.dumps({"model": "exact", "board": board.name, "seed": args.seed,
                       "contact": dataclasses.asdict(law), "board_offset_x": shake.board_offset_x,

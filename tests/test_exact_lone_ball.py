@@ -102,3 +102,12 @@ def _stream(name: str, balls: int) -> tuple[BoardSpec, Perturbation]:
     board = board.replace(release=dataclasses.replace(board.release, mode="stream"))
     board = board.replace(ball=dataclasses.replace(board.ball, count=balls))
     return board, perturbation(board, 0, 0, balls)
+
+
+def test_a_speed_dependent_bounce_falls_linearly_between_1_and_3_m_s(exact):
+    law = exact.Contact(0.72, 0.25, 0.2, restitution_at_3=0.52)
+    assert law.bounce(1.0) == pytest.approx(0.72)
+    assert law.bounce(2.0) == pytest.approx(0.62)
+    assert law.bounce(3.0) == pytest.approx(0.52)
+    assert law.bounce(0.1) == 0.0  # below the threshold
+    assert law.bounce(20.0) == 0.0  # clipped, never negative
