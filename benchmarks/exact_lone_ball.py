@@ -42,10 +42,12 @@ from scipy.spatial.transform import Rotation
 
 from galton.analysis.board import BoardSpec
 from galton.analysis.board_geometry import board_primitives
-from galton.analysis.board_layout import divider_positions, divider_top, row_heights
+from galton.analysis.board_layout import divider_top, row_heights
 from galton.analysis.board_release import Perturbation, perturbation
+from galton.analysis.board_scoring import assign_bins
 
 GRAVITY = 9.81
+FALL = np.array([0.0, -GRAVITY])  # gravity's acceleration in the x-z plane
 HORIZON_S = 0.25  # flight looked ahead per search for the next impact
 MAX_EVENTS = 5000  # impacts before a ball counts as caught
 ROLL_FACTOR = 5 / 7  # a rolling solid sphere's acceleration along a slope, over g's
@@ -119,16 +121,16 @@ def scenery(board: BoardSpec) -> Scenery:
 
 
 def _position(ball: Ball, t: float) -> np.ndarray:
-    return ball.p + ball.v * t + np.array([0.0, -0.5 * GRAVITY]) * t * t
+    return ball.p + ball.v * t + 0.5 * FALL * t * t
 
 
 def _velocity(ball: Ball, t: float) -> np.ndarray:
-    return ball.v + np.array([0.0, -GRAVITY]) * t
+    return ball.v + FALL * t
 
 
 def _circle_hit(ball: Ball, centre: np.ndarray, reach: float, horizon: float) -> float | None:
     """When the centre first reaches distance ``reach`` of ``centre`` while approaching."""
-    d0, v, a = ball.p - centre, ball.v, np.array([0.0, -0.5 * GRAVITY])
+    d0, v, a = ball.p - centre, ball.v, 0.5 * FALL
     coefficients = np.array([a @ a, 2 * a @ v, v @ v + 2 * a @ d0, 2 * v @ d0,
                              d0 @ d0 - reach * reach])
     roots = np.roots(coefficients)
@@ -163,7 +165,7 @@ def next_impact(ball: Ball, world: Scenery, radius: float,
     """The first impact within ``horizon``: its time, the contact normal, what was hit."""
     ts = np.linspace(0, horizon, 9)
     path = np.array([_position(ball, t) for t in ts])
-    apex = -ball.v[1] / -GRAVITY
+    apex = ball.v[1] / GRAVITY
     if 0 < apex < horizon:
         path = np.vstack([path, _position(ball, apex)])
     low, high = path.min(axis=0), path.max(axis=0)
@@ -235,8 +237,8 @@ class Follower:
 
     def __init__(self, board: BoardSpec, count: int) -> None:
         self.heights = np.asarray(row_heights(board))
+        self.board = board
         self.bin_z = divider_top(board) - board.ball.radius
-        self.edges = np.array(divider_positions(board))
         self.first = np.full((count, board.rows), np.nan)
         self.last = np.full((count, board.rows), np.nan)
         self.bins = np.full(count, -1)
@@ -251,7 +253,8 @@ class Follower:
                     self.first[index, row] = x
         landing = _downward_times(ball, self.bin_z, duration)
         if landing:
-            self.bins[index] = int(np.searchsorted(self.edges, _position(ball, landing[0])[0]))
+            x, z = _position(ball, landing[0])
+            self.bins[index] = int(assign_bins(self.board, np.array([[x, 0.0, z]]))[0])
             return True
         return False
 
@@ -306,9 +309,7 @@ def main() -> None:
                              "speed from --restitution at 1 m/s (clipped to 0..0.95)")
     parser.add_argument("--board", default="paper")
     args = parser.parse_args()
-    board = BoardSpec.load(args.board)
-    board = board.replace(release=dataclasses.replace(board.release, mode="stream"))
-    board = board.replace(ball=dataclasses.replace(board.ball, count=args.balls))
+    board = walk_probe.released(args.board, args.balls)
     shake = perturbation(board, 0, args.seed, args.balls)
     law = Contact(args.restitution, args.friction, args.threshold, args.restitution_at_3)
     seen, impacts = run(board, shake, law)

@@ -62,9 +62,7 @@ def build(engine: str, balls: int, seed: int, params: dict[str, Any],
           mode: str = "stream", source: str = "paper") -> tuple[World, BoardSpec, Perturbation]:
     """The bench's world for repetition 0 of ``seed`` on board ``source`` (a preset name or
     a file, as ``BoardSpec.load`` reads it): board built, no balls yet."""
-    board = BoardSpec.load(source)
-    board = board.replace(release=dataclasses.replace(board.release, mode=mode))
-    board = board.replace(ball=dataclasses.replace(board.ball, count=balls))
+    board = released(source, balls, mode)
     world = World(create_engine(engine))
     contacts = board.contacts.get(engine)
     merged = {**(dict(contacts.params) if contacts else {}), **params}
@@ -73,6 +71,13 @@ def build(engine: str, balls: int, seed: int, params: dict[str, Any],
     shake = perturbation(board, 0, seed, balls)
     world.spawn(_wire(board_groups(board, engine, shake.board_offset_x)))
     return world, board, shake
+
+
+def released(source: str, balls: int, mode: str = "stream") -> BoardSpec:
+    """Board ``source`` (a preset name or a file) releasing ``balls`` balls in ``mode``."""
+    board = BoardSpec.load(source)
+    board = board.replace(release=dataclasses.replace(board.release, mode=mode))
+    return board.replace(ball=dataclasses.replace(board.ball, count=balls))
 
 
 def _wire(groups: list[BodyGroup]) -> list[BodyGroup]:

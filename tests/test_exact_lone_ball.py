@@ -9,7 +9,6 @@ a cylinder leaves where cos(phi) = 10/17, and on the paper board every walk ends
 
 from __future__ import annotations
 
-import dataclasses
 import importlib
 import math
 import sys
@@ -81,7 +80,7 @@ def test_a_ball_rolls_off_a_pin_where_gravity_cannot_hold_it(exact, side):
 
 
 def test_every_walk_on_the_paper_board_ends_in_its_bin(exact):
-    board, shake = _stream("paper", 30)
+    board, shake = _stream(exact, 30)
     seen, impacts = exact.run(board, shake, exact.Contact(0.7, 0.25, 0.2))
     assert (seen.bins >= 0).all() and max(impacts) < exact.MAX_EVENTS
     summary = exact.walk_probe.summarise(seen, board, shake)
@@ -91,16 +90,14 @@ def test_every_walk_on_the_paper_board_ends_in_its_bin(exact):
 
 def test_a_dead_board_sends_no_ball_far(exact):
     """With no bounce a ball rolls off each pin beside the one above: the walk is narrow."""
-    board, shake = _stream("paper", 40)
+    board, shake = _stream(exact, 40)
     seen, _ = exact.run(board, shake, exact.Contact(0.0, 0.5, 0.2))
     lively, _ = exact.run(board, shake, exact.Contact(0.7, 0.25, 0.2))
     assert seen.bins.std() < lively.bins.std()
 
 
-def _stream(name: str, balls: int) -> tuple[BoardSpec, Perturbation]:
-    board = BoardSpec.load(name)
-    board = board.replace(release=dataclasses.replace(board.release, mode="stream"))
-    board = board.replace(ball=dataclasses.replace(board.ball, count=balls))
+def _stream(exact, balls: int) -> tuple[BoardSpec, Perturbation]:
+    board = exact.walk_probe.released("paper", balls)
     return board, perturbation(board, 0, 0, balls)
 
 
