@@ -63,11 +63,14 @@ class Contact:
     friction: float
     threshold: float
     restitution_at_3: float | None = None  # e at 3 m/s; linear in the approach speed from 1 m/s
+    plastic_exponent: float | None = None  # e = restitution * (v / 1 m/s) ** -exponent
 
     def bounce(self, approach: float) -> float:
         """e for this approach speed: 0 below the threshold, else constant or speed-dependent."""
         if approach < self.threshold:
             return 0.0
+        if self.plastic_exponent is not None:
+            return min(0.95, self.restitution * approach ** -self.plastic_exponent)
         if self.restitution_at_3 is None:
             return self.restitution
         slope = (self.restitution_at_3 - self.restitution) / 2.0
@@ -307,17 +310,26 @@ def main() -> None:
     parser.add_argument("--restitution-at-3", type=float, default=None,
                         help="e at 3 m/s: e then falls (or rises) linearly with the approach "
                              "speed from --restitution at 1 m/s (clipped to 0..0.95)")
+    parser.add_argument("--plastic-exponent", type=float, default=None,
+                        help="e = --restitution * (v / 1 m/s) ** -P, capped at 0.95; Johnson's "
+                             "elastic-plastic impact gives P = 1/4")
     parser.add_argument("--board", default="paper")
     args = parser.parse_args()
-    board = walk_probe.released(args.board, args.balls)
-    shake = perturbation(board, 0, args.seed, args.balls)
-    law = Contact(args.restitution, args.friction, args.threshold, args.restitution_at_3)
+    law = Contact(args.restitution, args.friction, args.threshold, args.restitution_at_3,
+                  args.plastic_exponent)
+    print(json.dumps(trial(args.board, args.balls, args.seed, law)))
+
+
+def trial(board_name: str, balls: int, seed: int, law: Contact) -> dict:
+    """One stream trial of lone balls under this law, as walk_probe summarises it."""
+    board = walk_probe.released(board_name, balls)
+    shake = perturbation(board, 0, seed, balls)
     seen, impacts = run(board, shake, law)
-    print(json.dumps({"model": "exact", "board": board.name, "seed": args.seed,
-                      "contact": dataclasses.asdict(law), "board_offset_x": shake.board_offset_x,
-                      "impacts_median": float(np.median(impacts)),
-                      "caught_after_max_impacts": int(sum(i >= MAX_EVENTS for i in impacts)),
-                      **walk_probe.summarise(seen, board, shake)}))
+    return {"model": "exact", "board": board.name, "seed": seed,
+            "contact": dataclasses.asdict(law), "board_offset_x": shake.board_offset_x,
+            "impacts_median": float(np.median(impacts)),
+            "caught_after_max_impacts": int(sum(i >= MAX_EVENTS for i in impacts)),
+            **walk_probe.summarise(seen, board, shake)}
 
 
 if __name__ == "__main__":

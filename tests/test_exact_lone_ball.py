@@ -5,6 +5,7 @@ is set by mechanics alone. These tests hold its pieces to textbook results: a bo
 e of the normal speed, friction either stops the contact point's slip (a solid sphere then
 rolls, v = omega r) or slides by mu times the normal impulse, a ball rolling off the top of
 a cylinder leaves where cos(phi) = 10/17, and on the paper board every walk ends in its bin.
+``benchmarks/exact_scan.py`` runs it over laws and seeds and pools what it stored.
 """
 
 from __future__ import annotations
@@ -108,3 +109,38 @@ def test_a_speed_dependent_bounce_falls_linearly_between_1_and_3_m_s(exact):
     assert law.bounce(3.0) == pytest.approx(0.52)
     assert law.bounce(0.1) == 0.0  # below the threshold
     assert law.bounce(20.0) == 0.0  # clipped, never negative
+
+
+def test_johnsons_plastic_bounce_falls_as_the_speed_to_minus_a_quarter(exact):
+    law = exact.Contact(0.78, 0.25, 0.2, plastic_exponent=0.25)
+    assert law.bounce(1.0) == pytest.approx(0.78)
+    assert law.bounce(16.0) == pytest.approx(0.39)  # 16 ** -1/4 = 1/2
+    assert law.bounce(0.3) == pytest.approx(0.95)  # capped: no ball comes back faster
+    assert law.bounce(0.1) == 0.0  # below the threshold
+
+
+@pytest.fixture(scope="module")
+def scan(exact):
+    sys.path.insert(0, str(BENCHMARKS))
+    try:
+        yield importlib.import_module("exact_scan")
+    finally:
+        sys.path.remove(str(BENCHMARKS))
+
+
+def test_a_scan_trial_records_the_law_and_the_speeds_it_was_asked_at(scan):
+    run = scan.one("paper", 12, 0, {"restitution": 0.78, "plastic_exponent": 0.25})
+    assert run["contact"]["plastic_exponent"] == 0.25 and run["contact"]["friction"] == 0.25
+    assert sum(run["bins"]["counts"]) == 12 and run["walk_bin_mismatch"] == 0
+    speeds = [run["approach_speed_percentiles"][q] for q in ("10", "50", "90", "99")]
+    assert 0.2 <= speeds[0] <= speeds[1] <= speeds[2] <= speeds[3]
+
+
+def test_the_scan_summary_pools_a_laws_seeds(scan):
+    binomial = [1, 11, 55, 165, 330, 462, 462, 330, 165, 55, 11, 1]
+    runs = [{"bins": {"counts": binomial}, "caught": 0} for _ in range(2)]
+    line = scan.summary_line("law", runs)
+    assert "balls   4096" in line and "width 1.658" in line and "seeds passing 2/2" in line
+    assert scan.law_key({"restitution": 0.72, "friction": 0.25, "plastic_exponent": None}) == \
+        '{"restitution": 0.72}'
+    assert scan.seed_range("3-5") == [3, 4, 5] and scan.seed_range("0,7") == [0, 7]
