@@ -6,18 +6,28 @@ there below ``sleep_tolerance`` for MuJoCo's ten steps and falls asleep. Real ba
 such a crown: the rest is unstable, only sleeping keeps it. On the paper board about one
 ball in 5,000 ended its trial asleep on a pin's top that way, counted in no bin.
 
+The same freeze holds arches. A ball on a pin's shoulder (15-25 degrees from its top) is
+pinned there by a neighbour wedged against the side of the pin above; the neighbour slides
+down that side at about the sleep tolerance (5 mm/s), so the pair falls asleep, and stays
+for good. Awake, the same pair collapses within 3 s (paper board, MuJoCo all-at-once, 500
+balls: 3 of 190 trials ended with such a pair; tests/engines/test_mujoco_engine.py rebuilds
+one).
+
 So every few steps the engine looks at the balls that fell asleep since its last look. One
 held up by a single contact, with a round geom of the fixed scenery, whose normal is within
-APEX_DEGREES of straight up, is woken and kept awake (sleep policy "never") until it rolls
-off that crown; then it may sleep again like any other ball. Balls at rest on a floor, in a
-pile or wedged between two supports are never touched. Only the balls that have just fallen
-asleep are examined, a few geometric queries each.
+CROWN_DEGREES of straight up, is woken and kept awake (sleep policy "never") until it leaves
+that crown; then it may sleep again like any other ball. A ball resting there alone rolls
+off; one held by its neighbours keeps their island awake until they slip or HOLD_LIMIT_S
+passes. Balls at rest on a floor, in a pile or wedged between two supports are never
+touched. Only the balls that have just fallen asleep are examined, a few geometric queries
+each.
 
 Crowns of moving bodies (a ball on top of another ball) are left alone: that ball is in a
 pile already, in its bin, and holding it awake kept its whole pile's island awake (8 % slower
 500-ball trials when tried). A ball balanced within 0.1 mm of a pin's top rolls off in about
-a second; one still there after HOLD_LIMIT_S is held by something else (a neighbour and the
-glass, say): it is let go, may sleep there, and is not held again until it has woken.
+a second; one still there after HOLD_LIMIT_S is held by something else for real (a
+neighbour and the glass, say): it is let go, may sleep there, and is not held again until it
+has woken.
 """
 
 from __future__ import annotations
@@ -28,10 +38,10 @@ from collections.abc import Iterator
 import mujoco
 import numpy as np
 
-APEX_DEGREES = 5.0  # a lone round support this close to vertical is a crown, not a rest
+CROWN_DEGREES = 30.0  # a ball on one round support this close to its top cannot rest alone
 SUPPORT_COSINE = 0.17  # a contact whose normal is within 80 degrees of up bears weight
 TOUCH = 1e-3  # m: geoms closer than this touch
-HOLD_LIMIT_S = 3.0  # a ball still on its crown after this long is not balancing
+HOLD_LIMIT_S = 5.0  # a ball still on its crown after this long is held there for real
 _SPHERE = int(mujoco.mjtGeom.mjGEOM_SPHERE)
 _ROUND = frozenset(int(t) for t in (mujoco.mjtGeom.mjGEOM_SPHERE, mujoco.mjtGeom.mjGEOM_CAPSULE,
                                     mujoco.mjtGeom.mjGEOM_ELLIPSOID,
@@ -106,15 +116,15 @@ def _up(m: mujoco.MjModel) -> np.ndarray | None:
 
 
 def on_a_crown(m: mujoco.MjModel, d: mujoco.MjData, geom: int, up: np.ndarray) -> bool:
-    """Whether this sphere's weight rests on one fixed round geom, within APEX_DEGREES of its
-    top."""
+    """Whether this sphere's weight rests on one fixed round geom, within CROWN_DEGREES of
+    its top."""
     supports = list(_supports(m, d, geom, up))
     if len(supports) != 1:
         return False
     other, normal = supports[0]
     fixed = m.body_weldid[m.geom_bodyid[other]] == 0  # welded to the world: scenery
     return bool(fixed) and _is_round_there(m, d, other, normal) and \
-        float(normal @ up) >= math.cos(math.radians(APEX_DEGREES))
+        float(normal @ up) >= math.cos(math.radians(CROWN_DEGREES))
 
 
 def _supports(m: mujoco.MjModel, d: mujoco.MjData, geom: int,

@@ -131,9 +131,10 @@ PARAMS: dict[str, ParamSpec] = {p.name: p for p in (
               "island sleeping: trees slower than this fall asleep (0 = sleeping off)",
               number(0.0, 10.0)),
     ParamSpec("mujoco.wake_balanced", True, "",
-              "wake a ball that fell asleep balanced on a single fixed round support (a "
-              "pin's apex) and keep it awake until it rolls off, for at most 3 s: real balls "
-              "cannot rest there (mujoco_balance)", flag),
+              "wake a ball that fell asleep on a single fixed round support near its top (a "
+              "pin's apex or shoulder, within 30 degrees) and keep it awake until it leaves, "
+              "for at most 5 s: a real ball cannot rest there alone, and one pinned by a "
+              "neighbour creeps (mujoco_balance)", flag),
 )}
 CONTACT_PARAMS = frozenset({"timestep", "default_friction", "default_restitution",
                             "default_static_friction", "default_static_restitution",

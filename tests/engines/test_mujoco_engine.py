@@ -580,6 +580,35 @@ def test_a_ball_that_stays_on_its_crown_is_let_go_and_sleeps(engine: MujocoEngin
     assert not twist.any() and pose[0, 2] > 1.1  # asleep on the crown after all
 
 
+def _arch_scene() -> list[BodyGroup]:
+    """Two balls as a 500-ball paper trial left them asleep (seed 8, repetition 3): B on the
+    shoulder of a pin, 15 degrees from its top; A on B, against the side of the pin above,
+    by the back wall."""
+    return [_posed("box", "wall", (0, 0.325, 3.5, 0, 0, 0, 1), (1, 0.05, 1), static=True),
+            _posed("cylinder", "upper_pin", (0.75, 0, 3.904, *ALONG_Y), (0.1, 0.275),
+                   static=True),
+            _posed("cylinder", "lower_pin", (0.5, 0, 3.704, *ALONG_Y), (0.1, 0.275),
+                   static=True),
+            _posed("sphere", "A", (0.605, 0.2298, 3.9042, *IDENTITY), (0.045,), mass=0.38),
+            _posed("sphere", "B", (0.5387, 0.2299, 3.8437, *IDENTITY), (0.045,), mass=0.38)]
+
+
+@pytest.mark.parametrize("guard", [False, True])
+def test_an_arch_on_a_pins_shoulder_is_not_frozen_by_sleep(engine: MujocoEngine,
+                                                           guard: bool) -> None:
+    """A creeps down the upper pin's side at about the sleep tolerance, so the pair falls
+    asleep at once and, unguarded, stays there for good; awake, as the guard keeps B, the
+    arch slips and both balls fall (as they do with sleeping off)."""
+    engine.set_params({"mujoco.wake_balanced": guard})
+    engine.spawn(_arch_scene())
+    run(engine, 4.0)
+    poses, twists = engine.get_states(["A", "B"])
+    if guard:
+        assert (poses[:, 2] < 3.6).all()  # both below the lower pin's centre: fallen
+    else:
+        assert not twists.any() and poses[1, 2] == pytest.approx(3.8437, abs=1e-3)
+
+
 def test_clearing_the_world_gives_a_held_ball_its_sleep_policy_back(
         engine: MujocoEngine) -> None:
     """clear() parks bodies in the same compiled model: none may stay barred from sleep."""
