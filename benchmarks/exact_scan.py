@@ -19,6 +19,7 @@ import argparse
 import json
 import os
 from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass, field
 
 import exact_lone_ball as exact
 import numpy as np
@@ -36,20 +37,23 @@ def seed_range(text: str) -> list[int]:
     return [int(part) for part in text.split(",")]
 
 
+@dataclass(frozen=True)
+class RecordedContact(exact.Contact):
+    """A contact law that also notes every approach speed it is asked for e at."""
+
+    speeds: list[float] = field(default_factory=list, compare=False, repr=False)
+
+    def bounce(self, approach: float) -> float:
+        self.speeds.append(approach)
+        return super().bounce(approach)
+
+
 def one(board: str, balls: int, seed: int, law: dict) -> dict:
     """One trial, with the percentiles of the approach speeds at which the law was asked for e."""
-    contact = exact.Contact(**{**DEFAULTS, **law})
-    speeds: list[float] = []
-    original = contact.bounce
-
-    def recorded(approach: float) -> float:
-        speeds.append(approach)
-        return original(approach)
-
-    object.__setattr__(contact, "bounce", recorded)
+    contact = RecordedContact(**{**DEFAULTS, **law})
     result = exact.trial(board, balls, seed, contact)
     result["contact"] = {**DEFAULTS, **law}
-    fast = np.array([s for s in speeds if s >= contact.threshold])
+    fast = np.array([s for s in contact.speeds if s >= contact.threshold])
     result["approach_speed_percentiles"] = {
         str(q): round(float(np.percentile(fast, q)), 3) for q in (10, 50, 90, 99)}
     return result
