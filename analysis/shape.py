@@ -36,6 +36,18 @@ class Flatness:
         return not self.null_low <= self.excess_kurtosis <= self.null_high
 
 
+def width(counts: Sequence[int] | np.ndarray, rows: int = ROWS) -> float:
+    """Standard deviation of the bin index over the settled balls; the binomial's is
+    sqrt(rows) / 2, so a width says at once whether a law is too narrow or too wide."""
+    table = check_counts(counts, rows).astype(float)
+    settled = table.sum()
+    if settled < 1:
+        raise NoSettledBallsError("a width needs settled balls")
+    bins = np.arange(len(table))
+    mean = table @ bins / settled
+    return float(np.sqrt(table @ (bins - mean) ** 2 / settled))
+
+
 def excess_kurtosis(counts: Sequence[int] | np.ndarray, rows: int = ROWS) -> float:
     """Fourth standardised moment of the bin index, minus 3 (a normal law gives 0)."""
     table = check_counts(counts, rows).astype(float)

@@ -69,12 +69,9 @@ def law_key(contact: dict) -> str:
 def summary_line(key: str, runs: list[dict]) -> str:
     """Pooled fidelity of one law's seeds, and how many seeds pass on their own."""
     counts = np.sum([run["bins"]["counts"] for run in runs], axis=0)
-    bins = np.arange(len(counts))
-    mean = float(counts @ bins / counts.sum())
-    width = float(np.sqrt(counts @ (bins - mean) ** 2 / counts.sum()))
     passing = sum(stats.p_monte_carlo(run["bins"]["counts"]) > stats.ALPHA for run in runs)
     caught = sum(run["caught"] for run in runs)
-    return (f"{key:52s} balls {counts.sum():6d}  width {width:.3f}  "
+    return (f"{key:52s} balls {counts.sum():6d}  width {shape.width(counts):.3f}  "
             f"kurtosis {shape.excess_kurtosis(counts):+.3f}  w {stats.effect_size(counts):.3f}  "
             f"p {stats.p_monte_carlo(counts):.4f}  seeds passing {passing}/{len(runs)}  "
             f"caught {caught}")

@@ -27,7 +27,7 @@ import statistics
 import numpy as np
 from bridge_overhead import LocalSim
 
-from galton.analysis import stats
+from galton.analysis import shape, stats
 from galton.analysis.board import BallSpec, BoardSpec, EngineContacts, SurfaceSpec
 from galton.client.bench.trial import TrialConfig, run_trial
 
@@ -43,7 +43,7 @@ def board_for(engine: str, balls: int, mode: str, params: dict, surfaces: dict) 
 
 def width(counts: np.ndarray | list[int]) -> float:
     """The standard deviation of the bin index over these balls (the binomial's: 1.658)."""
-    return round(float(np.repeat(np.arange(len(counts)), counts).std()), 3)
+    return round(shape.width(counts), 3)
 
 
 def main() -> None:

@@ -84,11 +84,10 @@ def summary_line(key: tuple[str, int, str, str], runs: list[dict[str, Any]]) -> 
                  for run in runs)
     together = np.sum([r["pooled"] for r in runs], axis=0)
     flat = shape.flatness(together)
-    spread = np.repeat(np.arange(len(together)), together).std()
     return (f"{engine:8s} {mode:11s} {balls:4d} x {runs[0]['reps']:2d}  {settings}: "
             f"{passed}/{len(runs)} seeds pass; {int(together.sum())} balls: "
             f"w {stats.effect_size(together):.3f}, kurtosis {flat.excess_kurtosis:+.2f} "
-            f"[{flat.null_low:+.2f}, {flat.null_high:+.2f}], width {spread:.3f}, "
+            f"[{flat.null_low:+.2f}, {flat.null_high:+.2f}], width {shape.width(together):.3f}, "
             f"lost {sum(r['lost'] for r in runs)}, "
             f"unsettled {sum(r['unsettled'] for r in runs)}")
 

@@ -24,13 +24,18 @@ from galton.analysis.board_release import Perturbation, perturbation
 BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
 
 
-@pytest.fixture(scope="module")
-def exact():
+def _benchmark(name: str):
+    """Import a script of benchmarks/ as a module (they import each other by plain name)."""
     sys.path.insert(0, str(BENCHMARKS))
     try:
-        yield importlib.import_module("exact_lone_ball")
+        return importlib.import_module(name)
     finally:
         sys.path.remove(str(BENCHMARKS))
+
+
+@pytest.fixture(scope="module")
+def exact():
+    return _benchmark("exact_lone_ball")
 
 
 FLOOR = np.array([0.0, 1.0])
@@ -120,12 +125,8 @@ def test_johnsons_plastic_bounce_falls_as_the_speed_to_minus_a_quarter(exact):
 
 
 @pytest.fixture(scope="module")
-def scan(exact):
-    sys.path.insert(0, str(BENCHMARKS))
-    try:
-        yield importlib.import_module("exact_scan")
-    finally:
-        sys.path.remove(str(BENCHMARKS))
+def scan():
+    return _benchmark("exact_scan")
 
 
 def test_a_scan_trial_records_the_law_and_the_speeds_it_was_asked_at(scan):

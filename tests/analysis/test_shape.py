@@ -28,6 +28,13 @@ def test_the_exact_binomial_has_the_kurtosis_of_eleven_rows() -> None:
     assert shape.effective_rows(kurtosis) == pytest.approx(11)
 
 
+@pytest.mark.parametrize("rows", [4, 6, 8, 10])
+def test_the_width_of_an_exact_binomial_is_half_the_root_of_its_rows(rows: int) -> None:
+    assert shape.width(pascal_centred(rows)) == pytest.approx(math.sqrt(rows) / 2, abs=1e-12)
+    assert shape.width(PASCAL_11) == pytest.approx(math.sqrt(11) / 2, abs=1e-12)
+    assert shape.width([0] * 5 + [7] + [0] * 6) == 0.0  # every ball in one bin
+
+
 @pytest.mark.parametrize("rows", [4, 6, 8])
 def test_fewer_independent_choices_read_back_as_fewer_rows(rows: int) -> None:
     kurtosis = shape.excess_kurtosis(pascal_centred(rows))
@@ -67,3 +74,5 @@ def test_bad_tables_are_refused() -> None:
         shape.excess_kurtosis([1, 2, 3])
     with pytest.raises(NoSettledBallsError):
         shape.excess_kurtosis([0] * 11 + [1])
+    with pytest.raises(NoSettledBallsError):
+        shape.width([0] * 12)
