@@ -1,6 +1,7 @@
 """An engine's default contact in physical terms, measured in-process on the daemon's engine.
 
 Usage: python benchmarks/contact_probe.py [--engine mujoco] [--params JSON] [--apex-drops N]
+       python benchmarks/contact_probe.py --impact-speeds 0.45,0.95,1.9,3.0 [--params JSON]
 
 Prints one JSON line:
 - ``drop_bounce``: e = v_out / v_in at the first impact of a ball (r 0.045 m, 0.38 kg)
@@ -15,7 +16,9 @@ Prints one JSON line:
 - ``never_asleep``: of balls dropped from 0.05 to 0.99 m in 1 cm steps onto a box floor,
   how many still move after 8 s (a hop that never ends), and from which heights.
 
-docs/physics/mujoco.md quotes these figures for the defaults.
+docs/physics/mujoco.md quotes these figures for the defaults. ``--impact-speeds`` prints only
+the drop bounce, at these impact speeds (m/s): how e depends on speed, and the most a setting
+can give (docs/PHYSICS.md, "Could an engine bounce like that?").
 """
 
 from __future__ import annotations
@@ -131,8 +134,14 @@ def main() -> None:
     parser.add_argument("--engine", default="mujoco")
     parser.add_argument("--params", default="{}", help="engine parameters as JSON")
     parser.add_argument("--apex-drops", type=int, default=150)
+    parser.add_argument("--impact-speeds", help="comma-separated m/s: the drop bounce only")
     args = parser.parse_args()
     name, params = args.engine, json.loads(args.params)
+    if args.impact_speeds:
+        speeds = [float(v) for v in args.impact_speeds.split(",")]
+        print(json.dumps({"engine": name, "params": params, "drop_bounce_at_speed": {
+            v: round(drop_bounce(name, params, v * v / (2 * GRAVITY)), 3) for v in speeds}}))
+        return
     hops = never_asleep(name, params)
     print(json.dumps({
         "engine": name, "params": params,

@@ -64,17 +64,18 @@ class Contact:
     threshold: float
     restitution_at_3: float | None = None  # e at 3 m/s; linear in the approach speed from 1 m/s
     plastic_exponent: float | None = None  # e = restitution * (v / 1 m/s) ** -exponent
+    cap: float = 0.95  # the most a speed-dependent law may give (an engine's own ceiling)
 
     def bounce(self, approach: float) -> float:
         """e for this approach speed: 0 below the threshold, else constant or speed-dependent."""
         if approach < self.threshold:
             return 0.0
         if self.plastic_exponent is not None:
-            return min(0.95, self.restitution * approach ** -self.plastic_exponent)
+            return min(self.cap, self.restitution * approach ** -self.plastic_exponent)
         if self.restitution_at_3 is None:
             return self.restitution
         slope = (self.restitution_at_3 - self.restitution) / 2.0
-        return min(0.95, max(0.0, self.restitution + slope * (approach - 1.0)))
+        return min(self.cap, max(0.0, self.restitution + slope * (approach - 1.0)))
 
 
 @dataclass
@@ -309,14 +310,17 @@ def main() -> None:
     parser.add_argument("--threshold", type=float, default=0.2)
     parser.add_argument("--restitution-at-3", type=float, default=None,
                         help="e at 3 m/s: e then falls (or rises) linearly with the approach "
-                             "speed from --restitution at 1 m/s (clipped to 0..0.95)")
+                             "speed from --restitution at 1 m/s (clipped to 0..--cap)")
     parser.add_argument("--plastic-exponent", type=float, default=None,
-                        help="e = --restitution * (v / 1 m/s) ** -P, capped at 0.95; Johnson's "
+                        help="e = --restitution * (v / 1 m/s) ** -P, capped at --cap; Johnson's "
                              "elastic-plastic impact gives P = 1/4")
+    parser.add_argument("--cap", type=float, default=0.95,
+                        help="the highest e a speed-dependent law gives (MuJoCo's contact "
+                             "reaches about 0.72 at its default 2 ms step)")
     parser.add_argument("--board", default="paper")
     args = parser.parse_args()
     law = Contact(args.restitution, args.friction, args.threshold, args.restitution_at_3,
-                  args.plastic_exponent)
+                  args.plastic_exponent, args.cap)
     print(json.dumps(trial(args.board, args.balls, args.seed, law)))
 
 

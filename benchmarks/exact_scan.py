@@ -26,7 +26,7 @@ import numpy as np
 
 from galton.analysis import shape, stats
 
-DEFAULTS = {"restitution": 0.72, "friction": 0.25, "threshold": 0.2}
+DEFAULTS = {"restitution": 0.72, "friction": 0.25, "threshold": 0.2, "cap": 0.95}
 
 
 def seed_range(text: str) -> list[int]:

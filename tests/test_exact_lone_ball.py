@@ -124,6 +124,12 @@ def test_johnsons_plastic_bounce_falls_as_the_speed_to_minus_a_quarter(exact):
     assert law.bounce(0.1) == 0.0  # below the threshold
 
 
+def test_a_capped_law_gives_no_more_than_its_engines_ceiling(exact):
+    law = exact.Contact(0.78, 0.25, 0.2, plastic_exponent=0.25, cap=0.72)
+    assert law.bounce(0.5) == pytest.approx(0.72)  # the law alone would give 0.93
+    assert law.bounce(16.0) == pytest.approx(0.39)  # fast impacts are under the cap
+
+
 @pytest.fixture(scope="module")
 def scan():
     return _benchmark("exact_scan")
@@ -144,4 +150,6 @@ def test_the_scan_summary_pools_a_laws_seeds(scan):
     assert "balls   4096" in line and "width 1.658" in line and "seeds passing 2/2" in line
     assert scan.law_key({"restitution": 0.72, "friction": 0.25, "plastic_exponent": None}) == \
         '{"restitution": 0.72}'
+    assert scan.law_key({"restitution": 0.78, "cap": 0.95}) == '{"restitution": 0.78}'
+    assert scan.law_key({"restitution": 0.78, "cap": 0.72}) == '{"cap": 0.72, "restitution": 0.78}'
     assert scan.seed_range("3-5") == [3, 4, 5] and scan.seed_range("0,7") == [0, 7]
