@@ -65,11 +65,17 @@ class Contact:
     restitution_at_3: float | None = None  # e at 3 m/s; linear in the approach speed from 1 m/s
     plastic_exponent: float | None = None  # e = restitution * (v / 1 m/s) ** -exponent
     cap: float = 0.95  # the most a speed-dependent law may give (an engine's own ceiling)
+    # Judge the speed by the ball's whole velocity, not its normal part: what an engine that
+    # sets each ball's bounce between steps, from its speed in flight, can do.
+    whole_speed: bool = False
 
-    def bounce(self, approach: float) -> float:
-        """e for this approach speed: 0 below the threshold, else constant or speed-dependent."""
+    def bounce(self, approach: float, speed: float | None = None) -> float:
+        """e for this approach speed (normal part; ``speed``: the whole one): 0 below the
+        threshold, else constant or speed-dependent."""
         if approach < self.threshold:
             return 0.0
+        if self.whole_speed and speed is not None:
+            approach = speed
         if self.plastic_exponent is not None:
             return min(self.cap, self.restitution * approach ** -self.plastic_exponent)
         if self.restitution_at_3 is None:
@@ -201,7 +207,7 @@ def impact(ball: Ball, normal: np.ndarray, radius: float, law: Contact) -> float
     """Apply one rigid impact (per unit mass); returns the normal speed it leaves with."""
     tangent = np.array([-normal[1], normal[0]])
     approach = -ball.v @ normal
-    e = law.bounce(approach)
+    e = law.bounce(approach, float(np.linalg.norm(ball.v)))
     normal_impulse = (1 + e) * approach
     slip = ball.v @ tangent + ball.spin * radius
     stick = -slip * STICK_FACTOR
@@ -317,10 +323,13 @@ def main() -> None:
     parser.add_argument("--cap", type=float, default=0.95,
                         help="the highest e a speed-dependent law gives (MuJoCo's contact "
                              "reaches about 0.72 at its default 2 ms step)")
+    parser.add_argument("--whole-speed", action="store_true",
+                        help="the law reads the ball's whole speed, not the normal approach "
+                             "(as an engine setting each ball's bounce between steps would)")
     parser.add_argument("--board", default="paper")
     args = parser.parse_args()
     law = Contact(args.restitution, args.friction, args.threshold, args.restitution_at_3,
-                  args.plastic_exponent, args.cap)
+                  args.plastic_exponent, args.cap, args.whole_speed)
     print(json.dumps(trial(args.board, args.balls, args.seed, law)))
 
 

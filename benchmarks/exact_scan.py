@@ -26,7 +26,8 @@ import numpy as np
 
 from galton.analysis import shape, stats
 
-DEFAULTS = {"restitution": 0.72, "friction": 0.25, "threshold": 0.2, "cap": 0.95}
+DEFAULTS = {"restitution": 0.72, "friction": 0.25, "threshold": 0.2, "cap": 0.95,
+            "whole_speed": False}
 
 
 def seed_range(text: str) -> list[int]:
@@ -43,9 +44,9 @@ class RecordedContact(exact.Contact):
 
     speeds: list[float] = field(default_factory=list, compare=False, repr=False)
 
-    def bounce(self, approach: float) -> float:
+    def bounce(self, approach: float, speed: float | None = None) -> float:
         self.speeds.append(approach)
-        return super().bounce(approach)
+        return super().bounce(approach, speed)
 
 
 def one(board: str, balls: int, seed: int, law: dict) -> dict:

@@ -10,6 +10,7 @@ a cylinder leaves where cos(phi) = 10/17, and on the paper board every walk ends
 
 from __future__ import annotations
 
+import dataclasses
 import importlib
 import math
 import sys
@@ -128,6 +129,14 @@ def test_a_capped_law_gives_no_more_than_its_engines_ceiling(exact):
     law = exact.Contact(0.78, 0.25, 0.2, plastic_exponent=0.25, cap=0.72)
     assert law.bounce(0.5) == pytest.approx(0.72)  # the law alone would give 0.93
     assert law.bounce(16.0) == pytest.approx(0.39)  # fast impacts are under the cap
+
+
+def test_a_whole_speed_law_reads_the_balls_speed_but_the_threshold_its_approach(exact):
+    normal = exact.Contact(0.78, 0.25, 0.2, plastic_exponent=0.25)
+    whole = dataclasses.replace(normal, whole_speed=True)
+    assert normal.bounce(1.0, speed=16.0) == pytest.approx(0.78)
+    assert whole.bounce(1.0, speed=16.0) == pytest.approx(0.39)
+    assert whole.bounce(0.1, speed=16.0) == 0.0  # a grazing touch does not bounce
 
 
 @pytest.fixture(scope="module")
