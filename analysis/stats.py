@@ -277,6 +277,43 @@ def detectable_effect(settled: int, rows: int = ROWS, alpha: float = ALPHA,
     return math.sqrt(noncentrality / settled)
 
 
+def pass_rate(counts: Sequence[int] | np.ndarray, settled: int, rows: int = ROWS,
+              alpha: float = ALPHA, draws: int = DEFAULT_DRAWS,
+              seed: SeedLike = DEFAULT_SEED) -> float:
+    """How often a run of ``settled`` balls passes the test at ``alpha`` if the board's law is
+    the one these ``counts`` show (pooled over many runs).
+
+    It is what a pass rate over seeds should be when the seeds only resample one law: an
+    observed rate far from it means the seed changes the law itself. The law is the counts'
+    shares shrunk towards the binomial until their w is the bias-corrected ``effect_size``
+    (sampling noise in the counts would otherwise count as departure), and the runs are
+    ``draws`` seeded multinomial tables, judged against the Monte Carlo null's critical
+    value. Simulated, not read from the noncentral chi-squared: at a given w, how often a law
+    passes also depends on where it departs (tails or shoulders), by a few percent.
+    """
+    table = check_counts(counts, rows)
+    if settled < 1:
+        raise NoSettledBallsError(f"a pass rate needs runs of >= 1 ball, got {settled}")
+    if not 0 < alpha < 1:
+        raise CountsError(f"need 0 < alpha < 1, got alpha {alpha}")
+    rng = np.random.default_rng(seed)
+    law = _denoised_law(table, rows)
+    expected = bin_probabilities(rows) * settled
+    critical = np.quantile(null_statistics(settled, rows, draws, rng), 1 - alpha)
+    runs = rng.multinomial(settled, law, size=draws)
+    return float(np.mean(_chi2_rows(runs, expected) <= critical))
+
+
+def _denoised_law(table: np.ndarray, rows: int) -> np.ndarray:
+    """The table's shares moved towards the binomial so that their w is ``effect_size``."""
+    binomial = bin_probabilities(rows)
+    shares = table / table.sum()
+    raw = math.sqrt(float(np.sum((shares - binomial) ** 2 / binomial)))
+    if raw == 0:
+        return binomial
+    return binomial + (shares - binomial) * (effect_size(table, rows) / raw)
+
+
 def sum_over_repetitions(tables: Sequence[Sequence[int] | np.ndarray],
                          rows: int = ROWS) -> np.ndarray:
     """Bin-wise sum of several trials' counts (the pooled table)."""

@@ -14,7 +14,9 @@ how each trial's width follows its board shift. A group
 whose w is near that line passes or fails with the seed; one well below it passes.
 
 ``--summary`` prints one line per group instead: how many of its seeds pass the pooled
-test, w and excess kurtosis over all its balls, the width, and lost and unsettled balls.
+test, with that rate's 95 % interval beside the rate the group's pooled law predicts for a
+run of its size (``galton.analysis.stats.pass_rate``), w and excess kurtosis over all its
+balls, the width, and lost and unsettled balls.
 Groups are told apart by engine, balls, release mode, parameters and per-role surfaces.
 """
 
@@ -28,6 +30,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from scipy import stats as sps
 
 from galton.analysis import shape, stats
 from galton.analysis.board import BoardSpec
@@ -50,14 +53,19 @@ def group_key(run: dict[str, Any]) -> tuple[str, int, str, str]:
     return (run["engine"], run["balls"], run["mode"], settings)
 
 
+def pooled_p(run: dict[str, Any]) -> float:
+    """A run's pooled Monte Carlo p, with the bench's own number of draws."""
+    return stats.p_monte_carlo(run["pooled"],
+                               draws=stats.DEFAULT_DRAWS * stats.POOLED_DRAWS_FACTOR)
+
+
 def describe(key: tuple[str, int, str, str], runs: list[dict[str, Any]]) -> str:
     engine, balls, mode, params = key
     runs = sorted(runs, key=lambda r: r["seed"])
     per_run = int(sum(runs[0]["pooled"]))
     lines = [f"{engine} {mode} {balls} x {runs[0]['reps']} {params}"]
-    draws = stats.DEFAULT_DRAWS * stats.POOLED_DRAWS_FACTOR  # the bench's pooled test
-    for run in runs:
-        p = stats.p_monte_carlo(run["pooled"], draws=draws)
+    ps = [pooled_p(run) for run in runs]
+    for run, p in zip(runs, ps, strict=True):
         lines.append(f"  seed {run['seed']}: p {p:.3f}  width {run['width']:.3f}  "
                      f"w {stats.effect_size(run['pooled']):.3f}  "
                      f"kurtosis {shape.excess_kurtosis(run['pooled']):+.3f}  "
@@ -66,6 +74,8 @@ def describe(key: tuple[str, int, str, str], runs: list[dict[str, Any]]) -> str:
     lines.append(f"  all {len(runs)} seeds ({int(together.sum())} balls): "
                  f"w {stats.effect_size(together):.3f}; one run of {per_run} balls detects "
                  f"w {stats.detectable_effect(per_run):.3f} half the time")
+    passed = sum(p > stats.ALPHA for p in ps)
+    lines.append(f"  {passed}/{len(runs)} seeds pass ({pass_rate_line(runs, passed, together)})")
     lines.append(flatness_line(together))
     lines.extend(shift_line(runs))
     expected = stats.expected_counts(int(together.sum()))
@@ -79,17 +89,26 @@ def summary_line(key: tuple[str, int, str, str], runs: list[dict[str, Any]]) -> 
     """One group in one line: its seeds' pass count and how far all its balls are from the
     binomial (w, kurtosis with the binomial's 95 % range at as many balls, width)."""
     engine, balls, mode, settings = key
-    draws = stats.DEFAULT_DRAWS * stats.POOLED_DRAWS_FACTOR
-    passed = sum(stats.p_monte_carlo(run["pooled"], draws=draws) > stats.ALPHA
-                 for run in runs)
+    passed = sum(pooled_p(run) > stats.ALPHA for run in runs)
     together = np.sum([r["pooled"] for r in runs], axis=0)
     flat = shape.flatness(together)
     return (f"{engine:8s} {mode:11s} {balls:4d} x {runs[0]['reps']:2d}  {settings}: "
-            f"{passed}/{len(runs)} seeds pass; {int(together.sum())} balls: "
+            f"{passed}/{len(runs)} seeds pass ({pass_rate_line(runs, passed, together)}); "
+            f"{int(together.sum())} balls: "
             f"w {stats.effect_size(together):.3f}, kurtosis {flat.excess_kurtosis:+.2f} "
             f"[{flat.null_low:+.2f}, {flat.null_high:+.2f}], width {shape.width(together):.3f}, "
             f"lost {sum(r['lost'] for r in runs)}, "
             f"unsettled {sum(r['unsettled'] for r in runs)}")
+
+
+def pass_rate_line(runs: list[dict[str, Any]], passed: int, together: np.ndarray) -> str:
+    """The observed pass rate's 95 % interval beside the rate the group's pooled law
+    predicts for one run (``stats.pass_rate``): if the interval holds the prediction, the
+    seeds only resample one law, and that rate is the law's, not luck's."""
+    interval = sps.binomtest(passed, len(runs)).proportion_ci(confidence_level=0.95)
+    predicted = stats.pass_rate(together, int(sum(runs[0]["pooled"])))
+    return (f"95 % interval {100 * interval.low:.0f}-{100 * interval.high:.0f} %; "
+            f"its pooled law predicts {100 * predicted:.0f} %")
 
 
 def flatness_line(together: np.ndarray) -> str:

@@ -1,14 +1,29 @@
-"""Helpers for tests: building bodies and snapshotting a daemon's scene."""
+"""Helpers for tests: building bodies, snapshotting a daemon's scene, importing scripts."""
 
 from __future__ import annotations
 
+import importlib
+import sys
 from dataclasses import dataclass
+from pathlib import Path
+from types import ModuleType
 
 import numpy as np
 
+from galton.analysis import stats
 from galton.client import Client, plane, spheres
 
 BALL_RADIUS = 0.05
+BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
+
+
+def import_benchmark(name: str) -> ModuleType:
+    """Import a script of benchmarks/ as a module (they import each other by plain name)."""
+    sys.path.insert(0, str(BENCHMARKS))
+    try:
+        return importlib.import_module(name)
+    finally:
+        sys.path.remove(str(BENCHMARKS))
 
 
 def ball_row(count: int, prefix: str = "ball", z: float = 1.0, **options: object) -> tuple:
@@ -47,3 +62,12 @@ def ground_and_balls(sim: Client, count: int = 3) -> list[str]:
     names, group = ball_row(count)
     sim.spawn(group)
     return names
+
+
+def tilted_law(w: float) -> np.ndarray:
+    """Binomial(11, 1/2) moved towards the tails (w > 0) or the centre (w < 0) until its
+    Cohen's w is exactly ``abs(w)``."""
+    p = stats.bin_probabilities()
+    direction = (np.arange(12) - 5.5) ** 2 - np.sum(p * (np.arange(12) - 5.5) ** 2)
+    direction = direction * p  # sums to 0: the law stays a law
+    return p + w * direction / np.sqrt(np.sum(direction**2 / p))

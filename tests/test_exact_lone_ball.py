@@ -11,32 +11,19 @@ a cylinder leaves where cos(phi) = 10/17, and on the paper board every walk ends
 from __future__ import annotations
 
 import dataclasses
-import importlib
 import math
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
+from support import import_benchmark
 
 from galton.analysis.board import BoardSpec
 from galton.analysis.board_release import Perturbation, perturbation
 
-BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
-
-
-def _benchmark(name: str):
-    """Import a script of benchmarks/ as a module (they import each other by plain name)."""
-    sys.path.insert(0, str(BENCHMARKS))
-    try:
-        return importlib.import_module(name)
-    finally:
-        sys.path.remove(str(BENCHMARKS))
-
 
 @pytest.fixture(scope="module")
 def exact():
-    return _benchmark("exact_lone_ball")
+    return import_benchmark("exact_lone_ball")
 
 
 FLOOR = np.array([0.0, 1.0])
@@ -141,7 +128,7 @@ def test_a_whole_speed_law_reads_the_balls_speed_but_the_threshold_its_approach(
 
 @pytest.fixture(scope="module")
 def scan():
-    return _benchmark("exact_scan")
+    return import_benchmark("exact_scan")
 
 
 def test_a_scan_trial_records_the_law_and_the_speeds_it_was_asked_at(scan):

@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pytest
 from scipy import stats as sps
+from support import tilted_law
 
 from galton.analysis import stats
 from galton.analysis.errors import (
@@ -162,24 +163,16 @@ def test_errors_share_one_root_and_other_boards_work() -> None:
     assert stats.chi2_statistic([1, 3, 3, 1], rows=3) == 0.0
 
 
-def _tilted_law(w: float) -> np.ndarray:
-    """Binomial(11, 1/2) moved towards the tails until its Cohen's w is exactly ``w``."""
-    p = stats.bin_probabilities()
-    direction = (np.arange(12) - 5.5) ** 2 - np.sum(p * (np.arange(12) - 5.5) ** 2)
-    direction = direction * p  # sums to 0: the law stays a law
-    return p + w * direction / math.sqrt(np.sum(direction**2 / p))
-
-
 def test_effect_size_is_near_zero_for_a_perfect_board_and_finds_a_known_tilt() -> None:
     rng = np.random.default_rng(5)
     perfect = rng.multinomial(100_000, stats.bin_probabilities())
     assert stats.effect_size(perfect) < 0.01
-    tilted = rng.multinomial(100_000, _tilted_law(0.05))
+    tilted = rng.multinomial(100_000, tilted_law(0.05))
     assert stats.effect_size(tilted) == pytest.approx(0.05, abs=0.006)
 
 
 def test_effect_size_does_not_grow_with_the_balls() -> None:
-    law = _tilted_law(0.04)
+    law = tilted_law(0.04)
     sizes = [stats.effect_size(np.random.default_rng(n).multinomial(n, law))
              for n in (20_000, 80_000, 320_000)]
     assert max(sizes) - min(sizes) < 0.01
@@ -190,10 +183,56 @@ def test_detectable_effect_is_rejected_at_its_power() -> None:
     tables: measured on 2,000 seeded multinomial draws."""
     w = stats.detectable_effect(5_000)
     assert stats.detectable_effect(20_000) == pytest.approx(w / 2)
-    tables = np.random.default_rng(11).multinomial(5_000, _tilted_law(w), size=2_000)
+    tables = np.random.default_rng(11).multinomial(5_000, tilted_law(w), size=2_000)
     expected = stats.expected_counts(5_000)
     chi2 = np.sum((tables - expected) ** 2 / expected, axis=1)
     assert np.mean(chi2 > stats.critical_value()) == pytest.approx(0.5, abs=0.05)
+
+
+def _law_counts(w: float) -> np.ndarray:
+    """A tilted law as the counts of ten million balls (its shares to seven digits)."""
+    return np.round(10_000_000 * tilted_law(w)).astype(np.int64)
+
+
+def test_pass_rate_of_a_binomial_board_is_one_minus_alpha() -> None:
+    """Counts drawn from the binomial itself, whose chi-squared is below its degrees of
+    freedom: their sampling noise is not taken for a departure, so runs pass 95 % of the
+    time."""
+    sampled = np.random.default_rng(14).multinomial(40_000, stats.bin_probabilities())
+    assert stats.effect_size(sampled) == 0.0
+    assert stats.pass_rate(sampled, 5_000) == pytest.approx(1 - stats.ALPHA, abs=0.01)
+
+
+def test_pass_rate_follows_the_effect_size_and_the_run_size() -> None:
+    """A tilted law passes about as often as the noncentral chi-squared says, and less
+    often with more balls per run or a larger w."""
+    law = _law_counts(0.03)
+    predicted = sps.ncx2.cdf(stats.critical_value(), 11, 5_000 * 0.03**2)
+    assert stats.pass_rate(law, 5_000) == pytest.approx(predicted, abs=0.06)
+    assert stats.pass_rate(law, 20_000) < stats.pass_rate(law, 5_000) < stats.pass_rate(
+        law, 1_000)
+    assert stats.pass_rate(_law_counts(0.05), 5_000) < stats.pass_rate(law, 5_000)
+
+
+def test_pass_rate_matches_runs_drawn_from_the_same_law() -> None:
+    """Pooled counts of a narrow law predict the share of independent 5,000-ball runs of that
+    law that pass (300 seeded runs, judged by the bench's Monte Carlo test)."""
+    narrow = tilted_law(-0.04)
+    pooled = np.random.default_rng(14).multinomial(200_000, narrow)
+    runs = np.random.default_rng(15).multinomial(5_000, narrow, size=300)
+    observed = np.mean([stats.p_monte_carlo(run, draws=2_000) > stats.ALPHA for run in runs])
+    assert stats.pass_rate(pooled, 5_000) == pytest.approx(observed, abs=0.09)
+
+
+def test_pass_rate_is_seeded_and_checks_its_arguments() -> None:
+    law = _law_counts(0.03)
+    assert stats.pass_rate(law, 5_000, seed=3) == stats.pass_rate(law, 5_000, seed=3)
+    with pytest.raises(NoSettledBallsError):
+        stats.pass_rate(law, 0)
+    with pytest.raises(CountsError, match="alpha"):
+        stats.pass_rate(law, 5_000, alpha=1.5)
+    with pytest.raises(CountsError):
+        stats.pass_rate([1, 2, 3], 5_000)
 
 
 def test_detectable_effect_checks_its_arguments() -> None:

@@ -1,0 +1,63 @@
+"""``benchmarks/seed_spread.py``: how a fidelity verdict depends on the seed.
+
+Its summary line is what docs/PHYSICS.md quotes for each 500-ball cell: the seeds that
+pass, that rate's 95 % interval and the rate the cell's pooled law predicts. Here it reads
+seeded runs of known laws, with the junk lines PyBullet prints between them.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+from support import import_benchmark, tilted_law
+
+from galton.analysis import stats
+
+
+@pytest.fixture(scope="module")
+def spread():
+    return import_benchmark("seed_spread")
+
+
+def _run(law: np.ndarray, seed: int, engine: str) -> dict:
+    """One 500 x 10 run's line as fidelity_inprocess.py prints it, drawn from ``law``."""
+    pooled = np.random.default_rng(seed).multinomial(5_000, law)
+    return {"engine": engine, "balls": 500, "reps": 10, "mode": "stream", "params": {},
+            "surfaces": {}, "seed": seed, "width": 1.66, "lost": 0, "unsettled": 0,
+            "pooled": pooled.tolist()}
+
+
+def _summaries(spread, tmp_path: Path) -> dict[str, str]:
+    lines = ["argv[0]="]
+    lines += [json.dumps(_run(stats.bin_probabilities(), seed, "fair")) for seed in range(4)]
+    lines += [json.dumps(_run(tilted_law(0.12), seed, "wide")) for seed in range(3)]
+    path = tmp_path / "runs.jsonl"
+    path.write_text("\n".join(lines) + "\n")
+    groups: dict = {}
+    for run in spread.read_runs([str(path)]):
+        groups.setdefault(spread.group_key(run), []).append(run)
+    return {key[0]: spread.summary_line(key, runs) for key, runs in groups.items()}
+
+
+def _percent(pattern: str, line: str) -> float:
+    match = re.search(pattern, line)
+    assert match, f"{pattern!r} not in {line!r}"
+    return float(match.group(1))
+
+
+def test_summary_counts_passes_and_predicts_the_rate_from_the_pooled_law(
+        spread, tmp_path: Path) -> None:
+    lines = _summaries(spread, tmp_path)
+    assert set(lines) == {"fair", "wide"}
+    fair, wide = lines["fair"], lines["wide"]
+    fair_passed = sum(stats.p_monte_carlo(_run(stats.bin_probabilities(), s, "fair")["pooled"],
+                                          draws=200_000) > stats.ALPHA for s in range(4))
+    assert f"{fair_passed}/4 seeds pass" in fair
+    assert _percent(r"predicts (\d+) %", fair) >= 90
+    assert "0/3 seeds pass (95 % interval 0-71 %" in wide
+    assert _percent(r"predicts (\d+) %", wide) < 5
+    assert "20000 balls" in fair and "15000 balls" in wide
