@@ -4,6 +4,7 @@ Pure computation on numbers and records: no simulator, network or other galton p
 imported here. Start from ``write_outputs(ExperimentResults, out_dir)``.
 """
 
+from galton.analysis.compare import Homogeneity, homogeneity
 from galton.analysis.errors import (
     AnalysisError,
     CountsError,
@@ -71,6 +72,7 @@ __all__ = [
     "ExperimentResults",
     "GoodnessOfFit",
     "GroupSummary",
+    "Homogeneity",
     "NoSettledBallsError",
     "PooledTails",
     "PublishedRow",
@@ -84,6 +86,7 @@ __all__ = [
     "effect_size",
     "expected_counts",
     "goodness_of_fit",
+    "homogeneity",
     "judge",
     "judge_all",
     "p_asymptotic",

@@ -1,6 +1,6 @@
 """How a fidelity verdict depends on the seed, and how far each engine is from the binomial.
 
-Usage: python benchmarks/seed_spread.py [--summary] FILE [FILE ...]
+Usage: python benchmarks/seed_spread.py [--summary] [--exact EXACT_FILE] FILE [FILE ...]
 
 Each FILE holds JSON lines printed by ``benchmarks/fidelity_inprocess.py`` (other lines are
 skipped). Runs are grouped by engine, balls, release mode and parameters; for each group the
@@ -12,6 +12,11 @@ standardised residual of each bin over all seeds (where the law departs), how fl
 is (excess kurtosis, read as a number of independent rows: ``galton.analysis.shape``), and
 how each trial's width follows its board shift. A group
 whose w is near that line passes or fails with the seed; one well below it passes.
+
+``--exact EXACT_FILE`` (JSON lines of ``benchmarks/exact_lone_ball.py``) adds, to each
+group, the test of homogeneity of all its balls against the exact lone ball's balls on the
+``paper`` board at ``--restitution`` and ``--friction`` (constant laws only;
+``galton.analysis.compare.homogeneity``): the reference a faithful simulator should match.
 
 ``--summary`` prints one line per group instead: how many of its seeds pass the pooled
 test, with that rate's 95 % interval beside the rate the group's pooled law predicts for a
@@ -32,7 +37,7 @@ from typing import Any
 import numpy as np
 from scipy import stats as sps
 
-from galton.analysis import shape, stats
+from galton.analysis import compare, shape, stats
 from galton.analysis.board import BoardSpec
 from galton.analysis.board_release import perturbation
 
@@ -59,7 +64,32 @@ def pooled_p(run: dict[str, Any]) -> float:
                                draws=stats.DEFAULT_DRAWS * stats.POOLED_DRAWS_FACTOR)
 
 
-def describe(key: tuple[str, int, str, str], runs: list[dict[str, Any]]) -> str:
+def exact_counts(path: str, restitution: float, friction: float) -> np.ndarray:
+    """All the exact lone balls on the ``paper`` board with this constant contact law."""
+    law = {"restitution": restitution, "friction": friction}
+    tables = []
+    for line in Path(path).read_text().splitlines():
+        run = json.loads(line) if line.startswith("{") else {}
+        contact = run.get("contact", {})
+        constant = set(contact) <= {"restitution", "friction", "threshold"}
+        if (run.get("board") == "paper" and constant
+                and {k: contact.get(k) for k in law} == law):
+            tables.append(run["bins"]["counts"])
+    if not tables:
+        raise SystemExit(f"{path}: no exact paper-board run at restitution {restitution}, "
+                         f"friction {friction}")
+    return np.sum(tables, axis=0)
+
+
+def exact_line(together: np.ndarray, exact: np.ndarray) -> str:
+    """Whether a group's balls and the exact lone ball's come from one law."""
+    same = compare.homogeneity(together, exact)
+    return (f"  against {int(exact.sum())} exact lone balls: chi2 {same.chi2:.1f}, "
+            f"{same.dof} df, p {same.p_value:.3f} (homogeneity, outer two bins merged)")
+
+
+def describe(key: tuple[str, int, str, str], runs: list[dict[str, Any]],
+             exact: np.ndarray | None = None) -> str:
     engine, balls, mode, params = key
     runs = sorted(runs, key=lambda r: r["seed"])
     per_run = int(sum(runs[0]["pooled"]))
@@ -77,6 +107,8 @@ def describe(key: tuple[str, int, str, str], runs: list[dict[str, Any]]) -> str:
     passed = sum(p > stats.ALPHA for p in ps)
     lines.append(f"  {passed}/{len(runs)} seeds pass ({pass_rate_line(runs, passed, together)})")
     lines.append(flatness_line(together))
+    if exact is not None:
+        lines.append(exact_line(together, exact))
     lines.extend(shift_line(runs))
     expected = stats.expected_counts(int(together.sum()))
     residuals = (together - expected) / np.sqrt(expected)
@@ -143,13 +175,20 @@ def main() -> None:
     parser.add_argument("files", nargs="+")
     parser.add_argument("--summary", action="store_true",
                         help="one line per group: pass count over seeds, w, kurtosis, width")
+    parser.add_argument("--exact", metavar="EXACT_FILE",
+                        help="exact_lone_ball.py runs to test each group's law against")
+    parser.add_argument("--restitution", type=float, default=0.72,
+                        help="the exact runs' restitution (default 0.72)")
+    parser.add_argument("--friction", type=float, default=0.25,
+                        help="the exact runs' friction (default 0.25)")
     args = parser.parse_args()
+    exact = exact_counts(args.exact, args.restitution, args.friction) if args.exact else None
     groups: dict[tuple[str, int, str, str], list[dict[str, Any]]] = defaultdict(list)
     for run in read_runs(args.files):
         groups[group_key(run)].append(run)
     for key in sorted(groups):
         runs = sorted(groups[key], key=lambda r: r["seed"])
-        print(summary_line(key, runs) if args.summary else describe(key, runs))
+        print(summary_line(key, runs) if args.summary else describe(key, runs, exact))
 
 
 if __name__ == "__main__":
