@@ -307,11 +307,11 @@ def pass_rate(counts: Sequence[int] | np.ndarray, settled: int, rows: int = ROWS
 def _denoised_law(table: np.ndarray, rows: int) -> np.ndarray:
     """The table's shares moved towards the binomial so that their w is ``effect_size``."""
     binomial = bin_probabilities(rows)
-    shares = table / table.sum()
-    raw = math.sqrt(float(np.sum((shares - binomial) ** 2 / binomial)))
+    corrected = effect_size(table, rows)  # raises first if no ball settled
+    raw = math.sqrt(chi2_statistic(table, rows) / table.sum())
     if raw == 0:
         return binomial
-    return binomial + (shares - binomial) * (effect_size(table, rows) / raw)
+    return binomial + (table / table.sum() - binomial) * (corrected / raw)
 
 
 def sum_over_repetitions(tables: Sequence[Sequence[int] | np.ndarray],

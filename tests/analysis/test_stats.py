@@ -229,6 +229,8 @@ def test_pass_rate_is_seeded_and_checks_its_arguments() -> None:
     assert stats.pass_rate(law, 5_000, seed=3) == stats.pass_rate(law, 5_000, seed=3)
     with pytest.raises(NoSettledBallsError):
         stats.pass_rate(law, 0)
+    with pytest.raises(NoSettledBallsError, match="settled ball"):
+        stats.pass_rate([0] * 12, 5_000)
     with pytest.raises(CountsError, match="alpha"):
         stats.pass_rate(law, 5_000, alpha=1.5)
     with pytest.raises(CountsError):
