@@ -23,11 +23,13 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
+from galton.analysis import stats
+from galton.analysis.errors import RecordError
 from galton.analysis.published import PUBLISHED_TABLE2
 from galton.analysis.records import ExperimentResults, TrialRecord
 from galton.analysis.summary import EngineSummary, GroupSummary, summarise
 
-MIN_POOLED_P = 0.05
+MIN_POOLED_P = stats.ALPHA
 WEBOTS_CHI2 = next(row.chi2 for row in PUBLISHED_TABLE2 if row.simulator == "Webots")
 
 
@@ -103,7 +105,13 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("results", nargs="+", help="results.json files or their folders")
     args = parser.parse_args(argv)
-    cells = verdicts(load_trials(args.results))
+    try:
+        trials = load_trials(args.results)
+    except RecordError as exc:
+        parser.error(str(exc))
+    if not trials:
+        parser.error("the results hold no trial")
+    cells = verdicts(trials)
     for cell in cells:
         print(cell.line())
     missed = [c for c in cells if c.misses]

@@ -94,3 +94,15 @@ def test_the_pooled_p_is_the_reports(targets, tmp_path: Path) -> None:
     trials = _trials("pybullet", "stream", 500, tilted_law(0.04), seed=7)
     cells = targets.verdicts(targets.load_trials([str(_write(tmp_path, "run", trials))]))
     assert [c.pooled_p for c in cells] == [summarise(trials)[0].groups[0].pooled.p_monte_carlo]
+
+
+def test_unreadable_or_empty_results_are_refused_with_the_reason(targets, tmp_path: Path,
+                                                                 capsys) -> None:
+    with pytest.raises(SystemExit) as exited:
+        targets.main([str(tmp_path / "missing")])
+    assert exited.value.code == 2
+    assert "cannot read results from" in capsys.readouterr().err
+    empty = _write(tmp_path, "empty", [])
+    with pytest.raises(SystemExit):
+        targets.main([str(empty)])
+    assert "the results hold no trial" in capsys.readouterr().err
