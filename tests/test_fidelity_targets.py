@@ -87,13 +87,31 @@ def test_each_missed_target_is_named_and_fails_the_run(targets, tmp_path: Path,
     assert "0 of 3 cells meet every target" in out
 
 
-def test_the_pooled_p_is_the_reports(targets, tmp_path: Path) -> None:
-    """The script's p is the one the bench's own summary gives for the same trials."""
-    from galton.analysis.summary import summarise
+def _report_rows(report: Path) -> dict[tuple[str, int], tuple[float, float]]:
+    """(median chi2 per trial, pooled MC p) of each engine and ball count in a bench report."""
+    rows, engine = {}, ""
+    for line in report.read_text().splitlines():
+        if line.startswith("### "):
+            engine = line[4:].strip()
+        cells = [c.strip() for c in line.strip("|").split("|")]
+        if engine and len(cells) > 6 and cells[0].isdigit():
+            rows[(engine, int(cells[0]))] = (float(cells[2]), float(cells[6]))
+    return rows
 
-    trials = _trials("pybullet", "stream", 500, tilted_law(0.04), seed=7)
-    cells = targets.verdicts(targets.load_trials([str(_write(tmp_path, "run", trials))]))
-    assert [c.pooled_p for c in cells] == [summarise(trials)[0].groups[0].pooled.p_monte_carlo]
+
+@pytest.mark.parametrize("release", ["all-at-once", "stream"])
+def test_a_real_bench_run_is_recomputed_as_its_report_gave_it(targets, release: str) -> None:
+    """The defaults' bench runs kept in docs/data: from results.json alone, the script finds
+    the median chi2 and pooled p that the bench wrote in its report."""
+    folder = Path(__file__).resolve().parents[1] / "docs" / "data" / "bench-defaults" / release
+    reported = _report_rows(folder / "report.md")
+    cells = targets.verdicts(targets.load_trials([str(folder)]))
+    assert {(c.engine, c.balls) for c in cells} == set(reported) and len(reported) == 4
+    for cell in cells:
+        assert cell.release == release and cell.board == "paper"
+        chi2, p = reported[(cell.engine, cell.balls)]
+        assert cell.chi2_median == pytest.approx(chi2, rel=1e-3)  # four figures
+        assert round(cell.pooled_p, 3) == p
 
 
 def test_unreadable_or_empty_results_are_refused_with_the_reason(targets, tmp_path: Path,
