@@ -8,6 +8,7 @@
 
 from __future__ import annotations
 
+import uuid
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -31,6 +32,8 @@ from galton.protocol import (
     pack_f64,
     unpack_f64,
 )
+from galton.protocol.keys import client_token_key
+from galton.protocol.operations import OPERATIONS
 
 DEFAULT_TIMEOUT_S = 5.0
 DEFAULT_STEP_TIMEOUT_S = 600.0
@@ -74,12 +77,18 @@ class Client:
         self._own_session = session is None
         self.session = session if session is not None else open_session(connect, config_file)
         self.last_stamp = Stamp(0, 0.0)
+        # This client's liveliness: a daemon ends a step request whose client has vanished.
+        self.client_id = uuid.uuid4().hex
+        self._token = self.session.liveliness().declare_token(client_token_key(self.client_id))
 
     @property
     def instance(self) -> str:
         return self.keys.instance
 
     def close(self) -> None:
+        if self._token is not None:
+            self._token.undeclare()
+            self._token = None
         if self._own_session:
             self.session.close()
 
@@ -100,8 +109,10 @@ class Client:
     def request(self, op: str, args: dict[str, Any] | None = None,
                 timeout: float | None = None) -> Reply:
         """Send any operation and return the raw reply, failures included."""
+        steps = op in OPERATIONS and OPERATIONS[op].steps
         reply = query(self.session, self.keys.control(op), op, args,
-                      self.timeout if timeout is None else timeout)
+                      self.timeout if timeout is None else timeout,
+                      self.client_id if steps else None)
         self.last_stamp = Stamp(reply.step, reply.sim_time)
         return reply
 

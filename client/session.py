@@ -54,10 +54,10 @@ def open_session(connect: str | Sequence[str] | None = None,
 
 
 def query(session: zenoh.Session, key: str, op: str, args: dict[str, Any] | None,
-          timeout: float) -> Reply:
+          timeout: float, client: str | None = None) -> Reply:
     """Send one request and return the daemon's reply; no answer is an error, never empty."""
     started = time.monotonic()
-    replies = session.get(key, payload=encode_request(op, args), timeout=timeout)
+    replies = session.get(key, payload=encode_request(op, args, client), timeout=timeout)
     for answer in replies:
         if answer.ok is not None:
             return decode_reply(answer.ok.payload.to_bytes())

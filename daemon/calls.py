@@ -13,6 +13,14 @@ class Call:
     op: str
     payload: bytes
     respond: Callable[[bytes], None]
+    client: str | None = None  # the sender's id, once the request is decoded
+
+
+@dataclass
+class Task:
+    """Work for the physics thread that is no request: e.g. a client's disappearance."""
+
+    run: Callable[[], None]
 
 
 @dataclass

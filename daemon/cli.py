@@ -10,6 +10,7 @@ from typing import Annotated
 import typer
 import zenoh
 
+from galton.daemon.limits import Limits, describe_limits, parse_limits
 from galton.daemon.server import DEFAULT_LISTEN, DaemonOptions, run_daemon
 from galton.protocol import GaltonError, validate_instance_name
 
@@ -26,6 +27,13 @@ def _parse_params(text: str | None) -> dict:
     if not isinstance(params, dict):
         raise typer.BadParameter("--params must be a JSON object of name to value")
     return params
+
+
+def _parse_limits(items: list[str]) -> Limits:
+    try:
+        return parse_limits(items)
+    except ValueError as exc:
+        raise typer.BadParameter(str(exc)) from exc
 
 
 @app.command()
@@ -45,6 +53,8 @@ def serve(
         help="Telemetry publications per second (0 = none).", min=0.0, max=1000.0)] = 10.0,
     params: Annotated[str | None, typer.Option(
         help='Engine parameters as JSON, e.g. \'{"timestep": 0.001}\'.')] = None,
+    limit: Annotated[list[str] | None, typer.Option(
+        help=f"A limit as NAME=VALUE (repeatable); defaults: {describe_limits()}.")] = None,
     log_level: Annotated[str, typer.Option(help="Logging level.")] = "warning",
 ) -> None:
     """Serve one world on ENGINE as INSTANCE until SIGINT or SIGTERM."""
@@ -55,7 +65,8 @@ def serve(
         options = DaemonOptions(
             engine=engine, instance=instance, listen=listen or [DEFAULT_LISTEN],
             connect=connect or [], zenoh_config=zenoh_config, multicast=multicast,
-            telemetry_rate_hz=telemetry_rate, params=_parse_params(params))
+            telemetry_rate_hz=telemetry_rate, params=_parse_params(params),
+            limits=_parse_limits(limit or []))
         code = run_daemon(options, announce=lambda line: print(line, flush=True))
     except GaltonError as error:
         typer.echo(f"galton-daemon: {error}", err=True)

@@ -87,11 +87,21 @@ class Engine(ABC):
         """Advance the physics by ``count`` fixed timesteps."""
 
     @abstractmethod
-    def state_is_finite(self) -> bool:
-        """False when any body's position or velocity is NaN or infinite, or the engine
-        detected a divergence in any ``step`` since the last ``reset_dynamics``/``clear``.
+    def state_within(self, max_position: float, max_speed: float) -> bool:
+        """False when the world has diverged: any moving body's position or velocity is NaN
+        or infinite, any coordinate of its position is beyond ``max_position`` metres from
+        the origin, any component of its linear or angular velocity beyond ``max_speed``
+        (m/s, rad/s), or the engine detected a divergence in any ``step`` since the last
+        ``reset_dynamics``/``clear``. Absurd finite states count: a ball at x = 4e299 has
+        diverged as surely as one at NaN.
 
         The World calls it once per batch of steps, not after every step."""
+
+    @abstractmethod
+    def properties(self, names: Sequence[str]) -> np.ndarray:
+        """The effective (n, 3) mass (kg), friction and restitution of these entities: what
+        the engine simulates, defaults included, never None. A static body's mass is NaN
+        (it has none); a loaded model's mass is its whole subtree's."""
 
     @abstractmethod
     def clear(self) -> None:

@@ -17,12 +17,14 @@ from typing import Any
 
 import numpy as np
 
-from galton.daemon.calls import Call, StepJob
+from galton.daemon.calls import Call, StepJob, Task
+from galton.daemon.limits import DEFAULT_LIMITS, Limits
 from galton.daemon.loop_state import StateOps
 from galton.daemon.monitor import Pacer, ProcessMonitor, RtfWindow
-from galton.daemon.ops import MUTATING_OPS, SCENE_OPS
+from galton.daemon.ops import SCENE_OPS
 from galton.daemon.world import World
 from galton.protocol import (
+    DecodeLimits,
     NotFoundError,
     OperationFailedError,
     PhysicsError,
@@ -31,13 +33,13 @@ from galton.protocol import (
     ResultCode,
     SimStatus,
     Telemetry,
-    UnknownOperationError,
     decode_request,
     encode_reply,
     error_reply,
     pack_f64,
 )
-from galton.protocol.errors import did_you_mean
+from galton.protocol.errors import brief
+from galton.protocol.operations import OPERATIONS, Operation, operation
 
 log = logging.getLogger("galton.daemon")
 
@@ -51,6 +53,10 @@ CHUNK_WALL_S = 0.005  # physics work between two looks at the inbox
 SHORT_SWITCH_INTERVAL_S = 0.00005
 DEFAULT_SWITCH_INTERVAL_S = 0.005
 VERIFY_PERIOD_S = 0.05  # the state is checked finite at least this often while stepping
+# Physics before requests: while steps are due now (a step job, RTF 0, a world behind its
+# clock), requests get at most this much of the physics thread between two chunks of steps
+# (a chunk is CHUNK_WALL_S), and always at least one request, so neither side starves.
+REQUEST_SLICE_S = 0.001
 
 
 class SimLoop(StateOps):
@@ -60,10 +66,17 @@ class SimLoop(StateOps):
                  publish_telemetry: Callable[[Telemetry], None],
                  publish_event: Callable[[dict[str, Any]], None],
                  telemetry_rate_hz: float = 10.0,
-                 engine_factory: Callable[[str], Any] | None = None) -> None:
+                 engine_factory: Callable[[str], Any] | None = None,
+                 limits: Limits = DEFAULT_LIMITS) -> None:
         self.world = world
         self.instance = instance
-        self.inbox: queue.SimpleQueue[Call | None] = queue.SimpleQueue()
+        self.limits = limits
+        self.decode_limits = DecodeLimits(
+            max_bytes=limits.max_request_bytes, max_depth=limits.max_depth,
+            max_string=limits.max_string_bytes,
+            long_text_keys=frozenset(a.name for op in OPERATIONS.values() for a in op.args
+                                     if a.long_text))
+        self.inbox: queue.SimpleQueue[Call | Task | None] = queue.SimpleQueue()
         self.state = "stopped"
         self.target_rtf = 1.0
         self.job: StepJob | None = None
@@ -77,6 +90,7 @@ class SimLoop(StateOps):
         self._step_cost = 1e-4
         self._last_verify = 0.0
         self._seq = 0
+        self._event_seq = 0
         self._stopping = False
         self.rtf = 0.0
         self._status_reply: tuple[bytes, tuple[Any, ...], bytes] | None = None
@@ -90,8 +104,8 @@ class SimLoop(StateOps):
         sys.setswitchinterval(SHORT_SWITCH_INTERVAL_S if holds_gil else DEFAULT_SWITCH_INTERVAL_S)
 
     # -- threads ------------------------------------------------------------------------
-    def submit(self, call: Call) -> None:
-        """Called from Zenoh's threads: hand a request to the physics thread."""
+    def submit(self, call: Call | Task) -> None:
+        """Called from Zenoh's threads: hand a request (or a task) to the physics thread."""
         self.inbox.put(call)
 
     def stop(self) -> None:
@@ -99,18 +113,42 @@ class SimLoop(StateOps):
         self.inbox.put(None)
 
     def run(self) -> None:
-        """The physics thread's body; returns after ``stop()``, every query answered."""
+        """The physics thread's body; returns after ``stop()``, every query answered.
+
+        Nothing a request does can end it: whatever escapes a tick is logged, the world is
+        paused (faulted if it diverged), and the loop goes on serving."""
         next_telemetry = time.monotonic()
         while not self._stopping:
-            self._take_calls(self._idle_timeout(next_telemetry))
-            if self._stopping:
-                break
-            self._advance()
-            now = time.monotonic()
-            if now >= next_telemetry:
-                self._publish_telemetry(now)
-                next_telemetry = max(next_telemetry + self.telemetry_period, now)
+            try:
+                next_telemetry = self._tick(next_telemetry)
+            except Exception as exc:
+                self._recover(exc)
         self._answer_leftovers()
+
+    def _tick(self, next_telemetry: float) -> float:
+        """Physics first (the steps due now), then telemetry, then requests until the next
+        step is due; returns when the next telemetry sample is due."""
+        self._advance()
+        now = time.monotonic()
+        if now >= next_telemetry:
+            self._publish_telemetry(now)
+            next_telemetry = max(next_telemetry + self.telemetry_period, now)
+        self._take_calls(self._idle_timeout(next_telemetry))
+        return next_telemetry
+
+    def _recover(self, exc: Exception) -> None:
+        """The last line of defence: an error no request handler caught pauses the world."""
+        if isinstance(exc, PhysicsError):
+            self._fault(exc)
+            return
+        log.exception("the physics loop caught an unexpected error; the world is paused")
+        error = OperationFailedError(f"the engine failed: {type(exc).__name__}: "
+                                     f"{brief(str(exc))}")
+        if self.job is not None:
+            job, self.job = self.job, None
+            self._reply_error(job.call, error)
+        self._set_state("paused")
+        self.emit({"kind": "error", "message": error.message})
 
     def _idle_timeout(self, next_telemetry: float) -> float:
         now = time.monotonic()
@@ -123,21 +161,34 @@ class SimLoop(StateOps):
         return until_telemetry
 
     def _take_calls(self, timeout: float) -> None:
-        """Answer what is in the inbox, waiting up to ``timeout`` s for the first call
-        (for ever when infinite: nothing due, e.g. paused with telemetry off)."""
+        """Answer requests until the next step is due, waiting up to ``timeout`` s for the
+        first (for ever when infinite: nothing due). With steps due now, requests get
+        REQUEST_SLICE_S, and at least one is answered."""
+        deadline = time.monotonic() + max(timeout, REQUEST_SLICE_S)
         try:
             if timeout <= 0:
-                call = self.inbox.get_nowait()
+                item = self.inbox.get_nowait()
             else:
-                call = self.inbox.get(timeout=None if math.isinf(timeout) else timeout)
+                item = self.inbox.get(timeout=None if math.isinf(timeout) else timeout)
         except queue.Empty:
             return
-        while call is not None:
-            self.handle(call)
+        while item is not None:
+            self._take(item)
+            if time.monotonic() >= deadline:
+                return
             try:
-                call = self.inbox.get_nowait()
+                item = self.inbox.get_nowait()
             except queue.Empty:
                 return
+
+    def _take(self, item: Call | Task) -> None:
+        if isinstance(item, Task):
+            try:
+                item.run()
+            finally:
+                self._keep_invariants()
+        else:
+            self.handle(item)
 
     def _answer_leftovers(self) -> None:
         closing = OperationFailedError("the daemon is shutting down")
@@ -154,38 +205,70 @@ class SimLoop(StateOps):
 
     # -- requests -----------------------------------------------------------------------
     def handle(self, call: Call) -> None:
-        """Answer one call (or start its step job); never raises."""
+        """Answer one call (or start its step job); never raises. A rejected request has
+        changed nothing: every check runs before anything is applied."""
         try:
-            request = decode_request(call.payload, call.op)
+            request = decode_request(call.payload, call.op, self.decode_limits)
+            op = operation(request.op)
+            op.check_arg_names(request.args)
             self._require_world(request.args)
-            state_op = self.STATE_OPS.get(request.op)
-            if state_op is not None:
-                result = state_op(self, call, request.args)
-                if result is not None:
-                    self._reply_ok(call, result)
-                return
-            scene_op = SCENE_OPS.get(request.op)
-            if scene_op is None:
-                known = sorted([*SCENE_OPS, *self.STATE_OPS])
-                raise UnknownOperationError(
-                    f"unknown operation {request.op!r}{did_you_mean(request.op, known)}",
-                    {"operations": known})
-            result = scene_op(self.world, request.args)
-            if request.op in MUTATING_OPS:
-                self.publish_event({"kind": "scene", "op": request.op,
-                                    "step": self.world.step_index})
-            self._reply_ok(call, result)
+            call.client = request.client
+            result = self._dispatch(op, call, request.args)
+            if result is not None:
+                self._reply_ok(call, result)
         except RemoteError as error:
             self._reply_error(call, error)
         except Exception as exc:  # the daemon keeps serving whatever an engine does
             log.exception("operation %s failed", call.op)
-            self._reply_error(call, OperationFailedError(f"{type(exc).__name__}: {exc}"))
+            self._reply_error(call, OperationFailedError(
+                f"{type(exc).__name__}: {brief(str(exc))}"))
+        finally:
+            self._keep_invariants()
+
+    def _dispatch(self, op: Operation, call: Call, args: dict[str, Any]) -> dict[str, Any] | None:
+        state_op = self.STATE_OPS.get(op.name)
+        if state_op is not None:
+            return state_op(self, call, args)
+        result = SCENE_OPS[op.name](self.world, args)
+        if op.mutates:
+            self.emit({"kind": "scene", "op": op.name, "step": self.world.step_index})
+            self._check_job_reads()
+        return result
+
+    def _check_job_reads(self) -> None:
+        """A step job whose read entities are gone is answered now, not after its steps."""
+        job = self.job
+        if job is None or job.read is None:
+            return
+        gone = [name for name in job.read if name not in self.world.entities]
+        if gone:
+            self.job = None
+            self._reply_error(job.call, NotFoundError(
+                f"entity {brief(gone[0])} that this step request reads was deleted after "
+                f"{job.done} of {job.total} steps", {"missing": gone[:100],
+                                                     "steps_done": job.done}))
+
+    def _keep_invariants(self) -> None:
+        """A diverged world never plays or steps, whoever noticed the divergence."""
+        if self.world.faulted and (self.state == "playing" or self.job is not None):
+            self._fault(PhysicsError(
+                f"the simulation diverged at step {self.world.step_index}; reset it (scope "
+                "'state' or 'all') before playing or stepping"))
+
+    def emit(self, event: dict[str, Any]) -> None:
+        """Publish an event with the next sequence number: a gap tells a subscriber what it
+        missed."""
+        self._event_seq += 1
+        try:
+            self.publish_event({"seq": self._event_seq, **event})
+        except Exception:
+            log.exception("could not publish an event")
 
     def _require_world(self, args: dict[str, Any]) -> None:
         """Requests may name a world; this daemon serves one (room for several later)."""
         world = args.get("world", self.world.name)
         if world != self.world.name:
-            raise NotFoundError(f"no world named {world!r}: this daemon serves one world, "
+            raise NotFoundError(f"no world named {brief(world)}: this daemon serves one world, "
                                 f"{self.world.name!r}")
 
     def _reply_ok(self, call: Call, result: dict[str, Any]) -> None:
@@ -278,8 +361,8 @@ class SimLoop(StateOps):
         """A diverged step: pause, tell subscribers, fail the step job; never publish it."""
         self.refresh_clock()
         self._set_state("paused")
-        self.publish_event({"kind": "physics_error", "message": error.message,
-                            "step": self.world.step_index, "sim_time": self.world.sim_time})
+        self.emit({"kind": "physics_error", "message": error.message,
+                   "step": self.world.step_index, "sim_time": self.world.sim_time})
         if self.job is not None:
             job, self.job = self.job, None
             self._reply_error(job.call, error)
@@ -320,10 +403,14 @@ class SimLoop(StateOps):
             return
         status = self._status_from(snapshot)
         try:
-            self._require_world(decode_request(call.payload, call.op).args)
+            request = decode_request(call.payload, call.op, self.decode_limits)
+            operation(request.op).check_arg_names(request.args)
+            self._require_world(request.args)
             reply = Reply(ResultCode.OK, result=status.to_wire(), step=status.step,
                           sim_time=status.sim_time)
-        except RemoteError as error:
+        except Exception as exc:  # on Zenoh's thread: whatever happens, one typed reply
+            error = exc if isinstance(exc, RemoteError) else OperationFailedError(
+                f"{type(exc).__name__}: {brief(str(exc))}")
             self._send(call, encode_reply(error_reply(error, status.step, status.sim_time)))
             return
         data = encode_reply(reply)

@@ -18,20 +18,30 @@ from galton.protocol import (
     InvalidArgumentError,
     OperationFailedError,
 )
-from galton.protocol.model import check_names, check_type, finite_number
+from galton.protocol.errors import brief, did_you_mean
+from galton.protocol.model import RESET_SCOPES, check_names, check_type, finite_number
 
 if TYPE_CHECKING:
     from galton.daemon.loop import SimLoop
 
-MAX_STEPS = 1_000_000_000
 MAX_RTF = 1e6
 
 
-def _check_count(value: Any) -> int:
-    if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= MAX_STEPS:
-        raise InvalidArgumentError(f"step.count must be an integer in [1, {MAX_STEPS}], "
-                                   f"got {value!r}")
+def _check_count(value: Any, max_steps: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= max_steps:
+        raise InvalidArgumentError(f"step.count must be an integer in [1, {max_steps}], "
+                                   f"got {brief(value)}")
     return value
+
+
+def check_scope(value: Any) -> str:
+    """reset's scope, checked before anything is cancelled or reset."""
+    scope = check_type(value, str, "reset.scope")
+    if scope not in RESET_SCOPES:
+        raise InvalidArgumentError(
+            f"reset.scope {brief(scope)} is not one of {', '.join(RESET_SCOPES)}"
+            f"{did_you_mean(scope[:64], RESET_SCOPES)}")
+    return scope
 
 
 def _check_rtf(value: Any, where: str) -> float:
@@ -66,10 +76,11 @@ class StateOps:
 
     def op_play(self: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
         rtf = args.get("rtf")
-        if rtf is not None:
-            self.target_rtf = _check_rtf(rtf, "play.rtf")
+        target = self.target_rtf if rtf is None else _check_rtf(rtf, "play.rtf")
         if self.job is not None:
             raise IncorrectStateError("a step request is still running; wait for it or pause")
+        self.world.require_valid()
+        self.target_rtf = target
         self._set_state("playing")
         return self.status().to_wire()
 
@@ -96,26 +107,35 @@ class StateOps:
         if "until_rest" in args:
             raise InvalidArgumentError("step takes no until_rest: use run_until with "
                                        "until_rest and read to stop once bodies rest")
-        count = _check_count(args.get("count", 1))
+        count = _check_count(args.get("count", 1), self.limits.max_steps)
         self._start_job(call, count, self._read_list(args, "step"))
 
     def op_run_until(self: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any] | None:
         target = finite_number(args.get("sim_time"), "run_until.sim_time", low=0.0)
         dt = self.world.engine.timestep
-        count = math.ceil((target - self.world.sim_time) / dt - 1e-9)
+        steps = (target - self.world.sim_time) / dt - 1e-9
+        limit = self.limits.max_steps
+        if steps > limit:
+            raise InvalidArgumentError(
+                f"run_until.sim_time {target:g} s is {steps:.3g} steps of {dt:g} s away; one "
+                f"request takes at most {limit} steps (to sim time "
+                f"{self.world.sim_time + limit * dt:g} s)", {"max_steps": limit})
+        count = math.ceil(steps)
         if count <= 0:
             raise InvalidArgumentError(
                 f"run_until.sim_time {target} is not after the current sim time "
                 f"{self.world.sim_time}")
         read = self._read_list(args, "run_until")
-        self._start_job(call, _check_count(count), read, _rest_check(args, read, dt))
+        self._start_job(call, count, read, _rest_check(args, read, dt))
         return None
 
     def op_reset(self: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
-        scope = check_type(args.get("scope", "all"), str, "reset.scope")
+        scope = check_scope(args.get("scope", "all"))
         self._cancel_job("reset")
         self.world.reset(scope)
         self._after_reset()
+        self.emit({"kind": "scene", "op": "reset", "scope": scope,
+                   "step": self.world.step_index})
         return self.status().to_wire()
 
     def op_load_world(self: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
@@ -132,11 +152,12 @@ class StateOps:
                 engine.close()
                 raise
         self._cancel_job("world replaced")
-        old, self.world = self.world, World(engine, self.world.name)
+        old, self.world = self.world, World(engine, self.world.name, self.limits)
         old.engine.close()
         self.tune_switch_interval()
         self._after_reset()
         self._set_state("stopped")
+        self.emit({"kind": "scene", "op": "load_world", "engine": name, "step": 0})
         return self.status().to_wire()
 
     # -- helpers ------------------------------------------------------------------------
@@ -161,6 +182,16 @@ class StateOps:
             self._set_state("paused")
         self.job = StepJob(call, count, count, read, rest)
 
+    def client_gone(self: SimLoop, client: str) -> None:
+        """A client's liveliness token vanished: the step request it is waiting for ends
+        now (its reply has nowhere to go), the world stays paused where it got to."""
+        job = self.job
+        if job is None or job.call.client != client:
+            return
+        self._cancel_job("its client disappeared")
+        self.emit({"kind": "job_abandoned", "client": client, "steps_done": job.done,
+                   "steps_asked": job.total, "step": self.world.step_index})
+
     def _cancel_job(self: SimLoop, reason: str) -> None:
         if self.job is None:
             return
@@ -180,8 +211,8 @@ class StateOps:
             self.pacer.anchor(time.monotonic(), self.world.sim_time, self.target_rtf)
         if state != self.state:
             self.state = state
-            self.publish_event({"kind": "state", "state": state, "step": self.world.step_index,
-                                "sim_time": self.world.sim_time})
+            self.emit({"kind": "state", "state": state, "step": self.world.step_index,
+                       "sim_time": self.world.sim_time})
 
     STATE_OPS: ClassVar[dict[str, Callable[..., dict[str, Any] | None]]] = {
         "status": op_status,

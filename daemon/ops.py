@@ -7,6 +7,8 @@ scene as it was.
 
 from __future__ import annotations
 
+import os
+import stat
 from collections.abc import Callable
 from typing import Any
 
@@ -17,8 +19,10 @@ from galton.protocol import (
     BodyProperties,
     FeatureUnsupportedError,
     InvalidArgumentError,
+    ResourceLimitError,
     pack_f64,
 )
+from galton.protocol.errors import brief
 from galton.protocol.model import (
     MAX_BATCH,
     check_names,
@@ -29,17 +33,20 @@ from galton.protocol.model import (
 )
 
 SceneOp = Callable[[World, dict[str, Any]], dict[str, Any]]
-MAX_MODEL_BYTES = 16 * 1024 * 1024
+MAX_PREFIX_LENGTH = 64
 
 
 def spawn(world: World, args: dict[str, Any]) -> dict[str, Any]:
     groups_raw = require(args, "groups", list, "spawn")
     if not groups_raw:
         raise InvalidArgumentError("spawn.groups must hold at least one group")
+    if len(groups_raw) > MAX_BATCH:
+        raise InvalidArgumentError(f"spawn holds {len(groups_raw)} groups; at most {MAX_BATCH}")
     groups = [BodyGroup.from_wire(g, f"spawn.groups[{i}]") for i, g in enumerate(groups_raw)]
     total = sum(len(g) for g in groups)
     if total > MAX_BATCH:
         raise InvalidArgumentError(f"spawn asks for {total} bodies; at most {MAX_BATCH} a call")
+    world.require_room(total)
     _require_shapes(world, groups)
     return {"names": world.spawn(groups)}
 
@@ -58,15 +65,50 @@ def load_model(world: World, args: dict[str, Any]) -> dict[str, Any]:
     if fmt not in formats:
         raise FeatureUnsupportedError(
             f"the {world.engine.name} engine loads {', '.join(formats) or 'no'} models, "
-            f"not {fmt!r}")
+            f"not {brief(fmt)}")
     text, path = args.get("text"), args.get("path")
     if (text is None) == (path is None):
         raise InvalidArgumentError("load_model needs exactly one of 'text' or 'path'")
-    source = check_type(text if text is not None else path, str, "load_model.text/path")
-    if len(source) > MAX_MODEL_BYTES:
-        raise InvalidArgumentError(f"load_model: the model is over {MAX_MODEL_BYTES} bytes")
-    prefix = check_type(args.get("prefix", ""), str, "load_model.prefix")
+    limit = world.limits.max_model_bytes
+    if text is not None:
+        check_type(text, str, "load_model.text")
+        if len(text) > limit:
+            raise ResourceLimitError(f"load_model.text holds {len(text)} characters; at most "
+                                     f"{limit}", {"limit": "max_model_bytes", "max": limit})
+    else:
+        path = model_file(check_type(path, str, "load_model.path"), limit)
+    prefix = check_prefix(args.get("prefix", ""))
+    world.require_room(1)
     return {"names": world.load_model(fmt, text, path, prefix)}
+
+
+def model_file(path: str, limit: int) -> str:
+    """A load_model path must name a regular file of at most ``limit`` bytes: a device, a
+    pipe or a folder would block or exhaust the physics thread (``/dev/stdin``,
+    ``/dev/zero``)."""
+    if not path or "\x00" in path:
+        raise InvalidArgumentError(f"load_model.path {brief(path)} is not a file path")
+    try:
+        info = os.stat(path)
+    except OSError as exc:
+        raise InvalidArgumentError(
+            f"load_model.path {brief(path)} cannot be read: {exc.strerror}") from exc
+    if not stat.S_ISREG(info.st_mode):
+        raise InvalidArgumentError(f"load_model.path {brief(path)} is not a regular file")
+    if info.st_size > limit:
+        raise ResourceLimitError(f"load_model.path {brief(path)} holds {info.st_size} bytes; "
+                                 f"at most {limit}", {"limit": "max_model_bytes", "max": limit})
+    return path
+
+
+def check_prefix(value: Any) -> str:
+    """A name prefix: printable, and short enough that prefixed names stay names."""
+    prefix = check_type(value, str, "load_model.prefix")
+    if len(prefix) > MAX_PREFIX_LENGTH or not prefix.isprintable():
+        raise InvalidArgumentError(
+            f"load_model.prefix {brief(prefix)} must be at most {MAX_PREFIX_LENGTH} printable "
+            "characters")
+    return prefix
 
 
 def list_entities(world: World, args: dict[str, Any]) -> dict[str, Any]:
@@ -77,7 +119,7 @@ def list_entities(world: World, args: dict[str, Any]) -> dict[str, Any]:
         if value is not None:
             check_type(value, str, f"list.{key}")
     found = world.select(pattern, tag, kind)
-    return {"entities": [info.to_wire() for info in found]}
+    return {"entities": [info.to_wire() for info in world.effective(found)]}
 
 
 def _names_or_all(world: World, args: dict[str, Any], where: str) -> list[str]:
@@ -151,5 +193,3 @@ SCENE_OPS: dict[str, SceneOp] = {
     "set_params": set_params,
     "capabilities": capabilities,
 }
-# Ops that change the scene: their replies are stamped, and they fault-check nothing.
-MUTATING_OPS = frozenset({"spawn", "load_model", "set_states", "update", "delete", "set_params"})

@@ -11,7 +11,12 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from galton.protocol.errors import FeatureUnsupportedError, InvalidArgumentError, did_you_mean
+from galton.protocol.errors import (
+    FeatureUnsupportedError,
+    InvalidArgumentError,
+    brief,
+    did_you_mean,
+)
 from galton.protocol.model import finite_number
 
 KNOWN_ENGINES = ("mujoco", "pybullet")
@@ -42,7 +47,7 @@ def integer(low: int, high: int) -> Callable[[Any, str], int]:
     def check(value: Any, where: str) -> int:
         if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
             raise InvalidArgumentError(f"{where} must be an integer in [{low}, {high}], "
-                                       f"got {value!r}")
+                                       f"got {brief(value)}")
         return value
     return check
 
@@ -51,7 +56,7 @@ def vector(length: int, low: float, high: float) -> Callable[[Any, str], tuple[f
     def check(value: Any, where: str) -> tuple[float, ...]:
         if not isinstance(value, list | tuple) or len(value) != length:
             raise InvalidArgumentError(f"{where} must be a list of {length} numbers, "
-                                       f"got {value!r}")
+                                       f"got {brief(value)}")
         return tuple(finite_number(v, f"{where}[{i}]", low=low, high=high)
                      for i, v in enumerate(value))
     return check
@@ -61,14 +66,14 @@ def choice(*options: str) -> Callable[[Any, str], str]:
     def check(value: Any, where: str) -> str:
         if value not in options:
             raise InvalidArgumentError(f"{where} must be one of {', '.join(options)}, "
-                                       f"got {value!r}")
+                                       f"got {brief(value)}")
         return value
     return check
 
 
 def flag(value: Any, where: str) -> bool:
     if not isinstance(value, bool):
-        raise InvalidArgumentError(f"{where} must be true or false, got {value!r}")
+        raise InvalidArgumentError(f"{where} must be true or false, got {brief(value)}")
     return value
 
 
@@ -76,7 +81,7 @@ def check_updates(engine: str, specs: Mapping[str, ParamSpec],
                   updates: Mapping[str, Any]) -> dict[str, Any]:
     """Validate every update before any is applied; return the clean values."""
     if not isinstance(updates, Mapping):
-        raise InvalidArgumentError(f"params must be a map of name to value, got {updates!r}")
+        raise InvalidArgumentError(f"params must be a map of name to value, got {brief(updates)}")
     clean: dict[str, Any] = {}
     for name, value in updates.items():
         spec = specs.get(name)
@@ -84,10 +89,10 @@ def check_updates(engine: str, specs: Mapping[str, ParamSpec],
             prefix = str(name).split(".", 1)[0]
             if "." in str(name) and prefix in KNOWN_ENGINES and prefix != engine:
                 raise FeatureUnsupportedError(
-                    f"parameter {name!r} belongs to the {prefix} engine; this daemon runs "
+                    f"parameter {brief(name)} belongs to the {prefix} engine; this daemon runs "
                     f"{engine}")
             raise InvalidArgumentError(
-                f"unknown parameter {name!r}{did_you_mean(str(name), specs)}; "
+                f"unknown parameter {brief(name)}{did_you_mean(str(name), specs)}; "
                 f"known: {', '.join(sorted(specs))}")
         clean[name] = spec.check(value, f"params.{name}")
     return clean

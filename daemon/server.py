@@ -15,17 +15,21 @@ from typing import Any
 import msgpack
 import zenoh
 
-from galton.daemon.calls import Call
+from galton.daemon.calls import Call, Task
 from galton.daemon.engines import ENGINE_CLASSES, create_engine
+from galton.daemon.limits import DEFAULT_LIMITS, Limits
 from galton.daemon.loop import SimLoop
 from galton.daemon.world import World
 from galton.protocol import DEFAULT_PORT, Keys, Telemetry
-from galton.protocol.keys import op_from_control_key
+from galton.protocol.keys import CLIENTS_PATTERN, client_from_token_key, op_from_control_key
 
 log = logging.getLogger("galton.daemon")
 
 DEFAULT_LISTEN = f"tcp/127.0.0.1:{DEFAULT_PORT}"
 FAST_OPS = frozenset({"status"})  # read-only, answered on Zenoh's thread from a snapshot
+# After SIGTERM the daemon answers what is pending and closes; if a request still holds the
+# physics thread this long after the signal, the process exits without waiting for it.
+SHUTDOWN_GRACE_S = 1.5
 
 
 @dataclass
@@ -40,6 +44,7 @@ class DaemonOptions:
     multicast: bool = False
     telemetry_rate_hz: float = 10.0
     params: dict[str, Any] = field(default_factory=dict)
+    limits: Limits = DEFAULT_LIMITS
 
 
 def zenoh_config(options: DaemonOptions) -> zenoh.Config:
@@ -69,16 +74,27 @@ class Daemon:
         self._telemetry_pub = self.session.declare_publisher(
             self.keys.telemetry, congestion_control=zenoh.CongestionControl.DROP)
         self._events_pub = self.session.declare_publisher(self.keys.events)
-        self.loop = SimLoop(World(engine), options.instance, self._publish_telemetry,
-                            self._publish_event, options.telemetry_rate_hz, create_engine)
+        self.loop = SimLoop(World(engine, limits=options.limits), options.instance,
+                            self._publish_telemetry, self._publish_event,
+                            options.telemetry_rate_hz, create_engine, options.limits)
         self._thread: threading.Thread | None = None
         self._queryable: Any = None
         self._token: Any = None
+        self._clients: Any = None
+        self.finished = threading.Event()
 
     def open(self) -> None:
-        """Declare the control queryable and the liveliness token: clients can reach us."""
+        """Declare the control queryable and the liveliness token: clients can reach us.
+        Watch the clients' tokens: a step job whose client vanishes ends (docs/protocol.md)."""
+        self._clients = self.session.liveliness().declare_subscriber(
+            CLIENTS_PATTERN, self._on_client_token)
         self._queryable = self.session.declare_queryable(self.keys.control_all, self._on_query)
         self._token = self.session.liveliness().declare_token(self.keys.alive)
+
+    def _on_client_token(self, sample: zenoh.Sample) -> None:
+        client = client_from_token_key(str(sample.key_expr))
+        if sample.kind == zenoh.SampleKind.DELETE and client is not None:
+            self.loop.submit(Task(lambda: self.loop.client_gone(client)))
 
     def start(self) -> None:
         """Serve with the physics loop on a thread of its own (for embedding in a process
@@ -101,6 +117,8 @@ class Daemon:
             self._thread.join(timeout=10)
         if self._queryable is not None:
             self._queryable.undeclare()
+        if self._clients is not None:
+            self._clients.undeclare()
         self.loop.world.engine.close()
         self.session.close()
 
@@ -157,11 +175,16 @@ def run_daemon(options: DaemonOptions, announce: Callable[[str], None] = print) 
     def stop_on_signal() -> None:
         os.read(wake_read, 1)
         daemon.withdraw()
+        if not daemon.finished.wait(SHUTDOWN_GRACE_S):
+            log.warning("a request still held the physics thread %.1f s after the signal: "
+                        "exiting without it", SHUTDOWN_GRACE_S)
+            os._exit(0)
     threading.Thread(target=stop_on_signal, name="signals", daemon=True).start()
     announce(f"galton-daemon ready: instance={options.instance} engine={options.engine} "
              f"listen={','.join(options.listen)} engines={','.join(ENGINE_CLASSES)}")
     try:
         daemon.loop.run()
+        daemon.finished.set()
     finally:
         daemon.close()
     return 0

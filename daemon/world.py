@@ -7,13 +7,16 @@ engine never receives an unknown or duplicate name, and a rejected request chang
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import fnmatch
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from galton.daemon.engine import Engine
+from galton.daemon.limits import DEFAULT_LIMITS, Limits
 from galton.protocol import (
     POSE_WIDTH,
     RESET_SCOPES,
@@ -25,8 +28,9 @@ from galton.protocol import (
     NameNotUniqueError,
     NotFoundError,
     PhysicsError,
+    ResourceLimitError,
 )
-from galton.protocol.errors import did_you_mean
+from galton.protocol.errors import brief, did_you_mean
 
 ENTITY_KINDS = ("static", "dynamic")
 
@@ -43,9 +47,11 @@ class Entity:
 class World:
     """One simulated world: an engine, its entities by name, and its clock."""
 
-    def __init__(self, engine: Engine, name: str = "default") -> None:
+    def __init__(self, engine: Engine, name: str = "default",
+                 limits: Limits = DEFAULT_LIMITS) -> None:
         self.engine = engine
         self.name = name
+        self.limits = limits
         self.entities: dict[str, Entity] = {}
         self.step_index = 0
         self.faulted = False
@@ -60,7 +66,7 @@ class World:
             first = missing[0]
             more = f" and {len(missing) - 1} more" if len(missing) > 1 else ""
             raise NotFoundError(
-                f"no entity named {first!r}{more}{did_you_mean(first, self.entities)}",
+                f"no entity named {brief(first)}{more}{did_you_mean(first, self.entities)}",
                 {"missing": missing[:100], "missing_count": len(missing)},
             )
 
@@ -78,7 +84,7 @@ class World:
                kind: str | None = None) -> list[EntityInfo]:
         """Entities whose name matches a glob, that carry a tag, of a kind (static/dynamic)."""
         if kind is not None and kind not in ENTITY_KINDS:
-            raise InvalidArgumentError(f"kind must be one of {ENTITY_KINDS}, got {kind!r}")
+            raise InvalidArgumentError(f"kind must be one of {ENTITY_KINDS}, got {brief(kind)}")
         found = []
         for name, entity in self.entities.items():
             if pattern is not None and not fnmatch.fnmatchcase(name, pattern):
@@ -89,6 +95,26 @@ class World:
                 continue
             found.append(entity.info)
         return found
+
+    def require_room(self, count: int) -> None:
+        """Refuse, before any work, a request that would take the world past its limit."""
+        limit = self.limits.max_entities
+        if len(self.entities) + count > limit:
+            raise ResourceLimitError(
+                f"the world holds {len(self.entities)} entities; {count} more would pass its "
+                f"limit of {limit} (galton-daemon --limit max_entities=N)",
+                {"limit": "max_entities", "max": limit, "count": len(self.entities)})
+
+    def effective(self, infos: Sequence[EntityInfo]) -> list[EntityInfo]:
+        """Copies of these entities' infos with the mass, friction and restitution the
+        engine simulates (defaults included; a static body's mass stays None: it has none)."""
+        if not infos:
+            return []
+        values = self.engine.properties([info.name for info in infos])
+        return [dataclasses.replace(
+            info, mass=_number_or_none(mass), friction=_number_or_none(friction),
+            restitution=_number_or_none(restitution))
+            for info, (mass, friction, restitution) in zip(infos, values.tolist(), strict=True)]
 
     # -- create / delete ----------------------------------------------------------------
     def spawn(self, groups: Sequence[BodyGroup]) -> list[str]:
@@ -110,6 +136,11 @@ class World:
     def load_model(self, fmt: str, text: str | None, path: str | None, prefix: str) -> list[str]:
         infos = self.engine.load_model(fmt, text, path, prefix)
         names = [info.name for info in infos]
+        try:
+            self.require_room(len(names))
+        except ResourceLimitError:
+            self.engine.delete(names)
+            raise
         poses, twists = self.engine.get_states(names) if names else (
             np.zeros((0, POSE_WIDTH)), np.zeros((0, TWIST_WIDTH)))
         for i, info in enumerate(infos):
@@ -126,7 +157,8 @@ class World:
     def get_states(self, names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
         self.require_known(names)
         self.verify()
-        return self.engine.get_states(names)
+        poses, twists = self.engine.get_states(names)
+        return canonical_quaternions(poses), twists
 
     def set_states(self, names: Sequence[str], poses: np.ndarray | None,
                    twists: np.ndarray | None) -> None:
@@ -187,10 +219,11 @@ class World:
         self.require_valid()
         if self.verified_step == self.step_index:
             return
-        if not self.engine.state_is_finite():
+        if not self.engine.state_within(self.limits.max_position, self.limits.max_speed):
             self.faulted = True
             raise PhysicsError(
-                f"the simulation diverged (NaN or infinite state) within steps "
+                f"the simulation diverged (NaN, infinite, or beyond "
+                f"{self.limits.max_position:g} m or {self.limits.max_speed:g} m/s) within steps "
                 f"{self.verified_step + 1}..{self.step_index}; the world is paused and "
                 "its states will not be served until a reset")
         self.verified_step = self.step_index
@@ -198,7 +231,7 @@ class World:
     def reset(self, scope: str) -> None:
         if scope not in RESET_SCOPES:
             raise InvalidArgumentError(
-                f"reset scope {scope!r} is not one of {', '.join(RESET_SCOPES)}"
+                f"reset scope {brief(scope)} is not one of {', '.join(RESET_SCOPES)}"
                 f"{did_you_mean(scope, RESET_SCOPES)}")
         with contextlib.suppress(PhysicsError):
             self.verify()  # a divergence in unchecked steps must not be forgotten
@@ -223,3 +256,22 @@ class World:
         self.engine.reset_dynamics()
         self.faulted = False
         self.verified_step = self.step_index
+
+
+def canonical_quaternions(poses: np.ndarray) -> np.ndarray:
+    """q and -q are one rotation: serve the one with qw >= 0 (and, when qw is 0, the first
+    non-zero of qx, qy, qz positive), so both engines give the same numbers."""
+    quats = poses[:, 3:7]
+    flip = quats[:, 3] < 0
+    zero_w = quats[:, 3] == 0
+    if zero_w.any():
+        first = np.argmax(quats[:, :3] != 0, axis=1)
+        flip |= zero_w & (quats[np.arange(len(quats)), first] < 0)
+    if flip.any():
+        poses = poses.copy()
+        poses[flip, 3:7] *= -1.0
+    return poses
+
+
+def _number_or_none(value: float) -> float | None:
+    return None if math.isnan(value) else value

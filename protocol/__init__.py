@@ -8,6 +8,7 @@ from galton.protocol.arrays import pack_f64, unpack_f64
 from galton.protocol.codes import ResultCode
 from galton.protocol.envelope import (
     PROTOCOL_VERSION,
+    DecodeLimits,
     Reply,
     Request,
     decode_reply,
@@ -29,6 +30,7 @@ from galton.protocol.errors import (
     PhysicsError,
     RemoteError,
     RequestTimeoutError,
+    ResourceLimitError,
     UnknownOperationError,
     UnsupportedVersionError,
     error_for_code,
@@ -65,6 +67,7 @@ __all__ = [
     "BodyProperties",
     "Capabilities",
     "DaemonUnreachableError",
+    "DecodeLimits",
     "EntityInfo",
     "FeatureUnsupportedError",
     "GaltonError",
@@ -80,6 +83,7 @@ __all__ = [
     "Reply",
     "Request",
     "RequestTimeoutError",
+    "ResourceLimitError",
     "ResultCode",
     "SimStatus",
     "Telemetry",

@@ -17,3 +17,4 @@ class ResultCode(IntEnum):
     UNKNOWN_OPERATION = 8
     UNSUPPORTED_VERSION = 9
     PHYSICS_ERROR = 10
+    RESOURCE_LIMIT = 11

@@ -11,7 +11,9 @@ from galton.protocol.codes import ResultCode
 from galton.protocol.errors import (
     MalformedRequestError,
     RemoteError,
+    ResourceLimitError,
     UnsupportedVersionError,
+    brief,
     error_for_code,
 )
 
@@ -20,11 +22,27 @@ PROTOCOL_VERSION = 1
 
 @dataclass
 class Request:
-    """One operation call: ``op`` names it, ``args`` holds its fields."""
+    """One operation call: ``op`` names it, ``args`` holds its fields; ``client`` is the
+    sender's id (its liveliness token's last chunk), so a long step can be tied to it."""
 
     op: str
     args: dict[str, Any] = field(default_factory=dict)
     version: int = PROTOCOL_VERSION
+    client: str | None = None
+
+
+@dataclass(frozen=True)
+class DecodeLimits:
+    """What a request may hold before anything reads it (the daemon's limits)."""
+
+    max_bytes: int = 16 * 1024 * 1024
+    max_depth: int = 16
+    max_string: int = 4096
+    long_text_keys: frozenset[str] = frozenset()  # top-level args exempt from max_string
+
+
+NO_LIMITS = DecodeLimits(max_bytes=2**62, max_depth=10_000, max_string=2**62)
+CLIENT_ID_LENGTH = 64
 
 
 @dataclass
@@ -48,38 +66,103 @@ class Reply:
             raise error_for_code(self.code, self.message, self.details)
 
 
-def encode_request(op: str, args: dict[str, Any] | None = None) -> bytes:
-    return msgpack.packb({"v": PROTOCOL_VERSION, "op": op, "args": args or {}}, use_bin_type=True)
+def encode_request(op: str, args: dict[str, Any] | None = None,
+                   client: str | None = None) -> bytes:
+    body: dict[str, Any] = {"v": PROTOCOL_VERSION, "op": op, "args": args or {}}
+    if client is not None:
+        body["client"] = client
+    return msgpack.packb(body, use_bin_type=True)
 
 
-def decode_request(payload: bytes, op_from_key: str | None = None) -> Request:
-    """Parse a request, raising MalformedRequest or UnsupportedVersion with the reason."""
+def decode_request(payload: bytes, op_from_key: str | None = None,
+                   limits: DecodeLimits = NO_LIMITS) -> Request:
+    """Parse a request, raising MalformedRequest, UnsupportedVersion or ResourceLimit with
+    the reason. Size is checked before decoding; depth and strings before any field is read."""
+    if len(payload) > limits.max_bytes:
+        raise ResourceLimitError(
+            f"the request is {len(payload)} bytes; this daemon takes at most "
+            f"{limits.max_bytes}", {"limit": "max_request_bytes", "max": limits.max_bytes})
     try:
         body = msgpack.unpackb(payload, raw=False, strict_map_key=True)
+    except msgpack.StackError as exc:
+        raise ResourceLimitError(
+            f"the request nests maps and lists deeper than {limits.max_depth} levels",
+            {"limit": "max_depth", "max": limits.max_depth}) from exc
     except Exception as exc:
-        raise MalformedRequestError(f"payload is not valid msgpack: {exc}") from exc
+        raise MalformedRequestError(f"payload is not valid msgpack: {brief(str(exc))}") from exc
     if not isinstance(body, dict):
         raise MalformedRequestError(
             f"request must be a msgpack map with 'v', 'op', 'args', got {type(body).__name__}"
         )
+    check_shape(body, limits)
     version = body.get("v")
     if version != PROTOCOL_VERSION:
         raise UnsupportedVersionError(
-            f"protocol version {version!r} is not supported; this daemon speaks "
-            f"v{PROTOCOL_VERSION}",
+            f"protocol version {brief(version)} is not supported; this daemon speaks "
+            f"v{PROTOCOL_VERSION} (every request carries 'v': {PROTOCOL_VERSION})",
             {"supported": [PROTOCOL_VERSION]},
         )
     op = body.get("op", op_from_key)
     if not isinstance(op, str):
         raise MalformedRequestError(f"'op' must be a string, got {type(op).__name__}")
     if op_from_key is not None and op != op_from_key:
-        raise MalformedRequestError(f"'op' is {op!r} but the key names {op_from_key!r}")
+        raise MalformedRequestError(
+            f"'op' is {brief(op)} but the key names {brief(op_from_key)}: send each request "
+            "to its own operation's key")
+    unknown = set(body) - ENVELOPE_FIELDS
+    if unknown:
+        raise MalformedRequestError(
+            f"the envelope has unknown fields {brief(sorted(map(str, unknown)))}; it holds "
+            f"{', '.join(sorted(ENVELOPE_FIELDS))}")
     args = body.get("args", {})
     if args is None:
         args = {}
     if not isinstance(args, dict):
         raise MalformedRequestError(f"'args' must be a map, got {type(args).__name__}")
-    return Request(op=op, args=args, version=version)
+    return Request(op=op, args=args, version=version, client=_client_id(body.get("client")))
+
+
+ENVELOPE_FIELDS = frozenset({"v", "op", "args", "client"})
+
+
+def _client_id(value: Any) -> str | None:
+    if value is None:
+        return None
+    if not isinstance(value, str) or not 0 < len(value) <= CLIENT_ID_LENGTH:
+        raise MalformedRequestError(
+            f"'client' must be a string of 1-{CLIENT_ID_LENGTH} characters, got {brief(value)}")
+    return value
+
+
+def check_shape(body: dict[str, Any], limits: DecodeLimits) -> None:
+    """Refuse a request nested deeper than ``max_depth`` or holding a string longer than
+    ``max_string`` (but the long-text args); iterative, so no depth can overflow it."""
+    args = body.get("args")
+    stack: list[tuple[Any, int, bool]] = [(body, 1, False)]
+    while stack:
+        value, depth, exempt = stack.pop()
+        if isinstance(value, dict | list):
+            if depth > limits.max_depth:
+                raise ResourceLimitError(
+                    f"the request nests maps and lists deeper than {limits.max_depth} levels",
+                    {"limit": "max_depth", "max": limits.max_depth})
+            if isinstance(value, dict):
+                for key, item in value.items():
+                    _check_string(key, limits, False)
+                    stack.append((item, depth + 1,
+                                  value is args and key in limits.long_text_keys))
+            else:
+                stack.extend((item, depth + 1, False) for item in value)
+        else:
+            _check_string(value, limits, exempt)
+
+
+def _check_string(value: Any, limits: DecodeLimits, exempt: bool) -> None:
+    if isinstance(value, str) and not exempt and len(value) > limits.max_string:
+        raise ResourceLimitError(
+            f"a string of the request holds {len(value)} characters ({brief(value, 40)}); "
+            f"at most {limits.max_string}", {"limit": "max_string_bytes",
+                                             "max": limits.max_string})
 
 
 def encode_reply(reply: Reply) -> bytes:
@@ -98,10 +181,14 @@ def encode_reply(reply: Reply) -> bytes:
     )
 
 
+MAX_MESSAGE = 2000  # characters of an error message; the values it quotes are brief()
+
+
 def error_reply(error: RemoteError, step: int = 0, sim_time: float = 0.0) -> Reply:
-    return Reply(
-        code=error.code, message=error.message, step=step, sim_time=sim_time, details=error.details
-    )
+    message = error.message if len(error.message) <= MAX_MESSAGE else (
+        error.message[:MAX_MESSAGE] + "...")
+    return Reply(code=error.code, message=message, step=step, sim_time=sim_time,
+                 details=error.details)
 
 
 def decode_reply(payload: bytes) -> Reply:

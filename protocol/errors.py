@@ -13,7 +13,8 @@
     │   │   └── UnknownOperationError    UNKNOWN_OPERATION: no such operation
     │   ├── NameNotUniqueError       NAME_NOT_UNIQUE: an entity of that name exists
     │   ├── UnsupportedVersionError  UNSUPPORTED_VERSION: protocol version mismatch
-    │   └── PhysicsError             PHYSICS_ERROR: the state became NaN or infinite
+    │   ├── PhysicsError             PHYSICS_ERROR: the state diverged (NaN, infinite, absurd)
+    │   └── ResourceLimitError       RESOURCE_LIMIT: the request is over one of the daemon's limits
     ├── DaemonUnreachableError       no daemon answered (client side only)
     └── RequestTimeoutError          a daemon exists but did not answer in time (client side)
 """
@@ -21,7 +22,9 @@
 from __future__ import annotations
 
 import difflib
+import reprlib
 from collections.abc import Iterable
+from typing import Any
 
 from galton.protocol.codes import ResultCode
 
@@ -81,6 +84,10 @@ class PhysicsError(RemoteError):
     code = ResultCode.PHYSICS_ERROR
 
 
+class ResourceLimitError(RemoteError):
+    code = ResultCode.RESOURCE_LIMIT
+
+
 class DaemonUnreachableError(GaltonError):
     """No daemon answered at the address or instance asked for."""
 
@@ -102,6 +109,7 @@ _BY_CODE: dict[ResultCode, type[RemoteError]] = {
         NameNotUniqueError,
         UnsupportedVersionError,
         PhysicsError,
+        ResourceLimitError,
     )
 }
 
@@ -121,3 +129,20 @@ def did_you_mean(word: str, choices: Iterable[str]) -> str:
     if not close:
         return ""
     return " (did you mean " + " or ".join(repr(c) for c in close) + "?)"
+
+
+QUOTE_LIMIT = 100  # characters of an offending value an error message may quote
+_QUOTER = reprlib.Repr()
+_QUOTER.maxlevel, _QUOTER.maxdict, _QUOTER.maxlist, _QUOTER.maxtuple = 3, 4, 4, 4
+_QUOTER.maxstring, _QUOTER.maxother, _QUOTER.maxlong = 60, 60, 40
+
+
+def brief(value: Any, limit: int = QUOTE_LIMIT) -> str:
+    """A repr of ``value`` of at most ``limit`` characters, cheap however big or deep the
+    value is: an error message must never echo a 50 MB field back to its sender."""
+    if isinstance(value, str | bytes | bytearray) and len(value) > limit:
+        head = repr(value[:limit])
+        text = f"{head[:limit]}... ({len(value)} {'chars' if isinstance(value, str) else 'bytes'})"
+    else:
+        text = _QUOTER.repr(value)
+    return text if len(text) <= limit + 20 else text[:limit] + "..."

@@ -16,6 +16,22 @@ DEFAULT_PORT = 7460
 CONTROL_CHUNK = "@ctl"
 ALIVE_CHUNK = "alive"
 LIVELINESS_PATTERN = f"{ROOT}/*/{ALIVE_CHUNK}"
+# Every SDK client holds a liveliness token here; a daemon watches them, so that a long step
+# asked by a client that has gone is not run to its end for nobody.
+CLIENTS_CHUNK = "_clients"
+CLIENTS_PATTERN = f"{ROOT}/{CLIENTS_CHUNK}/*"
+
+
+def client_token_key(client_id: str) -> str:
+    """The liveliness key of one client, ``galton/_clients/<client id>``."""
+    return f"{ROOT}/{CLIENTS_CHUNK}/{client_id}"
+
+
+def client_from_token_key(key: str) -> str | None:
+    parts = key.split("/")
+    if len(parts) == 3 and parts[0] == ROOT and parts[1] == CLIENTS_CHUNK:
+        return parts[2]
+    return None
 
 _INSTANCE_RE = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.\-]{0,63}$")
 

@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from galton.protocol.arrays import pack_f64, unpack_f64
-from galton.protocol.errors import InvalidArgumentError
+from galton.protocol.errors import InvalidArgumentError, brief, did_you_mean
 
 POSE_WIDTH = 7
 TWIST_WIDTH = 6
@@ -44,7 +44,8 @@ def check_type(value: Any, kind: type | tuple[type, ...], where: str) -> Any:
         raise InvalidArgumentError(f"{where} must be a number, got a boolean")
     if not isinstance(value, kind):
         names = kind.__name__ if isinstance(kind, type) else " or ".join(k.__name__ for k in kind)
-        raise InvalidArgumentError(f"{where} must be {names}, got {type(value).__name__} {value!r}")
+        raise InvalidArgumentError(
+            f"{where} must be {names}, got {type(value).__name__} {brief(value)}")
     return value
 
 
@@ -56,7 +57,8 @@ def finite_number(value: Any, where: str, *, low: float = -math.inf, high: float
     too_low = number <= low if low_open else number < low
     if not math.isfinite(number) or too_low or number > high:
         bound = f"({low}, {high}]" if low_open else f"[{low}, {high}]"
-        raise InvalidArgumentError(f"{where} must be a finite number in {bound}, got {value!r}")
+        raise InvalidArgumentError(
+            f"{where} must be a finite number in {bound}, got {brief(value)}")
     return number
 
 
@@ -69,7 +71,7 @@ def check_name(name: Any, where: str) -> str:
     check_type(name, str, where)
     if not name or len(name) > MAX_NAME_LENGTH or not name.isprintable():
         raise InvalidArgumentError(
-            f"{where} {name!r} is not a valid entity name: use 1-{MAX_NAME_LENGTH} printable "
+            f"{where} {brief(name)} is not a valid entity name: use 1-{MAX_NAME_LENGTH} printable "
             "characters"
         )
     return name
@@ -86,7 +88,7 @@ def check_names(value: Any, where: str) -> list[str]:
     if len(set(names)) != len(names):
         seen: set[str] = set()
         dup = next(n for n in names if n in seen or seen.add(n))
-        raise InvalidArgumentError(f"{where} names {dup!r} more than once")
+        raise InvalidArgumentError(f"{where} names {brief(dup)} more than once")
     return names
 
 
@@ -212,10 +214,11 @@ class BodyGroup:
     @classmethod
     def from_wire(cls, body: Any, where: str = "group") -> BodyGroup:
         check_type(body, dict, where)
+        check_fields(body, GROUP_FIELDS, where)
         shape = require(body, "shape", str, where)
         if shape not in BODY_SHAPES:
             raise InvalidArgumentError(
-                f"{where}.shape {shape!r} is not one of {', '.join(BODY_SHAPES)}")
+                f"{where}.shape {brief(shape)} is not one of {', '.join(BODY_SHAPES)}")
         size = _check_size(shape, require(body, "size", list, where), f"{where}.size")
         names = check_names(require(body, "names", list, where), f"{where}.names")
         poses = decode_poses(require(body, "poses", (bytes, bytearray), where), len(names),
@@ -236,6 +239,19 @@ class BodyGroup:
             rgba=check_rgba(body.get("rgba"), f"{where}.rgba"),
             tags=check_tags(body.get("tags", []), f"{where}.tags"),
         )
+
+
+GROUP_FIELDS = ("shape", "size", "names", "poses", "twists", "static", "mass", "friction",
+                "restitution", "rgba", "tags")
+
+
+def check_fields(body: dict[str, Any], allowed: tuple[str, ...], where: str) -> None:
+    """Refuse a field that is not one of ``allowed``, naming the closest."""
+    for key in body:
+        if key not in allowed:
+            raise InvalidArgumentError(
+                f"{where} has no field {brief(key)}{did_you_mean(str(key)[:64], allowed)}; "
+                f"its fields: {', '.join(allowed)}")
 
 
 def _check_size(shape: str, size: list[Any], where: str) -> tuple[float, ...]:

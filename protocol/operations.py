@@ -1,0 +1,108 @@
+"""Every operation of the protocol, declared once: its arguments, and what it does to a world.
+
+The daemon refuses an argument not declared here (INVALID_ARGUMENT, with a "did you mean"),
+the fuzz harness generates requests from these declarations, and docs/protocol.md is held
+to them by a test. Each argument's ``kind`` names the value it takes on the wire:
+
+- ``number``: a finite int or float; ``count``: an int; ``string``; ``bool``;
+- ``names``: a list of entity names; ``map``: a msgpack map (its fields checked by the op);
+- ``groups``: a list of body-group maps (docs/protocol.md, "spawn");
+- ``poses`` / ``twists``: msgpack bin of packed float64 rows (7 and 6 wide);
+- ``choice``: a string, one of ``choices``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from galton.protocol.errors import InvalidArgumentError, UnknownOperationError, did_you_mean
+
+ARG_KINDS = ("number", "count", "string", "bool", "names", "map", "groups", "poses", "twists",
+             "choice")
+# Every request may name the world it is for (one world per daemon for now).
+WORLD_ARG = "world"
+
+
+@dataclass(frozen=True)
+class Arg:
+    """One argument of an operation."""
+
+    name: str
+    kind: str
+    required: bool = False
+    choices: tuple[str, ...] = ()
+    long_text: bool = False  # may exceed the daemon's string limit (a model's text)
+
+    def __post_init__(self) -> None:
+        if self.kind not in ARG_KINDS:
+            raise ValueError(f"argument {self.name}: unknown kind {self.kind!r}")
+
+
+@dataclass(frozen=True)
+class Operation:
+    """One operation: its arguments and whether a success changes the world."""
+
+    name: str
+    args: tuple[Arg, ...] = ()
+    mutates: bool = False
+    steps: bool = False  # answered only when its steps are done (it belongs to its client)
+
+    def arg(self, name: str) -> Arg | None:
+        return next((a for a in self.args if a.name == name), None)
+
+    @property
+    def arg_names(self) -> tuple[str, ...]:
+        return tuple(a.name for a in self.args)
+
+    def check_arg_names(self, args: dict[str, object]) -> None:
+        """Refuse any argument this operation does not declare, naming the closest one."""
+        allowed = {*self.arg_names, WORLD_ARG}
+        for key in args:
+            if key not in allowed:
+                listed = ", ".join(sorted(allowed))
+                raise InvalidArgumentError(
+                    f"{self.name} takes no argument {str(key)[:64]!r}"
+                    f"{did_you_mean(str(key)[:64], allowed)}; it takes: {listed}")
+
+
+_NAMES = Arg("names", "names", required=True)
+OPERATIONS: dict[str, Operation] = {op.name: op for op in (
+    Operation("status"),
+    Operation("capabilities"),
+    Operation("play", (Arg("rtf", "number"),), mutates=True),
+    Operation("set_rtf", (Arg("rtf", "number", required=True),), mutates=True),
+    Operation("pause", mutates=True),
+    Operation("stop", mutates=True),
+    Operation("step", (Arg("count", "count"), Arg("read", "names")), mutates=True, steps=True),
+    Operation("run_until", (Arg("sim_time", "number", required=True), Arg("read", "names"),
+                            Arg("until_rest", "map")), mutates=True, steps=True),
+    Operation("reset", (Arg("scope", "choice", choices=("time", "state", "spawned", "all")),),
+              mutates=True),
+    Operation("load_world", (Arg("engine", "choice", required=True,
+                                 choices=("mujoco", "pybullet")), Arg("params", "map")),
+              mutates=True),
+    Operation("spawn", (Arg("groups", "groups", required=True),), mutates=True),
+    Operation("load_model", (Arg("format", "choice", required=True, choices=("mjcf", "urdf")),
+                             Arg("text", "string", long_text=True), Arg("path", "string"),
+                             Arg("prefix", "string")), mutates=True),
+    Operation("list", (Arg("name", "string"), Arg("tag", "string"),
+                       Arg("kind", "choice", choices=("static", "dynamic")))),
+    Operation("get_states", (Arg("names", "names"),)),
+    Operation("set_states", (_NAMES, Arg("poses", "poses"), Arg("twists", "twists")),
+              mutates=True),
+    Operation("update", (_NAMES, Arg("properties", "map", required=True)), mutates=True),
+    Operation("delete", (_NAMES,), mutates=True),
+    Operation("get_params"),
+    Operation("set_params", (Arg("params", "map", required=True),), mutates=True),
+)}
+
+
+def operation(name: str) -> Operation:
+    """The operation of that name, or UnknownOperationError with the closest names."""
+    found = OPERATIONS.get(name)
+    if found is None:
+        known = sorted(OPERATIONS)
+        raise UnknownOperationError(
+            f"unknown operation {name[:64]!r}{did_you_mean(name[:64], known)}",
+            {"operations": known})
+    return found
