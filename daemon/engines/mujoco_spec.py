@@ -18,6 +18,7 @@ import numpy as np
 from galton.daemon.engines.mujoco_state import to_wxyz
 from galton.daemon.params import ParamSpec, choice, flag, integer, number, vector
 from galton.protocol import BodyGroup, InvalidArgumentError
+from galton.protocol.errors import brief
 
 log = logging.getLogger("galton.daemon.mujoco")
 
@@ -54,7 +55,7 @@ def _solref(value: Any, where: str) -> tuple[float, ...]:
     timeconst, dampratio = vector(2, 0.0, 10.0)(value, where)
     if timeconst <= 0 or dampratio <= 0:
         raise InvalidArgumentError(f"{where} must be [timeconst > 0 s, dampratio > 0], got "
-                                   f"{value!r}")
+                                   f"{brief(value)}")
     return (timeconst, dampratio)
 
 
@@ -63,7 +64,7 @@ def _solimp(value: Any, where: str) -> tuple[float, ...]:
     if not (0 < dmin <= dmax < 1 and width > 0 and 0 < mid < 1 and power >= 1):
         raise InvalidArgumentError(
             f"{where} must be [dmin, dmax, width, midpoint, power] with 0 < dmin <= dmax < 1, "
-            f"width > 0, 0 < midpoint < 1, power >= 1; got {value!r}")
+            f"width > 0, 0 < midpoint < 1, power >= 1; got {brief(value)}")
     return (dmin, dmax, width, mid, power)
 
 
@@ -71,7 +72,7 @@ def _condim(value: Any, where: str) -> int:
     condim = integer(1, 6)(value, where)
     if condim not in CONDIMS:
         raise InvalidArgumentError(f"{where} must be one of {', '.join(map(str, CONDIMS))} "
-                                   f"(MuJoCo's contact dimensions), got {value!r}")
+                                   f"(MuJoCo's contact dimensions), got {brief(value)}")
     return condim
 
 
