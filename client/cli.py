@@ -232,4 +232,5 @@ def main() -> None:
     app()
 
 
-from galton.client import cli_bench  # noqa: E402,F401  (registers bench and report)
+# Registering bench, report and fuzz on ``app``:
+from galton.client import cli_bench, cli_fuzz  # noqa: E402,F401
