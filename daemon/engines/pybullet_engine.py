@@ -27,6 +27,7 @@ from __future__ import annotations
 import functools
 import importlib.metadata
 import itertools
+import math
 import typing
 from collections.abc import Callable, Sequence
 from typing import Any, TypeVar
@@ -370,14 +371,32 @@ class PybulletEngine(Engine):
             step()
 
     @_engine_call
-    def state_is_finite(self) -> bool:
-        """Static bodies cannot move in a step (and set_states takes only finite values),
-        so only the others are read: a board's hundreds of pins cost nothing here."""
+    def state_within(self, max_position: float, max_speed: float) -> bool:
+        """Static bodies cannot move in a step, so only the others are read: a board's
+        hundreds of pins cost nothing here. Bullet itself never reports a divergence: a body
+        flung far enough is only taken out of the simulation, with a printed warning."""
         moving = [b.uid for b in self._bodies.values() if not b.static]
         if not moving:
             return True
         poses, twists = self._read(moving)
-        return bool(np.isfinite(poses).all() and np.isfinite(twists).all())
+        return bool(np.isfinite(poses).all() and np.isfinite(twists).all()
+                    and np.abs(poses[:, :3]).max() <= max_position
+                    and np.abs(twists).max() <= max_speed)
+
+    @_engine_call
+    def properties(self, names: Sequence[str]) -> np.ndarray:
+        """Spawned bodies from what the engine last gave PyBullet (getDynamicsInfo reports
+        a rigid body's restitution as 0); models from PyBullet, the mass summed over links."""
+        rows = [self._properties(body) for body in self._lookup(names)]
+        return np.array(rows, dtype=float).reshape(len(rows), 3)
+
+    def _properties(self, body: _Body) -> tuple[float, float, float]:
+        if body.shape != "model":
+            return (math.nan if body.static else body.mass, body.friction, body.restitution)
+        info = self._bc.getDynamicsInfo(body.uid, -1)
+        mass = info[0] + sum(self._bc.getDynamicsInfo(body.uid, link)[0]
+                             for link in range(body.links))
+        return (math.nan if body.static else mass, info[1], info[5])
 
     # -- models ---------------------------------------------------------------------------
     @_engine_call
