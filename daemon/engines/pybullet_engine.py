@@ -24,6 +24,7 @@ or, past a count of removed bodies, by rebuilding the world (pybullet_rebuild.py
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import importlib.metadata
 import itertools
@@ -60,8 +61,11 @@ from galton.daemon.engines.pybullet_shapes import (
     DENSITY,
     BodyMaker,
     ShapeCache,
+    link_masses,
     load_bodies,
     margin_for,
+    read_text,
+    scale_masses,
     unique_name,
     unit_inertia,
     volume,
@@ -121,6 +125,10 @@ class PybulletEngine(Engine):
         self._values: dict[str, Any] = {name: spec.default for name, spec in SPECS.items()}
         self._removed = 0  # bodies removed since resetSimulation last ran
         self._held: dict[str, rebuild.Held] = {}  # states a rebuild could not set bit for bit
+        # Poses given to PyBullet (spawn, set_states) since the last step: a rebuild sets
+        # them again as given, which reading them back (a rotation matrix) cannot promise.
+        self._given: dict[str, list[float]] = {}
+        self._batches = itertools.count()  # spawn groups and model loads, in order
         self.rebuilds = 0
         self._configure_world()
 
@@ -209,55 +217,70 @@ class PybulletEngine(Engine):
         try:
             for group in groups:
                 if group.names:
-                    bodies.update(self._spawn_group(group, made))
+                    bodies.update(self._spawn_group(group, made, next(self._batches)))
         except BaseException:
             self._maker.remove(made)
             raise
         self._bodies.update(bodies)
+        for group in groups:
+            self._given.update(zip(group.names, np.asarray(
+                group.poses, dtype=float).reshape(-1, POSE_WIDTH).tolist(), strict=True))
 
-    def _spawn_group(self, group: BodyGroup, made: list[int]) -> dict[str, _Body]:
-        """The group's bodies in (at most) one createMultiBody call, then each one's own
-        orientation, velocity and dynamics."""
+    def _spawn_group(self, group: BodyGroup, made: list[int], batch: int,
+                     redo: rebuild.Redo | None = None) -> dict[str, _Body]:
+        """The group's bodies in (at most) one createMultiBody call, all turned like the
+        first, then each one's own orientation where it differs, velocity and dynamics. A
+        rebuild (``redo``) makes them as they were first made."""
         if group.shape not in BODY_SHAPES:
             raise InvalidArgumentError(f"unknown shape {group.shape!r}")
         if group.shape == "plane" and not group.static:
             raise InvalidArgumentError("a plane must be static")
         size = tuple(float(s) for s in group.size)
         poses = np.asarray(group.poses, dtype=float).reshape(-1, POSE_WIDTH).tolist()
+        if redo is None:
+            turn = tuple(poses[0][3:])
+            redo = rebuild.Redo(turn, [any(pose[3:] != poses[0][3:] for pose in poses)]
+                                * len(poses))
         mass = 0.0 if group.static else (
             group.mass if group.mass is not None else DENSITY * volume(group.shape, size))
-        quaternions = np.asarray(group.poses, dtype=float).reshape(-1, POSE_WIDTH)[:, 3:]
-        shared = bool((quaternions == quaternions[0]).all())  # one turn for all: no resets
         ids = self._maker.create(mass, self._shapes.get(group.shape, size),
                                  self._shapes.visual(group.shape, size, group.rgba),
-                                 [pose[:3] for pose in poses], poses[0][3:], self._owned(), made)
-        friction_key, restitution_key = default_keys(group.static)
-        friction = group.friction if group.friction is not None else (
-            self._values[friction_key])
-        restitution = group.restitution if group.restitution is not None else (
-            self._values[restitution_key])
-        dynamics: dict[str, Any] = {"lateralFriction": friction, "restitution": restitution}
-        inertia = None
-        if not group.static:
-            inertia = unit_inertia(group.shape, size)
-            # Mass and inertia together: an inertia alone sets a rigid body's mass to 0.
-            dynamics.update(mass=mass, localInertiaDiagonal=[mass * i for i in inertia],
-                            ccdSweptSphereRadius=self._values["pybullet.ccd_swept_sphere_radius"])
+                                 [pose[:3] for pose in poses], list(redo.turn), self._owned(),
+                                 made)
+        friction, restitution, dynamics = self._dynamics(group, size, mass)
         twists = None if group.twists is None else np.asarray(
             group.twists, dtype=float).reshape(-1, TWIST_WIDTH).tolist()
         for k, uid in enumerate(ids):
-            if not shared:
+            if redo.turned[k]:
                 self._reset_pose(uid, poses[k][:3], poses[k][3:])
             if twists is not None:
                 self._reset_velocity(uid, twists[k][:3], twists[k][3:])
             self._change(uid, -1, **dynamics)
         self._set_margin(ids[0], group.shape, size)
         rgba = None if group.rgba is None else tuple(float(c) for c in group.rgba)
-        return {name: _Body(uid, group.static, group.shape, size, inertia,
+        inertia = None if group.static else unit_inertia(group.shape, size)
+        return {name: _Body(uid, group.static, group.shape, size, inertia, batch,
                             follows_friction=group.friction is None,
                             follows_restitution=group.restitution is None, mass=mass,
-                            friction=friction, restitution=restitution, rgba=rgba)
-                for name, uid in zip(group.names, ids, strict=True)}
+                            friction=friction, restitution=restitution, rgba=rgba,
+                            made_mass=mass, turn=redo.turn, turned=turned)
+                for name, uid, turned in zip(group.names, ids, redo.turned, strict=True)}
+
+    def _dynamics(self, group: BodyGroup, size: tuple[float, ...],
+                  mass: float) -> tuple[float, float, dict[str, Any]]:
+        """A group's friction, restitution, and the changeDynamics arguments of its bodies."""
+        friction_key, restitution_key = default_keys(group.static)
+        friction = group.friction if group.friction is not None else (
+            self._values[friction_key])
+        restitution = group.restitution if group.restitution is not None else (
+            self._values[restitution_key])
+        dynamics: dict[str, Any] = {"lateralFriction": friction, "restitution": restitution}
+        if not group.static:
+            inertia = unit_inertia(group.shape, size)
+            # Mass and inertia together: an inertia alone sets a rigid body's mass to 0.
+            dynamics.update(mass=mass, localInertiaDiagonal=[mass * i for i in inertia],
+                            ccdSweptSphereRadius=self._values["pybullet.ccd_swept_sphere_radius"])
+        return friction, restitution, dynamics
 
     @_engine_call
     def delete(self, names: Sequence[str]) -> None:
@@ -267,6 +290,7 @@ class PybulletEngine(Engine):
         for name in names:
             del self._bodies[name]
             self._held.pop(name, None)
+            self._given.pop(name, None)
         # removeBody keeps about 0.85 kB per body (measured with shared shapes) until
         # resetSimulation: an empty world is reset for free, a fuller one rebuilt now and then.
         if not self._bodies:
@@ -275,14 +299,63 @@ class PybulletEngine(Engine):
             self._rebuild()
 
     def _rebuild(self) -> None:
-        """resetSimulation, keeping every (spawned) body as the protocol sees it."""
+        """resetSimulation, then every body made again, in the order it was first made, as
+        the protocol sees it (pybullet_rebuild.py)."""
         kept = dict(self._bodies)
-        states = rebuild.read_states(self._bc, kept)
+        states = rebuild.read_states(self._bc, kept, self._given, self._held)
+        exact = set(self._given)
         self.clear()
-        self._held = rebuild.recreate(self._bc, self._maker, self._shapes, kept, states,
-                                      self._values)
-        self._bodies.update(kept)
+        for names in rebuild.batches(kept):
+            if kept[names[0]].model is not None:
+                self._reload(names, kept, states)
+            else:
+                self._remake(names, kept, states)
+        self._held = rebuild.settle(self._bc, self._bodies, states, exact)
+        self._given = {name: states[name][0] for name in exact}
         self.rebuilds += 1
+
+    def _remake(self, names: list[str], kept: dict[str, _Body],
+                states: dict[str, rebuild.State]) -> None:
+        """A spawn group's remaining bodies made again as spawn first made them, then given
+        what update or a default has changed since."""
+        group, redo = rebuild.as_group(names, kept, states)
+        bodies = self._spawn_group(group, [], kept[names[0]].batch, redo)
+        for name, body in bodies.items():
+            old = kept[name]
+            changes = rebuild.changes(old, body)
+            if changes is not None:
+                self._edit_spawned(body, changes)
+            body.follows_friction = old.follows_friction
+            body.follows_restitution = old.follows_restitution
+            body.turned = old.turned
+        self._bodies.update(bodies)
+
+    def _reload(self, names: list[str], kept: dict[str, _Body],
+                states: dict[str, rebuild.State]) -> None:
+        """A model loaded again (from its file while the file is unchanged), its deleted
+        bodies removed, the others given what update changed and the state to restore. Its
+        joints are back as loaded, at rest."""
+        model = kept[names[0]].model
+        assert model is not None
+        unchanged = model.path is not None and _text_of(model.path) == model.text
+        ids = load_bodies(self._bc, self._maker, model.fmt, model.text,
+                          model.path if unchanged else None)
+        wanted = {body.model.index: name for name in names
+                  if (body := kept[name]).model is not None}
+        for index, uid in enumerate(ids):
+            name = wanted.get(index)
+            if name is None:  # deleted since the load
+                self._maker.remove([uid])
+                continue
+            old = kept[name]
+            body = self._adopt_model_body(uid, name, old.batch)
+            body.model = old.model
+            assert old.model is not None
+            self._edit_model(body, old.model.edits)
+            if states[name] != old.model.loaded:
+                pose, twist = states[name]
+                self._reset_pose(uid, pose[:3], pose[3:])
+                self._reset_velocity(uid, twist[:3], twist[3:])
 
     @_engine_call
     def clear(self) -> None:
@@ -290,14 +363,20 @@ class PybulletEngine(Engine):
         self._bc.resetSimulation()
         self._bodies.clear()
         self._held.clear()
+        self._given.clear()
         self._removed = 0
         self._maker.forget()
         self._shapes.forget()
         self._configure_world()
 
+    @_engine_call
     def reset_dynamics(self) -> None:
-        """Nothing to do: Bullet rebuilds contacts from the new poses at the next step, and
-        rigid bodies made by PyBullet do not fall asleep (a moved floor lets balls fall)."""
+        """A new world, every body made again in order at the state just set: Bullet keeps
+        contact points and their warm-start impulses across a teleport, and a body flung out
+        of its broadphase stays out, so a rewound world would otherwise not replay its first
+        run, and would replay it differently after a longer run."""
+        if self._bodies:
+            self._rebuild()
 
     @_engine_call
     def update(self, names: Sequence[str], props: BodyProperties) -> None:
@@ -307,23 +386,43 @@ class PybulletEngine(Engine):
             if static:
                 raise InvalidArgumentError(f"entity {static[0]!r} is static: it has no mass")
         for body in bodies:
-            dynamics: dict[str, Any] = {}
-            if props.mass is not None and body.unit_inertia is not None:
-                body.mass = props.mass
-                dynamics.update(mass=props.mass,
-                                localInertiaDiagonal=[props.mass * i for i in body.unit_inertia])
-            if props.friction is not None:
-                dynamics["lateralFriction"] = body.friction = props.friction
-                body.follows_friction = False
-            if props.restitution is not None:
-                dynamics["restitution"] = body.restitution = props.restitution
-                body.follows_restitution = False
-            if dynamics:
-                self._change(body.uid, -1, **dynamics)
-            if props.rgba is not None:
-                body.rgba = tuple(float(c) for c in props.rgba)
-                for link in range(-1, body.links):
-                    self._bc.changeVisualShape(body.uid, link, rgbaColor=list(props.rgba))
+            if body.model is not None:
+                body.model.edits = _merged(body.model.edits, props)
+                self._edit_model(body, props)
+            else:
+                self._edit_spawned(body, props)
+
+    def _edit_spawned(self, body: _Body, props: BodyProperties) -> None:
+        dynamics: dict[str, Any] = {}
+        if props.mass is not None and body.unit_inertia is not None:
+            body.mass = props.mass
+            dynamics.update(mass=props.mass,
+                            localInertiaDiagonal=[props.mass * i for i in body.unit_inertia])
+        if props.friction is not None:
+            dynamics["lateralFriction"] = body.friction = props.friction
+            body.follows_friction = False
+        if props.restitution is not None:
+            dynamics["restitution"] = body.restitution = props.restitution
+            body.follows_restitution = False
+        if dynamics:
+            self._change(body.uid, -1, **dynamics)
+        if props.rgba is not None:
+            body.rgba = tuple(float(c) for c in props.rgba)
+            self._bc.changeVisualShape(body.uid, -1, rgbaColor=list(props.rgba))
+
+    def _edit_model(self, body: _Body, props: BodyProperties) -> None:
+        """A model's mass is its whole body's (every link scaled alike); friction and
+        restitution are its base's, the look every link's."""
+        if body.model is not None and props.mass is not None and not body.static:
+            scale_masses(self._bc, body.uid, body.model.links, props.mass)
+        dynamics = {key: value for key, value in (("lateralFriction", props.friction),
+                                                  ("restitution", props.restitution))
+                    if value is not None}
+        if dynamics:
+            self._change(body.uid, -1, **dynamics)
+        if props.rgba is not None:
+            for link in range(-1, body.links):
+                self._bc.changeVisualShape(body.uid, link, rgbaColor=list(props.rgba))
 
     def _owned(self) -> set[int]:
         return {b.uid for b in self._bodies.values()}
@@ -353,12 +452,18 @@ class PybulletEngine(Engine):
     @_engine_call
     def set_states(self, names: Sequence[str], poses: np.ndarray | None,
                    twists: np.ndarray | None) -> None:
+        """A pose alone keeps each body's twist, a twist alone its pose, as on every engine:
+        resetBasePositionAndOrientation zeroes the twist, so it is read first and set again."""
         ids = [b.uid for b in self._lookup(names)]
         if self._held:
             rebuild.release_held(self._held, names, poses is not None, twists is not None)
         if poses is not None:
-            for uid, pose in zip(ids, np.asarray(poses, dtype=float).tolist(), strict=True):
+            rows = np.asarray(poses, dtype=float).tolist()
+            if twists is None:
+                twists = self._read(ids)[1]
+            for uid, pose in zip(ids, rows, strict=True):
                 self._reset_pose(uid, pose[:3], pose[3:])
+            self._given.update(zip(names, rows, strict=True))
         if twists is not None:
             for uid, twist in zip(ids, np.asarray(twists, dtype=float).tolist(), strict=True):
                 self._reset_velocity(uid, twist[:3], twist[3:])
@@ -367,6 +472,7 @@ class PybulletEngine(Engine):
     def step(self, count: int) -> None:
         step = self._step
         self._held.clear()
+        self._given.clear()
         for _ in range(count):
             step()
 
@@ -410,17 +516,20 @@ class PybulletEngine(Engine):
                 f"PyBullet cannot load {fmt!r} models; it loads {', '.join(MODEL_FORMATS)}")
         if (text is None) == (path is None):
             raise InvalidArgumentError("give a model as text or as a path, not both or neither")
-        ids = load_bodies(self._bc, self._maker, fmt, text, path)
+        source = text if text is not None else read_text(path or "")
+        ids = load_bodies(self._bc, self._maker, fmt, source, path)
         try:
-            return self._adopt_model(fmt, ids, prefix)
+            return self._adopt_model(fmt, ids, prefix, source, path)
         except BaseException:
             self._maker.remove(ids)
             for name in [n for n, b in self._bodies.items() if b.uid in ids]:
                 del self._bodies[name]
             raise
 
-    def _adopt_model(self, fmt: str, ids: list[int], prefix: str) -> list[EntityInfo]:
-        """Name the loaded bodies, refuse names in use, and register the bodies."""
+    def _adopt_model(self, fmt: str, ids: list[int], prefix: str, text: str,
+                     path: str | None) -> list[EntityInfo]:
+        """Name the loaded bodies, refuse names in use, and register the bodies with what it
+        takes to load them again."""
         if not ids:
             raise InvalidArgumentError(f"the {fmt.upper()} model holds no bodies")
         names: list[str] = []
@@ -434,25 +543,47 @@ class PybulletEngine(Engine):
             raise NameNotUniqueError(
                 f"the model's body {taken[0]!r} has the name of an existing entity; load it "
                 "with another prefix")
-        return [self._adopt_model_body(uid, name) for uid, name in zip(ids, names, strict=True)]
+        batch, infos = next(self._batches), []
+        for index, (uid, name) in enumerate(zip(ids, names, strict=True)):
+            body = self._adopt_model_body(uid, name, batch)
+            poses, twists = self._read([uid])
+            body.model = rebuild.Model(fmt, text, path, index,
+                                       link_masses(self._bc, uid, body.links),
+                                       (poses[0].tolist(), twists[0].tolist()))
+            _, friction, restitution = self._properties(body)
+            infos.append(EntityInfo(name=name, shape="model", static=body.static,
+                                    mass=sum(m for m, _ in body.model.links),
+                                    friction=friction, restitution=restitution,
+                                    source="model"))
+        return infos
 
-    def _adopt_model_body(self, uid: int, name: str) -> EntityInfo:
+    def _adopt_model_body(self, uid: int, name: str, batch: int) -> _Body:
         """Register one loaded body, with the settings every dynamic body gets."""
-        links = self._bc.getNumJoints(uid)
-        base = self._bc.getDynamicsInfo(uid, -1)
-        mass, friction, inertia, restitution = base[0], base[1], base[2], base[5]
-        static = mass <= 0
+        static = self._bc.getDynamicsInfo(uid, -1)[0] <= 0
         if not static:
             self._change(uid, -1, linearDamping=0.0, angularDamping=0.0,
                          ccdSweptSphereRadius=self._values["pybullet.ccd_swept_sphere_radius"])
-        total = mass + sum(self._bc.getDynamicsInfo(uid, link)[0] for link in range(links))
-        self._bodies[name] = _Body(uid, static, "model", (), None if static else (
-            tuple(i / mass for i in inertia)), links=links)
-        return EntityInfo(name=name, shape="model", static=static, mass=total,
-                          friction=friction, restitution=restitution, source="model")
+        body = _Body(uid, static, "model", (), None, batch, links=self._bc.getNumJoints(uid))
+        self._bodies[name] = body
+        return body
 
     # -- life -----------------------------------------------------------------------------
     def close(self) -> None:
         if not self._closed:
             self._closed = True
             self._bc.disconnect()
+
+
+def _text_of(path: str) -> str | None:
+    """A model file's text now, or None where it cannot be read any more."""
+    try:
+        return read_text(path)
+    except InvalidArgumentError:
+        return None
+
+
+def _merged(edits: BodyProperties, props: BodyProperties) -> BodyProperties:
+    """The latest value of each property ``update`` has set on a model body."""
+    return dataclasses.replace(edits, **{
+        key: value for key in ("mass", "friction", "restitution", "rgba")
+        if (value := getattr(props, key)) is not None})

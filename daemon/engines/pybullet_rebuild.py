@@ -1,34 +1,45 @@
-"""Rebuilding a PyBullet world to free what removeBody keeps.
+"""Rebuilding a PyBullet world: resetSimulation, then every body made again as it was.
 
-removeBody leaves about 0.85 kB per removed body inside Bullet until resetSimulation, so a
-world that keeps some bodies while others come and go grows without end. The engine counts
-the bodies removed since the last rebuild; once they pass ``REBUILD_AFTER`` (or twice the
-bodies left, so that a rebuild's cost stays small beside the deletes that led to it) it
-reads every remaining body, calls resetSimulation, re-applies the world settings and makes
-each body again: shape, size, look, mass and inertia, friction, restitution, collision
-margin, CCD, pose and twist, under the same entity name (with a new PyBullet id).
+Two things need it. removeBody leaves about 0.9 kB per removed body inside Bullet until
+resetSimulation, so a world that keeps some bodies while others come and go grows without
+end: once the bodies removed since the last rebuild pass ``REBUILD_AFTER`` (or twice the
+bodies left, so that a rebuild's cost stays small beside the deletes that led to it) the
+engine rebuilds. And a rewound world (``reset_dynamics``, after ``stop`` set every body
+back to its created state) must replay its first run bit for bit: Bullet keeps contact
+points with their warm-start impulses across a teleport, and a body flung out of the
+broadphase stays out, so only a new world forgets the run before.
 
-A pose read back from Bullet is a rotation matrix turned into a quaternion, and setting that
-quaternion does not always give the same matrix back: about a third of the turned bodies
-read back a quaternion one or two units in the last place off. ``place`` corrects the
-quaternion a few times; a body still off after that keeps its exact old state as what
-``get_states`` reports until its state is next set or the world steps (the simulation goes
-on from a pose that differs by rounding only).
+A rebuild makes the bodies again in the order they were first made, batch by batch (a
+spawn group, a model load), through the same calls as the first time: shape, size, look,
+mass and inertia, friction, restitution, collision margin, CCD, pose and twist, under the
+same entity name (with a new PyBullet id). A world made only by spawns and rebuilt with
+the poses it was made with is then the same world, bit for bit.
 
-Worlds that hold bodies of a loaded model are not rebuilt (a model's joints, link states
-and file would all have to be restored): there removeBody's leak stays.
+A pose is set again from the value last given to PyBullet (spawn, ``set_states``) when the
+world has not stepped since; otherwise it is read back, a rotation matrix turned into a
+quaternion, and setting that quaternion does not always give the same matrix back: about a
+third of the turned bodies read back a quaternion one or two units in the last place off.
+``place`` corrects the quaternion a few times; a body still off after that keeps its exact
+old state as what ``get_states`` reports until its state is next set or the world steps
+(the simulation goes on from a pose that differs by rounding only).
+
+Loaded models are loaded again from their text, with the changes ``update`` made since.
+Their joints come back as loaded, at rest, so a rewound model replays its first run too;
+for that reason a world holding a model is not rebuilt to free deleted bodies, where its
+joints would have to be kept as they are: there removeBody's leak stays.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from dataclasses import dataclass
-from typing import Any
+import itertools
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass, field
 
 import numpy as np
 from pybullet_utils.bullet_client import BulletClient
 
-from galton.daemon.engines.pybullet_shapes import BodyMaker, ShapeCache, margin_for
+from galton.daemon.engines.pybullet_shapes import Link
+from galton.protocol import BodyGroup, BodyProperties
 
 REBUILD_AFTER = 5_000  # bodies removed since the last rebuild, at the least
 PLACE_TRIES = 4  # quaternion corrections before a pose is held instead
@@ -38,43 +49,113 @@ Held = tuple[list[float] | None, list[float] | None]  # the pose, twist or both 
 
 
 @dataclass(slots=True)
+class Model:
+    """Where a loaded body came from, to load it again."""
+
+    fmt: str
+    text: str
+    path: str | None  # loaded from this file (its relative mesh paths need it)
+    index: int  # the body's place among those the load made
+    links: tuple[Link, ...]  # base first, as loaded: ``update(mass=...)`` scales these
+    loaded: State  # the state it was loaded in, as read back
+    edits: BodyProperties = field(default_factory=BodyProperties)  # the latest of each
+
+
+@dataclass(frozen=True, slots=True)
+class Redo:
+    """How a rebuild makes a spawn group again: the orientation its bodies were made with,
+    and which of them then take their own."""
+
+    turn: tuple[float, ...]
+    turned: list[bool]
+
+
+@dataclass(slots=True)
 class Body:
-    """What the engine keeps per entity beyond PyBullet's body id: for spawned bodies,
-    everything needed to make the body again."""
+    """What the engine keeps per entity beyond PyBullet's body id: everything needed to make
+    the body again."""
 
     uid: int
     static: bool
     shape: str  # a protocol shape, or "model"
     size: tuple[float, ...]
-    unit_inertia: tuple[float, float, float] | None  # None for static bodies
+    unit_inertia: tuple[float, float, float] | None  # None for static bodies and models
+    batch: int = 0  # the spawn group or model load that made it
     links: int = 0  # a model's links beside the base
     follows_friction: bool = False  # set by default_(static_)friction, now and after a change
     follows_restitution: bool = False
     mass: float = 0.0  # spawned bodies: what PyBullet was last given (0 when static)
+    # The mass it was made with. Bullet computes a body's inertia in world axes when it
+    # makes it and again only at the end of a step, so the first step after a mass change
+    # still uses the old one: a rebuild makes the body with this mass, then sets ``mass``.
+    made_mass: float = 0.0
+    # The orientation it was made with, and whether spawn then turned it to its own (a
+    # group of several orientations): Bullet's first step uses the inertia of the body as
+    # made, in world axes, and a quaternion given to createMultiBody makes a matrix a few
+    # units in the last place off the one resetBasePositionAndOrientation makes.
+    turn: tuple[float, ...] = (0.0, 0.0, 0.0, 1.0)
+    turned: bool = False
     friction: float = 0.0
     restitution: float = 0.0
     rgba: tuple[float, ...] | None = None  # None: the default look
+    model: Model | None = None
 
 
 def due(removed: int, live: dict[str, Body]) -> bool:
     """Whether enough bodies went to make a rebuild worth it, and it can be done."""
     if removed < max(REBUILD_AFTER, 2 * len(live)):
         return False
-    return not any(body.shape == "model" for body in live.values())
+    return not any(body.model is not None for body in live.values())
 
 
-def read_states(bc: BulletClient, bodies: dict[str, Body]) -> dict[str, State]:
-    """Each body's pose and twist, as PyBullet reports them."""
+def read_states(bc: BulletClient, bodies: dict[str, Body], given: dict[str, list[float]],
+                held: dict[str, Held]) -> dict[str, State]:
+    """Each body's pose and twist to make it with: a pose given since the last step as it
+    was given, a held state as held, the rest as PyBullet reports it."""
     states = {}
     for name, body in bodies.items():
         position, orientation = bc.getBasePositionAndOrientation(body.uid)
         linear, angular = bc.getBaseVelocity(body.uid)
-        states[name] = ([*position, *orientation], [*linear, *angular])
+        pose, twist = held.get(name, (None, None))
+        states[name] = (given.get(name) or pose or [*position, *orientation],
+                        twist or [*linear, *angular])
     return states
 
 
+def batches(bodies: dict[str, Body]) -> Iterator[list[str]]:
+    """The bodies in the order they were made, in runs that one call makes again: what is
+    left of one spawn group or of one model load."""
+    for _, run in itertools.groupby(bodies, key=lambda name: bodies[name].batch):
+        yield list(run)
+
+
+def as_group(names: list[str], bodies: dict[str, Body],
+             states: dict[str, State]) -> tuple[BodyGroup, Redo]:
+    """What is left of a spawn group, as the group that makes it again (with the first
+    body's values) and how: a body is turned when it was or when its turn has changed."""
+    body = bodies[names[0]]
+    group = BodyGroup(body.shape, body.size, names,
+                      np.array([states[n][0] for n in names], dtype=float),
+                      twists=np.array([states[n][1] for n in names], dtype=float),
+                      static=body.static, mass=None if body.static else body.made_mass,
+                      friction=body.friction, restitution=body.restitution, rgba=body.rgba)
+    turned = [bodies[n].turned or tuple(states[n][0][3:]) != body.turn for n in names]
+    return group, Redo(body.turn, turned)
+
+
+def changes(old: Body, new: Body) -> BodyProperties | None:
+    """What sets a body made again to the values it had, or None when it has them."""
+    props = BodyProperties(
+        mass=old.mass if old.mass != new.mass else None,
+        friction=old.friction if old.friction != new.friction else None,
+        restitution=old.restitution if old.restitution != new.restitution else None,
+        rgba=old.rgba if old.rgba != new.rgba and old.rgba is not None else None)
+    return None if props == BodyProperties() else props
+
+
 def place(bc: BulletClient, uid: int, pose: list[float]) -> bool:
-    """Set a body's pose so that it reads back as ``pose``; False where rounding defeats it."""
+    """Set a body's pose so that it reads back as ``pose``; False where rounding defeats it.
+    Either way the body's twist is zero after it (resetBasePositionAndOrientation's doing)."""
     want = (tuple(pose[:3]), tuple(pose[3:]))
     quaternion = list(pose[3:])
     for _ in range(PLACE_TRIES):
@@ -87,42 +168,19 @@ def place(bc: BulletClient, uid: int, pose: list[float]) -> bool:
     return False
 
 
-def recreate(bc: BulletClient, maker: BodyMaker, shapes: ShapeCache, bodies: dict[str, Body],
-             states: dict[str, State], values: dict[str, Any]) -> dict[str, Held]:
-    """Make the spawned ``bodies`` again in a freshly reset world, giving each its new id.
-    Returns the states of those that do not read back bit for bit (see the module doc)."""
-    groups: dict[tuple[Any, ...], list[str]] = {}
-    for name, body in bodies.items():
-        groups.setdefault((body.shape, body.size, body.rgba, body.mass), []).append(name)
-    made: list[int] = []
-    for (shape, size, rgba, mass), names in groups.items():
-        ids = maker.create(mass, shapes.get(shape, size), shapes.visual(shape, size, rgba),
-                           [states[n][0][:3] for n in names], states[names[0]][0][3:],
-                           set(), made)
-        for name, uid in zip(names, ids, strict=True):
-            bodies[name].uid = uid
+def settle(bc: BulletClient, bodies: dict[str, Body], states: dict[str, State],
+           exact: set[str]) -> dict[str, Held]:
+    """Correct the poses of bodies made again from read-back states (those not in
+    ``exact``); return the states of those that still do not read back bit for bit."""
     held: dict[str, Held] = {}
-    margins: set[tuple[str, tuple[float, ...]]] = set()
     for name, body in bodies.items():
-        dynamics: dict[str, Any] = {"lateralFriction": body.friction,
-                                    "restitution": body.restitution}
-        if not body.static and body.unit_inertia is not None:
-            dynamics.update(mass=body.mass,
-                            localInertiaDiagonal=[body.mass * i for i in body.unit_inertia],
-                            ccdSweptSphereRadius=values["pybullet.ccd_swept_sphere_radius"])
-        bc.changeDynamics(body.uid, -1, **dynamics)
         pose, twist = states[name]
-        exact = place(bc, body.uid, pose)
+        if name in exact or bc.getBasePositionAndOrientation(body.uid) == (
+                tuple(pose[:3]), tuple(pose[3:])):
+            continue
+        if not place(bc, body.uid, pose):
+            held[name] = (pose, None)
         bc.resetBaseVelocity(body.uid, twist[:3], twist[3:])
-        linear, angular = bc.getBaseVelocity(body.uid)
-        twist_exact = [*linear, *angular] == twist
-        if not (exact and twist_exact):
-            held[name] = (None if exact else pose, None if twist_exact else twist)
-        if (body.shape, body.size) not in margins:
-            margins.add((body.shape, body.size))
-            margin = margin_for(body.shape, body.size, values["pybullet.collision_margin"])
-            if margin is not None:
-                bc.changeDynamics(body.uid, -1, collisionMargin=margin)
     return held
 
 

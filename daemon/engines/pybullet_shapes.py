@@ -112,6 +112,7 @@ def margin_for(shape: str, size: tuple[float, ...], margin: float) -> float | No
 
 
 Mesh = tuple[list[list[float]], list[int]]  # vertices, triangle indices
+Link = tuple[float, tuple[float, ...]]  # a model link's mass and inertia diagonal
 
 
 def _lathe(profile: list[tuple[float, float]]) -> Mesh:
@@ -343,13 +344,14 @@ def model_file(fmt: str, text: str | None, path: str | None) -> Iterator[str]:
         yield file_name
 
 
-def load_bodies(bc: BulletClient, maker: BodyMaker, fmt: str, text: str | None,
+def load_bodies(bc: BulletClient, maker: BodyMaker, fmt: str, text: str,
                 path: str | None) -> list[int]:
-    """Load a URDF or MJCF model; a model PyBullet refuses leaves no body behind."""
-    check_xml(fmt, text if text is not None else read_text(path or ""))
+    """Load a URDF or MJCF model (its ``text``, from ``path`` when it came from a file); a
+    model PyBullet refuses leaves no body behind."""
+    check_xml(fmt, text)
     before = maker.known_ids()
     try:
-        with model_file(fmt, text, path) as file_name:
+        with model_file(fmt, None if path else text, path) as file_name:
             if fmt == "urdf":
                 ids = [bc.loadURDF(file_name, flags=URDF_FLAGS)]
             else:
@@ -361,6 +363,23 @@ def load_bodies(bc: BulletClient, maker: BodyMaker, fmt: str, text: str | None,
             "printed the reason on the daemon's output") from exc
     maker.reused(ids)
     return ids
+
+
+def link_masses(bc: BulletClient, uid: int, links: int) -> tuple[Link, ...]:
+    """Mass and inertia diagonal of a loaded body's base and each of its links."""
+    infos = (bc.getDynamicsInfo(uid, link) for link in range(-1, links))
+    return tuple((float(info[0]), tuple(float(i) for i in info[2])) for info in infos)
+
+
+def scale_masses(bc: BulletClient, uid: int, links: tuple[Link, ...], mass: float) -> None:
+    """Give a loaded body this total mass, its base and links scaled alike from their
+    loaded values (as MuJoCo scales a model's subtree), so that repeated updates do not
+    compound rounding."""
+    factor = mass / max(sum(m for m, _ in links), 1e-12)
+    for link, (link_mass, inertia) in zip(range(-1, len(links) - 1), links, strict=True):
+        if link_mass > 0:
+            bc.changeDynamics(uid, link, mass=link_mass * factor,
+                              localInertiaDiagonal=[i * factor for i in inertia])
 
 
 def unique_name(name: str, taken: set[str]) -> str:

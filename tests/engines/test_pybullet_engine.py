@@ -176,6 +176,24 @@ def test_spawn_get_set_delete_round_trip(engine: PybulletEngine) -> None:
     assert engine.get_states(["s1"])[0][0, 0] == pytest.approx(5)
 
 
+def test_a_pose_alone_keeps_the_twist_and_a_twist_alone_the_pose(
+        engine: PybulletEngine) -> None:
+    """resetBasePositionAndOrientation zeroes a body's twist; the engine sets it again."""
+    engine.spawn([balls(["a"], [0, 0, 1], twists=np.array([[1.0, 0, 2, 0, 3, 0]]))])
+    (arm,) = engine.load_model("urdf", ARM_URDF, None, "m/")
+    names = ["a", arm.name]
+    engine.set_states([arm.name], None, np.array([[0.5, 0, 0, 0, 0, 0.2]]))
+    _, twists = engine.get_states(names)
+    moved = poses_at([[1, 1, 2], [2, 2, 2]])
+    moved[1, 3:] = [0, 0, math.sin(0.2), math.cos(0.2)]
+    engine.set_states(names, moved, None)
+    poses, kept = engine.get_states(names)
+    np.testing.assert_array_equal(kept, twists)
+    np.testing.assert_allclose(poses, moved, atol=1e-15)
+    engine.set_states(names, None, np.zeros((2, 6)))
+    np.testing.assert_array_equal(engine.get_states(names)[0], poses)
+
+
 def test_default_mass_is_water_density_and_capsule_inertia_is_exact(
         engine: PybulletEngine) -> None:
     engine.spawn([BodyGroup("box", (0.1, 0.2, 0.3), ["box"], poses_at([0, 0, 1])),
@@ -410,6 +428,92 @@ def test_identical_runs_give_identical_arrays() -> None:
     (p0, t0), (p1, t1) = runs
     assert np.array_equal(p0, p1) and np.array_equal(t0, t1)
     assert p0[:, 2].max() < 0.3  # the top layer came down onto the bottom one
+
+
+# -- rewinding: stop sets every body back, then reset_dynamics -----------------------------
+def overlapping_scene() -> list[BodyGroup]:
+    """Spheres, boxes and a capsule made overlapping on a plane: they burst apart, collide
+    and tumble, so any difference in the contact state shows within a few hundred steps."""
+    def turned(positions: Any, angles: list[float]) -> np.ndarray:
+        poses = poses_at(positions)
+        poses[:, 3], poses[:, 6] = np.sin(np.divide(angles, 2)), np.cos(np.divide(angles, 2))
+        return poses
+
+    return [ground(),
+            balls([f"s{i}" for i in range(4)], [[0, 0, 0.05], [0.08, 0, 0.05],
+                                                [0.04, 0.06, 0.1], [0, 0.02, 0.14]]),
+            BodyGroup("box", (0.05, 0.04, 0.03), ["b0", "b1"],
+                      turned([[0.1, 0.05, 0.05], [0.14, 0.08, 0.09]], [0.4, 0.7])),
+            BodyGroup("capsule", (0.03, 0.06), ["cap"], turned([[0.05, 0.1, 0.12]], [1.2]),
+                      twists=np.array([[0.2, 0, 0, 0, 0, 1.0]]))]
+
+
+def created_states(groups: list[BodyGroup]) -> tuple[list[str], np.ndarray, np.ndarray]:
+    """Names, poses and twists as the World keeps them for a stop: what spawn was given."""
+    names = [n for g in groups for n in g.names]
+    twists = [g.twists if g.twists is not None else np.zeros((len(g), 6)) for g in groups]
+    return names, np.vstack([g.poses for g in groups]), np.vstack(twists)
+
+
+def test_a_rewound_world_replays_its_first_run(engine: PybulletEngine) -> None:
+    """Bit for bit, however long the run before the rewind was, with a model, an update and
+    a deleted body before the first run (Bullet kept contacts and their warm starts)."""
+    groups = overlapping_scene()
+    engine.spawn(groups)
+    engine.update(["s1", "b0"], BodyProperties(mass=0.3, friction=0.9, rgba=(1, 0, 0, 1)))
+    engine.delete(["s2"])
+    (arm,) = engine.load_model("urdf", ARM_URDF, None, "m/")
+    engine.set_states([arm.name], poses_at([0.3, 0.3, 0.3]), None)
+    names, poses, twists = created_states(groups)
+    keep = [k for k, name in enumerate(names) if name != "s2"]
+    names = [*(names[k] for k in keep), arm.name]
+    poses, twists = np.vstack([poses[keep], poses_at([0.3, 0.3, 0.3])]), np.vstack(
+        [twists[keep], np.zeros(6)])
+
+    def run(steps: int) -> tuple[np.ndarray, np.ndarray]:
+        engine.step(steps)
+        states = engine.get_states(names)
+        engine.set_states(names, poses, twists)
+        engine.reset_dynamics()
+        return states
+
+    first = run(600)
+    run(100)
+    again = run(600)
+    np.testing.assert_array_equal(first[0], again[0])
+    np.testing.assert_array_equal(first[1], again[1])
+    assert np.abs(first[0][:, :3] - poses[:, :3]).max() > 0.3  # they burst apart
+
+
+def test_a_rewound_model_has_its_joints_back_as_loaded(engine: PybulletEngine) -> None:
+    (arm,) = engine.load_model("urdf", ARM_URDF, None, "m/")
+    pose, twist = engine.get_states([arm.name])
+    engine.update([arm.name], BodyProperties(mass=5.0, friction=0.3))
+    engine._bc.resetJointState(body_id(engine, arm.name), 0, 0.5, 2.0)
+    engine.step(10)
+    engine.set_states([arm.name], pose, twist)
+    engine.reset_dynamics()
+    uid = body_id(engine, arm.name)
+    assert engine._bc.getJointState(uid, 0)[:2] == (0.0, 0.0)
+    np.testing.assert_allclose(engine.properties([arm.name]), [[5.0, 0.3, 0.0]])
+    np.testing.assert_array_equal(engine.get_states([arm.name])[0], pose)
+
+
+def test_a_model_mass_scales_every_link(engine: PybulletEngine) -> None:
+    """As MuJoCo does: the whole model weighs what update says, its links in proportion."""
+    (arm,) = engine.load_model("urdf", ARM_URDF, None, "m/")
+    uid = body_id(engine, arm.name)
+    for mass in (5.0, 1.25):
+        engine.update([arm.name], BodyProperties(mass=mass))
+        assert engine.properties([arm.name])[0, 0] == pytest.approx(mass)
+        base, link = (engine._bc.getDynamicsInfo(uid, k) for k in (-1, 0))
+        assert base[0] == pytest.approx(0.8 * mass) and link[0] == pytest.approx(0.2 * mass)
+        assert base[2] == pytest.approx([0.01 * 0.4 * mass] * 3)
+
+
+def test_rewinding_an_empty_world_does_nothing(engine: PybulletEngine) -> None:
+    engine.reset_dynamics()
+    assert engine.rebuilds == 0 and engine.state_within(1e6, 1e5)
 
 
 # -- models ------------------------------------------------------------------------------
