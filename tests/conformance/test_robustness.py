@@ -4,6 +4,8 @@ by hand or by the fuzzer, on both engines, through a real daemon."""
 from __future__ import annotations
 
 import queue
+import subprocess
+import sys
 import threading
 from collections.abc import Callable, Iterator
 from typing import Any
@@ -24,6 +26,8 @@ from galton.protocol import (
 )
 
 WAIT_S = 20.0
+ONE_BODY_MJCF = ('<mujoco><worldbody><body name="b"><freejoint/><geom size=".1"/></body>'
+                 "</worldbody></mujoco>")
 LONG = 10**9
 
 
@@ -181,7 +185,7 @@ def test_run_until_far_away_is_refused_naming_its_own_field(sim: Client) -> None
 
 @pytest.mark.parametrize("prefix", ["\x00", "a\nb", "x" * 65])
 def test_a_bad_model_prefix_is_an_invalid_argument(sim: Client, prefix: str) -> None:
-    text = '<mujoco><worldbody><body name="b"><freejoint/><geom size=".1"/></body></worldbody></mujoco>'
+    text = ONE_BODY_MJCF
     code, message, _ = raw(sim, "load_model", request(
         "load_model", {"format": "mjcf", "text": text, "prefix": prefix}))
     assert code == ResultCode.INVALID_ARGUMENT and "prefix" in message
@@ -189,7 +193,7 @@ def test_a_bad_model_prefix_is_an_invalid_argument(sim: Client, prefix: str) -> 
 
 
 def test_a_taken_model_name_is_name_not_unique(sim: Client) -> None:
-    text = '<mujoco><worldbody><body name="b"><freejoint/><geom size=".1"/></body></worldbody></mujoco>'
+    text = ONE_BODY_MJCF
     sim.load_model("mjcf", text=text, prefix="m_")
     before = snapshot(sim)
     code, _, _ = raw(sim, "load_model", request(
@@ -314,3 +318,26 @@ def test_list_reports_effective_values(sim: Client) -> None:
         assert (info.mass is None) == info.static
     ball = sim.list(kind="dynamic")[0]
     assert ball.mass == pytest.approx(1000 * 4 / 3 * np.pi * 0.05**3, rel=1e-6)
+
+
+def test_a_killed_client_process_s_step_ends(sim: Client, daemon: Any) -> None:
+    """The issue's case: a client process killed during step 10^9."""
+    sim.spawn(ball_row(1)[1])
+    script = ("import sys\nfrom galton.client import Client\n"
+              "with Client(sys.argv[1], sys.argv[2], timeout=5) as c:\n"
+              "    c.step(10**9, timeout=600)\n")
+    events: queue.Queue[dict] = queue.Queue()
+    with sim.on_event(events.put):
+        child = subprocess.Popen([sys.executable, "-c", script, daemon.instance,
+                                  daemon.endpoint])
+        try:
+            wait_for(lambda: sim.status().step > 0)
+        finally:
+            child.kill()
+            child.wait(WAIT_S)
+        event = events.get(timeout=WAIT_S)
+        while event["kind"] != "job_abandoned":
+            event = events.get(timeout=WAIT_S)
+    assert 0 < event["steps_done"] < LONG
+    assert sim.play().state == "playing"
+    sim.pause()
