@@ -13,6 +13,7 @@ import queue
 import sys
 import time
 from collections.abc import Callable
+from contextlib import AbstractContextManager, nullcontext
 from typing import Any
 
 import numpy as np
@@ -94,6 +95,9 @@ class SimLoop(StateOps):
         self._stopping = False
         self.rtf = 0.0
         self._status_reply: tuple[bytes, tuple[Any, ...], bytes] | None = None
+        # Wraps each scene-changing request (spawn, delete, load_model...): galton-daemon
+        # makes SIGTERM end the process at once inside it (server.sigterm_ends_at_once).
+        self.work_guard: Callable[[], AbstractContextManager[None]] = nullcontext
         self.clock: tuple[int, float, float, int, bool] = (0, 0.0, 0.0, 0, False)
         self.refresh_clock()
         self.tune_switch_interval()
@@ -213,7 +217,8 @@ class SimLoop(StateOps):
             op.check_arg_names(request.args)
             self._require_world(request.args)
             call.client = request.client
-            result = self._dispatch(op, call, request.args)
+            with self.work_guard() if op.mutates and not op.steps else nullcontext():
+                result = self._dispatch(op, call, request.args)
             if result is not None:
                 self._reply_ok(call, result)
         except RemoteError as error:

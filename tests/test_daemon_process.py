@@ -2,16 +2,19 @@
 
 from __future__ import annotations
 
+import contextlib
 import importlib.util
 import signal
 import threading
 from pathlib import Path
 
+import numpy as np
+import psutil
 import pytest
 import zenoh
 
 from galton.client import Client, EmbeddedDaemon, instances, plane, spheres, wait_for_daemon
-from galton.protocol import DaemonUnreachableError, OperationFailedError, Telemetry
+from galton.protocol import DaemonUnreachableError, GaltonError, OperationFailedError, Telemetry
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -143,3 +146,27 @@ def test_a_daemon_without_telemetry_still_serves() -> None:
             assert client.status().state == "paused"
             assert client.step(5).step == 30
         assert samples == []
+
+
+def test_sigterm_in_the_middle_of_a_long_spawn_ends_the_daemon() -> None:
+    """A 100,000-body spawn holds the GIL inside the engine for seconds: SIGTERM must not
+    wait for it (issue 22). The process ends by the signal's default action."""
+    daemon = EmbeddedDaemon("pybullet", instance="long-spawn").start()
+    assert daemon.process is not None
+    process = psutil.Process(daemon.process.pid)
+    names = [f"s{i}" for i in range(100_000)]
+    grid = np.column_stack([np.arange(100_000) % 300 * 0.1, np.arange(100_000) // 300 * 0.1,
+                            np.zeros(100_000)])
+    with Client(daemon.instance, daemon.endpoint, timeout=120) as client:
+        cpu = sum(process.cpu_times()[:2])
+        def spawn() -> None:
+            with contextlib.suppress(GaltonError):  # no reply: the daemon is gone
+                client.spawn(spheres(names, grid, 0.04, static=True), timeout=120)
+        request = threading.Thread(target=spawn, daemon=True)
+        request.start()
+        while sum(process.cpu_times()[:2]) - cpu < 0.3:  # the spawn is being worked on
+            request.join(0.01)
+        daemon.process.send_signal(signal.SIGTERM)
+        code = daemon.process.wait(10)
+        daemon.stop()
+    assert code in (0, -signal.SIGTERM)
