@@ -1,0 +1,51 @@
+"""docs/protocol.md is held to the code: every operation and its arguments, every result
+code, every limit and every event kind the daemon publishes are documented."""
+
+from __future__ import annotations
+
+import re
+from dataclasses import fields
+from pathlib import Path
+
+import pytest
+
+from galton.daemon.limits import Limits
+from galton.protocol import ResultCode
+from galton.protocol.operations import OPERATIONS, Operation
+
+PAGE = (Path(__file__).resolve().parents[1] / "docs" / "protocol.md").read_text()
+DAEMON = Path(__file__).resolve().parents[1] / "daemon"
+
+
+def section(op: str) -> str:
+    """The text under the heading that names this operation."""
+    match = re.search(rf"^### .*`{op}`.*$", PAGE, re.MULTILINE)
+    assert match, f"docs/protocol.md has no section for {op!r}"
+    rest = PAGE[match.end():]
+    end = re.search(r"^##", rest, re.MULTILINE)
+    return rest[:end.start() if end else None]
+
+
+@pytest.mark.parametrize("op", OPERATIONS.values(), ids=list(OPERATIONS))
+def test_every_operation_and_argument_is_documented(op: Operation) -> None:
+    text = section(op.name)
+    for name in op.arg_names:
+        assert f"`{name}`" in text, f"{op.name}: argument {name!r} is not documented"
+
+
+def test_every_result_code_is_in_the_table() -> None:
+    for code in ResultCode:
+        assert re.search(rf"^\| {int(code)} \| {code.name} \|", PAGE, re.MULTILINE), code.name
+
+
+def test_every_limit_is_in_the_table() -> None:
+    for spec in fields(Limits):
+        assert f"| `{spec.name}` |" in PAGE, spec.name
+
+
+def test_every_event_kind_is_documented() -> None:
+    source = "".join(p.read_text() for p in DAEMON.glob("*.py"))
+    kinds = set(re.findall(r'"kind": "(\w+)"', source))
+    assert kinds >= {"state", "scene", "physics_error", "job_abandoned"}
+    for kind in kinds:
+        assert f"| `{kind}` |" in PAGE, kind
