@@ -17,14 +17,22 @@ docs/physics/pybullet.md has the measurements. ``contactBreakingThreshold`` is a
 the PyBullet module: every engine sets its own value when it starts, and the last
 ``set_params`` wins for all engines of the process.
 
-Memory: removeBody keeps about 0.85 kB per body even with shared collision shapes; only
+Memory: removeBody keeps about 0.9 kB per body even with shared collision shapes; only
 resetSimulation frees it, which ``clear`` does, and ``delete`` does when the world empties
-or, past a count of removed bodies, by rebuilding the world (pybullet_rebuild.py).
+or, past a count of removed bodies, by rebuilding the world (pybullet_rebuild.py). Visual
+meshes are made once per process (pybullet_shapes.shared_mesh): createVisualShape never
+lets go of the lists it is given.
+
+Rewinding: ``reset_dynamics`` rebuilds the world too, every body made again as it was first
+made, so that a stopped world replays its first run bit for bit (Bullet would otherwise keep
+contact points and their warm starts across the teleport).
+
+The engine is three parts: this module (bodies, states, models), ``Parameters``
+(pybullet_params.py) and ``Rebuilding`` (pybullet_rebuild.py).
 """
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 import importlib.metadata
 import itertools
@@ -50,20 +58,15 @@ from galton.daemon.engine import (
     Engine,
 )
 from galton.daemon.engines import pybullet_rebuild as rebuild
-from galton.daemon.engines.pybullet_params import (
-    SPECS,
-    SURFACE_DEFAULTS,
-    WORLD_PARAMS,
-    default_keys,
-)
+from galton.daemon.engines.pybullet_params import SPECS, Parameters, default_keys
 from galton.daemon.engines.pybullet_rebuild import Body as _Body
+from galton.daemon.engines.pybullet_rebuild import Rebuilding
 from galton.daemon.engines.pybullet_shapes import (
     DENSITY,
     BodyMaker,
     ShapeCache,
     link_masses,
     load_bodies,
-    margin_for,
     read_text,
     scale_masses,
     unique_name,
@@ -103,7 +106,7 @@ def _engine_call(method: Callable[_P, _R]) -> Callable[_P, _R]:
     return wrapper
 
 
-class PybulletEngine(Engine):
+class PybulletEngine(Parameters, Rebuilding, Engine):
     """Named rigid bodies in a headless PyBullet world."""
 
     name = "pybullet"
@@ -159,52 +162,6 @@ class PybulletEngine(Engine):
         clean = check_updates(self.name, SPECS, params)
         self._values.update(clean)
         self._apply(clean)
-
-    def _configure_world(self) -> None:
-        """Every setting of a fresh (or reset) world: resetSimulation forgets them all."""
-        # The file cache keys on file names and keeps every file read: with temporary files
-        # it only grows, and with a rewritten file it serves the old text.
-        self._bc.setPhysicsEngineParameter(enableFileCaching=0)
-        self._apply(self._values)
-
-    def _apply(self, values: dict[str, Any]) -> None:
-        """Hand changed values to PyBullet: world settings, then the bodies they reach."""
-        world = {WORLD_PARAMS[k]: int(v) if isinstance(v, bool) else v
-                 for k, v in values.items() if k in WORLD_PARAMS}
-        if world:
-            self._bc.setPhysicsEngineParameter(**world)
-        if "gravity" in values:
-            self._bc.setGravity(*values["gravity"])
-        bodies = list(self._bodies.values())
-        if values.keys() & SURFACE_DEFAULTS:
-            self._follow_surface_defaults(bodies, values)
-        if "pybullet.ccd_swept_sphere_radius" in values:
-            radius = values["pybullet.ccd_swept_sphere_radius"]
-            for body in bodies:
-                if not body.static:
-                    self._change(body.uid, -1, ccdSweptSphereRadius=radius)
-        if "pybullet.collision_margin" in values:
-            done: set[tuple[str, tuple[float, ...]]] = set()
-            for body in bodies:  # the shape is shared: one body per shape sets it for all
-                if (body.shape, body.size) not in done:
-                    done.add((body.shape, body.size))
-                    self._set_margin(body.uid, body.shape, body.size)
-
-    def _follow_surface_defaults(self, bodies: list[_Body], values: dict[str, Any]) -> None:
-        """Bodies spawned without a friction or restitution take their kind's new default."""
-        for body in bodies:
-            friction_key, restitution_key = default_keys(body.static)
-            if body.follows_friction and friction_key in values:
-                body.friction = values[friction_key]
-                self._change(body.uid, -1, lateralFriction=body.friction)
-            if body.follows_restitution and restitution_key in values:
-                body.restitution = values[restitution_key]
-                self._change(body.uid, -1, restitution=body.restitution)
-
-    def _set_margin(self, uid: int, shape: str, size: tuple[float, ...]) -> None:
-        margin = margin_for(shape, size, self._values["pybullet.collision_margin"])
-        if margin is not None:
-            self._change(uid, -1, collisionMargin=margin)
 
     # -- bodies ---------------------------------------------------------------------------
     @_engine_call
@@ -298,65 +255,6 @@ class PybulletEngine(Engine):
         elif rebuild.due(self._removed, self._bodies):
             self._rebuild()
 
-    def _rebuild(self) -> None:
-        """resetSimulation, then every body made again, in the order it was first made, as
-        the protocol sees it (pybullet_rebuild.py)."""
-        kept = dict(self._bodies)
-        states = rebuild.read_states(self._bc, kept, self._given, self._held)
-        exact = set(self._given)
-        self.clear()
-        for names in rebuild.batches(kept):
-            if kept[names[0]].model is not None:
-                self._reload(names, kept, states)
-            else:
-                self._remake(names, kept, states)
-        self._held = rebuild.settle(self._bc, self._bodies, states, exact)
-        self._given = {name: states[name][0] for name in exact}
-        self.rebuilds += 1
-
-    def _remake(self, names: list[str], kept: dict[str, _Body],
-                states: dict[str, rebuild.State]) -> None:
-        """A spawn group's remaining bodies made again as spawn first made them, then given
-        what update or a default has changed since."""
-        group, redo = rebuild.as_group(names, kept, states)
-        bodies = self._spawn_group(group, [], kept[names[0]].batch, redo)
-        for name, body in bodies.items():
-            old = kept[name]
-            changes = rebuild.changes(old, body)
-            if changes is not None:
-                self._edit_spawned(body, changes)
-            body.follows_friction = old.follows_friction
-            body.follows_restitution = old.follows_restitution
-            body.turned = old.turned
-        self._bodies.update(bodies)
-
-    def _reload(self, names: list[str], kept: dict[str, _Body],
-                states: dict[str, rebuild.State]) -> None:
-        """A model loaded again (from its file while the file is unchanged), its deleted
-        bodies removed, the others given what update changed and the state to restore. Its
-        joints are back as loaded, at rest."""
-        model = kept[names[0]].model
-        assert model is not None
-        unchanged = model.path is not None and _text_of(model.path) == model.text
-        ids = load_bodies(self._bc, self._maker, model.fmt, model.text,
-                          model.path if unchanged else None)
-        wanted = {body.model.index: name for name in names
-                  if (body := kept[name]).model is not None}
-        for index, uid in enumerate(ids):
-            name = wanted.get(index)
-            if name is None:  # deleted since the load
-                self._maker.remove([uid])
-                continue
-            old = kept[name]
-            body = self._adopt_model_body(uid, name, old.batch)
-            body.model = old.model
-            assert old.model is not None
-            self._edit_model(body, old.model.edits)
-            if states[name] != old.model.loaded:
-                pose, twist = states[name]
-                self._reset_pose(uid, pose[:3], pose[3:])
-                self._reset_velocity(uid, twist[:3], twist[3:])
-
     @_engine_call
     def clear(self) -> None:
         """resetSimulation: the only call that frees PyBullet's collision shapes."""
@@ -387,7 +285,7 @@ class PybulletEngine(Engine):
                 raise InvalidArgumentError(f"entity {static[0]!r} is static: it has no mass")
         for body in bodies:
             if body.model is not None:
-                body.model.edits = _merged(body.model.edits, props)
+                body.model.edits = rebuild.merged(body.model.edits, props)
                 self._edit_model(body, props)
             else:
                 self._edit_spawned(body, props)
@@ -573,17 +471,3 @@ class PybulletEngine(Engine):
             self._closed = True
             self._bc.disconnect()
 
-
-def _text_of(path: str) -> str | None:
-    """A model file's text now, or None where it cannot be read any more."""
-    try:
-        return read_text(path)
-    except InvalidArgumentError:
-        return None
-
-
-def _merged(edits: BodyProperties, props: BodyProperties) -> BodyProperties:
-    """The latest value of each property ``update`` has set on a model body."""
-    return dataclasses.replace(edits, **{
-        key: value for key in ("mass", "friction", "restitution", "rgba")
-        if (value := getattr(props, key)) is not None})

@@ -1,6 +1,8 @@
 """The PyBullet engine's parameters: name, default, unit, meaning and check of each, and the
 setPhysicsEngineParameter keyword of those that are world settings.
 
+``Parameters``, a part of the engine, hands values to PyBullet and to the bodies they reach.
+
 The contact defaults are calibrated on the Galton board (docs/physics/pybullet.md): restitution
 0.8275 and friction 0.5 on every body (PyBullet multiplies both bodies' values: e = 0.685,
 mu = 0.25), contacts made from 0.01 m, 10 solver iterations and pyramid friction.
@@ -8,7 +10,14 @@ mu = 0.25), contacts made from 0.01 m, 10 solver iterations and pyramid friction
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING, Any
+
+from galton.daemon.engines.pybullet_shapes import margin_for
 from galton.daemon.params import ParamSpec, flag, integer, number, vector
+
+if TYPE_CHECKING:
+    from galton.daemon.engines.pybullet_engine import PybulletEngine
+    from galton.daemon.engines.pybullet_rebuild import Body
 
 SPECS: dict[str, ParamSpec] = {spec.name: spec for spec in (
     ParamSpec("timestep", 1 / 240, "s", "Simulated time per step.",
@@ -73,3 +82,54 @@ def default_keys(static: bool) -> tuple[str, str]:
     if static:
         return "default_static_friction", "default_static_restitution"
     return "default_friction", "default_restitution"
+
+
+class Parameters:
+    """The engine's part that applies parameters: world settings and per-body values."""
+
+    def _configure_world(self: PybulletEngine) -> None:
+        """Every setting of a fresh (or reset) world: resetSimulation forgets them all."""
+        # The file cache keys on file names and keeps every file read: with temporary files
+        # it only grows, and with a rewritten file it serves the old text.
+        self._bc.setPhysicsEngineParameter(enableFileCaching=0)
+        self._apply(self._values)
+
+    def _apply(self: PybulletEngine, values: dict[str, Any]) -> None:
+        """Hand changed values to PyBullet: world settings, then the bodies they reach."""
+        world = {WORLD_PARAMS[k]: int(v) if isinstance(v, bool) else v
+                 for k, v in values.items() if k in WORLD_PARAMS}
+        if world:
+            self._bc.setPhysicsEngineParameter(**world)
+        if "gravity" in values:
+            self._bc.setGravity(*values["gravity"])
+        bodies = list(self._bodies.values())
+        if values.keys() & SURFACE_DEFAULTS:
+            self._follow_surface_defaults(bodies, values)
+        if "pybullet.ccd_swept_sphere_radius" in values:
+            radius = values["pybullet.ccd_swept_sphere_radius"]
+            for body in bodies:
+                if not body.static:
+                    self._change(body.uid, -1, ccdSweptSphereRadius=radius)
+        if "pybullet.collision_margin" in values:
+            done: set[tuple[str, tuple[float, ...]]] = set()
+            for body in bodies:  # the shape is shared: one body per shape sets it for all
+                if (body.shape, body.size) not in done:
+                    done.add((body.shape, body.size))
+                    self._set_margin(body.uid, body.shape, body.size)
+
+    def _follow_surface_defaults(self: PybulletEngine, bodies: list[Body],
+                                 values: dict[str, Any]) -> None:
+        """Bodies spawned without a friction or restitution take their kind's new default."""
+        for body in bodies:
+            friction_key, restitution_key = default_keys(body.static)
+            if body.follows_friction and friction_key in values:
+                body.friction = values[friction_key]
+                self._change(body.uid, -1, lateralFriction=body.friction)
+            if body.follows_restitution and restitution_key in values:
+                body.restitution = values[restitution_key]
+                self._change(body.uid, -1, restitution=body.restitution)
+
+    def _set_margin(self: PybulletEngine, uid: int, shape: str, size: tuple[float, ...]) -> None:
+        margin = margin_for(shape, size, self._values["pybullet.collision_margin"])
+        if margin is not None:
+            self._change(uid, -1, collisionMargin=margin)

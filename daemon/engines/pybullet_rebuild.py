@@ -12,8 +12,15 @@ broadphase stays out, so only a new world forgets the run before.
 A rebuild makes the bodies again in the order they were first made, batch by batch (a
 spawn group, a model load), through the same calls as the first time: shape, size, look,
 mass and inertia, friction, restitution, collision margin, CCD, pose and twist, under the
-same entity name (with a new PyBullet id). A world made only by spawns and rebuilt with
-the poses it was made with is then the same world, bit for bit.
+same entity name (with a new PyBullet id); each body with the mass and orientation it was
+first made with, since Bullet's first step still uses the inertia (in world axes) of the
+body as made, and then given what has changed since. So a rewound world is the same world,
+bit for bit, however long it ran before: replays after a stop agree with each other always,
+and with the first run whenever that started from the created states (the World's stop
+sets them), with spawns, updates, parameters, deletes and model loads before it. One
+exception is known: a change of ``pybullet.collision_margin`` between making boxes or
+cylinders and the first run (Bullet keeps a box's extents less its margin, rounded anew at
+each change: 2e-4 m apart after 600 steps of a tumbling scene).
 
 A pose is set again from the value last given to PyBullet (spawn, ``set_states``) when the
 world has not stepped since; otherwise it is read back, a rotation matrix turned into a
@@ -31,15 +38,25 @@ joints would have to be kept as they are: there removeBody's leak stays.
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 from pybullet_utils.bullet_client import BulletClient
 
-from galton.daemon.engines.pybullet_shapes import Link
-from galton.protocol import BodyGroup, BodyProperties
+from galton.daemon.engines.pybullet_shapes import WHITE, Link, load_bodies, read_text
+from galton.protocol import (
+    BodyGroup,
+    BodyProperties,
+    InvalidArgumentError,
+    OperationFailedError,
+)
+
+if TYPE_CHECKING:
+    from galton.daemon.engines.pybullet_engine import PybulletEngine
 
 REBUILD_AFTER = 5_000  # bodies removed since the last rebuild, at the least
 PLACE_TRIES = 4  # quaternion corrections before a pose is held instead
@@ -149,7 +166,7 @@ def changes(old: Body, new: Body) -> BodyProperties | None:
         mass=old.mass if old.mass != new.mass else None,
         friction=old.friction if old.friction != new.friction else None,
         restitution=old.restitution if old.restitution != new.restitution else None,
-        rgba=old.rgba if old.rgba != new.rgba and old.rgba is not None else None)
+        rgba=(old.rgba or WHITE) if old.rgba != new.rgba else None)
     return None if props == BodyProperties() else props
 
 
@@ -204,3 +221,88 @@ def release_held(held: dict[str, Held], names: Sequence[str], poses: bool,
             pose, twist = (None if poses else pose), (None if twists else twist)
             if pose is not None or twist is not None:
                 held[name] = (pose, twist)
+
+
+def text_of(path: str) -> str | None:
+    """A model file's text now, or None where it cannot be read any more."""
+    try:
+        return read_text(path)
+    except InvalidArgumentError:
+        return None
+
+
+def merged(edits: BodyProperties, props: BodyProperties) -> BodyProperties:
+    """The latest value of each property ``update`` has set on a model body."""
+    return dataclasses.replace(edits, **{
+        key: value for key in ("mass", "friction", "restitution", "rgba")
+        if (value := getattr(props, key)) is not None})
+
+
+class Rebuilding:
+    """The engine's part that rebuilds its world."""
+
+    def _rebuild(self: PybulletEngine) -> None:
+        """resetSimulation, then every body made again, in the order it was first made, as
+        the protocol sees it (see the module's docstring)."""
+        kept = dict(self._bodies)
+        states = read_states(self._bc, kept, self._given, self._held)
+        exact = set(self._given)
+        self.clear()
+        for names in batches(kept):
+            if kept[names[0]].model is not None:
+                self._reload(names, kept, states)
+            else:
+                self._remake(names, kept, states)
+        self._held = settle(self._bc, self._bodies, states, exact)
+        self._given = {name: states[name][0] for name in exact}
+        self.rebuilds += 1
+
+    def _remake(self: PybulletEngine, names: list[str], kept: dict[str, Body],
+                states: dict[str, State]) -> None:
+        """A spawn group's remaining bodies made again as spawn first made them, then given
+        what update or a default has changed since."""
+        group, redo = as_group(names, kept, states)
+        bodies = self._spawn_group(group, [], kept[names[0]].batch, redo)
+        for name, body in bodies.items():
+            old = kept[name]
+            fixes = changes(old, body)
+            if fixes is not None:
+                self._edit_spawned(body, fixes)
+            body.follows_friction = old.follows_friction
+            body.follows_restitution = old.follows_restitution
+            body.turned, body.rgba = old.turned, old.rgba
+        self._bodies.update(bodies)
+
+    def _reload(self: PybulletEngine, names: list[str], kept: dict[str, Body],
+                states: dict[str, State]) -> None:
+        """A model loaded again (from its file while the file is unchanged), the bodies
+        deleted since its load removed again, the others restored."""
+        models = {name: model for name in names if (model := kept[name].model) is not None}
+        first = models[names[0]]
+        unchanged = first.path is not None and text_of(first.path) == first.text
+        try:
+            ids = load_bodies(self._bc, self._maker, first.fmt, first.text,
+                              first.path if unchanged else None)
+        except InvalidArgumentError as exc:  # its meshes gone from beside its file?
+            raise OperationFailedError(f"a model could not be loaded again: {exc}") from exc
+        wanted = {model.index: name for name, model in models.items()}
+        for index, uid in enumerate(ids):
+            name = wanted.get(index)
+            if name is None:
+                self._maker.remove([uid])
+            else:
+                self._restore_model_body(uid, name, kept[name].batch, models[name],
+                                         states[name])
+
+    def _restore_model_body(self: PybulletEngine, uid: int, name: str, batch: int,
+                            model: Model, state: State) -> None:
+        """A body loaded again, given what update changed and its state; its joints are
+        back as loaded, at rest. A state as loaded is not set again: a pose read back and
+        set makes a matrix a unit in the last place off the loaded one."""
+        body = self._adopt_model_body(uid, name, batch)
+        body.model = model
+        self._edit_model(body, model.edits)
+        if state != model.loaded:
+            pose, twist = state
+            self._reset_pose(uid, pose[:3], pose[3:])
+            self._reset_velocity(uid, twist[:3], twist[3:])
