@@ -6,8 +6,8 @@ end: once the bodies removed since the last rebuild pass ``REBUILD_AFTER`` (or t
 bodies left, so that a rebuild's cost stays small beside the deletes that led to it) the
 engine rebuilds. And a rewound world (``reset_dynamics``, after ``stop`` set every body
 back to its created state) must replay its first run bit for bit: Bullet keeps contact
-points with their warm-start impulses across a teleport, and a body flung out of the
-broadphase stays out, so only a new world forgets the run before.
+points with their warm-start impulses across a teleport, so only a new world forgets the
+run before.
 
 A rebuild makes the bodies again in the order they were first made, batch by batch (a
 spawn group, a model load), through the same calls as the first time: shape, size, look,

@@ -78,9 +78,8 @@ def test_a_pose_alone_keeps_the_twist_and_a_twist_alone_the_pose(
 
 
 def test_a_body_sent_absurdly_far_faults_the_world(sim: Client) -> None:
-    """A ball at x = 4e299 is finite, but no simulation goes on from there (PyBullet only
-    took it out of its broadphase): the step faults, and a reset to the created state
-    recovers."""
+    """A ball at x = 4e299 is finite (PyBullet lets it fall on there), but no simulation
+    goes on from there: the step faults, and a reset to the created state recovers."""
     sim.spawn(plane(), spheres(["ball"], [[0, 0, 0.5]], RADIUS))
     sim.set_states(["ball"], poses=np.array([[4e299, 0, 0.5, 0, 0, 0, 1]]))
     with pytest.raises(PhysicsError, match="diverged"):
