@@ -646,6 +646,7 @@ def resident_bytes() -> int:
         return int(statm.read().split()[1]) * PAGE_BYTES
 
 
+@pytest.mark.skipif(not os.path.exists("/proc/self/statm"), reason="reads Linux's /proc")
 def test_clearing_the_world_frees_what_it_held(engine: PybulletEngine) -> None:
     """`reset all` clears the world. PyBullet's createVisualShape keeps the lists of every
     mesh it is given, so meshes made afresh for each world leaked 17.5 kB per clear of these
