@@ -25,7 +25,7 @@ import numpy as np
 
 from galton.client.fuzz_requests import RequestMaker
 from galton.client.sdk import Client
-from galton.protocol import GaltonError, ResultCode, decode_reply
+from galton.protocol import GaltonError, PhysicsError, ResultCode, decode_reply
 from galton.protocol.operations import OPERATIONS
 
 REPLY_TIMEOUT_S = 30.0
@@ -76,8 +76,11 @@ def look(client: Client) -> WorldView:
     names = [e["name"] for e in entities]
     states: Any = "faulted"
     if not status["faulted"] and names:
-        result = client.call("get_states", {"names": names})
-        states = [result["poses"], result["twists"]]
+        try:  # a playing world may diverge between the two requests
+            result = client.call("get_states", {"names": names})
+            states = [result["poses"], result["twists"]]
+        except PhysicsError:
+            pass
     clock = {k: status[k] for k in ("state", "step", "sim_time", "timestep", "target_rtf",
                                     "entity_count", "engine", "faulted")}
     blob = msgpack.packb([clock, entities, states, client.call("get_params")["params"]],

@@ -37,6 +37,7 @@ class RequestMaker:
         self.names: list[str] = []  # the world's entities, as last listed
         self.sim_time = 0.0
         self.engine = "mujoco"  # the daemon's engine: load_world mostly keeps it
+        self.last_count = 1  # names in the request being made
         self._counter = 0
 
     # -- choices -----------------------------------------------------------------------
@@ -139,7 +140,9 @@ def _choice(maker: RequestMaker, arg: Arg) -> Any:
 
 
 def _names(maker: RequestMaker, arg: Arg) -> Any:
-    return maker.some_names()
+    names = maker.some_names()
+    maker.last_count = len(names)  # the rows that follow mostly match
+    return names
 
 
 def _map(maker: RequestMaker, arg: Arg) -> Any:
@@ -148,11 +151,14 @@ def _map(maker: RequestMaker, arg: Arg) -> Any:
 
 def _rows(width: int) -> Callable[[RequestMaker, Arg], Any]:
     def make(maker: RequestMaker, arg: Arg) -> Any:
-        rows = maker.rng.normal(0, 1, (int(maker.rng.integers(1, 4)), width))
+        count = maker.last_count if maker.chance(0.8) else int(maker.rng.integers(1, 4))
+        rows = maker.rng.normal(0, 1, (count, width))
         if width == 7:
             rows[:, 2] = np.abs(rows[:, 2]) + 0.5
         if maker.chance(0.1):
             return pack_f64(rows)[:-3]
+        if maker.chance(0.03):  # absurd but finite: the next step must fault the world
+            rows *= 1e200
         return pack_f64(rows)
     return make
 
