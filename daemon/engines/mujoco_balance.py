@@ -101,6 +101,13 @@ class BalanceGuard:
             elif slept:
                 del self._let_go[tree]
 
+    def forget(self, m: mujoco.MjModel, trees: np.ndarray) -> None:
+        """These trees left the world without a recompile (parked): free any held one."""
+        for tree in map(int, trees):
+            if tree in self._held:
+                self._release(m, tree)
+            self._let_go.pop(tree, None)
+
     def release_all(self, m: mujoco.MjModel) -> None:
         """Give every held ball its own sleep policy back (the guard is being switched off)."""
         for tree in list(self._held):

@@ -1,10 +1,11 @@
 """The MuJoCo engine: a world built with ``mujoco.MjSpec`` and edited while it runs.
 
-Every delete or model load edits the spec and recompiles it once, in place
-(``MjSpec.recompile``), so the bodies already there keep their positions, velocities and
-warm starts. A spawn does too unless the pool holds enough parked, pre-compiled bodies of the
-group's kind: then it binds the names to them, no compile (``mujoco_pool``); a compiling spawn
-adds spare parked twins, and delete and clear park spawned bodies again.
+A model load, and a delete that removes bodies, edit the spec and recompile it once, in
+place (``MjSpec.recompile``), so the bodies already there keep their positions, velocities
+and warm starts. A spawn does too unless the pool holds enough parked, pre-compiled bodies of
+the group's kind: then it binds the names to them, no compile (``mujoco_pool``); a compiling
+spawn adds spare parked twins, and delete and clear park spawned bodies again (no compile
+when they all fit in the pool).
 
 Dynamic bodies have a free joint; static ones are jointless children of the
 world whose pose is written into the compiled model (and the spec), so moving them needs no
@@ -14,6 +15,16 @@ compile: nothing in Python runs per body per step.
 
 Contacts: a contact takes the larger of its two geoms' frictions and the average of their
 solref (MuJoCo's rules); restitution maps to solref as ``mujoco_spec.damping_ratio`` says.
+
+Every change is all or nothing. What can fail (a recompile MuJoCo rejects, a world MuJoCo
+cannot hold) comes before anything that cannot; a failed recompile leaves the model and data
+in use untouched, and the spec's edits and the engine's books are put back. Removed bodies
+cannot be put back, so a delete in a world holding a loaded model (whose references may
+reach other bodies) is first tried on a copy of the spec.
+
+Size: MuJoCo holds at most ``mujoco_spec.MAX_BODIES`` bodies, and its compile costs
+O(free bodies x degrees of freedom): about 1.6 s for 4,000 free spheres, four times that for
+twice as many. Everything else here is linear in the bodies a call touches.
 """
 
 from __future__ import annotations
@@ -51,18 +62,26 @@ from galton.protocol import (
     Capabilities,
     EntityInfo,
     FeatureUnsupportedError,
+    GaltonError,
     InvalidArgumentError,
+    NameNotUniqueError,
     NotFoundError,
     OperationFailedError,
+    ResourceLimitError,
 )
 
 FEATURES = (FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDATE_MASS,
             FEATURE_UPDATE_FRICTION, FEATURE_UPDATE_RESTITUTION, FEATURE_UPDATE_RGBA,
             FEATURE_LOAD_MODEL, FEATURE_STATIC_POSE)
 _GEOM = mujoco.mjtObj.mjOBJ_GEOM
+_BODY = mujoco.mjtObj.mjOBJ_BODY
+# What MuJoCo raises for a model or a change it cannot take (FatalError: its mju_error).
+_MUJOCO_ERRORS = (ValueError, TypeError, RuntimeError, mujoco.FatalError)
+# Body names the engine keeps for itself: the world body's and the parked bodies'.
+_WORLD = "world"
 
 
-@dataclass
+@dataclass(eq=False)
 class _Entity:
     """An entity's spec body and what the engine must remember about it."""
 
@@ -73,6 +92,7 @@ class _Entity:
     restitution: float | None = None
     initial_pose: np.ndarray | None = None
     key: mp.Key | None = None  # its pool kind while its compiled values are still that kind's
+    parts: tuple[str, ...] = ()  # a model entity's inner bodies' names (taken while it lives)
 
     def geoms(self) -> list[Any]:
         return [self.body.first_geom()] if self.source == "spawn" else \
@@ -86,6 +106,14 @@ WORKERS_OFF_CONTACTS = 200
 # Counted across requests, so the looks fall on the same steps however the steps are split
 # into requests (a step(1) loop or one long run_until give the same trajectory).
 LOOK_EVERY_STEPS = 50
+
+
+def _mujoco_error(exc: Exception, what: str) -> GaltonError:
+    """A typed error for MuJoCo's refusal, in its words: too big is a resource limit."""
+    words = str(exc)
+    if "allocate memory" in words or "must be less than" in words:
+        return ResourceLimitError(f"{what}: MuJoCo cannot hold the world ({words})")
+    return InvalidArgumentError(f"{what}: {words}")
 
 
 class MujocoEngine(Engine):
@@ -109,6 +137,12 @@ class MujocoEngine(Engine):
         self._pool = mp.Pool()
         self._spec = mujoco.MjSpec()
         self._spec.modelname = "galton"
+        self._spec.copy_during_attach = True  # see mujoco_spec.add_group
+        self._home = self._spec.worldbody.add_frame()  # where big spawned groups live
+        self._spec.memory = ms.arena_bytes(1, 0)
+        self._parts: set[str] = set()  # names of loaded models' inner bodies
+        self._models = 0  # model entities alive
+        self._broken = False
         ms.write_options(self._spec.option, self._values)
         self._model = self._spec.compile()
         self._data = mujoco.MjData(self._model)
@@ -116,12 +150,19 @@ class MujocoEngine(Engine):
         self._start_workers()
         self._reindex()
 
-    def _recompile(self) -> None:
-        """Compile the edited spec in place, keeping the state; raise with MuJoCo's words."""
+    def _recompile(self, nbody: int | None = None, nv: int | None = None) -> None:
+        """Compile the edited spec in place, keeping the state, with an arena for ``nbody``
+        bodies and ``nv`` degrees of freedom (the model's own by default). On failure the
+        model and data in use are untouched; raise with MuJoCo's words."""
+        m = self._model
+        memory = self._spec.memory
+        self._spec.memory = ms.arena_bytes(m.nbody if nbody is None else nbody,
+                                           m.nv if nv is None else nv)
         try:
             self._model, self._data = self._spec.recompile(self._model, self._data)
-        except ValueError as exc:
-            raise InvalidArgumentError(f"MuJoCo rejected the change: {exc}") from exc
+        except _MUJOCO_ERRORS as exc:
+            self._spec.memory = memory
+            raise _mujoco_error(exc, "MuJoCo rejected the change") from exc
         self._workers = 0  # the recompiled MjData has no thread pool
         self._start_workers()
         self._reindex()
@@ -150,21 +191,12 @@ class MujocoEngine(Engine):
         self._index = mst.StateIndex.of(self._model)
         self._balance = self._balance_guard()
         self._ids = {name: e.body.id for name, e in self._entities.items()}
+        self._watch: np.ndarray | None = None
         self._warnings = self._data.warning.number
 
     def _balance_guard(self) -> BalanceGuard | None:
         """A guard for the compiled model, if wanted (see mujoco_balance)."""
         return BalanceGuard(self._model) if self._values["mujoco.wake_balanced"] else None
-
-    def _commit(self, added: Sequence[str], spares: Sequence[Any] = ()) -> None:
-        """Recompile after adding these entities (and parked spares); on failure take them
-        out again."""
-        try:
-            self._recompile()
-        except InvalidArgumentError:
-            self._pool.forget(spares)
-            ms.remove_bodies(self._spec, [*(self._entities.pop(n).body for n in added), *spares])
-            raise
 
     def _body_ids(self, names: Sequence[str]) -> np.ndarray:
         try:
@@ -182,6 +214,14 @@ class MujocoEngine(Engine):
         if not spawned.all():
             gids.append(np.flatnonzero(np.isin(m.body_rootid[m.geom_bodyid], ids[~spawned])))
         return np.concatenate(gids)
+
+    def _watched(self) -> np.ndarray:
+        """qpos rows of the entities' free bodies' positions (parked ones are no entities)."""
+        if self._watch is None:
+            ids = np.fromiter(self._ids.values(), dtype=np.int64, count=len(self._ids))
+            free = ids[self._index.kind[ids] == FREE]
+            self._watch = (self._index.qadr[free][:, None] + np.arange(3)).ravel()
+        return self._watch
 
     # -- Engine: description & parameters ------------------------------------------------
     def capabilities(self) -> Capabilities:
@@ -234,36 +274,35 @@ class MujocoEngine(Engine):
             ms.write_contacts(m, e.geoms(), self._geom_ids([name]), v, friction, restitution,
                               spawned)
 
+    def properties(self, names: Sequence[str]) -> np.ndarray:
+        """Mass from the compiled model (a model's subtree; NaN when static), the first geom's
+        sliding friction, and the nominal restitution: the one given, the default a spawned
+        body follows, NaN for a model's own contacts (MuJoCo has no restitution as such)."""
+        m, ids = self._model, self._body_ids(names)
+        entities = [self._entities[n] for n in names]
+        spawned = np.array([e.source == "spawn" for e in entities], dtype=bool)
+        mass = np.where(spawned, m.body_mass[ids], m.body_subtreemass[ids])
+        mass[[e.static for e in entities]] = np.nan
+        geoms = mst.first_geoms(m, ids, spawned)
+        friction = np.where(geoms >= 0, m.geom_friction[np.maximum(geoms, 0), 0], np.nan)
+        restitution = [self._restitution(e) for e in entities]
+        return np.column_stack([mass, friction, np.array(restitution, dtype=float)])
+
+    def _restitution(self, e: _Entity) -> float:
+        if e.restitution is not None:
+            return e.restitution
+        if e.source == "spawn":
+            return ms.default_surface(e.static, self._values)[1]
+        return float("nan")
+
     # -- Engine: create & delete ---------------------------------------------------------
     def spawn(self, groups: Sequence[BodyGroup]) -> None:
         """Bind parked bodies where the pool has enough of a group's kind; compile the other
         groups (with spare parked twins) in one recompile."""
-        names = [n for g in groups for n in g.names]
-        taken = [n for n in names if self._spec.body(n) is not None]
-        if taken:  # a model's inner link, which is no entity of the World's
-            raise InvalidArgumentError(f"MuJoCo already has a body named {taken[0]!r} (a part "
-                                       "of a loaded model); choose another name")
-        if len(set(names)) != len(names):
-            raise InvalidArgumentError("MuJoCo rejected the change: a name is repeated")
-        added: list[str] = []
-        spares: list[Any] = []
-        pooled: list[tuple[BodyGroup, mp.Key]] = []
-        wanted: dict[mp.Key, int] = {}
-        for group in groups:
-            material = ms.material(group, self._values)
-            key = mp.key_of(group, material)
-            if self._pool.available(key) >= wanted.get(key, 0) + len(group):
-                wanted[key] = wanted.get(key, 0) + len(group)
-                pooled.append((group, key))
-                continue
-            for name, body in ms.add_group(self._spec, group, material):
-                self._entities[name] = _Entity(body, group.static, friction=group.friction,
-                                               restitution=group.restitution, key=key)
-                added.append(name)
-            spares += self._pool.add_spares(self._spec, group, material, key,
-                                            self._pool.spares(len(group)))
-        if added:
-            self._commit(added, spares)
+        self._check_new([n for g in groups for n in g.names])
+        pooled, compiled = self._plan(groups)
+        if compiled:
+            self._compile_groups(compiled)
         for group, key in pooled:
             self._bind(group, key)
         if pooled:
@@ -272,6 +311,75 @@ class MujocoEngine(Engine):
             if group.twists is not None and not group.static:
                 mst.write_twists(self._data, self._index, self._body_ids(group.names),
                                  np.asarray(group.twists, dtype=float), None)
+
+    def _check_new(self, names: Sequence[str]) -> None:
+        if len(set(names)) != len(names):
+            raise InvalidArgumentError("MuJoCo rejected the change: a name is repeated")
+        for name in names:
+            if name in self._entities:
+                raise NameNotUniqueError(f"an entity named {name!r} already exists")
+            if name in self._parts:  # a model's inner link, which is no entity of the World's
+                raise InvalidArgumentError(f"MuJoCo already has a body named {name!r} (a part "
+                                           "of a loaded model); choose another name")
+            if name == _WORLD or name.startswith(mp.PREFIX):
+                raise InvalidArgumentError(f"the body name {name!r} is the MuJoCo engine's own "
+                                           f"(the world, or beginning {mp.PREFIX!r})")
+
+    def _plan(self, groups: Sequence[BodyGroup]) -> tuple[
+            list[tuple[BodyGroup, mp.Key]], list[tuple[BodyGroup, ms.Material, mp.Key, int]]]:
+        """Which groups take parked bodies, and which are compiled with how many spares;
+        refuse (ResourceLimitError) a spawn that would pass MuJoCo's body limit."""
+        pooled, compiled = [], []
+        wanted: dict[mp.Key, int] = {}
+        total = self._model.nbody
+        for group in groups:
+            material = ms.material(group, self._values)
+            key = mp.key_of(group, material)
+            if self._pool.available(key) >= wanted.get(key, 0) + len(group):
+                wanted[key] = wanted.get(key, 0) + len(group)
+                pooled.append((group, key))
+                continue
+            total += len(group)
+            compiled.append((group, material, key, len(group)))
+        if total > ms.MAX_BODIES:
+            raise ResourceLimitError(
+                f"MuJoCo holds at most {ms.MAX_BODIES} bodies in one world (its broadphase "
+                f"numbers them with 16 bits); this spawn would make {total} (the world has "
+                f"{len(self._entities)} entities and {len(self._pool)} parked bodies)",
+                {"limit": "mujoco_bodies", "max": ms.MAX_BODIES, "count": total})
+        room, added, planned = ms.MAX_BODIES - total, 0, []
+        for group, material, key, count in compiled:
+            spares = min(self._pool.spares(count, added), room - added)
+            added += spares
+            planned.append((group, material, key, spares))
+        return pooled, planned
+
+    def _compile_groups(self, compiled: list[tuple[BodyGroup, ms.Material, mp.Key, int]]
+                        ) -> None:
+        """Add the groups' bodies and spares, recompile; on any failure take them out."""
+        snapshot = self._pool.snapshot()
+        added: list[str] = []
+        made: list[Any] = []
+        nbody, nv = self._model.nbody, self._model.nv
+        try:
+            for group, material, key, spares in compiled:
+                bodies = ms.add_group(self._spec, self._home, group, material)
+                made += bodies
+                for name, body in zip(group.names, bodies, strict=True):
+                    self._entities[name] = _Entity(body, group.static, friction=group.friction,
+                                                   restitution=group.restitution, key=key)
+                    added.append(name)
+                made += self._pool.add_spares(self._spec, self._home, group, material, key,
+                                              spares)
+                nbody += len(group) + spares
+                nv += 0 if group.static else 6 * (len(group) + spares)
+            self._recompile(nbody, nv)
+        except BaseException:
+            for name in added:
+                del self._entities[name]
+            self._pool.restore(snapshot)
+            ms.remove_bodies(self._spec, made)
+            raise
 
     def _bind(self, group: BodyGroup, key: mp.Key) -> None:
         """Give a group's names to parked bodies of its kind and release them: no compile."""
@@ -282,6 +390,7 @@ class MujocoEngine(Engine):
             self._entities[name] = _Entity(body, group.static, friction=group.friction,
                                            restitution=group.restitution, key=key)
             self._ids[name] = body.id
+        self._watch = None
         mp.bind_arrays(self._model, self._data, self._index, self._body_ids(group.names),
                        poses)
 
@@ -291,19 +400,40 @@ class MujocoEngine(Engine):
             raise FeatureUnsupportedError(f"model format {fmt!r} is not supported by MuJoCo "
                                           "here; supported: mjcf")
         child = ms.parse_mjcf(text, path)
-        names = [prefix + body.name for body in child.worldbody.bodies]
-        trial = self._spec.copy()  # attaching cannot be undone: try it on a copy first
+        tops, parts = ms.model_names(child, prefix)
+        self._check_model_names([*tops, *(n for names in parts for n in names)])
         try:
+            trial = self._spec.copy()  # attaching cannot be undone: try it on a copy first
             trial.attach(child.copy(), prefix=prefix, frame=trial.worldbody.add_frame())
-            trial.compile()
-        except ValueError as exc:
-            raise InvalidArgumentError(f"the MJCF model does not fit this world: {exc}") from exc
-        self._spec.attach(child, prefix=prefix, frame=self._spec.worldbody.add_frame())
+            size = trial.compile()
+        except _MUJOCO_ERRORS as exc:
+            raise _mujoco_error(exc, "the MJCF model does not fit this world") from exc
+        frame = self._spec.worldbody.add_frame()
+        try:
+            self._spec.attach(child, prefix=prefix, frame=frame)
+            for name, inner in zip(tops, parts, strict=True):
+                body = self._spec.body(name)
+                self._entities[name] = _Entity(body, static=bool(body.mocap), source="model",
+                                               parts=inner)
+            self._recompile(size.nbody, size.nv)
+        except (GaltonError, *_MUJOCO_ERRORS) as exc:
+            for name in tops:
+                self._entities.pop(name, None)
+            ms.remove_frame(self._spec, frame)  # with the model's bodies and what uses them
+            if isinstance(exc, GaltonError):
+                raise
+            raise _mujoco_error(exc, "the MJCF model does not fit this world") from exc
+        self._models += len(tops)
+        self._parts.update(n for names in parts for n in names)
+        return [self._model_info(name) for name in tops]
+
+    def _check_model_names(self, names: Sequence[str]) -> None:
         for name in names:
-            body = self._spec.body(name)
-            self._entities[name] = _Entity(body, static=bool(body.mocap), source="model")
-        self._commit(names)
-        return [self._model_info(name) for name in names]
+            if name in self._entities or name in self._parts or name == _WORLD or \
+                    name.startswith(mp.PREFIX):
+                raise NameNotUniqueError(
+                    f"the model's body {name!r} has the name of a body already in the MuJoCo "
+                    "world; load it with another prefix")
 
     def _model_info(self, name: str) -> EntityInfo:
         bid = self._ids[name]
@@ -315,15 +445,55 @@ class MujocoEngine(Engine):
                           mass=float(self._model.body_subtreemass[bid]), source="model")
 
     def delete(self, names: Sequence[str]) -> None:
-        """One recompile; spawned bodies still of their kind go back to the pool, parked."""
-        self._body_ids(names)
-        parked = self._pool.park_or_remove(self._spec, [self._entities.pop(n) for n in names])
+        """Spawned bodies still of their kind go back to the pool, parked (no compile while
+        they all fit); the others leave the spec, and one recompile follows."""
+        ids = self._body_ids(names)
+        entities = [self._entities[n] for n in names]
+        parked, removed = self._pool.split(entities)
+        if removed and self._models:
+            self._try_removing(removed)
+        for name, entity in zip(names, entities, strict=True):
+            self._forget(name, entity)
+        self._pool.park(parked)
+        ms.remove_bodies(self._spec, [e.body for e in removed])
+        if removed or self._gravcomp_missing(parked):
+            try:
+                self._recompile()
+            except GaltonError as exc:
+                self._broken = True  # the bodies are out of the spec, not of the model
+                raise OperationFailedError(
+                    f"MuJoCo failed to recompile after a delete ({exc}); the world must be "
+                    "reset") from exc
+            park = np.array([e.body.id for e in parked], dtype=np.int64)
+        else:
+            chosen = {id(e) for e in parked}
+            park = ids[[i for i, e in enumerate(entities) if id(e) in chosen]]
+            if self._balance is not None:
+                self._balance.forget(self._model, self._model.body_treeid[park])
+        mp.park_arrays(self._model, self._data, self._index, park)
+
+    def _forget(self, name: str, entity: _Entity) -> None:
+        del self._entities[name]
+        del self._ids[name]
+        self._watch = None
+        self._parts.difference_update(entity.parts)
+        self._models -= entity.source == "model"
+
+    def _gravcomp_missing(self, parked: Sequence[_Entity]) -> bool:
+        """Whether parking these needs a recompile: a model compiled without any gravity
+        compensation ignores the body_gravcomp that holds parked bodies up."""
+        return self._model.ngravcomp == 0 and not all(e.static for e in parked)
+
+    def _try_removing(self, removed: Sequence[_Entity]) -> None:
+        """Compile a copy of the spec without these bodies; raise, changing nothing, if
+        MuJoCo refuses it."""
+        trial = self._spec.copy()
+        names = {e.body.name for e in removed}
+        ms.remove_bodies(trial, [b for b in trial.worldbody.bodies if b.name in names])
         try:
-            self._recompile()
-        except InvalidArgumentError as exc:
-            raise OperationFailedError(f"MuJoCo failed to recompile after a delete: {exc}") \
-                from exc
-        mp.park_arrays(self._model, self._data, self._index, parked)
+            trial.compile()
+        except _MUJOCO_ERRORS as exc:
+            raise OperationFailedError(f"MuJoCo cannot delete these bodies: {exc}") from exc
 
     def clear(self) -> None:
         """An empty world at time 0; the pool stays warm: every spawned body is parked."""
@@ -331,14 +501,20 @@ class MujocoEngine(Engine):
         entities = list(self._entities.values())
         self._entities.clear()
         self._diverged = False
-        if any(e.source != "spawn" for e in entities):
+        if self._models or self._broken:
             self._build_empty()  # a model may bring more than bodies: start afresh
             return
-        parked = self._pool.park_or_remove(self._spec, entities)
-        if len(parked) < len(entities) or (  # removed some; or gravcomp was compiled out
-                self._model.ngravcomp == 0 and not all(e.static for e in entities)):
-            self._recompile()
-        mp.park_arrays(self._model, self._data, self._index, parked)
+        parked, removed = self._pool.split(entities)
+        self._pool.park(parked)
+        ms.remove_bodies(self._spec, [e.body for e in removed])
+        if removed or self._gravcomp_missing(parked):
+            try:
+                self._recompile()
+            except GaltonError:
+                self._build_empty()
+                return
+        mp.park_arrays(self._model, self._data, self._index,
+                       np.array([e.body.id for e in parked], dtype=np.int64))
         mujoco.mj_resetData(self._model, self._data)
         self._reindex()
 
@@ -390,7 +566,11 @@ class MujocoEngine(Engine):
             body.quat = quats[row]
 
     def update(self, names: Sequence[str], props: BodyProperties) -> None:
+        """The mass first, the one change MuJoCo may refuse (its recompile); the rest
+        cannot fail, so a refused mass leaves every property as it was."""
         self._body_ids(names)
+        if props.mass is not None:
+            self._set_masses(names, props.mass)
         for name in names:
             entity = self._entities[name]
             entity.key = None  # no longer like its parked twins: deleting it removes it
@@ -405,26 +585,30 @@ class MujocoEngine(Engine):
             for name in names:
                 for geom in self._entities[name].geoms():
                     geom.rgba = props.rgba
-        if props.mass is not None:
-            self._set_masses(names, props.mass)
 
     def _set_masses(self, names: Sequence[str], mass: float) -> None:
-        """Give each entity this total mass (a model's bodies scaled alike); one recompile."""
+        """Give each entity this total mass (a model's bodies scaled alike); one recompile,
+        the spec's old values put back if MuJoCo refuses it."""
         m = self._model
+        undo: list[tuple[Any, str, Any]] = []
         for name in names:
             entity = self._entities[name]
             if entity.source == "spawn":
-                entity.body.first_geom().mass = mass
+                undo += ms.set_values(entity.body.first_geom(), mass=mass)
                 continue
             scale = mass / max(float(m.body_subtreemass[self._ids[name]]), 1e-12)
-            for body in [entity.body, *entity.body.find_all(mujoco.mjtObj.mjOBJ_BODY)]:
+            for body in [entity.body, *entity.body.find_all(_BODY)]:
                 bid = body.id
-                body.mass = float(m.body_mass[bid]) * scale
-                body.inertia = m.body_inertia[bid] * scale
-                body.ipos = m.body_ipos[bid]
-                body.iquat = m.body_iquat[bid]
-                body.explicitinertial = True
-        self._recompile()
+                undo += ms.set_values(body, mass=float(m.body_mass[bid]) * scale,
+                                      inertia=m.body_inertia[bid] * scale,
+                                      ipos=m.body_ipos[bid], iquat=m.body_iquat[bid],
+                                      explicitinertial=True)
+        try:
+            self._recompile()
+        except GaltonError:
+            for element, attribute, value in reversed(undo):
+                setattr(element, attribute, value)
+            raise
 
     # -- Engine: time ---------------------------------------------------------------------
     def step(self, count: int) -> None:
@@ -446,10 +630,13 @@ class MujocoEngine(Engine):
         if self._balance is not None:
             self._balance.check(self._model, self._data)
 
-    def state_is_finite(self) -> bool:
-        d = self._data
-        return not self._diverged and all(
-            np.isfinite(a).all() for a in (d.qpos, d.qvel, d.mocap_pos, d.mocap_quat))
+    def state_within(self, max_position: float, max_speed: float) -> bool:
+        """numpy over qpos, qvel and mocap (see mujoco_state.within); MuJoCo's own warnings
+        of a blow-up, or a world left half-changed by a failed delete, count as diverged."""
+        if self._diverged or self._broken:
+            return False
+        return mst.within(self._model, self._data, self._index, self._watched(),
+                          max_position, max_speed)
 
     def reset_dynamics(self) -> None:
         """Forget warm starts; also clear what a divergence left beyond the entities' roots."""

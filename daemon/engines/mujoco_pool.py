@@ -38,7 +38,7 @@ _PARK_WXYZ = mst.to_wxyz(PARK_AT[3:])
 SPARE_MIN = 16
 # ...as long as no more than CAPACITY bodies are parked in all.
 CAPACITY = 2048
-_PREFIX = "galton.parked."
+PREFIX = "galton.parked."  # parked bodies' names; no entity may take one
 
 Key = tuple[Any, ...]
 
@@ -61,23 +61,24 @@ class Pool:
     def available(self, key: Key) -> int:
         return len(self._parked.get(key, ()))
 
-    def spares(self, count: int) -> int:
-        """How many twins to compile beside a recompiling spawn of ``count`` bodies."""
-        return max(0, min(max(count // 4, SPARE_MIN), CAPACITY - len(self)))
+    def spares(self, count: int, coming: int = 0) -> int:
+        """How many twins to compile beside a recompiling spawn of ``count`` bodies, when
+        ``coming`` more are already planned for the same compile."""
+        return max(0, min(max(count // 4, SPARE_MIN), CAPACITY - len(self) - coming))
 
     def _name(self) -> str:
         self._serial += 1
-        return f"{_PREFIX}{self._serial}"
+        return f"{PREFIX}{self._serial}"
 
-    def add_spares(self, spec: mujoco.MjSpec, group: BodyGroup, material: ms.Material,
-                   key: Key, count: int) -> list[Any]:
+    def add_spares(self, spec: mujoco.MjSpec, home: Any, group: BodyGroup,
+                   material: ms.Material, key: Key, count: int) -> list[Any]:
         """Add ``count`` parked twins of this group's bodies to the spec (compiled later)."""
         if count <= 0:
             return []
         parked = BodyGroup(shape=group.shape, size=group.size,
                            names=[self._name() for _ in range(count)],
                            poses=np.tile(PARK_AT, (count, 1)), static=group.static)
-        bodies = [body for _, body in ms.add_group(spec, parked, material)]
+        bodies = ms.add_group(spec, home, parked, material)
         for body in bodies:
             park_spec(body, group.static)
         self._parked.setdefault(key, []).extend(bodies)
@@ -89,32 +90,31 @@ class Pool:
         self._parked[key] = bodies[count:]
         return bodies[:count]
 
-    def put(self, key: Key, body: Any, static: bool) -> bool:
-        """Park a spec body (renamed, collisions off) if there is room; False if not."""
-        if len(self) >= CAPACITY:
-            return False
-        body.name = self._name()
-        park_spec(body, static)
-        self._parked.setdefault(key, []).append(body)
-        return True
-
-    def park_or_remove(self, spec: mujoco.MjSpec, entities: Sequence[Any]) -> list[Any]:
-        """Park the bodies of these (former) entities that are still of their kind, while
-        there is room; remove the others from the spec. The parked bodies, to park in the
-        arrays once compiled."""
+    def split(self, entities: Sequence[Any]) -> tuple[list[Any], list[Any]]:
+        """Which of these (soon former) entities the pool would park, while there is room
+        (those still of their kind), and which must leave the spec; nothing changes yet."""
+        room = CAPACITY - len(self)
         parked, removed = [], []
         for e in entities:
-            pool = e.key is not None and self.put(e.key, e.body, e.static)
-            (parked if pool else removed).append(e.body)
-        if removed:
-            ms.remove_bodies(spec, removed)
-        return parked
+            fits = e.key is not None and len(parked) < room
+            (parked if fits else removed).append(e)
+        return parked, removed
 
-    def forget(self, bodies: Sequence[Any]) -> None:
-        """Drop these bodies from the pool (they are being deleted from the spec)."""
-        gone = {id(body) for body in bodies}
-        for key, parked in self._parked.items():
-            self._parked[key] = [body for body in parked if id(body) not in gone]
+    def park(self, entities: Sequence[Any]) -> None:
+        """Park the bodies of these former entities (as ``split`` chose): renamed, collisions
+        off, at rest far below; their arrays are parked by ``park_arrays``."""
+        for e in entities:
+            e.body.name = self._name()
+            park_spec(e.body, e.static)
+            self._parked.setdefault(e.key, []).append(e.body)
+
+    def snapshot(self) -> tuple[int, dict[Key, list[Any]]]:
+        """The pool as it is, for ``restore`` if what follows fails."""
+        return self._serial, {key: list(bodies) for key, bodies in self._parked.items()}
+
+    def restore(self, snapshot: tuple[int, dict[Key, list[Any]]]) -> None:
+        self._serial, parked = snapshot
+        self._parked = {key: list(bodies) for key, bodies in parked.items()}
 
     def clear(self) -> None:
         self._parked.clear()
@@ -169,9 +169,8 @@ def _place(m: mujoco.MjModel, d: mujoco.MjData, index: mst.StateIndex, ids: np.n
 
 
 def park_arrays(m: mujoco.MjModel, d: mujoco.MjData, index: mst.StateIndex,
-                bodies: Sequence[Any]) -> None:
+                ids: np.ndarray) -> None:
     """Park compiled bodies: collisions off, at rest far below, held against gravity."""
-    ids = np.fromiter((body.id for body in bodies), dtype=np.int64, count=len(bodies))
     _collide(m, ids, 0)
     _place(m, d, index, ids, np.tile(PARK_AT, (len(ids), 1)))
     m.body_gravcomp[ids[index.kind[ids] == mst.FREE]] = 1.0

@@ -45,12 +45,19 @@ class StateIndex:
     """Per body id: how it moves (FREE, MOCAP, JOINTED, STATIC) and where its state lives.
 
     STATIC: a jointless, non-mocap child of the world, posed by the model's body_pos/quat.
+    Also, for the divergence check: the qvel rows of free joints' angular velocities (in the
+    body frame) with the qpos rows of their quaternions, every other qvel row, and the bodies
+    moved by joints other than a free one.
     """
 
     kind: np.ndarray
     qadr: np.ndarray
     vadr: np.ndarray
     mocap: np.ndarray
+    spin_dofs: np.ndarray  # (n, 3)
+    spin_quats: np.ndarray  # (n, 4)
+    other_dofs: np.ndarray
+    jointed: np.ndarray
 
     @classmethod
     def of(cls, m: mujoco.MjModel) -> StateIndex:
@@ -65,7 +72,13 @@ class StateIndex:
         static[0] = False
         kind = np.where(free, FREE, np.where(m.body_mocapid >= 0, MOCAP,
                                              np.where(static, STATIC, JOINTED)))
-        return cls(kind=kind, qadr=qadr, vadr=vadr, mocap=m.body_mocapid.copy())
+        spin = vadr[free][:, None] + TWIST[3:]
+        other = np.ones(m.nv, dtype=bool)
+        other[spin.ravel()] = False
+        jointed = np.flatnonzero(kind == JOINTED)
+        return cls(kind=kind, qadr=qadr, vadr=vadr, mocap=m.body_mocapid.copy(),
+                   spin_dofs=spin, spin_quats=qadr[free][:, None] + POSE[3:],
+                   other_dofs=np.flatnonzero(other), jointed=jointed[jointed > 0])
 
 
 def jointed_states(m: mujoco.MjModel, d: mujoco.MjData,
@@ -175,3 +188,46 @@ def write_twists(d: mujoco.MjData, index: StateIndex, ids: np.ndarray, twists: n
         else to_wxyz(poses[:, 3:])
     local = rotate(quats, twists[:, 3:], inverse=True)
     d.qvel[index.vadr[ids][:, None] + TWIST] = np.hstack([twists[:, :3], local])
+
+
+def first_geoms(m: mujoco.MjModel, ids: np.ndarray, spawned: np.ndarray) -> np.ndarray:
+    """The first geom of each body: a spawned body's own, a model's lowest in its subtree;
+    -1 where there is none."""
+    first = np.where(m.body_geomnum[ids] > 0, m.body_geomadr[ids], -1)
+    if spawned.all():
+        return first
+    roots = m.body_rootid[m.geom_bodyid]
+    gids = np.flatnonzero(np.isin(roots, ids[~spawned]))
+    lowest = np.full(m.nbody, m.ngeom)
+    np.minimum.at(lowest, roots[gids], gids)
+    found = lowest[ids[~spawned]]
+    first[~spawned] = np.where(found < m.ngeom, found, -1)
+    return first
+
+
+# -- divergence ----------------------------------------------------------------------------
+def _beyond(values: np.ndarray, limit: float) -> bool:
+    """Whether any value's magnitude passes the limit (NaN counts as past it)."""
+    return not bool((np.abs(values) <= limit).all())
+
+
+def within(m: mujoco.MjModel, d: mujoco.MjData, index: StateIndex, positions: np.ndarray,
+           max_position: float, max_speed: float) -> bool:
+    """Whether the state is finite, these qpos rows (the watched free bodies' x y z) and the
+    jointed bodies' positions within ``max_position``, and every velocity component, angular
+    ones in the world frame, within ``max_speed``.
+
+    A free joint's angular velocity is kept in the body frame; no world component can pass
+    its norm, so only the few rows whose norm passes the limit are rotated.
+    """
+    if not all(np.isfinite(a).all() for a in (d.qpos, d.qvel, d.mocap_pos, d.mocap_quat)):
+        return False
+    if _beyond(d.qpos[positions], max_position) or \
+            _beyond(d.xpos[index.jointed], max_position) or \
+            _beyond(d.qvel[index.other_dofs], max_speed):
+        return False
+    spin = d.qvel[index.spin_dofs]
+    fast = np.linalg.norm(spin, axis=1) > max_speed
+    if not fast.any():
+        return True
+    return not _beyond(rotate(d.qpos[index.spin_quats[fast]], spin[fast]), max_speed)
