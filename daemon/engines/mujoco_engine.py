@@ -151,9 +151,13 @@ class MujocoEngine(Engine):
         self._reindex()
 
     def _recompile(self, nbody: int | None = None, nv: int | None = None) -> None:
+        self._compile(nbody, nv)
+        self._reindex()
+
+    def _compile(self, nbody: int | None = None, nv: int | None = None) -> None:
         """Compile the edited spec in place, keeping the state, with an arena for ``nbody``
         bodies and ``nv`` degrees of freedom (the model's own by default). On failure the
-        model and data in use are untouched; raise with MuJoCo's words."""
+        model and data in use are untouched; raise with MuJoCo's words. (Reindex after.)"""
         m = self._model
         memory = self._spec.memory
         self._spec.memory = ms.arena_bytes(m.nbody if nbody is None else nbody,
@@ -165,7 +169,6 @@ class MujocoEngine(Engine):
             raise _mujoco_error(exc, "MuJoCo rejected the change") from exc
         self._workers = 0  # the recompiled MjData has no thread pool
         self._start_workers()
-        self._reindex()
 
     def _start_workers(self) -> None:
         """Size the current MjData's thread pool (a new MjData starts with none).
@@ -358,28 +361,28 @@ class MujocoEngine(Engine):
                         ) -> None:
         """Add the groups' bodies and spares, recompile; on any failure take them out."""
         snapshot = self._pool.snapshot()
-        added: list[str] = []
-        made: list[Any] = []
+        additions = mp.Additions(self._spec, self._home)
         nbody, nv = self._model.nbody, self._model.nv
         try:
-            for group, material, key, spares in compiled:
-                bodies = ms.add_group(self._spec, self._home, group, material)
-                made += bodies
-                for name, body in zip(group.names, bodies, strict=True):
-                    self._entities[name] = _Entity(body, group.static, friction=group.friction,
-                                                   restitution=group.restitution, key=key)
-                    added.append(name)
-                made += self._pool.add_spares(self._spec, self._home, group, material, key,
-                                              spares)
+            for group, material, _, spares in compiled:
+                additions.add(group, material)
+                if spares:
+                    additions.add(self._pool.spare_group(group, spares), material, parked=True)
                 nbody += len(group) + spares
                 nv += 0 if group.static else 6 * (len(group) + spares)
-            self._recompile(nbody, nv)
+            self._compile(nbody, nv)
         except BaseException:
-            for name in added:
-                del self._entities[name]
             self._pool.restore(snapshot)
-            ms.remove_bodies(self._spec, made)
+            additions.undo()
             raise
+        made = iter(additions.bodies())
+        for group, _, key, spares in compiled:
+            for name, body in zip(group.names, next(made), strict=True):
+                self._entities[name] = _Entity(body, group.static, friction=group.friction,
+                                               restitution=group.restitution, key=key)
+            if spares:
+                self._pool.adopt(key, next(made))
+        self._reindex()
 
     def _bind(self, group: BodyGroup, key: mp.Key) -> None:
         """Give a group's names to parked bodies of its kind and release them: no compile."""
@@ -419,7 +422,7 @@ class MujocoEngine(Engine):
         except (GaltonError, *_MUJOCO_ERRORS) as exc:
             for name in tops:
                 self._entities.pop(name, None)
-            ms.remove_frame(self._spec, frame)  # with the model's bodies and what uses them
+            mp.remove_frame(self._spec, frame)  # with the model's bodies and what uses them
             if isinstance(exc, GaltonError):
                 raise
             raise _mujoco_error(exc, "the MJCF model does not fit this world") from exc
@@ -455,7 +458,7 @@ class MujocoEngine(Engine):
         for name, entity in zip(names, entities, strict=True):
             self._forget(name, entity)
         self._pool.park(parked)
-        ms.remove_bodies(self._spec, [e.body for e in removed])
+        mp.remove_bodies(self._spec, [e.body for e in removed])
         if removed or self._gravcomp_missing(parked):
             try:
                 self._recompile()
@@ -489,7 +492,7 @@ class MujocoEngine(Engine):
         MuJoCo refuses it."""
         trial = self._spec.copy()
         names = {e.body.name for e in removed}
-        ms.remove_bodies(trial, [b for b in trial.worldbody.bodies if b.name in names])
+        mp.remove_bodies(trial, [b for b in trial.worldbody.bodies if b.name in names])
         try:
             trial.compile()
         except _MUJOCO_ERRORS as exc:
@@ -506,7 +509,7 @@ class MujocoEngine(Engine):
             return
         parked, removed = self._pool.split(entities)
         self._pool.park(parked)
-        ms.remove_bodies(self._spec, [e.body for e in removed])
+        mp.remove_bodies(self._spec, [e.body for e in removed])
         if removed or self._gravcomp_missing(parked):
             try:
                 self._recompile()

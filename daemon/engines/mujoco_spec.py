@@ -8,14 +8,12 @@ from __future__ import annotations
 
 import logging
 import math
-from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import mujoco
 import numpy as np
 
-from galton.daemon.engines.mujoco_state import to_wxyz
 from galton.daemon.params import ParamSpec, choice, flag, integer, number, vector
 from galton.protocol import BodyGroup, InvalidArgumentError
 from galton.protocol.errors import brief
@@ -48,14 +46,11 @@ MIN_DAMPRATIO = 0.01
 # MuJoCo refuses a model of more bodies (the world body and parked ones included): its
 # broadphase numbers bodies with 16 bits.
 MAX_BODIES = 65_533
-# Arena beyond the pair buffers (see arena_bytes); measured needs are far below (see tests).
-ARENA_BASE = 64 << 20
-ARENA_PER_BODY = 16 << 10
-ARENA_PER_DOF = 16 << 10
-# Groups this large are built apart and attached (see add_group), in pieces of CHUNK bodies.
-ATTACH_MIN = 64
-CHUNK = 512
-_ATTACH_PREFIX = "galton."  # attached bodies are unnamed, so it names nothing
+# The arena beyond the pair buffers (see arena_bytes).
+ARENA_BASE = 16 << 20
+ARENA_PER_BODY = 8 << 10
+ARENA_PER_DOF = 8 << 10
+ARENA_CAP = 4 << 30
 # MuJoCo's warnings that mean the state blew up during a step.
 DIVERGENCE_WARNINGS = np.array([int(w) for w in (
     mujoco.mjtWarning.mjWARN_BADQPOS, mujoco.mjtWarning.mjWARN_BADQVEL,
@@ -296,101 +291,6 @@ def geom_size(shape: str, size: tuple[float, ...]) -> list[float]:
     return list(size)
 
 
-def _geom(group: BodyGroup, material: Material) -> dict[str, Any]:
-    geom: dict[str, Any] = {
-        "type": GEOM_TYPES[group.shape], "size": geom_size(group.shape, group.size),
-        "friction": [material.friction, *material.spin], "condim": material.condim,
-        "solref": list(material.solref),
-        "solimp": list(material.solimp), "priority": STATIC_PRIORITY if group.static else 0}
-    if material.rgba is not None:
-        geom["rgba"] = list(material.rgba)
-    if material.mass is not None and not group.static:
-        geom["mass"] = material.mass
-    else:
-        geom["density"] = DENSITY
-    return geom
-
-
-def _add_bodies(parent: Any, group: BodyGroup, material: Material, rows: range,
-                named: bool) -> list[Any]:
-    geom = _geom(group, material)
-    poses = np.asarray(group.poses, dtype=float)[rows.start:rows.stop]
-    quats = to_wxyz(poses[:, 3:7])
-    bodies = []
-    for i, row in enumerate(rows):
-        body = parent.add_body(name=group.names[row] if named else "", pos=poses[i, :3],
-                               quat=quats[i])
-        bodies.append(body)
-        if not group.static:
-            body.add_freejoint()
-        body.add_geom(**geom)
-    return bodies
-
-
-def add_group(spec: mujoco.MjSpec, home: Any, group: BodyGroup,
-              material: Material) -> list[Any]:
-    """Add one body per name, in order; return them.
-
-    A dynamic body gets a free joint. A static one is a jointless child of the world, not a
-    mocap body: MuJoCo counts mocap bodies as always awake and wakes every sleeping ball
-    touching one, so a board of mocap bodies would never let its piles sleep. A static body
-    still moves without a compile: its pose lives in the model (body_pos, body_quat).
-
-    MuJoCo walks the whole spec after every body, joint or geom added to it, so n bodies added
-    one by one to a spec of N cost O(n·N): 8,000 spheres took 0.9 s, 16,000 four times that.
-    A group of ATTACH_MIN or more is built in fresh specs of CHUNK bodies and attached
-    (one walk each), then named and moved into ``home``, a frame of the world; a failure
-    leaves the spec as it was.
-    """
-    if len(group) < ATTACH_MIN:
-        return _add_bodies(spec.worldbody, group, material, range(len(group)), named=True)
-    frames: list[Any] = []
-    try:
-        for start in range(0, len(group), CHUNK):
-            child = mujoco.MjSpec()
-            _add_bodies(child.worldbody, group, material,
-                        range(start, min(start + CHUNK, len(group))), named=False)
-            frames.append(spec.worldbody.add_frame())
-            spec.attach(child, prefix=_ATTACH_PREFIX, frame=frames[-1])
-            _empty(child)
-        bodies = spec.worldbody.bodies[-len(group):]  # attached bodies come last, in order
-    except BaseException:
-        _delete(spec, [], frames)
-        raise
-    for body, name in zip(bodies, group.names, strict=True):
-        body.name = name
-        body.set_frame(home)
-    _delete(spec, [], frames)
-    return bodies
-
-
-def _empty(child: mujoco.MjSpec) -> None:
-    """Drop an attached child's bodies: the parent keeps the child spec alive, not its use."""
-    _delete(child, child.worldbody.bodies, [])
-
-
-def _delete(spec: mujoco.MjSpec, bodies: Sequence[Any], frames: Sequence[Any]) -> None:
-    """Delete bodies and frames (with what they hold) in one go: gathered under one frame,
-    then it deleted. (Deleting them one at a time walks the whole spec each time: 12 ms per
-    body at 1,000 bodies.)"""
-    if not bodies and not frames:
-        return
-    bin_ = spec.worldbody.add_frame()
-    for element in (*bodies, *frames):
-        element.set_frame(bin_)
-    spec.delete(bin_)
-
-
-def remove_bodies(spec: mujoco.MjSpec, bodies: Sequence[Any]) -> None:
-    """Delete these top-level bodies (and their subtrees) from the spec in one go."""
-    _delete(spec, bodies, [])
-
-
-def remove_frame(spec: mujoco.MjSpec, frame: Any) -> None:
-    """Delete a frame of the world with the bodies in it (MuJoCo drops what used them)."""
-    _delete(spec, [], [frame])
-
-
 def set_values(element: Any, **values: Any) -> list[tuple[Any, str, Any]]:
     """Set a spec element's attributes; return (element, attribute, old value) to undo it."""
     undo = [(element, name, np.array(getattr(element, name), copy=True)
@@ -405,13 +305,17 @@ def arena_bytes(nbody: int, nv: int) -> int:
     """The MjData arena a world of this size needs (the spec's ``memory``).
 
     Every step, mj_collision and mj_broadphase each take nbody²/2 ints from the arena for
-    candidate pairs, however few there are: 4·nbody² bytes, never touched beyond the pairs
-    found (the arena is allocated, not written). On top: contacts, constraint rows and solver
-    scratch, budgeted per body and per degree of freedom. MuJoCo's own default is quadratic
-    in nv (40·nv² bytes: 6 GB for 2,000 free spheres, and "Could not allocate memory" past
-    about 4,000) yet too small for the pair buffers of a few thousand static bodies.
+    candidate pairs, however few there are: 4·nbody² bytes. MuJoCo's own default ignores
+    them (a few thousand static bodies overflowed it at the first step) and grows with nv²
+    instead (40·nv² bytes: 6 GB for 2,000 free spheres, "Could not allocate memory" past
+    about 4,000). What the solver needs beside the pairs: CG and PGS about 11 and 17 kB per
+    ball in a settled pile of 2,000; Newton factors each island, up to 4·nv² bytes. So: the
+    pairs, plus the larger of a linear budget and MuJoCo's default capped at ARENA_CAP. It is
+    address space: only the pages used are ever touched.
     """
-    return 4 * nbody * nbody + ARENA_BASE + ARENA_PER_BODY * nbody + ARENA_PER_DOF * nv
+    linear = ARENA_BASE + ARENA_PER_BODY * nbody + ARENA_PER_DOF * nv
+    mujoco_default = 40 * (500 + nv) ** 2
+    return 4 * nbody * nbody + max(linear, min(mujoco_default, ARENA_CAP))
 
 
 # -- loaded models -----------------------------------------------------------------------

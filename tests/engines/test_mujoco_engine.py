@@ -686,13 +686,13 @@ def test_contact_dimension_must_be_one_mujoco_has(engine: MujocoEngine) -> None:
 # -- the pool of parked bodies -----------------------------------------------------------
 def _count_compiles(monkeypatch: pytest.MonkeyPatch) -> list[int]:
     calls: list[int] = []
-    original = MujocoEngine._recompile
+    original = MujocoEngine._compile
 
     def counting(self: MujocoEngine, *args: int | None) -> None:
         calls.append(1)
         original(self, *args)
 
-    monkeypatch.setattr(MujocoEngine, "_recompile", counting)
+    monkeypatch.setattr(MujocoEngine, "_compile", counting)
     return calls
 
 
