@@ -491,12 +491,11 @@ class MujocoEngine(Engine):
         """Compile a copy of the spec without these bodies; raise, changing nothing, if
         MuJoCo refuses it."""
         trial = self._spec.copy()
-        names = {e.body.name for e in removed}
-        mp.remove_bodies(trial, [b for b in trial.worldbody.bodies if b.name in names])
+        mp.remove_bodies(trial, [trial.body(e.body.name) for e in removed])
         try:
             trial.compile()
         except _MUJOCO_ERRORS as exc:
-            raise OperationFailedError(f"MuJoCo cannot delete these bodies: {exc}") from exc
+            raise _mujoco_error(exc, "MuJoCo cannot delete these bodies") from exc
 
     def clear(self) -> None:
         """An empty world at time 0; the pool stays warm: every spawned body is parked."""

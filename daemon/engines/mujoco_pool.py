@@ -167,7 +167,10 @@ class Additions:
             _add_bodies(child.worldbody, group, material, rows, parked, names)
             self._frames.append(self._spec.worldbody.add_frame())
             self._spec.attach(child, prefix=_TEMPORARY, frame=self._frames[-1])
-            _delete(child, child.worldbody.bodies, [])  # the spec keeps the child alive
+            # An attach also copies the child's defaults as a class of their own, which no
+            # element names (theirs say "main"), and keeps the child alive: drop both.
+            self._spec.delete(self._spec.find_default(f"{_TEMPORARY}main"))
+            _delete(child, child.worldbody.bodies, [])
         self._groups.append((group, None))
 
     def undo(self) -> None:
