@@ -139,6 +139,8 @@ class MujocoEngine(Engine):
         self._spec.modelname = "galton"
         self._spec.copy_during_attach = True  # see mujoco_spec.add_group
         self._home = self._spec.worldbody.add_frame()  # where big spawned groups live
+        self._litter: list[Any] = []  # empty frames, deleted with the next bodies removed
+        self._builders = mp.Builders()
         self._spec.memory = ms.arena_bytes(1, 0)
         self._parts: set[str] = set()  # names of loaded models' inner bodies
         self._models = 0  # model entities alive
@@ -361,7 +363,7 @@ class MujocoEngine(Engine):
                         ) -> None:
         """Add the groups' bodies and spares, recompile; on any failure take them out."""
         snapshot = self._pool.snapshot()
-        additions = mp.Additions(self._spec, self._home)
+        additions = mp.Additions(self._spec, self._home, self._builders)
         nbody, nv = self._model.nbody, self._model.nv
         try:
             for group, material, _, spares in compiled:
@@ -376,6 +378,7 @@ class MujocoEngine(Engine):
             additions.undo()
             raise
         made = iter(additions.bodies())
+        self._litter += additions.litter
         for group, _, key, spares in compiled:
             for name, body in zip(group.names, next(made), strict=True):
                 self._entities[name] = _Entity(body, group.static, friction=group.friction,
@@ -458,7 +461,8 @@ class MujocoEngine(Engine):
         for name, entity in zip(names, entities, strict=True):
             self._forget(name, entity)
         self._pool.park(parked)
-        mp.remove_bodies(self._spec, [e.body for e in removed])
+        if removed:
+            mp.remove_bodies(self._spec, [e.body for e in removed], self._sweep())
         if removed or self._gravcomp_missing(parked):
             try:
                 self._recompile()
@@ -481,6 +485,11 @@ class MujocoEngine(Engine):
         self._watch = None
         self._parts.difference_update(entity.parts)
         self._models -= entity.source == "model"
+
+    def _sweep(self) -> list[Any]:
+        """The litter (see mujoco_pool.Additions.bodies), handed over to be deleted."""
+        litter, self._litter = self._litter, []
+        return litter
 
     def _gravcomp_missing(self, parked: Sequence[_Entity]) -> bool:
         """Whether parking these needs a recompile: a model compiled without any gravity
@@ -508,7 +517,8 @@ class MujocoEngine(Engine):
             return
         parked, removed = self._pool.split(entities)
         self._pool.park(parked)
-        mp.remove_bodies(self._spec, [e.body for e in removed])
+        if removed:
+            mp.remove_bodies(self._spec, [e.body for e in removed], self._sweep())
         if removed or self._gravcomp_missing(parked):
             try:
                 self._recompile()

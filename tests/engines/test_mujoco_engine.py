@@ -1063,5 +1063,6 @@ def test_attached_and_added_bodies_simulate_alike(monkeypatch: pytest.MonkeyPatc
         engine.step(300)
         results.append(engine.get_states([f"b{i}" for i in range(100)]))
         assert not any(name.startswith("\x01") for name in engine._ids)
+        assert "<default" not in engine._spec.to_xml()  # no class left by the attaches
     for got, want in zip(*results, strict=True):
         np.testing.assert_array_equal(got, want)
