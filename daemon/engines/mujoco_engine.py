@@ -305,7 +305,8 @@ class MujocoEngine(Engine):
         """Bind parked bodies where the pool has enough of a group's kind; compile the other
         groups (with spare parked twins) in one recompile."""
         self._check_new([n for g in groups for n in g.names])
-        pooled, compiled = self._plan(groups)
+        pooled, compiled = self._pool.plan(groups, self._values, self._model.nbody,
+                                           len(self._entities))
         if compiled:
             self._compile_groups(compiled)
         for group, key in pooled:
@@ -330,37 +331,7 @@ class MujocoEngine(Engine):
                 raise InvalidArgumentError(f"the body name {name!r} is the MuJoCo engine's own "
                                            f"(the world, or beginning {mp.PREFIX!r})")
 
-    def _plan(self, groups: Sequence[BodyGroup]) -> tuple[
-            list[tuple[BodyGroup, mp.Key]], list[tuple[BodyGroup, ms.Material, mp.Key, int]]]:
-        """Which groups take parked bodies, and which are compiled with how many spares;
-        refuse (ResourceLimitError) a spawn that would pass MuJoCo's body limit."""
-        pooled, compiled = [], []
-        wanted: dict[mp.Key, int] = {}
-        total = self._model.nbody
-        for group in groups:
-            material = ms.material(group, self._values)
-            key = mp.key_of(group, material)
-            if self._pool.available(key) >= wanted.get(key, 0) + len(group):
-                wanted[key] = wanted.get(key, 0) + len(group)
-                pooled.append((group, key))
-                continue
-            total += len(group)
-            compiled.append((group, material, key, len(group)))
-        if total > ms.MAX_BODIES:
-            raise ResourceLimitError(
-                f"MuJoCo holds at most {ms.MAX_BODIES} bodies in one world (its broadphase "
-                f"numbers them with 16 bits); this spawn would make {total} (the world has "
-                f"{len(self._entities)} entities and {len(self._pool)} parked bodies)",
-                {"limit": "mujoco_bodies", "max": ms.MAX_BODIES, "count": total})
-        room, added, planned = ms.MAX_BODIES - total, 0, []
-        for group, material, key, count in compiled:
-            spares = min(self._pool.spares(count, added), room - added)
-            added += spares
-            planned.append((group, material, key, spares))
-        return pooled, planned
-
-    def _compile_groups(self, compiled: list[tuple[BodyGroup, ms.Material, mp.Key, int]]
-                        ) -> None:
+    def _compile_groups(self, compiled: Sequence[mp.Planned]) -> None:
         """Add the groups' bodies and spares, recompile; on any failure take them out."""
         snapshot = self._pool.snapshot()
         additions = mp.Additions(self._spec, self._home, self._builders)
@@ -624,10 +595,17 @@ class MujocoEngine(Engine):
 
     # -- Engine: time ---------------------------------------------------------------------
     def step(self, count: int) -> None:
+        """MuJoCo's own errors in a step (its arena overflowing) leave the data unusable:
+        the world reads as diverged until cleared."""
         self._warnings[ms.DIVERGENCE_WARNINGS] = 0
         while count > 0:
             run = min(count, LOOK_EVERY_STEPS - self._steps_since_look)
-            mujoco.mj_step(self._model, self._data, run)
+            try:
+                mujoco.mj_step(self._model, self._data, run)
+            except mujoco.FatalError as exc:
+                self._broken = True
+                raise OperationFailedError(f"MuJoCo failed in a step ({exc}); the world "
+                                           "must be reset") from exc
             count -= run
             self._steps_since_look += run
             if self._steps_since_look == LOOK_EVERY_STEPS:

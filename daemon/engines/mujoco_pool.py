@@ -32,14 +32,14 @@ CAPACITY.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, NamedTuple
 
 import mujoco
 import numpy as np
 
 from galton.daemon.engines import mujoco_spec as ms
 from galton.daemon.engines import mujoco_state as mst
-from galton.protocol import BodyGroup
+from galton.protocol import BodyGroup, ResourceLimitError
 
 _SLEEP = int(mujoco.mjtEnableBit.mjENBL_SLEEP)
 # Where parked bodies wait: a wire pose [x y z qx qy qz qw].
@@ -60,6 +60,15 @@ Key = tuple[Any, ...]
 def key_of(group: BodyGroup, material: ms.Material) -> Key:
     """What makes two spawned bodies interchangeable once compiled."""
     return (group.shape, tuple(float(s) for s in group.size), bool(group.static), material)
+
+
+class Planned(NamedTuple):
+    """A group a spawn compiles: its resolved material, its kind, its spare twins."""
+
+    group: BodyGroup
+    material: ms.Material
+    key: Key
+    spares: int
 
 
 class Pool:
@@ -83,6 +92,35 @@ class Pool:
     def _name(self) -> str:
         self._serial += 1
         return f"{PREFIX}{self._serial}"
+
+    def plan(self, groups: Sequence[BodyGroup], values: dict[str, Any], nbody: int,
+             entities: int) -> tuple[list[tuple[BodyGroup, Key]], list[Planned]]:
+        """Which groups of a spawn take parked bodies, and which are compiled, with how many
+        spares, into a world of ``nbody`` bodies; ResourceLimitError for a world MuJoCo
+        cannot hold, before anything is done."""
+        pooled, compiled = [], []
+        wanted: dict[Key, int] = {}
+        for group in groups:
+            material = ms.material(group, values)
+            key = key_of(group, material)
+            if self.available(key) >= wanted.get(key, 0) + len(group):
+                wanted[key] = wanted.get(key, 0) + len(group)
+                pooled.append((group, key))
+            else:
+                nbody += len(group)
+                compiled.append(Planned(group, material, key, 0))
+        if nbody > ms.MAX_BODIES:
+            raise ResourceLimitError(
+                f"MuJoCo holds at most {ms.MAX_BODIES} bodies in one world (its broadphase "
+                f"numbers them with 16 bits); this spawn would make {nbody} (the world has "
+                f"{entities} entities and {len(self)} parked bodies)",
+                {"limit": "mujoco_bodies", "max": ms.MAX_BODIES, "count": nbody})
+        spares = 0
+        for i, planned in enumerate(compiled):
+            count = min(self.spares(len(planned.group), spares), ms.MAX_BODIES - nbody - spares)
+            compiled[i] = planned._replace(spares=count)
+            spares += count
+        return pooled, compiled
 
     def spare_group(self, group: BodyGroup, count: int) -> BodyGroup:
         """``count`` parked twins of this group's bodies, named, to add beside it."""
