@@ -625,8 +625,7 @@ class MujocoEngine(Engine):
         of a blow-up, or a world left half-changed by a failed delete, count as diverged."""
         if self._diverged or self._broken:
             return False
-        return mst.within(self._model, self._data, self._index, self._watched(),
-                          max_position, max_speed)
+        return mst.within(self._data, self._index, self._watched(), max_position, max_speed)
 
     def reset_dynamics(self) -> None:
         """Forget warm starts; also clear what a divergence left beyond the entities' roots."""

@@ -3,11 +3,11 @@
 Adding: MuJoCo walks the whole spec after every body, joint or geom added to it, and finds a
 body by name by walking it too until the next compile, so n bodies added one by one to a spec
 of N cost O(n·N) (8,000 spheres took 0.9 s, 16,000 four times that). ``Additions`` adds a
-small group directly; a group of ATTACH_MIN or more is built in fresh specs of CHUNK bodies,
-attached into blocks of BLOCK bodies, each attached to the world (an attach walks the spec it
-goes into once, at about 1 µs per element) under temporary names; they are found by those
-names once compiled (MuJoCo indexes names at compile), then renamed and gathered in one
-frame.
+small group directly; a group of ATTACH_MIN or more is built in specs of CHUNK bodies, attached
+into blocks of BLOCK bodies, each attached to the world (an attach walks the spec it goes into
+once, about 1 µs per element) under temporary names; they are found by those names once
+compiled (MuJoCo indexes names at compile), then renamed and gathered in one frame. The
+building specs are ``Builders``, used again and again.
 
 Parking: spawning many bodies without a recompile.
 

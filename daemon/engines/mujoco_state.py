@@ -211,8 +211,8 @@ def _beyond(values: np.ndarray, limit: float) -> bool:
     return not bool((np.abs(values) <= limit).all())
 
 
-def within(m: mujoco.MjModel, d: mujoco.MjData, index: StateIndex, positions: np.ndarray,
-           max_position: float, max_speed: float) -> bool:
+def within(d: mujoco.MjData, index: StateIndex, positions: np.ndarray, max_position: float,
+           max_speed: float) -> bool:
     """Whether the state is finite, these qpos rows (the watched free bodies' x y z) and the
     jointed bodies' positions within ``max_position``, and every velocity component, angular
     ones in the world frame, within ``max_speed``.
