@@ -523,6 +523,11 @@ class MujocoEngine(Engine):
                               None if poses is None else poses[row],
                               None if twists is None else twists[row])
         d = self._data
+        if poses is not None and twists is None and free.any():
+            # A pose alone keeps the world-frame twist: MuJoCo holds a free body's spin in
+            # its own frame, so it is read first and written back after the turn.
+            twists = np.zeros((len(ids), 6))
+            twists[free] = mst.read_states(self._model, d, self._index, ids[free])[1]
         if poses is not None and free.any():
             mst.write_free_poses(d, self._index, ids[free], poses[free])
         if twists is not None and free.any():

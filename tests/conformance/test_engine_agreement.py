@@ -55,13 +55,9 @@ def test_a_stopped_world_replays_its_first_run_whatever_ran_between(sim: Client)
     assert np.abs(first.positions - created.positions).max() > 0.1  # they burst apart
 
 
-def test_a_pose_alone_keeps_the_twist_and_a_twist_alone_the_pose(
-        sim: Client, engine: str, request: pytest.FixtureRequest) -> None:
-    """Twists are in the world frame: turning a spinning body keeps its world spin."""
-    if engine == "mujoco":
-        request.applymarker(pytest.mark.xfail(strict=True, reason=(
-            "MuJoCo keeps a free joint's qvel, whose angular part is in the body frame, so "
-            "a pose alone turns the world spin with the body")))
+def test_a_pose_alone_keeps_the_twist_and_a_twist_alone_the_pose(sim: Client) -> None:
+    """Twists are in the world frame: turning a spinning body keeps its world spin (MuJoCo
+    holds a free joint's spin in the body frame, so its engine writes it back)."""
     sim.spawn(boxes(["crate"], [[0, 0, 1]], (0.1, 0.1, 0.1),
                     twists=np.array([[1.0, 0, 2, 0, 3, 0]])))
     before = sim.get_states(["crate"])
