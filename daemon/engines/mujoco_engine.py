@@ -300,13 +300,17 @@ class MujocoEngine(Engine):
             return ms.default_surface(e.static, self._values)[1]
         return float("nan")
 
+    def _free_bodies(self) -> int:
+        """Free joints in the compiled model: what its compile is quadratic in."""
+        return int(np.count_nonzero(self._model.jnt_type == mujoco.mjtJoint.mjJNT_FREE))
+
     # -- Engine: create & delete ---------------------------------------------------------
     def spawn(self, groups: Sequence[BodyGroup]) -> None:
         """Bind parked bodies where the pool has enough of a group's kind; compile the other
         groups (with spare parked twins) in one recompile."""
         self._check_new([n for g in groups for n in g.names])
         pooled, compiled = self._pool.plan(groups, self._values, self._model.nbody,
-                                           len(self._entities))
+                                           len(self._entities), self._free_bodies())
         if compiled:
             self._compile_groups(compiled)
         for group, key in pooled:

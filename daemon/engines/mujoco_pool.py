@@ -94,10 +94,11 @@ class Pool:
         return f"{PREFIX}{self._serial}"
 
     def plan(self, groups: Sequence[BodyGroup], values: dict[str, Any], nbody: int,
-             entities: int) -> tuple[list[tuple[BodyGroup, Key]], list[Planned]]:
+             entities: int, nfree: int) -> tuple[list[tuple[BodyGroup, Key]], list[Planned]]:
         """Which groups of a spawn take parked bodies, and which are compiled, with how many
-        spares, into a world of ``nbody`` bodies; ResourceLimitError for a world MuJoCo
-        cannot hold, before anything is done."""
+        spares, into a world of ``nbody`` bodies (``nfree`` of them free); ResourceLimitError
+        for a world MuJoCo cannot hold, or one whose compile would take minutes, before
+        anything is done."""
         pooled, compiled = [], []
         wanted: dict[Key, int] = {}
         for group in groups:
@@ -115,9 +116,17 @@ class Pool:
                 f"numbers them with 16 bits); this spawn would make {nbody} (the world has "
                 f"{entities} entities and {len(self)} parked bodies)",
                 {"limit": "mujoco_bodies", "max": ms.MAX_BODIES, "count": nbody})
+        free_room = values["mujoco.max_free_bodies"] - nfree
+        if compiled:
+            free_room -= sum(len(p.group) for p in compiled if not p.group.static)
+            check_free_bodies(values["mujoco.max_free_bodies"] - free_room,
+                              values["mujoco.max_free_bodies"])
         spares = 0
         for i, planned in enumerate(compiled):
             count = min(self.spares(len(planned.group), spares), ms.MAX_BODIES - nbody - spares)
+            if not planned.group.static:  # spare twins of moving bodies are free bodies too
+                count = min(count, free_room)
+                free_room -= count
             compiled[i] = planned._replace(spares=count)
             spares += count
         return pooled, compiled
@@ -394,3 +403,13 @@ def refresh(m: mujoco.MjModel, d: mujoco.MjData) -> None:
     m.opt.enableflags &= ~_SLEEP
     mujoco.mj_forward(m, d)
     m.opt.enableflags |= asleep
+
+
+def check_free_bodies(count: int, limit: int) -> None:
+    """Refuse a compile with more free bodies than ``mujoco.max_free_bodies``."""
+    if count > limit:
+        raise ResourceLimitError(
+            f"this request would compile a MuJoCo world of {count} moving bodies; the "
+            f"parameter mujoco.max_free_bodies allows {limit} (MuJoCo's compile is quadratic "
+            "in them: 10,000 take about 12 s)",
+            {"limit": "mujoco.max_free_bodies", "max": limit, "count": count})

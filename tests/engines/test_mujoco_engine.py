@@ -1066,3 +1066,21 @@ def test_attached_and_added_bodies_simulate_alike(monkeypatch: pytest.MonkeyPatc
         assert "<default" not in engine._spec.to_xml()  # no class left by the attaches
     for got, want in zip(*results, strict=True):
         np.testing.assert_array_equal(got, want)
+
+
+def test_a_compile_past_max_free_bodies_is_refused_up_front(engine: MujocoEngine) -> None:
+    """MuJoCo's compile is quadratic in free bodies: a spawn that would compile more than
+    mujoco.max_free_bodies of them is refused before anything is done (a 65,000-ball spawn
+    used to keep the daemon busy for longer than 15 minutes)."""
+    engine.set_params({"mujoco.max_free_bodies": 4})
+    engine.spawn([ground(), group("sphere", ["a", "b"], [[0, 0, 1], [1, 0, 1]])])
+    before = engine._spec.to_xml()
+    with pytest.raises(ResourceLimitError, match="max_free_bodies") as caught:
+        engine.spawn([group("box", ["c", "d", "e"], [[2, 0, 1], [3, 0, 1], [4, 0, 1]],
+                            size=(0.05, 0.05, 0.05))])
+    assert caught.value.details["count"] > 4
+    assert engine._spec.to_xml() == before
+    statics = group("sphere", [f"s{i}" for i in range(10)], [[i, 1, 0] for i in range(10)])
+    statics.static = True
+    engine.spawn([statics])  # static bodies cost the compile nothing of that kind
+    engine.step(2)
