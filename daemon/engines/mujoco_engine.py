@@ -435,10 +435,7 @@ class MujocoEngine(Engine):
             self._try_removing(removed)
         for name, entity in zip(names, entities, strict=True):
             self._forget(name, entity)
-        self._pool.park(parked)
-        if removed:
-            mp.remove_bodies(self._spec, [e.body for e in removed], self._sweep())
-        if removed or self._gravcomp_missing(parked):
+        if self._put_away(parked, removed):
             try:
                 self._recompile()
             except GaltonError as exc:
@@ -453,6 +450,14 @@ class MujocoEngine(Engine):
             if self._balance is not None:
                 self._balance.forget(self._model, self._model.body_treeid[park])
         mp.park_arrays(self._model, self._data, self._index, park)
+
+    def _put_away(self, parked: Sequence[_Entity], removed: Sequence[_Entity]) -> bool:
+        """Park what the pool takes and take the rest out of the spec; whether a recompile
+        must follow."""
+        self._pool.park(parked)
+        if removed:
+            mp.remove_bodies(self._spec, [e.body for e in removed], self._sweep())
+        return bool(removed) or self._gravcomp_missing(parked)
 
     def _forget(self, name: str, entity: _Entity) -> None:
         del self._entities[name]
@@ -491,10 +496,7 @@ class MujocoEngine(Engine):
             self._build_empty()  # a model may bring more than bodies: start afresh
             return
         parked, removed = self._pool.split(entities)
-        self._pool.park(parked)
-        if removed:
-            mp.remove_bodies(self._spec, [e.body for e in removed], self._sweep())
-        if removed or self._gravcomp_missing(parked):
+        if self._put_away(parked, removed):
             try:
                 self._recompile()
             except GaltonError:
