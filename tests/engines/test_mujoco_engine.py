@@ -1030,6 +1030,7 @@ def test_5000_free_spheres_fit_in_memory(engine: MujocoEngine) -> None:
     assert engine.get_states(["ball4999"])[0][0, 2] < 1.0
 
 
+@pytest.mark.slow  # a timing: on demand (-m slow), not in CI; benchmarks/spawn_scale.py
 def test_spawn_cost_grows_linearly_with_the_bodies() -> None:
     """2,000 and 8,000 static spheres in one spawn: 0.09 and 0.41 s measured; before, MuJoCo's
     walk of the whole spec per body added made them 0.09 and 1.6 s."""
