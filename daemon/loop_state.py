@@ -12,14 +12,14 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, ClassVar
 
 from galton.daemon.calls import Call, RestCheck, StepJob
-from galton.daemon.world import World
+from galton.daemon.world import World, check_scope
 from galton.protocol import (
     IncorrectStateError,
     InvalidArgumentError,
     OperationFailedError,
 )
-from galton.protocol.errors import brief, did_you_mean
-from galton.protocol.model import RESET_SCOPES, check_names, check_type, finite_number
+from galton.protocol.errors import brief
+from galton.protocol.model import check_fields, check_names, check_type, finite_number
 
 if TYPE_CHECKING:
     from galton.daemon.loop import SimLoop
@@ -34,16 +34,6 @@ def _check_count(value: Any, max_steps: int) -> int:
     return value
 
 
-def check_scope(value: Any) -> str:
-    """reset's scope, checked before anything is cancelled or reset."""
-    scope = check_type(value, str, "reset.scope")
-    if scope not in RESET_SCOPES:
-        raise InvalidArgumentError(
-            f"reset.scope {brief(scope)} is not one of {', '.join(RESET_SCOPES)}"
-            f"{did_you_mean(scope[:64], RESET_SCOPES)}")
-    return scope
-
-
 def _check_rtf(value: Any, where: str) -> float:
     return finite_number(value, where, low=0.0, high=MAX_RTF)
 
@@ -55,10 +45,7 @@ def _rest_check(args: dict[str, Any], read: list[str] | None,
     if rest is None:
         return None
     check_type(rest, dict, "run_until.until_rest")
-    unknown = set(rest) - {"speed", "every"}
-    if unknown:
-        raise InvalidArgumentError(f"run_until.until_rest has unknown fields {sorted(unknown)}; "
-                                   "allowed: speed, every")
+    check_fields(rest, ("speed", "every"), "run_until.until_rest")
     if read is None:
         raise InvalidArgumentError("run_until.until_rest needs 'read': the bodies that must rest")
     speed = finite_number(rest.get("speed"), "run_until.until_rest.speed", low=0.0,

@@ -12,6 +12,7 @@ import fnmatch
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -31,6 +32,7 @@ from galton.protocol import (
     ResourceLimitError,
 )
 from galton.protocol.errors import brief, did_you_mean
+from galton.protocol.model import check_type
 
 ENTITY_KINDS = ("static", "dynamic")
 
@@ -229,10 +231,7 @@ class World:
         self.verified_step = self.step_index
 
     def reset(self, scope: str) -> None:
-        if scope not in RESET_SCOPES:
-            raise InvalidArgumentError(
-                f"reset scope {brief(scope)} is not one of {', '.join(RESET_SCOPES)}"
-                f"{did_you_mean(scope, RESET_SCOPES)}")
+        check_scope(scope)
         with contextlib.suppress(PhysicsError):
             self.verify()  # a divergence in unchecked steps must not be forgotten
         if scope in ("time", "all"):
@@ -256,6 +255,16 @@ class World:
         self.engine.reset_dynamics()
         self.faulted = False
         self.verified_step = self.step_index
+
+
+def check_scope(value: Any) -> str:
+    """A reset scope, checked before anything is cancelled or reset."""
+    scope = check_type(value, str, "reset.scope")
+    if scope not in RESET_SCOPES:
+        raise InvalidArgumentError(
+            f"reset.scope {brief(scope)} is not one of {', '.join(RESET_SCOPES)}"
+            f"{did_you_mean(scope[:64], RESET_SCOPES)}")
+    return scope
 
 
 def canonical_quaternions(poses: np.ndarray) -> np.ndarray:

@@ -7,6 +7,7 @@ quaternion, as ROS and scipy), a twist 6 floats ``vx vy vz wx wy wz`` in the wor
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field, fields
 from typing import Any
 
@@ -30,6 +31,16 @@ SIZE_LAYOUT: dict[str, tuple[str, ...]] = {
     "capsule": ("radius", "half_length"),
     "plane": ("half_x", "half_y"),
 }
+
+
+def check_fields(body: dict[str, Any], allowed: Sequence[str], where: str) -> None:
+    """The one rule for keys: a field that is not one of ``allowed`` is refused, naming the
+    closest one (operations' arguments, spawn groups, update properties, until_rest)."""
+    for key in body:
+        if key not in allowed:
+            raise InvalidArgumentError(
+                f"{where} takes no field {brief(key)}{did_you_mean(str(key)[:64], allowed)}; "
+                f"it takes: {', '.join(allowed)}")
 
 
 def require(args: dict[str, Any], key: str, kind: type | tuple[type, ...], where: str) -> Any:
@@ -160,12 +171,7 @@ class BodyProperties:
     @classmethod
     def from_wire(cls, args: dict[str, Any], where: str = "properties") -> BodyProperties:
         check_type(args, dict, where)
-        unknown = set(args) - {"mass", "friction", "restitution", "rgba", "tags"}
-        if unknown:
-            raise InvalidArgumentError(
-                f"{where} has unknown fields {sorted(unknown)}; allowed: mass, friction, "
-                "restitution, rgba, tags"
-            )
+        check_fields(args, ("mass", "friction", "restitution", "rgba", "tags"), where)
         tags = args.get("tags")
         return cls(
             mass=optional_number(args, "mass", where, low=0, low_open=True, high=1e9),
@@ -245,13 +251,6 @@ GROUP_FIELDS = ("shape", "size", "names", "poses", "twists", "static", "mass", "
                 "restitution", "rgba", "tags")
 
 
-def check_fields(body: dict[str, Any], allowed: tuple[str, ...], where: str) -> None:
-    """Refuse a field that is not one of ``allowed``, naming the closest."""
-    for key in body:
-        if key not in allowed:
-            raise InvalidArgumentError(
-                f"{where} has no field {brief(key)}{did_you_mean(str(key)[:64], allowed)}; "
-                f"its fields: {', '.join(allowed)}")
 
 
 def _check_size(shape: str, size: list[Any], where: str) -> tuple[float, ...]:

@@ -14,8 +14,10 @@ to them by a test. Each argument's ``kind`` names the value it takes on the wire
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
-from galton.protocol.errors import InvalidArgumentError, UnknownOperationError, did_you_mean
+from galton.protocol.errors import UnknownOperationError, did_you_mean
+from galton.protocol.model import check_fields
 
 ARG_KINDS = ("number", "count", "string", "bool", "names", "map", "groups", "poses", "twists",
              "choice")
@@ -54,15 +56,9 @@ class Operation:
     def arg_names(self) -> tuple[str, ...]:
         return tuple(a.name for a in self.args)
 
-    def check_arg_names(self, args: dict[str, object]) -> None:
+    def check_arg_names(self, args: dict[str, Any]) -> None:
         """Refuse any argument this operation does not declare, naming the closest one."""
-        allowed = {*self.arg_names, WORLD_ARG}
-        for key in args:
-            if key not in allowed:
-                listed = ", ".join(sorted(allowed))
-                raise InvalidArgumentError(
-                    f"{self.name} takes no argument {str(key)[:64]!r}"
-                    f"{did_you_mean(str(key)[:64], allowed)}; it takes: {listed}")
+        check_fields(args, (*self.arg_names, WORLD_ARG), self.name)
 
 
 _NAMES = Arg("names", "names", required=True)

@@ -237,7 +237,7 @@ def test_a_long_string_is_a_resource_limit(sim: Client) -> None:
 ])
 def test_unknown_arguments_are_refused_with_a_suggestion(sim: Client, args: dict) -> None:
     code, message, size = raw(sim, "spawn", request("spawn", args))
-    assert code == ResultCode.INVALID_ARGUMENT and "takes no argument" in message
+    assert code == ResultCode.INVALID_ARGUMENT and "takes no field" in message
     assert size < 4096
     if "gruops" in args:
         assert "did you mean 'groups'" in message
