@@ -84,10 +84,8 @@ def decode_request(payload: bytes, op_from_key: str | None = None,
             f"{limits.max_bytes}", {"limit": "max_request_bytes", "max": limits.max_bytes})
     try:
         body = msgpack.unpackb(payload, raw=False, strict_map_key=True)
-    except msgpack.StackError as exc:
-        raise ResourceLimitError(
-            f"the request nests maps and lists deeper than {limits.max_depth} levels",
-            {"limit": "max_depth", "max": limits.max_depth}) from exc
+    except msgpack.StackError as exc:  # deeper than msgpack's own stack (about 1,000)
+        raise _too_deep(limits) from exc
     except Exception as exc:
         raise MalformedRequestError(f"payload is not valid msgpack: {brief(str(exc))}") from exc
     if not isinstance(body, dict):
@@ -143,9 +141,7 @@ def check_shape(body: dict[str, Any], limits: DecodeLimits) -> None:
         value, depth, exempt = stack.pop()
         if isinstance(value, dict | list):
             if depth > limits.max_depth:
-                raise ResourceLimitError(
-                    f"the request nests maps and lists deeper than {limits.max_depth} levels",
-                    {"limit": "max_depth", "max": limits.max_depth})
+                raise _too_deep(limits)
             if isinstance(value, dict):
                 for key, item in value.items():
                     _check_string(key, limits, False)
@@ -155,6 +151,12 @@ def check_shape(body: dict[str, Any], limits: DecodeLimits) -> None:
                 stack.extend((item, depth + 1, False) for item in value)
         else:
             _check_string(value, limits, exempt)
+
+
+def _too_deep(limits: DecodeLimits) -> ResourceLimitError:
+    return ResourceLimitError(
+        f"the request nests maps and lists deeper than {limits.max_depth} levels",
+        {"limit": "max_depth", "max": limits.max_depth})
 
 
 def _check_string(value: Any, limits: DecodeLimits, exempt: bool) -> None:
