@@ -141,7 +141,7 @@ PARAMS: dict[str, ParamSpec] = {p.name: p for p in (
               "moving (free) bodies a spawn that must compile may bring the "
               "world to, parked ones included; past it the request is RESOURCE_LIMIT, "
               "nothing done: MuJoCo's compile is quadratic in them (about 12 s for 10,000 "
-              "and 18 s for 12,000 on 2 cores), and a spawn that binds parked bodies needs "
+              "and 16 s for 12,000 on 2 cores), and a spawn that binds parked bodies needs "
               "no compile", integer(1, MAX_BODIES)),
     ParamSpec("mujoco.wake_balanced", True, "",
               "wake a ball that fell asleep on a single fixed round support near its top (a "
