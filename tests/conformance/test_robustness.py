@@ -7,6 +7,7 @@ import queue
 import subprocess
 import sys
 import threading
+import time
 from collections.abc import Callable, Iterator
 from typing import Any
 
@@ -75,8 +76,6 @@ class Background:
 
 def wait_for(condition: Callable[[], bool], timeout: float = WAIT_S) -> None:
     """Poll a condition answered by the daemon (each poll is a round trip) until it holds."""
-    import time
-
     deadline = time.monotonic() + timeout
     while not condition():
         assert time.monotonic() < deadline, "condition not met in time"
