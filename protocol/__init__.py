@@ -51,6 +51,7 @@ from galton.protocol.model import (
     BodyProperties,
     Capabilities,
     EntityInfo,
+    SimState,
     SimStatus,
     Telemetry,
 )
@@ -85,6 +86,7 @@ __all__ = [
     "RequestTimeoutError",
     "ResourceLimitError",
     "ResultCode",
+    "SimState",
     "SimStatus",
     "Telemetry",
     "UnknownOperationError",

@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field, fields
+from enum import StrEnum
 from typing import Any
 
 import numpy as np
@@ -20,7 +21,17 @@ POSE_WIDTH = 7
 TWIST_WIDTH = 6
 MAX_BATCH = 100_000
 MAX_NAME_LENGTH = 128
-SIM_STATES = ("stopped", "playing", "paused")
+
+
+class SimState(StrEnum):
+    """Where a world's clock is; a str on the wire ("stopped", "playing", "paused")."""
+
+    STOPPED = "stopped"  # at time 0 with every entity in its created state
+    PLAYING = "playing"  # advancing on its own at the target real-time factor
+    PAUSED = "paused"  # holding its time; steps only on request
+
+
+SIM_STATES = tuple(state.value for state in SimState)
 RESET_SCOPES = ("time", "state", "spawned", "all")
 BODY_SHAPES = ("sphere", "box", "cylinder", "capsule", "plane")
 # How many numbers ``size`` holds per shape, and what they mean (all half sizes, metres).
@@ -294,7 +305,7 @@ class EntityInfo:
 class SimStatus:
     """The simulation's clock and state at one instant."""
 
-    state: str
+    state: SimState
     step: int
     sim_time: float
     timestep: float
@@ -311,7 +322,7 @@ class SimStatus:
 
     @classmethod
     def from_wire(cls, body: dict[str, Any]) -> SimStatus:
-        return cls(**body)
+        return cls(**{**body, "state": SimState(body["state"])})
 
 
 @dataclass
@@ -321,7 +332,7 @@ class Telemetry:
     seq: int
     instance: str
     engine: str
-    state: str
+    state: SimState
     step: int
     sim_time: float
     wall_time: float
@@ -339,7 +350,7 @@ class Telemetry:
 
     @classmethod
     def from_wire(cls, body: dict[str, Any]) -> Telemetry:
-        return cls(**body)
+        return cls(**{**body, "state": SimState(body["state"])})
 
 
 @dataclass

@@ -40,14 +40,27 @@ class Arg:
             raise ValueError(f"argument {self.name}: unknown kind {self.kind!r}")
 
 
+# A client's timeout for a long-running operation (one that steps the world) by default.
+LONG_RUNNING_TIMEOUT_S = 600.0
+
+
 @dataclass(frozen=True)
 class Operation:
-    """One operation: its arguments and whether a success changes the world."""
+    """One operation: its arguments, what it does to a world and how long a client waits.
+
+    ``fast``: answered on the transport's thread from the last published state, without
+    waiting for the physics thread. ``steps``: long-running, answered only when its steps
+    are done (it belongs to its client, who may wait ``LONG_RUNNING_TIMEOUT_S``).
+    ``timeout_floor_s``: the least a client should wait for it (rebuilding a world takes
+    seconds), whatever its default timeout.
+    """
 
     name: str
     args: tuple[Arg, ...] = ()
     mutates: bool = False
-    steps: bool = False  # answered only when its steps are done (it belongs to its client)
+    steps: bool = False
+    fast: bool = False
+    timeout_floor_s: float = 0.0
 
     def arg(self, name: str) -> Arg | None:
         return next((a for a in self.args if a.name == name), None)
@@ -60,10 +73,17 @@ class Operation:
         """Refuse any argument this operation does not declare, naming the closest one."""
         check_fields(args, (*self.arg_names, WORLD_ARG), self.name)
 
+    def client_timeout(self, default_s: float) -> float:
+        """How long a client waits for this operation when the caller names no timeout."""
+        if self.steps:
+            return LONG_RUNNING_TIMEOUT_S
+        return max(default_s, self.timeout_floor_s)
+
 
 _NAMES = Arg("names", "names", required=True)
+_REBUILDS = 30.0  # operations that may rebuild the engine's world wait at least this long
 OPERATIONS: dict[str, Operation] = {op.name: op for op in (
-    Operation("status"),
+    Operation("status", fast=True),
     Operation("capabilities"),
     Operation("play", (Arg("rtf", "number"),), mutates=True),
     Operation("set_rtf", (Arg("rtf", "number", required=True),), mutates=True),
@@ -76,18 +96,20 @@ OPERATIONS: dict[str, Operation] = {op.name: op for op in (
               mutates=True),
     Operation("load_world", (Arg("engine", "choice", required=True,
                                  choices=("mujoco", "pybullet")), Arg("params", "map")),
-              mutates=True),
-    Operation("spawn", (Arg("groups", "groups", required=True),), mutates=True),
+              mutates=True, timeout_floor_s=_REBUILDS),
+    Operation("spawn", (Arg("groups", "groups", required=True),), mutates=True,
+              timeout_floor_s=_REBUILDS),
     Operation("load_model", (Arg("format", "choice", required=True, choices=("mjcf", "urdf")),
                              Arg("text", "string", long_text=True), Arg("path", "string"),
-                             Arg("prefix", "string")), mutates=True),
+                             Arg("prefix", "string")), mutates=True,
+              timeout_floor_s=_REBUILDS),
     Operation("list", (Arg("name", "string"), Arg("tag", "string"),
                        Arg("kind", "choice", choices=("static", "dynamic")))),
     Operation("get_states", (Arg("names", "names"),)),
     Operation("set_states", (_NAMES, Arg("poses", "poses"), Arg("twists", "twists")),
               mutates=True),
     Operation("update", (_NAMES, Arg("properties", "map", required=True)), mutates=True),
-    Operation("delete", (_NAMES,), mutates=True),
+    Operation("delete", (_NAMES,), mutates=True, timeout_floor_s=_REBUILDS),
     Operation("get_params"),
     Operation("set_params", (Arg("params", "map", required=True),), mutates=True),
 )}
