@@ -233,4 +233,4 @@ def main() -> None:
 
 
 # Registering bench, report and fuzz on ``app``:
-from galton.client import cli_bench, cli_fuzz  # noqa: E402,F401
+from galton.client import cli_bench, cli_check, cli_fuzz  # noqa: E402,F401
