@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 import logging
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 import zenoh
@@ -17,7 +17,7 @@ from galton.protocol import GaltonError, validate_instance_name
 app = typer.Typer(add_completion=False, help=__doc__)
 
 
-def _parse_params(text: str | None) -> dict:
+def _parse_params(text: str | None) -> dict[str, Any]:
     if not text:
         return {}
     try:

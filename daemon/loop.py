@@ -18,11 +18,11 @@ from typing import Any
 
 import numpy as np
 
+from galton.daemon import time_control
 from galton.daemon.calls import Call, StepJob, Task
+from galton.daemon.handlers import HANDLERS
 from galton.daemon.limits import DEFAULT_LIMITS, Limits
-from galton.daemon.loop_state import StateOps
 from galton.daemon.monitor import Pacer, ProcessMonitor, RtfWindow
-from galton.daemon.ops import SCENE_OPS
 from galton.daemon.world import World
 from galton.protocol import (
     DecodeLimits,
@@ -32,6 +32,7 @@ from galton.protocol import (
     RemoteError,
     Reply,
     ResultCode,
+    SimState,
     SimStatus,
     Telemetry,
     decode_request,
@@ -60,7 +61,7 @@ VERIFY_PERIOD_S = 0.05  # the state is checked finite at least this often while 
 REQUEST_SLICE_S = 0.001
 
 
-class SimLoop(StateOps):
+class SimLoop:
     """Owns the World and the simulation state machine (stopped / playing / paused)."""
 
     def __init__(self, world: World, instance: str,
@@ -78,7 +79,7 @@ class SimLoop(StateOps):
             long_text_keys=frozenset(a.name for op in OPERATIONS.values() for a in op.args
                                      if a.long_text))
         self.inbox: queue.SimpleQueue[Call | Task | None] = queue.SimpleQueue()
-        self.state = "stopped"
+        self.state = SimState.STOPPED
         self.target_rtf = 1.0
         self.job: StepJob | None = None
         self.pacer = Pacer()
@@ -150,8 +151,8 @@ class SimLoop(StateOps):
                                      f"{brief(str(exc))}")
         if self.job is not None:
             job, self.job = self.job, None
-            self._reply_error(job.call, error)
-        self._set_state("paused")
+            self.reply_error(job.call, error)
+        self.set_state(SimState.PAUSED)
         self.emit({"kind": "error", "message": error.message})
 
     def _idle_timeout(self, next_telemetry: float) -> float:
@@ -159,7 +160,7 @@ class SimLoop(StateOps):
         until_telemetry = max(0.0, next_telemetry - now)
         if self.job is not None:
             return 0.0
-        if self.state == "playing":
+        if self.state == SimState.PLAYING:
             due = self.pacer.seconds_until_due(now, self.world.sim_time, self.world.engine.timestep)
             return min(due, until_telemetry)
         return until_telemetry
@@ -197,15 +198,15 @@ class SimLoop(StateOps):
     def _answer_leftovers(self) -> None:
         closing = OperationFailedError("the daemon is shutting down")
         if self.job is not None:
-            self._reply_error(self.job.call, closing)
+            self.reply_error(self.job.call, closing)
             self.job = None
         while True:
             try:
                 call = self.inbox.get_nowait()
             except queue.Empty:
                 return
-            if call is not None:
-                self._reply_error(call, closing)
+            if isinstance(call, Call):
+                self.reply_error(call, closing)
 
     # -- requests -----------------------------------------------------------------------
     def handle(self, call: Call) -> None:
@@ -222,25 +223,31 @@ class SimLoop(StateOps):
             if result is not None:
                 self._reply_ok(call, result)
         except RemoteError as error:
-            self._reply_error(call, error)
+            self.reply_error(call, error)
         except Exception as exc:  # the daemon keeps serving whatever an engine does
             log.exception("operation %s failed", call.op)
-            self._reply_error(call, OperationFailedError(
+            self.reply_error(call, OperationFailedError(
                 f"{type(exc).__name__}: {brief(str(exc))}"))
         finally:
             self._keep_invariants()
 
     def _dispatch(self, op: Operation, call: Call, args: dict[str, Any]) -> dict[str, Any] | None:
-        state_op = self.STATE_OPS.get(op.name)
-        if state_op is not None:
-            return state_op(self, call, args)
-        result = SCENE_OPS[op.name](self.world, args)
-        if op.mutates:
-            self.emit({"kind": "scene", "op": op.name, "step": self.world.step_index})
-            self._check_job_reads()
-        return result
+        return HANDLERS[op.name](self, call, args)
 
-    def _check_job_reads(self) -> None:
+    def set_state(self, state: SimState) -> None:
+        """Move the state machine, announcing a change with a ``state`` event."""
+        if state == SimState.PLAYING:
+            self.pacer.anchor(time.monotonic(), self.world.sim_time, self.target_rtf)
+        if state != self.state:
+            self.state = state
+            self.emit({"kind": "state", "state": state.value, "step": self.world.step_index,
+                       "sim_time": self.world.sim_time})
+
+    def client_gone(self, client: str) -> None:
+        """A client's liveliness token vanished (called from a Task on this thread)."""
+        time_control.client_gone(self, client)
+
+    def check_job_reads(self) -> None:
         """A step job whose read entities are gone is answered now, not after its steps."""
         job = self.job
         if job is None or job.read is None:
@@ -248,14 +255,14 @@ class SimLoop(StateOps):
         gone = [name for name in job.read if name not in self.world.entities]
         if gone:
             self.job = None
-            self._reply_error(job.call, NotFoundError(
+            self.reply_error(job.call, NotFoundError(
                 f"entity {brief(gone[0])} that this step request reads was deleted after "
                 f"{job.done} of {job.total} steps", {"missing": gone[:100],
                                                      "steps_done": job.done}))
 
     def _keep_invariants(self) -> None:
         """A diverged world never plays or steps, whoever noticed the divergence."""
-        if self.world.faulted and (self.state == "playing" or self.job is not None):
+        if self.world.faulted and (self.state == SimState.PLAYING or self.job is not None):
             self._fault(PhysicsError(
                 f"the simulation diverged at step {self.world.step_index}; reset it (scope "
                 "'state' or 'all') before playing or stepping"))
@@ -282,7 +289,7 @@ class SimLoop(StateOps):
                       sim_time=self.world.sim_time)
         self._send(call, encode_reply(reply))
 
-    def _reply_error(self, call: Call, error: RemoteError) -> None:
+    def reply_error(self, call: Call, error: RemoteError) -> None:
         self.refresh_clock()
         reply = error_reply(error, self.world.step_index, self.world.sim_time)
         self._send(call, encode_reply(reply))
@@ -298,7 +305,7 @@ class SimLoop(StateOps):
         """Run one chunk of steps: a pending step job's, or the paced playing clock's."""
         if self.job is not None:
             self._run_steps(min(self.job.steps_to_next_check(), self._chunk_size()))
-        elif self.state == "playing":
+        elif self.state == SimState.PLAYING:
             due = self.pacer.steps_due(time.monotonic(), self.world.sim_time,
                                        self.world.engine.timestep)
             count = self._chunk_size() if due < 0 else min(due, self._chunk_size())
@@ -345,7 +352,7 @@ class SimLoop(StateOps):
                 poses, twists = self.world.get_states(job.read)
             except RemoteError as error:
                 error.details["steps_done"] = job.done
-                self._reply_error(job.call, error)
+                self.reply_error(job.call, error)
                 return
             result.update(names=job.read, poses=pack_f64(poses), twists=pack_f64(twists))
             if job.rest is not None:
@@ -365,12 +372,12 @@ class SimLoop(StateOps):
     def _fault(self, error: PhysicsError) -> None:
         """A diverged step: pause, tell subscribers, fail the step job; never publish it."""
         self.refresh_clock()
-        self._set_state("paused")
+        self.set_state(SimState.PAUSED)
         self.emit({"kind": "physics_error", "message": error.message,
                    "step": self.world.step_index, "sim_time": self.world.sim_time})
         if self.job is not None:
             job, self.job = self.job, None
-            self._reply_error(job.call, error)
+            self.reply_error(job.call, error)
 
     # -- status & telemetry -------------------------------------------------------------
     def refresh_clock(self) -> None:

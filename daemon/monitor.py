@@ -37,7 +37,7 @@ class ProcessMonitor:
         try:
             return int(self._statm.read_text().split()[1]) * self._page_size
         except OSError:
-            return self._process.memory_info().rss
+            return int(self._process.memory_info().rss)
 
 
 class RtfWindow:

@@ -180,16 +180,3 @@ def capabilities(world: World, args: dict[str, Any]) -> dict[str, Any]:
 def _wire_values(params: dict[str, Any]) -> dict[str, Any]:
     return {k: list(v) if isinstance(v, tuple) else v for k, v in params.items()}
 
-
-SCENE_OPS: dict[str, SceneOp] = {
-    "spawn": spawn,
-    "load_model": load_model,
-    "list": list_entities,
-    "get_states": get_states,
-    "set_states": set_states,
-    "update": update,
-    "delete": delete,
-    "get_params": get_params,
-    "set_params": set_params,
-    "capabilities": capabilities,
-}

@@ -67,7 +67,7 @@ def choice(*options: str) -> Callable[[Any, str], str]:
         if value not in options:
             raise InvalidArgumentError(f"{where} must be one of {', '.join(options)}, "
                                        f"got {brief(value)}")
-        return value
+        return str(value)
     return check
 
 

@@ -23,11 +23,11 @@ from galton.daemon.loop import SimLoop
 from galton.daemon.world import World
 from galton.protocol import DEFAULT_PORT, Keys, Telemetry
 from galton.protocol.keys import CLIENTS_PATTERN, client_from_token_key, op_from_control_key
+from galton.protocol.operations import OPERATIONS
 
 log = logging.getLogger("galton.daemon")
 
 DEFAULT_LISTEN = f"tcp/127.0.0.1:{DEFAULT_PORT}"
-FAST_OPS = frozenset({"status"})  # read-only, answered on Zenoh's thread from a snapshot
 # After SIGTERM the daemon answers what is pending and closes; if a request still holds the
 # physics thread this long after the signal, the process exits without waiting for it.
 SHUTDOWN_GRACE_S = 1.5
@@ -127,7 +127,8 @@ class Daemon:
         op = op_from_control_key(str(query.key_expr))
         payload = query.payload.to_bytes() if query.payload is not None else b""
         call = Call(op, payload, _responder(query))
-        if op in FAST_OPS:
+        declared = OPERATIONS.get(op)
+        if declared is not None and declared.fast:
             self.loop.handle_readonly(call)
         else:
             self.loop.submit(call)

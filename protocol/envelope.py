@@ -71,7 +71,8 @@ def encode_request(op: str, args: dict[str, Any] | None = None,
     body: dict[str, Any] = {"v": PROTOCOL_VERSION, "op": op, "args": args or {}}
     if client is not None:
         body["client"] = client
-    return msgpack.packb(body, use_bin_type=True)
+    data: bytes = msgpack.packb(body, use_bin_type=True)
+    return data
 
 
 def decode_request(payload: bytes, op_from_key: str | None = None,
@@ -168,7 +169,7 @@ def _check_string(value: Any, limits: DecodeLimits, exempt: bool) -> None:
 
 
 def encode_reply(reply: Reply) -> bytes:
-    return msgpack.packb(
+    data: bytes = msgpack.packb(
         {
             "v": PROTOCOL_VERSION,
             "code": int(reply.code),
@@ -181,6 +182,7 @@ def encode_reply(reply: Reply) -> bytes:
         },
         use_bin_type=True,
     )
+    return data
 
 
 MAX_MESSAGE = 2000  # characters of an error message; the values it quotes are brief()

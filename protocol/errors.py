@@ -38,7 +38,7 @@ class RemoteError(GaltonError):
 
     code: ResultCode = ResultCode.OPERATION_FAILED
 
-    def __init__(self, message: str, details: dict | None = None) -> None:
+    def __init__(self, message: str, details: dict[str, Any] | None = None) -> None:
         super().__init__(message)
         self.message = message
         self.details = details or {}
@@ -114,7 +114,8 @@ _BY_CODE: dict[ResultCode, type[RemoteError]] = {
 }
 
 
-def error_for_code(code: int, message: str, details: dict | None = None) -> RemoteError:
+def error_for_code(code: int, message: str,
+                   details: dict[str, Any] | None = None) -> RemoteError:
     """Build the exception that a failure code stands for (unknown codes: OperationFailed)."""
     try:
         cls = _BY_CODE[ResultCode(code)]

@@ -10,13 +10,14 @@ import math
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field, fields
 from enum import StrEnum
-from typing import Any
+from typing import Any, TypeVar, overload
 
 import numpy as np
 
 from galton.protocol.arrays import pack_f64, unpack_f64
 from galton.protocol.errors import InvalidArgumentError, brief, did_you_mean
 
+T = TypeVar("T")
 POSE_WIDTH = 7
 TWIST_WIDTH = 6
 MAX_BATCH = 100_000
@@ -61,7 +62,12 @@ def require(args: dict[str, Any], key: str, kind: type | tuple[type, ...], where
     return check_type(args[key], kind, f"{where}.{key}")
 
 
+@overload
+def check_type(value: Any, kind: type[T], where: str) -> T: ...
+@overload
+def check_type(value: Any, kind: tuple[type, ...], where: str) -> Any: ...
 def check_type(value: Any, kind: type | tuple[type, ...], where: str) -> Any:
+    """``value`` if it is of ``kind`` (a bool is no number), else INVALID_ARGUMENT."""
     if isinstance(value, bool) and kind in (int, float, (int, float)):
         raise InvalidArgumentError(f"{where} must be a number, got a boolean")
     if not isinstance(value, kind):
@@ -89,8 +95,8 @@ def optional_number(args: dict[str, Any], key: str, where: str, **bounds: Any) -
     return None if value is None else finite_number(value, f"{where}.{key}", **bounds)
 
 
-def check_name(name: Any, where: str) -> str:
-    check_type(name, str, where)
+def check_name(value: Any, where: str) -> str:
+    name = check_type(value, str, where)
     if not name or len(name) > MAX_NAME_LENGTH or not name.isprintable():
         raise InvalidArgumentError(
             f"{where} {brief(name)} is not a valid entity name: use 1-{MAX_NAME_LENGTH} printable "
@@ -108,8 +114,7 @@ def check_names(value: Any, where: str) -> list[str]:
         raise InvalidArgumentError(f"{where} names {len(value)} entities; at most {MAX_BATCH}")
     names = [check_name(n, f"{where}[{i}]") for i, n in enumerate(value)]
     if len(set(names)) != len(names):
-        seen: set[str] = set()
-        dup = next(n for n in names if n in seen or seen.add(n))
+        dup = next(n for i, n in enumerate(names) if n in names[:i])
         raise InvalidArgumentError(f"{where} names {brief(dup)} more than once")
     return names
 

@@ -11,7 +11,7 @@ import pytest
 
 from galton.daemon.limits import Limits
 from galton.protocol import ResultCode
-from galton.protocol.operations import OPERATIONS, Operation
+from galton.protocol.operations import LONG_RUNNING_TIMEOUT_S, OPERATIONS, Operation
 
 PAGE = (Path(__file__).resolve().parents[1] / "docs" / "protocol.md").read_text()
 DAEMON = Path(__file__).resolve().parents[1] / "daemon"
@@ -49,3 +49,20 @@ def test_every_event_kind_is_documented() -> None:
     assert kinds >= {"state", "scene", "physics_error", "job_abandoned"}
     for kind in kinds:
         assert f"| `{kind}` |" in PAGE, kind
+
+
+def summary_row(op: Operation) -> str:
+    """The row the operations table must hold for this operation, from the registry."""
+    args = ", ".join(f"`{a.name}`" + ("*" if a.required else "") for a in op.args) or "–"
+    if op.steps:
+        wait = f"{LONG_RUNNING_TIMEOUT_S:g} s"
+    else:
+        wait = f"≥ {op.timeout_floor_s:g} s" if op.timeout_floor_s else "default"
+    flags = " | ".join("yes" if flag else "no" for flag in (op.mutates, op.steps, op.fast))
+    return f"| `{op.name}` | {args} | {flags} | {wait} |"
+
+
+def test_the_operations_table_is_the_registry() -> None:
+    rows = re.findall(r"^\| `\w+` \| .* \| (?:yes|no) \| (?:yes|no) \| (?:yes|no) \| .*\|$",
+                      PAGE, re.MULTILINE)
+    assert rows == [summary_row(op) for op in OPERATIONS.values()]

@@ -1,0 +1,82 @@
+"""What the daemon does for each operation: protocol/operations.py declares every operation
+(its arguments, whether it mutates, steps or is fast, how long a client waits); this table
+binds each one to the function that serves it, and refuses to load when the two drift.
+
+Time-control operations (daemon/time_control.py) act on the loop; scene operations
+(daemon/ops.py) act on its World and, when they change it, publish a ``scene`` event. The
+one ``fast`` operation, status, is answered on the transport's thread from the loop's
+atomic snapshot (``SimLoop.handle_readonly``) and never reaches this table's callers; it is
+bound here too, so that a status that does reach the physics thread is answered the same.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
+
+from galton.daemon import ops, time_control
+from galton.daemon.calls import Call
+from galton.protocol.operations import OPERATIONS
+
+if TYPE_CHECKING:
+    from galton.daemon.loop import SimLoop
+
+Result = dict[str, Any] | None  # None: the reply comes later (a step job)
+Handler = Callable[["SimLoop", Call, dict[str, Any]], Result]
+
+
+def _scene(name: str, apply: ops.SceneOp) -> Handler:
+    """A scene operation as a handler: applied to the loop's world; a success that changes
+    the scene is announced, and a step job reading a deleted entity is answered now."""
+    mutates = OPERATIONS[name].mutates
+
+    def handle(loop: SimLoop, call: Call, args: dict[str, Any]) -> Result:
+        result = apply(loop.world, args)
+        if mutates:
+            loop.emit({"kind": "scene", "op": name, "step": loop.world.step_index})
+            loop.check_job_reads()
+        return result
+    return handle
+
+
+HANDLERS: dict[str, Handler] = {
+    "status": time_control.status,
+    "capabilities": _scene("capabilities", ops.capabilities),
+    "play": time_control.play,
+    "set_rtf": time_control.set_rtf,
+    "pause": time_control.pause,
+    "stop": time_control.stop,
+    "step": time_control.step,
+    "run_until": time_control.run_until,
+    "reset": time_control.reset,
+    "load_world": time_control.load_world,
+    "spawn": _scene("spawn", ops.spawn),
+    "load_model": _scene("load_model", ops.load_model),
+    "list": _scene("list", ops.list_entities),
+    "get_states": _scene("get_states", ops.get_states),
+    "set_states": _scene("set_states", ops.set_states),
+    "update": _scene("update", ops.update),
+    "delete": _scene("delete", ops.delete),
+    "get_params": _scene("get_params", ops.get_params),
+    "set_params": _scene("set_params", ops.set_params),
+}
+
+
+# What the transport's thread can answer from the loop's snapshot (SimLoop.handle_readonly).
+ANSWERED_FROM_SNAPSHOT = frozenset({"status"})
+
+
+def check_bindings(handlers: dict[str, Handler]) -> None:
+    """Every declared operation has a handler and every handler a declaration; the
+    operations declared fast are those the snapshot can answer."""
+    unbound = sorted(set(OPERATIONS) - set(handlers))
+    undeclared = sorted(set(handlers) - set(OPERATIONS))
+    fast = {name for name, op in OPERATIONS.items() if op.fast}
+    if unbound or undeclared or fast != ANSWERED_FROM_SNAPSHOT:
+        raise RuntimeError(
+            f"operations without a handler: {unbound}; handlers without a declaration in "
+            f"protocol/operations.py: {undeclared}; declared fast: {sorted(fast)}, answered "
+            f"from the snapshot: {sorted(ANSWERED_FROM_SNAPSHOT)}")
+
+
+check_bindings(HANDLERS)

@@ -1,0 +1,206 @@
+"""Time-control operations of the physics loop: play, pause, stop, step, run_until, reset,
+load_world.
+
+The state machine: stopped → playing ⇄ paused, with step jobs while not playing. Each
+operation takes the loop, the call and its arguments, and returns the reply's result map,
+or None when the reply comes later (a step job). daemon/handlers.py binds them to the
+operations of protocol/operations.py.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import TYPE_CHECKING, Any
+
+from galton.daemon.calls import Call, RestCheck, StepJob
+from galton.daemon.world import World, check_scope
+from galton.protocol import (
+    IncorrectStateError,
+    InvalidArgumentError,
+    OperationFailedError,
+)
+from galton.protocol.errors import brief
+from galton.protocol.model import SimState, check_fields, check_names, check_type, finite_number
+
+if TYPE_CHECKING:
+    from galton.daemon.loop import SimLoop
+
+MAX_RTF = 1e6
+
+
+def _check_count(value: Any, max_steps: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= max_steps:
+        raise InvalidArgumentError(f"step.count must be an integer in [1, {max_steps}], "
+                                   f"got {brief(value)}")
+    return value
+
+
+def _check_rtf(value: Any, where: str) -> float:
+    return finite_number(value, where, low=0.0, high=MAX_RTF)
+
+
+def _rest_check(args: dict[str, Any], read: list[str] | None,
+                timestep: float) -> RestCheck | None:
+    """run_until's optional ``until_rest: {speed, every}``: stop once the read bodies rest."""
+    rest = args.get("until_rest")
+    if rest is None:
+        return None
+    check_type(rest, dict, "run_until.until_rest")
+    check_fields(rest, ("speed", "every"), "run_until.until_rest")
+    if read is None:
+        raise InvalidArgumentError("run_until.until_rest needs 'read': the bodies that must rest")
+    speed = finite_number(rest.get("speed"), "run_until.until_rest.speed", low=0.0,
+                          low_open=True)
+    every = finite_number(rest.get("every"), "run_until.until_rest.every", low=0.0,
+                          low_open=True)
+    return RestCheck(speed, max(1, round(every / timestep)))
+
+
+def status(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+    return loop.status().to_wire()
+
+
+def play(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+    rtf = args.get("rtf")
+    target = loop.target_rtf if rtf is None else _check_rtf(rtf, "play.rtf")
+    if loop.job is not None:
+        raise IncorrectStateError("a step request is still running; wait for it or pause")
+    loop.world.require_valid()
+    loop.target_rtf = target
+    loop.set_state(SimState.PLAYING)
+    return loop.status().to_wire()
+
+
+def set_rtf(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+    loop.target_rtf = _check_rtf(args.get("rtf"), "set_rtf.rtf")
+    loop.pacer.anchor(time.monotonic(), loop.world.sim_time, loop.target_rtf)
+    return loop.status().to_wire()
+
+
+def pause(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+    cancel_job(loop, "paused")
+    loop.set_state(SimState.PAUSED)
+    return loop.status().to_wire()
+
+
+def stop(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+    """Pause and rewind: time to 0 and every entity back to the state it was created in."""
+    cancel_job(loop, "stopped")
+    loop.world.reset("state")
+    loop.world.reset("time")
+    _after_reset(loop)
+    loop.set_state(SimState.STOPPED)
+    return loop.status().to_wire()
+
+
+def step(loop: SimLoop, call: Call, args: dict[str, Any]) -> None:
+    if "until_rest" in args:
+        raise InvalidArgumentError("step takes no until_rest: use run_until with "
+                                   "until_rest and read to stop once bodies rest")
+    count = _check_count(args.get("count", 1), loop.limits.max_steps)
+    _start_job(loop, call, count, _read_list(loop, args, "step"))
+
+
+def run_until(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any] | None:
+    target = finite_number(args.get("sim_time"), "run_until.sim_time", low=0.0)
+    dt = loop.world.engine.timestep
+    steps = (target - loop.world.sim_time) / dt - 1e-9
+    limit = loop.limits.max_steps
+    if steps > limit:
+        raise InvalidArgumentError(
+            f"run_until.sim_time {target:g} s is {steps:.3g} steps of {dt:g} s away; one "
+            f"request takes at most {limit} steps (to sim time "
+            f"{loop.world.sim_time + limit * dt:g} s)", {"max_steps": limit})
+    count = math.ceil(steps)
+    if count <= 0:
+        raise InvalidArgumentError(
+            f"run_until.sim_time {target} is not after the current sim time "
+            f"{loop.world.sim_time}")
+    read = _read_list(loop, args, "run_until")
+    _start_job(loop, call, count, read, _rest_check(args, read, dt))
+    return None
+
+
+def reset(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+    scope = check_scope(args.get("scope", "all"))
+    cancel_job(loop, "reset")
+    loop.world.reset(scope)
+    _after_reset(loop)
+    loop.emit({"kind": "scene", "op": "reset", "scope": scope,
+               "step": loop.world.step_index})
+    return loop.status().to_wire()
+
+
+def load_world(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+    """Replace the world with a fresh one on the named engine, in this process."""
+    name = check_type(args.get("engine"), str, "load_world.engine")
+    if loop.engine_factory is None:
+        raise OperationFailedError("this daemon cannot switch engines")
+    engine = loop.engine_factory(name)
+    params = args.get("params")
+    if params is not None:
+        try:
+            engine.set_params(check_type(params, dict, "load_world.params"))
+        except Exception:
+            engine.close()
+            raise
+    cancel_job(loop, "world replaced")
+    old, loop.world = loop.world, World(engine, loop.world.name, loop.limits)
+    old.engine.close()
+    loop.tune_switch_interval()
+    _after_reset(loop)
+    loop.set_state(SimState.STOPPED)
+    loop.emit({"kind": "scene", "op": "load_world", "engine": name, "step": 0})
+    return loop.status().to_wire()
+
+
+# -- helpers ------------------------------------------------------------------------
+def _read_list(loop: SimLoop, args: dict[str, Any], where: str) -> list[str] | None:
+    """The entities a step request wants read back when done; unknown names reject the
+    request before any step is taken."""
+    read = args.get("read")
+    if read is None:
+        return None
+    names = check_names(read, f"{where}.read")
+    loop.world.require_known(names)
+    return names
+
+
+def _start_job(loop: SimLoop, call: Call, count: int, read: list[str] | None = None,
+               rest: RestCheck | None = None) -> None:
+    if loop.state == SimState.PLAYING:
+        raise IncorrectStateError("cannot step while playing: pause first")
+    if loop.job is not None:
+        raise IncorrectStateError("another step request is still running")
+    loop.world.require_valid()
+    if loop.state == SimState.STOPPED:
+        loop.set_state(SimState.PAUSED)
+    loop.job = StepJob(call, count, count, read, rest)
+
+
+def client_gone(loop: SimLoop, client: str) -> None:
+    """A client's liveliness token vanished: the step request it is waiting for ends
+    now (its reply has nowhere to go), the world stays paused where it got to."""
+    job = loop.job
+    if job is None or job.call.client != client:
+        return
+    cancel_job(loop, "its client disappeared")
+    loop.emit({"kind": "job_abandoned", "client": client, "steps_done": job.done,
+               "steps_asked": job.total, "step": loop.world.step_index})
+
+
+def cancel_job(loop: SimLoop, reason: str) -> None:
+    if loop.job is None:
+        return
+    job, loop.job = loop.job, None
+    done = job.total - job.remaining
+    loop.reply_error(job.call, OperationFailedError(
+        f"step request interrupted ({reason}) after {done} of {job.total} steps",
+        {"steps_done": done}))
+
+
+def _after_reset(loop: SimLoop) -> None:
+    loop.refresh_clock()
+    loop.rtf_window.clear()
+    loop.pacer.anchor(time.monotonic(), loop.world.sim_time, loop.target_rtf)

@@ -1,0 +1,44 @@
+"""One registry: every operation declared in protocol/operations.py is served by exactly one
+handler, the fast ones are those the daemon answers from its snapshot, and a client's
+default timeouts come from the same declarations."""
+
+from __future__ import annotations
+
+import pytest
+
+from galton.daemon.handlers import HANDLERS, check_bindings
+from galton.protocol.operations import LONG_RUNNING_TIMEOUT_S, OPERATIONS, Operation, operation
+
+
+def test_every_declared_operation_has_one_handler() -> None:
+    check_bindings(HANDLERS)
+    assert set(HANDLERS) == set(OPERATIONS)
+
+
+def test_a_declaration_without_a_handler_stops_the_daemon_loading() -> None:
+    partial = {name: handler for name, handler in HANDLERS.items() if name != "spawn"}
+    with pytest.raises(RuntimeError, match=r"without a handler: \['spawn'\]"):
+        check_bindings(partial)
+
+
+def test_a_handler_without_a_declaration_stops_the_daemon_loading() -> None:
+    extra = {**HANDLERS, "teleport": HANDLERS["set_states"]}
+    with pytest.raises(RuntimeError, match=r"without a declaration .*\['teleport'\]"):
+        check_bindings(extra)
+
+
+@pytest.mark.parametrize("op", OPERATIONS.values(), ids=list(OPERATIONS))
+def test_client_timeouts_follow_the_declaration(op: Operation) -> None:
+    waited = op.client_timeout(5.0)
+    if op.steps:
+        assert waited == LONG_RUNNING_TIMEOUT_S
+    else:
+        assert waited == max(5.0, op.timeout_floor_s)
+        assert op.client_timeout(100.0) == 100.0  # a longer default is never shortened
+
+
+def test_only_status_is_fast_and_only_step_and_run_until_are_long_running() -> None:
+    assert [name for name, op in OPERATIONS.items() if op.fast] == ["status"]
+    assert [name for name, op in OPERATIONS.items() if op.steps] == ["step", "run_until"]
+    assert all(op.mutates for op in OPERATIONS.values() if op.steps)
+    assert operation("spawn").timeout_floor_s >= 30
