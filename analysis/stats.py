@@ -73,7 +73,7 @@ def expected_counts(settled: int, rows: int = ROWS) -> np.ndarray:
 
 def _chi2_rows(tables: np.ndarray, expected: np.ndarray) -> np.ndarray:
     """Pearson's statistic of each row of ``tables``; one formula for observed and simulated."""
-    return (((tables - expected) ** 2) / expected).sum(axis=-1)
+    return np.asarray((((tables - expected) ** 2) / expected).sum(axis=-1), dtype=float)
 
 
 def _settled_expected(table: np.ndarray, rows: int) -> np.ndarray:
@@ -311,7 +311,8 @@ def _denoised_law(table: np.ndarray, rows: int) -> np.ndarray:
     raw = math.sqrt(chi2_statistic(table, rows) / table.sum())
     if raw == 0:
         return binomial
-    return binomial + (table / table.sum() - binomial) * (corrected / raw)
+    shares = table / table.sum()
+    return np.asarray(binomial + (shares - binomial) * (corrected / raw), dtype=float)
 
 
 def sum_over_repetitions(tables: Sequence[Sequence[int] | np.ndarray],
@@ -319,7 +320,7 @@ def sum_over_repetitions(tables: Sequence[Sequence[int] | np.ndarray],
     """Bin-wise sum of several trials' counts (the pooled table)."""
     if len(tables) == 0:
         raise NoSettledBallsError("no trials to pool: pass at least one table of counts")
-    return np.sum([check_counts(t, rows) for t in tables], axis=0)
+    return np.asarray(np.sum([check_counts(t, rows) for t in tables], axis=0), dtype=np.int64)
 
 
 def pooled_over_repetitions(tables: Sequence[Sequence[int] | np.ndarray], rows: int = ROWS,

@@ -1,8 +1,8 @@
 """Is an engine fit to run on board a robot, as the paper asks? Four checks, named thresholds.
 
-* fidelity: at every ball count tested, the Monte Carlo p-value of the counts pooled over
-  repetitions exceeds ``FIDELITY_ALPHA / k`` (Bonferroni over the k ball counts, so a
-  faithful engine fails with probability at most ``FIDELITY_ALPHA``);
+* fidelity: every ball count tested meets the fidelity targets, the one definition of a
+  pass that ``galton-client check`` applies too (``galton.analysis.targets``: pooled
+  Monte Carlo p, median per-trial chi-squared, no ball lost or unsettled);
 * loss: balls lost over all trials <= ``MAX_LOST_PERCENT`` of balls released;
 * speed: mean RTF at the largest ball count tested >= ``MIN_RTF``;
 * footprint: peak RSS <= ``MAX_PEAK_RSS_BYTES`` and mean CPU <= ``MAX_CPU_PERCENT`` (per-count
@@ -13,10 +13,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from galton.analysis.formatting import balls_text, p_equals
+from galton.analysis.formatting import balls_text
 from galton.analysis.summary import EngineSummary
+from galton.analysis.targets import TARGETS_TEXT, summary_cells
 
-FIDELITY_ALPHA = 0.05
 MAX_LOST_PERCENT = 0.5
 MIN_RTF = 1.0
 MAX_PEAK_RSS_BYTES = 500_000_000
@@ -25,8 +25,8 @@ SUITABLE = "suitable"
 NOT_SUITABLE = "not suitable"
 
 THRESHOLDS_TEXT = (
-    f"fidelity: pooled Monte Carlo p > {FIDELITY_ALPHA} / k at each of the k ball counts "
-    f"(Bonferroni); loss: <= {MAX_LOST_PERCENT} % of released balls lost; speed: mean RTF >= "
+    f"fidelity: at each ball count {TARGETS_TEXT} (the targets of galton-client check); "
+    f"loss: <= {MAX_LOST_PERCENT} % of released balls lost; speed: mean RTF >= "
     f"{MIN_RTF} at the largest ball count; footprint: peak RSS <= "
     f"{MAX_PEAK_RSS_BYTES / 1e6:.0f} MB and mean CPU <= {MAX_CPU_PERCENT:.0f} % of one core"
 )
@@ -65,15 +65,11 @@ class Verdict:
 
 
 def check_fidelity(summary: EngineSummary) -> Check:
-    """Every ball count's pooled Monte Carlo p above the Bonferroni-corrected level."""
-    level = FIDELITY_ALPHA / len(summary.groups)
-    failing = [(g.balls, g.pooled.p_monte_carlo if g.pooled else None) for g in summary.groups
-               if g.pooled is None or g.pooled.p_monte_carlo <= level]
-    if not failing:
-        return Check("fidelity", True, f"pooled Monte Carlo p > {level:.3g} at every ball count")
-    worst = ", ".join(f"{balls_text(n)}: " + ("no ball settled" if p is None else p_equals(p))
-                      for n, p in failing)
-    return Check("fidelity", False, f"distribution not binomial (p <= {level:.3g}) at {worst}")
+    """Every ball count meets the fidelity targets (``galton.analysis.targets``)."""
+    missed = [cell.miss_text() for cell in summary_cells(summary) if not cell.passed]
+    if not missed:
+        return Check("fidelity", True, f"every ball count meets the targets ({TARGETS_TEXT})")
+    return Check("fidelity", False, "targets missed at " + "; ".join(missed))
 
 
 def check_loss(summary: EngineSummary) -> Check:

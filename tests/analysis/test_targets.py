@@ -1,8 +1,9 @@
-"""``benchmarks/fidelity_targets.py``: the fidelity targets recomputed from results.json.
+"""``galton.analysis.targets``: the fidelity targets recomputed from results.json.
 
 Seeded tables of known laws stand for bench runs: a binomial board meets every target, and
 each way of missing one (a wide law, a lost or unsettled ball, trials far from the
-binomial) is named on its cell's line and makes the script exit 1.
+binomial, no ball settled) is named in its cell's misses. The report's fidelity check is
+built from the same cells.
 """
 
 from __future__ import annotations
@@ -12,79 +13,92 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from support import import_benchmark, tilted_law
+from support import tilted_law
+from synthetic_runs import law_trials, write_results
 
 from galton.analysis import stats
+from galton.analysis.errors import RecordError
 from galton.analysis.records import ExperimentResults, TrialRecord
+from galton.analysis.summary import summarise
+from galton.analysis.targets import (
+    MAX_CHI2_MEDIAN,
+    MIN_POOLED_P,
+    CellVerdict,
+    load_trials,
+    verdicts,
+)
+from galton.analysis.verdict import judge
+
+BENCH_DEFAULTS = Path(__file__).resolve().parents[2] / "docs" / "data" / "bench-defaults"
 
 
-@pytest.fixture(scope="module")
-def targets():
-    return import_benchmark("fidelity_targets")
+def _by_cell(cells: list[CellVerdict]) -> dict[tuple[str, str], CellVerdict]:
+    return {(c.engine, c.release): c for c in cells}
 
 
-def _trials(engine: str, release: str, balls: int, law: np.ndarray, seed: int,
-            lost: int = 0, unsettled: int = 0) -> list[TrialRecord]:
-    """Ten repetitions of ``balls`` drawn from ``law``; repetition 0 loses and strands balls."""
-    rng = np.random.default_rng(seed)
-    trials = []
-    for repetition in range(10):
-        missing = (lost + unsettled) if repetition == 0 else 0
-        counts = rng.multinomial(balls - missing, law).tolist()
-        trials.append(TrialRecord(
-            engine=engine, engine_version="x", board="paper", balls=balls,
-            repetition=repetition, seed=0, release=release, counts=counts,
-            settled=balls - missing, lost=lost if repetition == 0 else 0,
-            lost_by_reason={"below_floor": lost if repetition == 0 else 0},
-            unsettled=unsettled if repetition == 0 else 0))
-    return trials
+def _lopsided() -> np.ndarray:
+    law = np.zeros(12)
+    law[:6] = stats.bin_probabilities()[:6] * 2  # every ball falls to the left half
+    return law / law.sum()
 
 
-def _write(tmp_path: Path, name: str, trials: list[TrialRecord]) -> Path:
-    folder = tmp_path / name
-    folder.mkdir()
-    ExperimentResults(trials=trials).to_json(folder / "results.json")
-    return folder
+def test_the_targets_are_the_projects() -> None:
+    assert MIN_POOLED_P == 0.05 and MAX_CHI2_MEDIAN == 16.64
 
 
-def _lines(output: str) -> dict[tuple[str, str], str]:
-    """Each cell's line, keyed by engine and release."""
-    found = {}
-    for line in output.splitlines():
-        match = re.match(r"(\w+)\s+paper\s+(\S+)\s+\d+ x", line)
-        if match:
-            found[match.groups()] = line
-    return found
+def test_a_binomial_board_meets_every_target() -> None:
+    (cell,) = verdicts(law_trials("mujoco", "stream", 500, stats.bin_probabilities(), seed=3))
+    assert cell.passed and cell.misses == []
+    assert cell.line().endswith("met") and "lost 0  unsettled 0" in cell.line()
+    assert (cell.balls, cell.trials) == (500, 10)
 
 
-def test_a_binomial_board_meets_every_target(targets, tmp_path: Path, capsys) -> None:
-    folder = _write(tmp_path, "fair", _trials("mujoco", "stream", 500,
-                                              stats.bin_probabilities(), seed=3))
-    assert targets.main([str(folder)]) == 0
-    out = capsys.readouterr().out
-    line = _lines(out)[("mujoco", "stream")]
-    assert line.endswith("met") and "lost 0  unsettled 0" in line
-    assert "1 of 1 cells meet every target" in out
+def test_each_missed_target_is_named() -> None:
+    trials = (law_trials("pybullet", "all-at-once", 500, tilted_law(0.07), seed=4)
+              + law_trials("mujoco", "stream", 100, stats.bin_probabilities(), seed=5,
+                           lost=2, unsettled=1)
+              + law_trials("mujoco", "all-at-once", 100, _lopsided(), seed=6))
+    cells = _by_cell(verdicts(trials))
+    assert not any(c.passed for c in cells.values())
+    wide = cells[("pybullet", "all-at-once")]
+    assert len(wide.misses) == 1 and re.fullmatch(r"pooled p [\d.e-]+ <= 0\.05", wide.misses[0])
+    assert wide.line().endswith("NOT met: " + wide.misses[0])
+    assert cells[("mujoco", "stream")].misses == ["2 lost", "1 unsettled"]
+    assert any(m.startswith("median chi2") for m in cells[("mujoco", "all-at-once")].misses)
 
 
-def test_each_missed_target_is_named_and_fails_the_run(targets, tmp_path: Path,
-                                                       capsys) -> None:
-    wide = _write(tmp_path, "wide", _trials("pybullet", "all-at-once", 500,
-                                            tilted_law(0.07), seed=4))
-    leaky = _write(tmp_path, "leaky", _trials("mujoco", "stream", 100,
-                                              stats.bin_probabilities(), seed=5,
-                                              lost=2, unsettled=1))
-    lopsided = np.zeros(12)
-    lopsided[:6] = stats.bin_probabilities()[:6] * 2  # every ball falls to the left half
-    skewed = _write(tmp_path, "skewed", _trials("mujoco", "all-at-once", 100,
-                                                lopsided / lopsided.sum(), seed=6))
-    assert targets.main([str(wide), str(leaky / "results.json"), str(skewed)]) == 1
-    out = capsys.readouterr().out
-    lines = _lines(out)
-    assert re.search(r"NOT met: pooled p [\d.e-]+ <= 0\.05$", lines[("pybullet", "all-at-once")])
-    assert lines[("mujoco", "stream")].endswith("NOT met: 2 lost; 1 unsettled")
-    assert "median chi2" in lines[("mujoco", "all-at-once")].split("NOT met:")[1]
-    assert "0 of 3 cells meet every target" in out
+def test_a_cell_where_no_ball_settled_misses_and_says_why() -> None:
+    trials = law_trials("mujoco", "stream", 20, stats.bin_probabilities(), seed=7, lost=20)
+    (cell,) = verdicts(trials[:1])
+    assert cell.pooled_p is None and cell.misses == ["no ball settled", "20 lost"]
+    assert "pooled p      -" in cell.line()
+
+
+def test_a_cells_level_does_not_depend_on_the_other_ball_counts() -> None:
+    """Held to p > 0.05 on its own, not Bonferroni-corrected over the counts of the run: a
+    100-ball cell at p 0.038 misses alone and beside a 500-ball run, in the report too."""
+    alone = law_trials("mujoco", "stream", 100, tilted_law(0.12), seed=37)
+    (cell,) = verdicts(alone)
+    assert cell.pooled_p is not None and 0.025 < cell.pooled_p <= MIN_POOLED_P
+    both = alone + law_trials("mujoco", "stream", 500, stats.bin_probabilities(), seed=3)
+    assert [c.passed for c in verdicts(both)] == [False, True]
+    for trials in (alone, both):
+        (summary,) = summarise(trials)
+        assert not judge(summary).checks[0].passed
+
+
+def test_the_reports_fidelity_check_agrees_with_the_cells() -> None:
+    trials = (law_trials("mujoco", "stream", 100, stats.bin_probabilities(), seed=5,
+                         lost=2, unsettled=1)
+              + law_trials("mujoco", "stream", 500, stats.bin_probabilities(), seed=3))
+    (summary,) = summarise(trials)
+    fidelity = next(c for c in judge(summary).checks if c.name == "fidelity")
+    cells = verdicts(trials)
+    assert [c.passed for c in cells] == [False, True]
+    assert not fidelity.passed and fidelity.detail == "targets missed at 100 balls: 2 lost; " \
+        "1 unsettled"
+    (fair,) = summarise(law_trials("mujoco", "stream", 500, stats.bin_probabilities(), seed=3))
+    assert next(c for c in judge(fair).checks if c.name == "fidelity").passed
 
 
 def _report_rows(report: Path) -> dict[tuple[str, int], tuple[float, float]]:
@@ -100,27 +114,32 @@ def _report_rows(report: Path) -> dict[tuple[str, int], tuple[float, float]]:
 
 
 @pytest.mark.parametrize("release", ["all-at-once", "stream"])
-def test_a_real_bench_run_is_recomputed_as_its_report_gave_it(targets, release: str) -> None:
-    """The defaults' bench runs kept in docs/data: from results.json alone, the script finds
+def test_a_real_bench_run_is_recomputed_as_its_report_gave_it(release: str) -> None:
+    """The defaults' bench runs kept in docs/data: from results.json alone, the targets find
     the median chi2 and pooled p that the bench wrote in its report."""
-    folder = Path(__file__).resolve().parents[1] / "docs" / "data" / "bench-defaults" / release
+    folder = BENCH_DEFAULTS / release
     reported = _report_rows(folder / "report.md")
-    cells = targets.verdicts(targets.load_trials([str(folder)]))
+    cells = verdicts(load_trials([folder]))
     assert {(c.engine, c.balls) for c in cells} == set(reported) and len(reported) == 4
     for cell in cells:
         assert cell.release == release and cell.board == "paper"
         chi2, p = reported[(cell.engine, cell.balls)]
         assert cell.chi2_median == pytest.approx(chi2, rel=1e-3)  # four figures
-        assert round(cell.pooled_p, 3) == p
+        assert cell.pooled_p is not None and round(cell.pooled_p, 3) == p
 
 
-def test_unreadable_or_empty_results_are_refused_with_the_reason(targets, tmp_path: Path,
-                                                                 capsys) -> None:
-    with pytest.raises(SystemExit) as exited:
-        targets.main([str(tmp_path / "missing")])
-    assert exited.value.code == 2
-    assert "cannot read results from" in capsys.readouterr().err
-    empty = _write(tmp_path, "empty", [])
-    with pytest.raises(SystemExit):
-        targets.main([str(empty)])
-    assert "the results hold no trial" in capsys.readouterr().err
+def test_unreadable_or_empty_results_are_refused_with_the_reason(tmp_path: Path) -> None:
+    with pytest.raises(RecordError, match="cannot read results from"):
+        load_trials([tmp_path / "missing"])
+    empty = write_results(tmp_path / "empty", [])
+    with pytest.raises(RecordError, match="the results hold no trial"):
+        load_trials([empty])
+
+
+def test_files_and_folders_are_pooled(tmp_path: Path) -> None:
+    first = law_trials("mujoco", "stream", 100, stats.bin_probabilities(), seed=1)
+    second = law_trials("pybullet", "stream", 100, stats.bin_probabilities(), seed=2)
+    a = write_results(tmp_path / "a", first)
+    b = write_results(tmp_path / "b", second)
+    loaded: list[TrialRecord] = load_trials([a, b / "results.json"])
+    assert loaded == ExperimentResults.from_json(a / "results.json").trials + second
