@@ -5,10 +5,11 @@ from __future__ import annotations
 import threading
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
+from typing import Any
 
 import zenoh
 
-from galton.client.session import open_session, query
+from galton.client.session import close_session, open_session, query, undeclare
 from galton.protocol import (
     DaemonUnreachableError,
     GaltonError,
@@ -31,7 +32,7 @@ class DaemonInfo:
     entity_count: int
     error: str = ""
 
-    def to_dict(self) -> dict:
+    def to_dict(self) -> dict[str, Any]:
         return asdict(self)
 
 
@@ -51,7 +52,7 @@ def discover(session: zenoh.Session, timeout: float = 2.0) -> list[DaemonInfo]:
     daemons = []
     for name in instances(session, timeout):
         try:
-            reply = query(session, Keys(name).control("status"), "status", None, timeout)
+            reply = query(session, Keys(name), "status", None, timeout)
             reply.raise_for_code()
             status = SimStatus.from_wire(reply.result)
             daemons.append(DaemonInfo(name, status.engine, status.state, status.sim_time,
@@ -67,7 +68,7 @@ def discover_at(connect: str | Sequence[str] | None, timeout: float = 2.0) -> li
     try:
         return discover(session, timeout)
     finally:
-        session.close()
+        close_session(session)
 
 
 def wait_for_daemon(session: zenoh.Session, instance: str, timeout: float,
@@ -85,7 +86,7 @@ def wait_for_daemon(session: zenoh.Session, instance: str, timeout: float,
         if not appeared.wait(timeout):
             raise RequestTimeoutError(f"daemon {instance!r} did not appear within {timeout:g} s")
     finally:
-        subscriber.undeclare()
+        undeclare(subscriber)
 
 
 __all__ = ["DaemonInfo", "DaemonUnreachableError", "discover", "discover_at", "instances",

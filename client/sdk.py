@@ -4,20 +4,31 @@
 ...     sim.spawn(spheres(["ball"], [[0, 0, 1]], radius=0.05))
 ...     sim.step(500)
 ...     states = sim.get_states(["ball"])
+
+A Client holds no per-request state: each result is built from its own reply (stamps
+included), so one Client may serve several threads. Timeouts come from the operation
+registry (``galton.protocol.operations``) unless the caller names one.
 """
 
 from __future__ import annotations
 
 import uuid
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 import zenoh
 
-from galton.client.session import open_session, query
+from galton.client.session import (
+    Declared,
+    checked_timeout,
+    close_session,
+    open_session,
+    query,
+    undeclare,
+)
 from galton.client.telemetry import Subscription, TelemetryStream, subscribe_events
+from galton.client.values import Stamp, States
 from galton.protocol import (
     POSE_WIDTH,
     TWIST_WIDTH,
@@ -30,181 +41,180 @@ from galton.protocol import (
     SimStatus,
     Telemetry,
     pack_f64,
-    unpack_f64,
 )
+from galton.protocol.errors import ClientClosedError
 from galton.protocol.keys import client_token_key
 from galton.protocol.operations import OPERATIONS
 
 DEFAULT_TIMEOUT_S = 5.0
-DEFAULT_STEP_TIMEOUT_S = 600.0
 
-
-@dataclass
-class States:
-    """Poses (n, 7: x y z qx qy qz qw) and world twists (n, 6) of named bodies."""
-
-    names: list[str]
-    poses: np.ndarray
-    twists: np.ndarray
-    step: int
-    sim_time: float
-
-    @property
-    def positions(self) -> np.ndarray:
-        return self.poses[:, :3]
-
-    @property
-    def speeds(self) -> np.ndarray:
-        return np.linalg.norm(self.twists[:, :3], axis=1)
-
-
-@dataclass
-class Stamp:
-    """When a mutating request took effect."""
-
-    step: int
-    sim_time: float
+__all__ = ["DEFAULT_TIMEOUT_S", "Client", "Stamp", "States", "body_group", "boxes", "plane",
+           "spheres"]
 
 
 class Client:
-    """A connection to one daemon instance (the session may be shared with others)."""
+    """A connection to one daemon instance (the session may be shared with others).
+
+    ``timeout``: seconds a quick operation waits for its reply; operations that rebuild a
+    world wait at least their registry floor, stepping ones ``LONG_RUNNING_TIMEOUT_S``.
+    """
 
     def __init__(self, instance: str = "galton", connect: str | Sequence[str] | None = None,
                  *, timeout: float = DEFAULT_TIMEOUT_S, session: zenoh.Session | None = None,
                  config_file: str | None = None) -> None:
         self.keys = Keys(instance)
-        self.timeout = timeout
+        self.timeout = checked_timeout(timeout)
         self._own_session = session is None
         self.session = session if session is not None else open_session(connect, config_file)
-        self.last_stamp = Stamp(0, 0.0)
+        self._closed = False
         # This client's liveliness: a daemon ends a step request whose client has vanished.
         self.client_id = uuid.uuid4().hex
-        self._token = self.session.liveliness().declare_token(client_token_key(self.client_id))
+        self._token: Declared | None = self.session.liveliness().declare_token(
+            client_token_key(self.client_id))
 
     @property
     def instance(self) -> str:
         return self.keys.instance
 
+    @property
+    def closed(self) -> bool:
+        return self._closed
+
     def close(self) -> None:
+        """Withdraw this client's token and close its own session; closing twice is fine."""
+        if self._closed:
+            return
+        self._closed = True
         if self._token is not None:
-            self._token.undeclare()
+            undeclare(self._token)
             self._token = None
         if self._own_session:
-            self.session.close()
+            close_session(self.session)
 
     def __enter__(self) -> Client:
+        self._check_open()
         return self
 
     def __exit__(self, *exc: object) -> None:
         self.close()
 
+    def _check_open(self) -> None:
+        if self._closed:
+            raise ClientClosedError(
+                f"this Client (instance {self.instance!r}) was closed; open a new one")
+
     # -- plumbing -----------------------------------------------------------------------
-    def call(self, op: str, args: dict[str, Any] | None = None,
-             timeout: float | None = None) -> dict[str, Any]:
-        """Send any operation; return its result map or raise the error its code means."""
-        reply = self.request(op, args, timeout)
-        reply.raise_for_code()
-        return reply.result
+    def timeout_for(self, op: str, timeout: float | None = None) -> float:
+        """The seconds a request for ``op`` waits: ``timeout`` if given (finite, above 0),
+        else the registry's for the operation (unknown operations: this client's)."""
+        if timeout is not None:
+            return checked_timeout(timeout)
+        known = OPERATIONS.get(op)
+        return self.timeout if known is None else known.client_timeout(self.timeout)
 
     def request(self, op: str, args: dict[str, Any] | None = None,
                 timeout: float | None = None) -> Reply:
-        """Send any operation and return the raw reply, failures included."""
+        """Send any operation and return the raw reply, failures included; the reply holds
+        the step and sim time the request took effect at."""
+        self._check_open()
+        wait = self.timeout_for(op, timeout)
         steps = op in OPERATIONS and OPERATIONS[op].steps
-        reply = query(self.session, self.keys.control(op), op, args,
-                      self.timeout if timeout is None else timeout,
-                      self.client_id if steps else None)
-        self.last_stamp = Stamp(reply.step, reply.sim_time)
+        return query(self.session, self.keys, op, args, wait,
+                     self.client_id if steps else None)
+
+    def call(self, op: str, args: dict[str, Any] | None = None,
+             timeout: float | None = None) -> dict[str, Any]:
+        """Send any operation; return its result map or raise the error its code means."""
+        return self._ok(op, args, timeout).result
+
+    def _ok(self, op: str, args: dict[str, Any] | None = None,
+            timeout: float | None = None) -> Reply:
+        """The reply to a request that succeeded (a failure raises its typed error)."""
+        reply = self.request(op, args, timeout)
+        reply.raise_for_code()
         return reply
+
+    def _status(self, op: str, args: dict[str, Any] | None = None) -> SimStatus:
+        return SimStatus.from_wire(self.call(op, args))
 
     # -- discovery & clock --------------------------------------------------------------
     def capabilities(self) -> Capabilities:
         return Capabilities.from_wire(self.call("capabilities"))
 
     def status(self) -> SimStatus:
-        return SimStatus.from_wire(self.call("status"))
+        return self._status("status")
 
     def play(self, rtf: float | None = None) -> SimStatus:
         """Run continuously at ``rtf`` × real time (0 = as fast as possible)."""
-        return SimStatus.from_wire(self.call("play", {} if rtf is None else {"rtf": rtf}))
+        return self._status("play", {} if rtf is None else {"rtf": rtf})
 
     def set_rtf(self, rtf: float) -> SimStatus:
-        return SimStatus.from_wire(self.call("set_rtf", {"rtf": rtf}))
+        return self._status("set_rtf", {"rtf": rtf})
 
     def pause(self) -> SimStatus:
-        return SimStatus.from_wire(self.call("pause"))
+        return self._status("pause")
 
     def stop(self) -> SimStatus:
         """Pause and rewind: time to 0, every entity back to its created state."""
-        return SimStatus.from_wire(self.call("stop"))
+        return self._status("stop")
 
     def step(self, count: int = 1, timeout: float | None = None) -> Stamp:
         """Advance exactly ``count`` steps; returns when they are done."""
-        self.call("step", {"count": count},
-                  DEFAULT_STEP_TIMEOUT_S if timeout is None else timeout)
-        return self.last_stamp
+        return Stamp.of(self._ok("step", {"count": count}, timeout))
 
     def run_until(self, sim_time: float, timeout: float | None = None) -> Stamp:
-        self.call("run_until", {"sim_time": sim_time},
-                  DEFAULT_STEP_TIMEOUT_S if timeout is None else timeout)
-        return self.last_stamp
+        return Stamp.of(self._ok("run_until", {"sim_time": sim_time}, timeout))
 
     def step_and_read(self, count: int, names: Sequence[str],
                       timeout: float | None = None) -> States:
         """Advance ``count`` steps and return these bodies' states after the last one: one
         round trip, as a control loop wants (step, then observe)."""
-        result = self.call("step", {"count": count, "read": list(names)},
-                           DEFAULT_STEP_TIMEOUT_S if timeout is None else timeout)
-        return self._states(result)
+        return States.from_reply(
+            self._ok("step", {"count": count, "read": list(names)}, timeout))
 
     def run_until_and_read(self, sim_time: float, names: Sequence[str],
                            timeout: float | None = None) -> States:
         """``run_until`` and ``get_states(names)`` in one round trip."""
-        result = self.call("run_until", {"sim_time": sim_time, "read": list(names)},
-                           DEFAULT_STEP_TIMEOUT_S if timeout is None else timeout)
-        return self._states(result)
+        return States.from_reply(
+            self._ok("run_until", {"sim_time": sim_time, "read": list(names)}, timeout))
 
     def run_until_rest(self, sim_time: float, names: Sequence[str], speed: float,
                        every: float, timeout: float | None = None) -> tuple[States, bool]:
         """Run until every named body moves slower than ``speed`` m/s (looked at every
         ``every`` s of sim time) or until ``sim_time``; return their states and whether they
         came to rest. One round trip for a whole settling phase."""
-        result = self.call("run_until", {"sim_time": sim_time, "read": list(names),
-                                         "until_rest": {"speed": speed, "every": every}},
-                           DEFAULT_STEP_TIMEOUT_S if timeout is None else timeout)
-        return self._states(result), bool(result["at_rest"])
-
-    def _states(self, result: dict[str, Any]) -> States:
-        return States(result["names"], unpack_f64(result["poses"], POSE_WIDTH),
-                      unpack_f64(result["twists"], TWIST_WIDTH), *_stamp(self.last_stamp))
+        reply = self._ok("run_until", {"sim_time": sim_time, "read": list(names),
+                                       "until_rest": {"speed": speed, "every": every}},
+                         timeout)
+        return States.from_reply(reply), bool(reply.result["at_rest"])
 
     def reset(self, scope: str = "all") -> SimStatus:
         """Scopes: time, state (entities to their created state), spawned, all."""
-        return SimStatus.from_wire(self.call("reset", {"scope": scope}))
+        return self._status("reset", {"scope": scope})
 
     def load_world(self, engine: str, params: dict[str, Any] | None = None) -> SimStatus:
         """Replace the world with an empty one on another engine, without a restart."""
         args: dict[str, Any] = {"engine": engine}
         if params:
             args["params"] = params
-        return SimStatus.from_wire(self.call("load_world", args, timeout=max(self.timeout, 30)))
+        return self._status("load_world", args)
 
     def get_params(self) -> dict[str, Any]:
-        return self.call("get_params")["params"]
+        return _map(self.call("get_params"), "params")
 
     def set_params(self, params: dict[str, Any]) -> dict[str, Any]:
-        return self.call("set_params", {"params": params})["params"]
+        return _map(self.call("set_params", {"params": params}), "params")
 
     # -- scene --------------------------------------------------------------------------
     def spawn(self, *groups: BodyGroup, timeout: float | None = None) -> list[str]:
         """Create every body of every group in one request (one engine rebuild)."""
         args = {"groups": [g.to_wire() for g in groups]}
-        return self.call("spawn", args, timeout=timeout or max(self.timeout, 30))["names"]
+        return _names(self.call("spawn", args, timeout))
 
     def load_model(self, fmt: str, *, text: str | None = None, path: str | None = None,
                    prefix: str = "") -> list[str]:
         args = {"format": fmt, "text": text, "path": path, "prefix": prefix}
-        args = {k: v for k, v in args.items() if v is not None}
-        return self.call("load_model", args, timeout=max(self.timeout, 30))["names"]
+        return _names(self.call("load_model", {k: v for k, v in args.items() if v is not None}))
 
     def list(self, name: str | None = None, tag: str | None = None,
              kind: str | None = None) -> list[EntityInfo]:
@@ -214,8 +224,8 @@ class Client:
 
     def get_states(self, names: Sequence[str] | None = None) -> States:
         """States of these bodies (all when None) in one request."""
-        return self._states(
-            self.call("get_states", {} if names is None else {"names": list(names)}))
+        return States.from_reply(
+            self._ok("get_states", {} if names is None else {"names": list(names)}))
 
     def set_states(self, names: Sequence[str], poses: np.ndarray | None = None,
                    twists: np.ndarray | None = None) -> Stamp:
@@ -224,35 +234,40 @@ class Client:
             args["poses"] = pack_f64(np.asarray(poses, dtype=float).reshape(-1, POSE_WIDTH))
         if twists is not None:
             args["twists"] = pack_f64(np.asarray(twists, dtype=float).reshape(-1, TWIST_WIDTH))
-        self.call("set_states", args)
-        return self.last_stamp
+        return Stamp.of(self._ok("set_states", args))
 
     def update(self, names: Sequence[str], **properties: Any) -> Stamp:
         """Change mass, friction, restitution, rgba or tags of these entities."""
         props = BodyProperties(**properties)
-        self.call("update", {"names": list(names), "properties": props.to_wire()})
-        return self.last_stamp
+        return Stamp.of(self._ok("update", {"names": list(names),
+                                            "properties": props.to_wire()}))
 
     def delete(self, names: Sequence[str]) -> Stamp:
-        self.call("delete", {"names": list(names)}, timeout=max(self.timeout, 30))
-        return self.last_stamp
+        return Stamp.of(self._ok("delete", {"names": list(names)}))
 
     # -- streams ------------------------------------------------------------------------
     def telemetry(self, timeout: float | None = None) -> TelemetryStream:
         """An iterator of Telemetry samples (close it, or use it as a context manager)."""
+        self._check_open()
         return TelemetryStream(self.session, self.keys.telemetry,
                                self.timeout if timeout is None else timeout)
 
     def on_telemetry(self, callback: Callable[[Telemetry], None]) -> Subscription:
         """Call ``callback`` on Zenoh's thread for every sample; keep it short."""
+        self._check_open()
         return TelemetryStream.with_callback(self.session, self.keys.telemetry, callback)
 
     def on_event(self, callback: Callable[[dict[str, Any]], None]) -> Subscription:
+        self._check_open()
         return subscribe_events(self.session, self.keys.events, callback)
 
 
-def _stamp(stamp: Stamp) -> tuple[int, float]:
-    return stamp.step, stamp.sim_time
+def _names(result: dict[str, Any]) -> list[str]:
+    return [str(name) for name in result["names"]]
+
+
+def _map(result: dict[str, Any], key: str) -> dict[str, Any]:
+    return dict(result[key])
 
 
 def spheres(names: Sequence[str], positions: Sequence[Sequence[float]] | np.ndarray,
@@ -271,7 +286,8 @@ def plane(name: str = "ground", height: float = 0.0, **options: Any) -> BodyGrou
 
 
 def body_group(shape: str, size: tuple[float, ...], names: Sequence[str],
-           positions: Sequence[Sequence[float]] | np.ndarray, **options: Any) -> BodyGroup:
+               positions: Sequence[Sequence[float]] | np.ndarray, **options: Any) -> BodyGroup:
+    """A group of bodies of one shape at these positions (identity orientation)."""
     xyz = np.asarray(positions, dtype=float).reshape(-1, 3)
     poses = np.zeros((len(xyz), POSE_WIDTH))
     poses[:, :3] = xyz

@@ -10,6 +10,7 @@ from typing import Any
 import msgpack
 import zenoh
 
+from galton.client.session import Declared, checked_timeout, undeclare
 from galton.protocol import RequestTimeoutError, Telemetry
 
 log = logging.getLogger("galton.client")
@@ -18,12 +19,13 @@ log = logging.getLogger("galton.client")
 class Subscription:
     """A live subscription; ``close()`` (or leaving a ``with``) ends it."""
 
-    def __init__(self, subscriber: Any) -> None:
-        self._subscriber = subscriber
+    def __init__(self, subscriber: Declared) -> None:
+        self._subscriber: Declared | None = subscriber
 
     def close(self) -> None:
+        """End the subscription; closing twice is fine."""
         if self._subscriber is not None:
-            self._subscriber.undeclare()
+            undeclare(self._subscriber)
             self._subscriber = None
 
     def __enter__(self) -> Subscription:
@@ -46,7 +48,7 @@ class TelemetryStream(Subscription):
 
     def __init__(self, session: zenoh.Session, key: str, timeout: float) -> None:
         self._queue: queue.SimpleQueue[Telemetry] = queue.SimpleQueue()
-        self.timeout = timeout
+        self.timeout = checked_timeout(timeout)
         super().__init__(session.declare_subscriber(key, self._on_sample))
 
     def _on_sample(self, sample: zenoh.Sample) -> None:
@@ -61,8 +63,10 @@ class TelemetryStream(Subscription):
         return self.next(self.timeout)
 
     def next(self, timeout: float) -> Telemetry:
+        """The next sample, waiting at most ``timeout`` s (RequestTimeoutError after)."""
+        wait = checked_timeout(timeout)
         try:
-            return self._queue.get(timeout=timeout)
+            return self._queue.get(timeout=wait)
         except queue.Empty:
             raise RequestTimeoutError(
                 f"no telemetry within {timeout:g} s: is the daemon running, with a "

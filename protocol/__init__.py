@@ -18,6 +18,7 @@ from galton.protocol.envelope import (
     error_reply,
 )
 from galton.protocol.errors import (
+    ClientClosedError,
     DaemonUnreachableError,
     FeatureUnsupportedError,
     GaltonError,
@@ -67,6 +68,7 @@ __all__ = [
     "BodyGroup",
     "BodyProperties",
     "Capabilities",
+    "ClientClosedError",
     "DaemonUnreachableError",
     "DecodeLimits",
     "EntityInfo",

@@ -16,7 +16,8 @@
     │   ├── PhysicsError             PHYSICS_ERROR: the state diverged (NaN, infinite, absurd)
     │   └── ResourceLimitError       RESOURCE_LIMIT: the request is over one of the daemon's limits
     ├── DaemonUnreachableError       no daemon answered (client side only)
-    └── RequestTimeoutError          a daemon exists but did not answer in time (client side)
+    ├── RequestTimeoutError          a daemon exists but did not answer in time (client side)
+    └── ClientClosedError            the SDK Client was closed before this call (client side)
 """
 
 from __future__ import annotations
@@ -94,6 +95,10 @@ class DaemonUnreachableError(GaltonError):
 
 class RequestTimeoutError(GaltonError):
     """A daemon is there but did not answer within the caller's timeout."""
+
+
+class ClientClosedError(GaltonError):
+    """A call on an SDK Client after its ``close()``: open a new Client."""
 
 
 _BY_CODE: dict[ResultCode, type[RemoteError]] = {

@@ -48,9 +48,10 @@ def test_identical_runs_give_identical_states(sim: Client) -> None:
 
 def test_mutating_replies_carry_the_step_they_took_effect_at(sim: Client) -> None:
     sim.step(10)
-    sim.spawn(spheres(["late"], [[0, 0, 1]], 0.05))
-    assert sim.last_stamp.step == 10
-    assert sim.last_stamp.sim_time == pytest.approx(10 * sim.status().timestep)
+    reply = sim.request("spawn", {"groups": [spheres(["late"], [[0, 0, 1]], 0.05).to_wire()]})
+    assert reply.ok and reply.result["names"] == ["late"]
+    assert reply.step == 10
+    assert reply.sim_time == pytest.approx(10 * sim.status().timestep)
 
 
 def test_pause_stops_the_clock(sim: Client) -> None:
