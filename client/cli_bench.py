@@ -1,11 +1,15 @@
-"""``galton-client bench`` and ``galton-client report``: the Galton-board benchmark."""
+"""``galton-client bench``, ``report`` and ``sweep``: the Galton-board benchmark.
+
+Scoring and plotting (scipy, matplotlib: the ``[bench]`` extra) are imported inside the
+commands, so that a client installed without them still has every other command.
+"""
 
 from __future__ import annotations
 
 import itertools
 import json
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
@@ -13,12 +17,8 @@ from rich.table import Table
 
 from galton.analysis.board import BoardSpec
 from galton.analysis.errors import AnalysisError
-from galton.analysis.outputs import write_outputs
 from galton.analysis.published import PUBLISHED_LABEL, PUBLISHED_TABLE2
 from galton.analysis.records import ExperimentResults, TrialRecord
-from galton.analysis.stats import critical_value
-from galton.analysis.summary import EngineSummary, summarise
-from galton.analysis.sweep import plot_sweep, sweep_cells, sweep_table
 from galton.client.bench.daemons import bench_clients
 from galton.client.bench.experiment import (
     DEFAULT_BALLS,
@@ -27,9 +27,11 @@ from galton.client.bench.experiment import (
     ExperimentConfig,
     run_experiment,
 )
-from galton.client.bench.sweep import parse_axis, run_sweep
 from galton.client.bench.trial import DEFAULT_MAX_SIM_TIME_S, TrialConfig
 from galton.client.cli import JsonOpt, app, console, run_guarded
+
+if TYPE_CHECKING:
+    from galton.analysis.summary import EngineSummary
 
 DEFAULT_OUT = Path("galton-results")
 
@@ -108,6 +110,8 @@ def _run(config: ExperimentConfig, connect: list[str] | None, instances: list[st
 
 
 def _finish(results: ExperimentResults, out: Path, as_json: bool) -> None:
+    from galton.analysis.outputs import write_outputs
+    from galton.analysis.summary import summarise
     try:
         written = write_outputs(results, out)
         saved = ExperimentResults.from_json(written["results_json"])
@@ -124,7 +128,7 @@ def _finish(results: ExperimentResults, out: Path, as_json: bool) -> None:
                   "*.png)")
 
 
-def _headline(summary: EngineSummary) -> dict:
+def _headline(summary: EngineSummary) -> dict[str, Any]:
     group = summary.overall
     return {"engine": summary.label, "chi2_median": group.chi2_median,
             "chi2_pooled": group.pooled.chi2 if group.pooled else None,
@@ -136,6 +140,7 @@ def _headline(summary: EngineSummary) -> dict:
 
 def table2(summaries: list[EngineSummary], rows: int = 11) -> Table:
     """Our engines beside the paper's published rows, as in its Table 2."""
+    from galton.analysis.stats import critical_value
     title = (f"Galton board, {rows} d.o.f., critical value {critical_value(dof=rows):.2f} at 5 %"
              " (published rows: the paper's 11-row board)")
     table = Table("simulator", "chi-squared (median per trial)", "chi-squared pooled (MC p)",
@@ -194,6 +199,8 @@ def sweep(
     as_json: JsonOpt = False,
 ) -> None:
     """The benchmark over a grid of one or two parameters: a fidelity map per engine."""
+    from galton.analysis.sweep import plot_sweep, sweep_cells, sweep_table
+    from galton.client.bench.sweep import parse_axis, run_sweep
     axes = run_guarded(lambda: [parse_axis(p) for p in param])
     config = run_guarded(lambda: ExperimentConfig(
         board=load_board(board), engines=tuple(_csv(engines, "--engines")), balls=(balls,),
