@@ -1,0 +1,108 @@
+"""galton-client play, set-rtf, pause, stop, step, run-until and reset: the world's clock."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+import typer
+
+from galton.client.cli import JsonOpt, app, show_stamp, show_status, with_client
+from galton.client.cli_states import show_states
+from galton.client.cli_values import LIST_HELP, ResetScope, numbers, split_list
+
+PANEL = "Clock"
+Read = Annotated[str | None, typer.Option(
+    help=f"Entities whose states the reply carries, read after the last step, {LIST_HELP}.")]
+Rtf = Annotated[float, typer.Argument(
+    help="Target real-time factor (0 = as fast as possible).", min=0.0, show_default=False)]
+
+
+@app.command(rich_help_panel=PANEL)
+def play(ctx: typer.Context,
+         rtf: Annotated[float | None, typer.Option(
+             help="Target real-time factor (0 = as fast as possible; default: the current "
+                  "target).", min=0.0)] = None,
+         as_json: JsonOpt = False) -> None:
+    """Run the simulation continuously."""
+    show_status(with_client(ctx, lambda c: c.play(rtf)), as_json)
+
+
+@app.command("set-rtf", rich_help_panel=PANEL)
+def set_rtf(ctx: typer.Context, rtf: Rtf, as_json: JsonOpt = False) -> None:
+    """Change the target real-time factor, playing or not."""
+    show_status(with_client(ctx, lambda c: c.set_rtf(rtf)), as_json)
+
+
+@app.command(rich_help_panel=PANEL)
+def pause(ctx: typer.Context, as_json: JsonOpt = False) -> None:
+    """Pause the simulation clock (a running step request ends)."""
+    show_status(with_client(ctx, lambda c: c.pause()), as_json)
+
+
+@app.command(rich_help_panel=PANEL)
+def stop(ctx: typer.Context, as_json: JsonOpt = False) -> None:
+    """Pause and rewind: time to 0, entities back to their created state."""
+    show_status(with_client(ctx, lambda c: c.stop()), as_json)
+
+
+@app.command(rich_help_panel=PANEL)
+def reset(ctx: typer.Context,
+          scope: Annotated[ResetScope, typer.Option(
+              help="time: clock to 0; state: entities to their created state; spawned: "
+                   "remove every entity; all: both removal and clock.")] = "all",
+          as_json: JsonOpt = False) -> None:
+    """Reset time, states, spawned entities, or all (parameters are kept)."""
+    show_status(with_client(ctx, lambda c: c.reset(str(scope))), as_json)
+
+
+def read_names(read: str | None) -> list[str] | None:
+    return None if read is None else split_list(read, "--read")
+
+
+@app.command(rich_help_panel=PANEL)
+def step(ctx: typer.Context,
+         count: Annotated[int, typer.Argument(help="Steps to advance.", min=1)] = 1,
+         read: Read = None,
+         as_json: JsonOpt = False) -> None:
+    """Advance exactly COUNT steps (paused or stopped); returns when they are done."""
+    names = read_names(read)
+    if names is None:
+        stamp = with_client(ctx, lambda c: c.step(count))
+        show_stamp(f"{count} steps done", stamp, as_json, steps=count)
+        return
+    show_states(with_client(ctx, lambda c: c.step_and_read(count, names)), as_json)
+
+
+def rest_rule(text: str) -> tuple[float, float]:
+    """SPEED,EVERY: the speed (m/s) under which a body is at rest, looked at every EVERY s."""
+    values = numbers(text, "--until-rest")
+    if len(values) != 2:
+        raise typer.BadParameter(f"--until-rest takes SPEED,EVERY, got {text!r}")
+    return values[0], values[1]
+
+
+@app.command("run-until", rich_help_panel=PANEL)
+def run_until(
+    ctx: typer.Context,
+    sim_time: Annotated[float, typer.Argument(help="Sim time to reach, s.",
+                                              show_default=False)],
+    read: Read = None,
+    until_rest: Annotated[str | None, typer.Option(
+        help="SPEED,EVERY: stop early once every --read body moves slower than SPEED m/s, "
+             "looked at every EVERY s of sim time.")] = None,
+    as_json: JsonOpt = False,
+) -> None:
+    """Step until the sim time reaches SIM_TIME (or the --read bodies come to rest)."""
+    names = read_names(read)
+    if until_rest is not None:
+        if names is None:
+            raise typer.BadParameter("--until-rest needs --read (the bodies to watch)")
+        speed, every = rest_rule(until_rest)
+        states, at_rest = with_client(
+            ctx, lambda c: c.run_until_rest(sim_time, names, speed, every))
+        show_states(states, as_json, at_rest=at_rest)
+    elif names is not None:
+        show_states(with_client(ctx, lambda c: c.run_until_and_read(sim_time, names)), as_json)
+    else:
+        stamp = with_client(ctx, lambda c: c.run_until(sim_time))
+        show_stamp(f"ran until {sim_time:g} s", stamp, as_json)
