@@ -32,11 +32,15 @@ def to_xyzw(wxyz: np.ndarray) -> np.ndarray:
 
 
 def rotate(wxyz: np.ndarray, vec: np.ndarray, *, inverse: bool = False) -> np.ndarray:
-    """Rotate rows of vectors by rows of unit quaternions (or by their inverses)."""
+    """Rotate rows of vectors by rows of unit quaternions (or by their inverses).
+
+    A non-finite vector comes out non-finite (0 x inf is NaN) without a RuntimeWarning:
+    state_within is what reports a diverged state, not a warning on the way to it."""
     w = wxyz[:, :1]
     u = -wxyz[:, 1:] if inverse else wxyz[:, 1:]
-    t = 2.0 * np.cross(u, vec)
-    return vec + w * t + np.cross(u, t)
+    with np.errstate(invalid="ignore", over="ignore"):
+        t = 2.0 * np.cross(u, vec)
+        return vec + w * t + np.cross(u, t)
 
 
 # -- compiled model: where states live ---------------------------------------------------
