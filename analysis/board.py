@@ -192,7 +192,8 @@ class BoardSpec:
 
     def to_dict(self) -> dict[str, Any]:
         """Plain data (dicts, lists, numbers, strings, None), ready for JSON."""
-        return _plain(self)
+        plain: dict[str, Any] = _plain(self)
+        return plain
 
     def to_json(self, indent: int | None = 2) -> str:
         return json.dumps(self.to_dict(), indent=indent)
@@ -200,7 +201,8 @@ class BoardSpec:
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> BoardSpec:
         """Build from plain data; missing fields take the defaults (the paper board)."""
-        return _build(cls, data, "")
+        spec: BoardSpec = _build(cls, data, "")
+        return spec
 
     @classmethod
     def from_json(cls, text: str) -> BoardSpec:

@@ -89,23 +89,27 @@ def signed_distance(prim: Primitive, points: np.ndarray) -> np.ndarray:
     """Distance from each point (n, 3) to the solid's surface; negative inside."""
     local = (np.atleast_2d(points) - prim.position) @ prim.rotation
     size = np.asarray(prim.size)
+    distance: np.ndarray
     if prim.shape == "box":
-        return _box_sdf(local, size)
-    if prim.shape == "cylinder":
+        distance = _box_sdf(local, size)
+    elif prim.shape == "cylinder":
         radial = np.linalg.norm(local[:, :2], axis=1)
-        return _box_sdf(np.stack([radial, local[:, 2]], axis=1), size)
-    if prim.shape == "sphere":
-        return np.linalg.norm(local, axis=1) - size[0]
-    if prim.shape == "capsule":
+        distance = _box_sdf(np.stack([radial, local[:, 2]], axis=1), size)
+    elif prim.shape == "sphere":
+        distance = np.linalg.norm(local, axis=1) - size[0]
+    elif prim.shape == "capsule":
         axial = np.clip(local[:, 2], -size[1], size[1])
-        return np.linalg.norm(local - np.outer(axial, [0, 0, 1]), axis=1) - size[0]
-    return local[:, 2]  # plane: its local +z is the outward normal
+        distance = np.linalg.norm(local - np.outer(axial, [0, 0, 1]), axis=1) - size[0]
+    else:
+        distance = local[:, 2]  # plane: its local +z is the outward normal
+    return distance
 
 
 def _box_sdf(local: np.ndarray, half: np.ndarray) -> np.ndarray:
     q = np.abs(local) - half
     outside = np.linalg.norm(np.maximum(q, 0.0), axis=1)
-    return outside + np.minimum(q.max(axis=1), 0.0)
+    distance: np.ndarray = outside + np.minimum(q.max(axis=1), 0.0)
+    return distance
 
 
 def board_primitives(spec: BoardSpec, offset_x: float = 0.0) -> list[Primitive]:

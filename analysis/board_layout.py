@@ -158,8 +158,8 @@ def _scalar_problems(spec: BoardSpec) -> Iterator[Problem]:
             yield from _number(getattr(getattr(spec, section), name), f"{section}.{name}", 0.0)
     anywhere = (("pins.top_row_z", spec.pins.top_row_z), ("funnel.tip_z", spec.funnel.tip_z),
                 ("cavity.centre_y", spec.cavity.centre_y), ("floor.z", spec.floor.z))
-    for where, value in anywhere:
-        yield from _number(value, where, -math.inf)
+    for where, height in anywhere:
+        yield from _number(height, where, -math.inf)
     yield from _number(spec.release.gap, "release.gap", 0.0, low_open=False)
     yield from _number(spec.perturbation.board_shift_std, "perturbation.board_shift_std", 0.0,
                        MAX_BOARD_SHIFT_STD, low_open=False)
@@ -281,8 +281,9 @@ def _release_problems(spec: BoardSpec) -> Iterator[Problem]:
 
 def _contact_problems(spec: BoardSpec) -> Iterator[Problem]:
     """Known engines and body roles; friction >= 0; restitution in [0, 1]."""
-    if not isinstance(spec.contacts, dict):
-        yield "contacts", f"must be a table of engine name to settings, got {spec.contacts!r}"
+    contacts: Any = spec.contacts  # as read from a file: checked here, not trusted
+    if not isinstance(contacts, dict):
+        yield "contacts", f"must be a table of engine name to settings, got {contacts!r}"
         return
     for engine, settings in spec.contacts.items():
         if engine not in ENGINES:

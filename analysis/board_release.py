@@ -97,14 +97,16 @@ def cloud_slots(spec: BoardSpec) -> np.ndarray:
     slots = grid[(clear >= reach) & _above_funnel(spec, grid)]
     order = np.lexsort((slots[:, 1], slots[:, 0], np.abs(slots[:, 1] - spec.cavity.centre_y),
                         np.abs(slots[:, 0]), np.round(slots[:, 2], 9)))
-    return slots[order]
+    ordered: np.ndarray = slots[order]
+    return ordered
 
 
 def _above_funnel(spec: BoardSpec, points: np.ndarray) -> np.ndarray:
     """Whether each point is above the funnel's upper surface (inside the V, not under it)."""
     f = spec.funnel
     run = np.maximum(np.abs(points[:, 0]) - f.opening / 2, 0.0)
-    return points[:, 2] > f.tip_z + run * math.tan(math.radians(f.angle_deg))
+    above: np.ndarray = points[:, 2] > f.tip_z + run * math.tan(math.radians(f.angle_deg))
+    return above
 
 
 def cloud_capacity(spec: BoardSpec) -> int:

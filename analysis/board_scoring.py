@@ -103,7 +103,8 @@ def _inside_solid(spec: BoardSpec, points: np.ndarray, offset_x: float) -> np.nd
     solids = [p for p in board_primitives(spec, offset_x) if p.role != "floor"]
     if len(points) == 0:
         return np.zeros(0, dtype=bool)
-    return np.min([signed_distance(p, points) for p in solids], axis=0) < 0.0
+    inside: np.ndarray = np.min([signed_distance(p, points) for p in solids], axis=0) < 0.0
+    return inside
 
 
 def _outside_cavity(spec: BoardSpec, points: np.ndarray, offset_x: float) -> np.ndarray:

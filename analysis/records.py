@@ -102,7 +102,8 @@ class TrialRecord:
 
     def to_dict(self) -> dict[str, Any]:
         """A JSON-safe dict (numpy types unwrapped, non-finite floats as None)."""
-        return json_safe(asdict(self))
+        safe: dict[str, Any] = json_safe(asdict(self))
+        return safe
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> TrialRecord:
@@ -134,7 +135,8 @@ class ExperimentResults:
     def to_dict(self) -> dict[str, Any]:
         """JSON-safe dict; trials as a list of trial dicts."""
         body = {f.name: getattr(self, f.name) for f in fields(self) if f.name != "trials"}
-        return json_safe({**body, "trials": [t.to_dict() for t in self.trials]})
+        safe: dict[str, Any] = json_safe({**body, "trials": [t.to_dict() for t in self.trials]})
+        return safe
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> ExperimentResults:
