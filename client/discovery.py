@@ -9,7 +9,13 @@ from typing import Any
 
 import zenoh
 
-from galton.client.session import close_session, open_session, query, undeclare
+from galton.client.session import (
+    checked_timeout,
+    close_session,
+    open_session,
+    query,
+    undeclare,
+)
 from galton.protocol import (
     DaemonUnreachableError,
     GaltonError,
@@ -39,7 +45,8 @@ class DaemonInfo:
 def instances(session: zenoh.Session, timeout: float = 2.0) -> list[str]:
     """Names of every daemon instance whose liveliness token is visible."""
     found = set()
-    for reply in session.liveliness().get(LIVELINESS_PATTERN, timeout=timeout):
+    for reply in session.liveliness().get(LIVELINESS_PATTERN,
+                                          timeout=checked_timeout(timeout)):
         if reply.ok is not None:
             name = instance_from_liveliness_key(str(reply.ok.key_expr))
             if name:
@@ -74,6 +81,7 @@ def discover_at(connect: str | Sequence[str] | None, timeout: float = 2.0) -> li
 def wait_for_daemon(session: zenoh.Session, instance: str, timeout: float,
                     alive: threading.Event | None = None) -> None:
     """Block until the instance's liveliness token appears, or raise after ``timeout``."""
+    wait = checked_timeout(timeout)
     appeared = alive or threading.Event()
 
     def on_token(sample: zenoh.Sample) -> None:
@@ -83,7 +91,7 @@ def wait_for_daemon(session: zenoh.Session, instance: str, timeout: float,
     subscriber = session.liveliness().declare_subscriber(
         Keys(instance).alive, on_token, history=True)
     try:
-        if not appeared.wait(timeout):
+        if not appeared.wait(wait):
             raise RequestTimeoutError(f"daemon {instance!r} did not appear within {timeout:g} s")
     finally:
         undeclare(subscriber)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import math
+import numbers
 from collections.abc import Sequence
 from typing import Any, Protocol
 
@@ -55,7 +56,7 @@ def close_session(session: Closable) -> None:
 def checked_timeout(timeout: object, where: str = "timeout") -> float:
     """A timeout in seconds: a finite number above 0. Zero used to mean "the default",
     silently; a caller who wants the default passes None instead."""
-    if isinstance(timeout, bool) or not isinstance(timeout, int | float) or (
+    if isinstance(timeout, bool) or not isinstance(timeout, numbers.Real) or (
             not math.isfinite(timeout) or timeout <= 0):
         raise InvalidArgumentError(
             f"{where} must be a finite number of seconds above 0, got {brief(timeout)}; "

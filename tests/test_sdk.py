@@ -26,6 +26,7 @@ from galton.client import (
     RequestTimeoutError,
     Stamp,
     States,
+    instances,
     plane,
     spheres,
     wait_for_daemon,
@@ -107,6 +108,7 @@ def test_no_timeout_means_the_registry_default_for_the_operation(mujoco_sim: Cli
     assert mujoco_sim.timeout_for("no_such_op") == default
     assert mujoco_sim.timeout_for("step", 2.5) == 2.5  # an explicit timeout wins
     assert mujoco_sim.timeout_for("spawn", 0.5) == 0.5
+    assert mujoco_sim.timeout_for("status", np.int64(3)) == 3.0  # any real number
 
 
 @pytest.mark.parametrize("bad", BAD_TIMEOUTS, ids=repr)
@@ -129,6 +131,14 @@ def test_a_bad_timeout_is_refused_before_anything_is_sent(mujoco_sim: Client, ba
 def test_a_client_with_a_bad_default_timeout_is_refused(mujoco_sim: Client, bad: Any) -> None:
     with pytest.raises(InvalidArgumentError, match="timeout"):
         Client(mujoco_sim.instance, session=mujoco_sim.session, timeout=bad)
+
+
+def test_discovery_refuses_a_bad_timeout(mujoco_sim: Client) -> None:
+    with pytest.raises(InvalidArgumentError):
+        instances(mujoco_sim.session, 0)
+    with pytest.raises(InvalidArgumentError):
+        wait_for_daemon(mujoco_sim.session, mujoco_sim.instance, -1.0)
+    assert mujoco_sim.instance in instances(mujoco_sim.session, 2.0)
 
 
 def test_a_telemetry_wait_of_zero_is_refused(mujoco_sim: Client) -> None:
