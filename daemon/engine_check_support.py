@@ -93,22 +93,24 @@ def expect_array(value: object, shape: tuple[int, ...], what: str) -> np.ndarray
 
 
 def expect_close(seen: np.ndarray, expected: np.ndarray, atol: float, what: str) -> None:
-    """Equal within ``atol`` everywhere; the failure names the worst entry."""
+    """Equal within ``atol`` everywhere (NaN is never close); the failure names the worst
+    entry."""
     gap = np.abs(np.asarray(seen, dtype=float) - np.asarray(expected, dtype=float))
-    worst = float(np.nanmax(gap)) if gap.size else 0.0
-    if np.isnan(gap).any() or worst > atol:
-        at = np.unravel_index(int(np.nanargmax(gap)) if not np.isnan(gap).all() else 0,
-                              gap.shape)
-        raise CheckFailedError(what, f"{np.asarray(expected)[at]!r} within {atol:g} at {at}",
-                           f"{np.asarray(seen)[at]!r} (off by {worst:.3g})")
+    gap[np.isnan(gap)] = np.inf
+    if gap.size and gap.max() > atol:
+        at = tuple(int(i) for i in np.unravel_index(int(np.argmax(gap)), gap.shape))
+        raise CheckFailedError(
+            what, f"{float(np.asarray(expected)[at])!r} within {atol:g} at {list(at)}",
+            f"{float(np.asarray(seen)[at])!r} (off by {float(gap[at]):.3g})")
 
 
 def expect_identical(seen: np.ndarray, expected: np.ndarray, what: str) -> None:
     """Bit for bit the same numbers (NaN equal to NaN)."""
     if not np.array_equal(seen, expected, equal_nan=True):
-        gap = np.abs(np.asarray(seen) - np.asarray(expected))
-        raise CheckFailedError(what, "bit-identical arrays",
-                           f"arrays that differ by up to {float(np.nanmax(gap)):.3g}")
+        shapes = np.shape(seen) == np.shape(expected)
+        gap = np.abs(np.asarray(seen) - np.asarray(expected)) if shapes else np.array(np.inf)
+        raise CheckFailedError(what, "bit-identical arrays", f"arrays that differ by up to "
+                               f"{float(np.max(np.nan_to_num(gap, nan=np.inf))):.3g}")
 
 
 def expect_poses(seen: np.ndarray, expected: np.ndarray, atol: float, what: str) -> None:
