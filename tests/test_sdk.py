@@ -165,19 +165,20 @@ def test_a_stopped_daemon_is_unreachable_at_once(lone_daemon: EmbeddedDaemon) ->
         assert time.monotonic() - started < sim.timeout / 3  # decided, not timed out
 
 
-
 def test_a_daemon_killed_during_a_request_is_unreachable(lone_daemon: EmbeddedDaemon) -> None:
     """However long the get waited, the daemon's token is gone: not a timeout."""
-    events: queue.SimpleQueue[dict[str, Any]] = queue.SimpleQueue()
     with Client(lone_daemon.instance, lone_daemon.endpoint) as sim, \
-            sim.on_event(events.put), ThreadPoolExecutor(1) as pool:
+            ThreadPoolExecutor(1) as pool:
         wait_for_daemon(sim.session, sim.instance, 30.0)
         waiting = pool.submit(sim.run_until, 1e6, 5.0)
-        _next_event(events, lambda e: e["kind"] == "state" and e["state"] == "paused")
+        deadline = time.monotonic() + EVENT_WAIT_S
+        while sim.status().step == 0:  # one round trip a look: the job has begun
+            assert time.monotonic() < deadline, "the step request never started"
         assert lone_daemon.process is not None
         lone_daemon.process.kill()
         with pytest.raises(DaemonUnreachableError):
             waiting.result(EVENT_WAIT_S)
+
 
 def test_a_daemon_that_does_not_answer_in_time_is_busy(mujoco_sim: Client) -> None:
     """A step request for far more sim time than the timeout allows: the daemon is alive
