@@ -1,4 +1,8 @@
-"""The MuJoCo engine on its own, without a daemon: state kept across edits, physics, errors."""
+"""The MuJoCo engine on its own, without a daemon: state kept across edits, physics, errors.
+
+What every engine must do is checked by galton.daemon.engine_check (test_engine_check.py);
+here is what is MuJoCo's own: its pool, its compiles, sleep, the balance guard, its limits.
+"""
 
 from __future__ import annotations
 
@@ -81,21 +85,6 @@ def test_capabilities_describe_the_engine(engine: MujocoEngine) -> None:
     assert set(caps.params) == set(engine.get_params())
 
 
-@pytest.mark.parametrize("shape, size", [
-    ("sphere", (0.1,)), ("box", (0.1, 0.2, 0.3)), ("cylinder", (0.1, 0.2)),
-    ("capsule", (0.1, 0.2))])
-def test_spawned_state_reads_back_in_world_frame(engine: MujocoEngine, shape: str,
-                                                 size: tuple[float, ...]) -> None:
-    quat = Rotation.from_euler("xyz", [0.3, -0.7, 1.1]).as_quat()
-    pose = np.array([[0.5, -0.2, 2.0, *quat]])
-    twist = np.array([[0.1, 0.2, 0.3, 1.0, -2.0, 0.5]])
-    engine.spawn([BodyGroup(shape=shape, size=size, names=["thing"], poses=pose,
-                            twists=twist)])
-    poses, twists = engine.get_states(["thing"])
-    np.testing.assert_allclose(poses, pose, atol=1e-12)
-    np.testing.assert_allclose(twists, twist, atol=1e-12)
-
-
 def test_angular_velocity_is_about_world_axes(engine: MujocoEngine) -> None:
     engine.set_params({"gravity": [0, 0, 0]})
     tilted = Rotation.from_euler("x", 90, degrees=True)
@@ -108,21 +97,6 @@ def test_angular_velocity_is_about_world_axes(engine: MujocoEngine) -> None:
     expected = Rotation.from_euler("z", 0.5) * tilted
     assert (Rotation.from_quat(poses[0, 3:]) * expected.inv()).magnitude() < 1e-3
     np.testing.assert_allclose(twists[0], spin[0], atol=1e-9)
-
-
-def test_set_states_round_trip_and_delete(engine: MujocoEngine) -> None:
-    engine.spawn([group("box", ["a", "b"], [[0, 0, 1], [1, 0, 1]], size=(0.1, 0.1, 0.1))])
-    pose = np.array([[2.0, 3.0, 4.0, *Rotation.from_euler("z", 0.4).as_quat()]])
-    twist = np.array([[1.0, 0, 0, 0, 3.0, 0]])
-    engine.set_states(["b"], pose, twist)
-    poses, twists = engine.get_states(["b", "a"])
-    np.testing.assert_allclose(poses[0], pose[0], atol=1e-12)
-    np.testing.assert_allclose(twists[0], twist[0], atol=1e-12)
-    np.testing.assert_allclose(poses[1, :3], [0, 0, 1])
-    engine.delete(["a"])
-    np.testing.assert_allclose(engine.get_states(["b"])[0], pose, atol=1e-12)
-    with pytest.raises(NotFoundError):
-        engine.get_states(["a"])
 
 
 def test_a_batch_of_1000_spheres_costs_one_recompile(engine: MujocoEngine,
@@ -144,37 +118,6 @@ def _timed(call: Callable[[], object]) -> float:
     start = time.perf_counter()
     call()
     return time.perf_counter() - start
-
-
-def test_spawn_and_delete_keep_the_running_state(engine: MujocoEngine) -> None:
-    reference = MujocoEngine()
-    for world in (engine, reference):
-        world.spawn([ball("faller", z=10.0, twists=np.array([[0.3, 0, 0, 0, 0, 2.0]]))])
-        world.step(100)
-    engine.spawn([ball("other", z=3.0), ground()])
-    for world in (engine, reference):
-        world.step(100)
-    engine.delete(["other"])
-    for world in (engine, reference):
-        world.step(100)
-    for got, want in zip(engine.get_states(["faller"]), reference.get_states(["faller"]),
-                         strict=True):
-        np.testing.assert_array_equal(got, want)
-
-
-def test_free_fall_matches_half_g_t_squared(engine: MujocoEngine) -> None:
-    engine.spawn([ball(z=10.0)])
-    run(engine, 1.0)
-    drop = 10.0 - engine.get_states(["ball"])[0][0, 2]
-    assert drop == pytest.approx(0.5 * GRAVITY, rel=0.01)
-
-
-def test_a_ball_dropped_on_a_plane_rests_on_it(engine: MujocoEngine) -> None:
-    engine.spawn([ground(), ball(z=0.5)])
-    run(engine, 3.0)
-    poses, twists = engine.get_states(["ball"])
-    assert poses[0, 2] == pytest.approx(RADIUS, abs=0.005)
-    assert np.linalg.norm(twists[0, :3]) < 0.01
 
 
 @pytest.mark.parametrize("how", ["update", "default"])
@@ -328,12 +271,8 @@ def test_params_are_all_or_none(engine: MujocoEngine) -> None:
     before = engine.get_params()
     with pytest.raises(InvalidArgumentError):
         engine.set_params({"timestep": 0.001, "mujoco.cone": "round"})
-    with pytest.raises(InvalidArgumentError, match="did you mean 'timestep'"):
-        engine.set_params({"timestpe": 0.01})
     with pytest.raises(InvalidArgumentError):
         engine.set_params({"mujoco.solimp": [0.9, 0.95, 0.001, 0.5, 0.5]})
-    with pytest.raises(FeatureUnsupportedError, match="pybullet"):
-        engine.set_params({"pybullet.collision_margin": 0.01})
     assert engine.get_params() == before
     assert engine.timestep == DEFAULT_STEP
 
@@ -410,27 +349,6 @@ def test_divergence_is_reported_logged_and_recoverable(engine: MujocoEngine,
     engine.set_states(["ball"], np.array([[0, 0, math.nan, *IDENTITY]]), None)
     engine.step(1)
     assert not engine.state_within(*LIMITS)
-
-
-@pytest.mark.parametrize("pose, twist", [
-    ((4e299, 0, 0.5), None),  # past anything MuJoCo itself checks
-    ((2e6, 0, 0.5), None),  # past max_position only: MuJoCo sees nothing wrong
-    (None, (2e5, 0, 0, 0, 0, 0)),  # past max_speed
-    (None, (0, 0, 0, 0, 3e5, 0)),  # spinning past max_speed
-    (None, (0, 0, 0, 0, 0, 1e200))], ids=["x=4e299", "x=2e6", "v=2e5", "w=3e5", "w=1e200"])
-def test_an_absurd_finite_state_is_divergence_and_a_reset_recovers(
-        engine: MujocoEngine, pose: tuple[float, ...] | None,
-        twist: tuple[float, ...] | None) -> None:
-    engine.spawn([ground(), ball(z=0.5), ball("other", z=2.0)])
-    start = engine.get_states(["ball"])
-    engine.set_states(["ball"], None if pose is None else np.array([[*pose, *IDENTITY]]),
-                      None if twist is None else np.array([twist]))
-    engine.step(1)
-    assert not engine.state_within(*LIMITS)
-    engine.set_states(["ball"], *start)
-    engine.reset_dynamics()
-    engine.step(1)
-    assert engine.state_within(*LIMITS)
 
 
 def test_state_within_reads_spin_about_world_axes(engine: MujocoEngine) -> None:
@@ -629,29 +547,6 @@ def test_any_printable_prefix_loads_or_is_refused_with_a_typed_error(
         engine.delete([info.name for info in infos])
     for got, want in zip(engine.get_states(["keep"]), before, strict=True):
         np.testing.assert_array_equal(got, want)
-
-
-def test_same_world_same_steps_same_state() -> None:
-    results = []
-    for _ in range(2):
-        world = MujocoEngine()
-        positions = [[i * 0.07, 0, 0.3 + 0.15 * i] for i in range(10)]
-        world.spawn([ground(), group("sphere", [f"b{i}" for i in range(10)], positions)])
-        world.step(400)
-        results.append(world.get_states([f"b{i}" for i in range(10)]))
-    for got, want in zip(*results, strict=True):
-        np.testing.assert_array_equal(got, want)
-
-
-def test_clear_empties_the_world_and_keeps_params(engine: MujocoEngine) -> None:
-    engine.set_params({"timestep": 0.004})
-    engine.spawn([ground(), ball()])
-    engine.clear()
-    with pytest.raises(NotFoundError):
-        engine.get_states(["ball"])
-    assert engine.timestep == 0.004
-    engine.spawn([ball()])
-    assert engine.get_states(["ball"])[0][0, 2] == 1.0
 
 
 def slide_friction(engine: MujocoEngine, crate: str) -> float:
