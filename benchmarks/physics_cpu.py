@@ -30,8 +30,9 @@ from pathlib import Path
 from typing import Any
 
 import mujoco
-from bridge_overhead import LocalSim, trial_config, wall
+from bridge_overhead import trial_config, wall
 from common import machine, write_json
+from local_sim import LocalSim
 
 from galton.client import Client
 from galton.client.embedded import free_loopback_port

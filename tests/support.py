@@ -1,12 +1,8 @@
-"""Helpers for tests: building bodies, snapshotting a daemon's scene, importing scripts."""
+"""Helpers for tests: building bodies, snapshotting a daemon's scene, laws of known effect."""
 
 from __future__ import annotations
 
-import importlib
-import sys
 from dataclasses import dataclass
-from pathlib import Path
-from types import ModuleType
 
 import numpy as np
 
@@ -14,16 +10,6 @@ from galton.analysis import stats
 from galton.client import Client, plane, spheres
 
 BALL_RADIUS = 0.05
-BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
-
-
-def import_benchmark(name: str) -> ModuleType:
-    """Import a script of benchmarks/ as a module (they import each other by plain name)."""
-    sys.path.insert(0, str(BENCHMARKS))
-    try:
-        return importlib.import_module(name)
-    finally:
-        sys.path.remove(str(BENCHMARKS))
 
 
 def ball_row(count: int, prefix: str = "ball", z: float = 1.0, **options: object) -> tuple:

@@ -1,12 +1,12 @@
 """Follow balls down the board, row by row: are their left/right choices fair and independent?
 
-Usage: python benchmarks/walk_probe.py ENGINE [--balls 500] [--seed 0] [--params JSON]
-                                      [--crowd stream|all-at-once] [--board NAME_OR_TOML]
+Usage: python research/walk_probe.py ENGINE [--balls 500] [--seed 0] [--params JSON]
+                                    [--crowd stream|all-at-once] [--board NAME_OR_TOML]
 
 A binomial board needs each ball to make one fair, independent left/right choice per row.
-The 500-ball runs come out flatter than the binomial (``benchmarks/seed_spread.py``: like
+The 500-ball runs come out flatter than the binomial (``research/seed_spread.py``: like
 6-7 independent rows, not 11). This probe looks at the walk itself. It builds the ``paper``
-board (or ``--board``: a preset name or a TOML/JSON file, e.g. ``benchmarks/boards/*.toml``)
+board (or ``--board``: a preset name or a TOML/JSON file, e.g. ``research/boards/*.toml``)
 in-process (the bench's world, repetition 0 of ``--seed``). Without ``--crowd`` it
 drops the stream release's balls one at a time, each alone on the board (no ball-ball
 contact, no piles); with ``--crowd MODE`` it releases them as the bench does in that mode.

@@ -1,11 +1,12 @@
-"""The exact (event-driven) lone-ball model behind docs/PHYSICS.md's engine-free reference.
+"""The exact (event-driven) lone-ball model behind the engine-free reference
+(docs/research/physics-notebook.md).
 
-``benchmarks/exact_lone_ball.py`` follows a solid sphere between rigid impacts, so its law
+``research/exact_lone_ball.py`` follows a solid sphere between rigid impacts, so its law
 is set by mechanics alone. These tests hold its pieces to textbook results: a bounce keeps
 e of the normal speed, friction either stops the contact point's slip (a solid sphere then
 rolls, v = omega r) or slides by mu times the normal impulse, a ball rolling off the top of
 a cylinder leaves where cos(phi) = 10/17, and on the paper board every walk ends in its bin.
-``benchmarks/exact_scan.py`` runs it over laws and seeds and pools what it stored.
+``research/exact_scan.py`` runs it over laws and seeds and pools what it stored.
 """
 
 from __future__ import annotations
@@ -13,9 +14,10 @@ from __future__ import annotations
 import dataclasses
 import math
 
+import exact_lone_ball
+import exact_scan
 import numpy as np
 import pytest
-from support import import_benchmark
 
 from galton.analysis.board import BoardSpec
 from galton.analysis.board_release import Perturbation, perturbation
@@ -23,7 +25,7 @@ from galton.analysis.board_release import Perturbation, perturbation
 
 @pytest.fixture(scope="module")
 def exact():
-    return import_benchmark("exact_lone_ball")
+    return exact_lone_ball
 
 
 FLOOR = np.array([0.0, 1.0])
@@ -128,7 +130,7 @@ def test_a_whole_speed_law_reads_the_balls_speed_but_the_threshold_its_approach(
 
 @pytest.fixture(scope="module")
 def scan():
-    return import_benchmark("exact_scan")
+    return exact_scan
 
 
 def test_a_scan_trial_records_the_law_and_the_speeds_it_was_asked_at(scan):

@@ -1,9 +1,10 @@
 """What setting every ball's restitution between steps would cost PyBullet.
 
-Usage: python benchmarks/per_ball_bounce_cost.py [--balls 500] [--repeats 50]
+Usage: python research/per_ball_bounce_cost.py [--balls 500] [--repeats 50]
 
-Why: a bounce that falls with speed (docs/PHYSICS.md, "Could an engine bounce like that?")
-could be emulated by giving each ball, between steps, the restitution its speed asks for.
+Why: a bounce that falls with speed (docs/research/physics-notebook.md, "Could an engine
+bounce like that?") could be emulated by giving each ball, between steps, the restitution
+its speed asks for.
 PyBullet takes it one body at a time (``changeDynamics``), so this times that loop over
 BALLS balls, beside one step of the same balls falling free (no contacts: a floor for the
 step's own cost, which a crowd raises). Prints one JSON line, milliseconds per step.

@@ -1,15 +1,16 @@
 """Fidelity of one setting, in-process: the bench's trial loop over the daemon's own World.
 
-Usage: python benchmarks/fidelity_inprocess.py ENGINE BALLS REPS MODE
+Usage: python research/fidelity_inprocess.py ENGINE BALLS REPS MODE
            [--params JSON] [--surfaces JSON] [--seed N]
 
-e.g. python benchmarks/fidelity_inprocess.py mujoco 500 10 all-at-once \\
+e.g. python research/fidelity_inprocess.py mujoco 500 10 all-at-once \\
          --params '{"default_static_friction": 0.12}' \\
          --surfaces '{"ball": {"friction": 0.5, "restitution": 0.1}}'
 
 The calibration runs in docs/physics/mujoco.md came from this loop. No Zenoh is involved,
 and a trial here is bit-identical to the same trial through a daemon
-(benchmarks/bridge_overhead.py checks that). ``--params`` sets daemon parameters;
+(benchmarks/bridge_overhead.py checks that; ``LocalSim`` is benchmarks/local_sim.py).
+``--params`` sets daemon parameters;
 ``--surfaces`` sets per-role surfaces (roles: ball, pin, funnel, divider, wall, glass,
 floor). The script prints one JSON line: the pooled width (standard deviation of the bin
 index; the binomial's is 1.658), the Monte Carlo p, the median per-trial chi-squared, lost
@@ -25,7 +26,7 @@ import json
 import statistics
 
 import numpy as np
-from bridge_overhead import LocalSim
+from in_process import LocalSim
 
 from galton.analysis import shape, stats
 from galton.analysis.board import BallSpec, BoardSpec, EngineContacts, SurfaceSpec

@@ -1,7 +1,7 @@
 """An engine's default contact in physical terms, measured in-process on the daemon's engine.
 
-Usage: python benchmarks/contact_probe.py [--engine mujoco] [--params JSON] [--apex-drops N]
-       python benchmarks/contact_probe.py --impact-speeds 0.45,0.95,1.9,3.0 [--params JSON]
+Usage: python research/contact_probe.py [--engine mujoco] [--params JSON] [--apex-drops N]
+       python research/contact_probe.py --impact-speeds 0.45,0.95,1.9,3.0 [--params JSON]
 
 Prints one JSON line:
 - ``drop_bounce``: e = v_out / v_in at the first impact of a ball (r 0.045 m, 0.38 kg)
@@ -18,7 +18,7 @@ Prints one JSON line:
 
 docs/physics/mujoco.md quotes these figures for the defaults. ``--impact-speeds`` prints only
 the drop bounce, at these impact speeds (m/s): how e depends on speed, and the most a setting
-can give (docs/PHYSICS.md, "Could an engine bounce like that?").
+can give (docs/research/physics-notebook.md, "Could an engine bounce like that?").
 """
 
 from __future__ import annotations

@@ -1,8 +1,8 @@
 """How a fidelity verdict depends on the seed, and how far each engine is from the binomial.
 
-Usage: python benchmarks/seed_spread.py [--summary] [--exact EXACT_FILE] FILE [FILE ...]
+Usage: python research/seed_spread.py [--summary] [--exact EXACT_FILE] FILE [FILE ...]
 
-Each FILE holds JSON lines printed by ``benchmarks/fidelity_inprocess.py`` (other lines are
+Each FILE holds JSON lines printed by ``research/fidelity_inprocess.py`` (other lines are
 skipped). Runs are grouped by engine, balls, release mode and parameters; for each group the
 script prints every seed's pooled Monte Carlo p (recomputed with the bench's 200,000
 draws), width and effect size w (Cohen's w, see
@@ -13,7 +13,7 @@ is (excess kurtosis, read as a number of independent rows: ``galton.analysis.sha
 how each trial's width follows its board shift. A group
 whose w is near that line passes or fails with the seed; one well below it passes.
 
-``--exact EXACT_FILE`` (JSON lines of ``benchmarks/exact_lone_ball.py``) adds, to each
+``--exact EXACT_FILE`` (JSON lines of ``research/exact_lone_ball.py``) adds, to each
 group, the test of homogeneity of all its balls against the exact lone ball's balls on the
 ``paper`` board at ``--restitution`` and ``--friction`` (constant laws only;
 ``galton.analysis.compare.homogeneity``): the reference a faithful simulator should match.

@@ -5,9 +5,9 @@ on many seeds; this spreads (law, seed) pairs over processes and prints one JSON
 with the spread of the approach speeds at impact so a speed-dependent law can be read
 against the speeds the board really sees.
 
-    python benchmarks/exact_scan.py --laws '[{"restitution": 0.8, "plastic_exponent": 0.25}]' \
+    python research/exact_scan.py --laws '[{"restitution": 0.8, "plastic_exponent": 0.25}]' \
         --seeds 0-7 --balls 1000 --jobs 2 >> docs/data/exact_bounce_laws.jsonl
-    python benchmarks/exact_scan.py --summary docs/data/exact_bounce_laws.jsonl
+    python research/exact_scan.py --summary docs/data/exact_bounce_laws.jsonl
 
 ``--summary`` pools the seeds of each law: width, excess kurtosis, effect size w and the
 Monte Carlo p of the pooled counts against the binomial, and how many single seeds pass.

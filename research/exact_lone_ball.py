@@ -1,16 +1,17 @@
 """A lone ball on the board with exact collisions: the law no time step or soft contact shapes.
 
-Usage: python benchmarks/exact_lone_ball.py [--balls 1000] [--seed 0] [--restitution 0.70]
-                                            [--friction 0.25] [--threshold 0.2]
-                                            [--restitution-at-3 E3] [--board NAME_OR_TOML]
+Usage: python research/exact_lone_ball.py [--balls 1000] [--seed 0] [--restitution 0.70]
+                                          [--friction 0.25] [--threshold 0.2]
+                                          [--restitution-at-3 E3] [--board NAME_OR_TOML]
 
 Both engines' lone (streamed, one at a time) balls come out with a law of the right width
 but disagree on its shape: PyBullet's is flat (excess kurtosis -0.38), MuJoCo's is the
-binomial's (-0.18) (docs/PHYSICS.md, "Are the rows independent?"). Each engine steps a
-contact model with its own numerics: a time step, a soft or impulsive contact, a contact
-distance. This script follows the same balls with none of those: an event-driven flight of
-a solid sphere (I = 2/5 m r^2, spin about the pins' axis) between exact impacts, in the
-board's x-z plane (the pins span the cavity's depth, so a lone ball's y plays no part).
+binomial's (-0.18) (docs/research/physics-notebook.md, "Are the rows independent?").
+Each engine steps a contact model with its own numerics: a time step, a soft or
+impulsive contact, a contact distance. This script follows the same balls with none of
+those: an event-driven flight of a solid sphere (I = 2/5 m r^2, spin about the pins'
+axis) between exact impacts, in the board's x-z plane (the pins span the cavity's depth,
+so a lone ball's y plays no part).
 
 The contact law is the rigid one both engines aim at: at each impact the normal velocity
 reverses with restitution e (e = 0 when the ball approaches slower than ``--threshold``,

@@ -1,8 +1,8 @@
 """Two parameter settings, trial against trial: speed, settling and, on MuJoCo, who stays awake.
 
-Usage: python benchmarks/ab_trials.py ENGINE BALLS MODE REPS --a JSON --b JSON [--seed N]
+Usage: python research/ab_trials.py ENGINE BALLS MODE REPS --a JSON --b JSON [--seed N]
 
-e.g. python benchmarks/ab_trials.py mujoco 500 all-at-once 3 \\
+e.g. python research/ab_trials.py mujoco 500 all-at-once 3 \\
          --a '{"mujoco.wake_balanced": true}' --b '{"mujoco.wake_balanced": false}'
 
 Runs repetitions 0..REPS-1 of the paper board in-process (the daemon's World, as
@@ -21,8 +21,8 @@ import time
 from typing import Any
 
 import numpy as np
-from bridge_overhead import LocalSim
 from fidelity_inprocess import board_for, width
+from in_process import LocalSim
 
 from galton.client.bench.trial import TrialConfig, run_trial
 

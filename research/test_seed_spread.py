@@ -1,8 +1,8 @@
-"""``benchmarks/seed_spread.py``: how a fidelity verdict depends on the seed.
+"""``research/seed_spread.py``: how a fidelity verdict depends on the seed.
 
-Its summary line is what docs/PHYSICS.md quotes for each 500-ball cell: the seeds that
-pass, that rate's 95 % interval and the rate the cell's pooled law predicts. Here it reads
-seeded runs of known laws, with the junk lines PyBullet prints between them.
+Its summary line is what docs/research/physics-notebook.md quotes for each 500-ball cell:
+the seeds that pass, that rate's 95 % interval and the rate the cell's pooled law predicts.
+Here it reads seeded runs of known laws, with the junk lines PyBullet prints between them.
 """
 
 from __future__ import annotations
@@ -13,14 +13,15 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from support import import_benchmark, tilted_law
+import seed_spread
+from support import tilted_law
 
 from galton.analysis import stats
 
 
 @pytest.fixture(scope="module")
 def spread():
-    return import_benchmark("seed_spread")
+    return seed_spread
 
 
 def _run(law: np.ndarray, seed: int, engine: str) -> dict:
