@@ -26,4 +26,5 @@ def create_engine(name: str) -> Engine:
         module = importlib.import_module(module_name)
     except ImportError as exc:
         raise FeatureUnsupportedError(f"the {name} engine is not installed here: {exc}") from exc
-    return getattr(module, class_name)()
+    engine_class: type[Engine] = getattr(module, class_name)
+    return engine_class()

@@ -524,7 +524,7 @@ class MujocoEngine(Engine):
             bad = names[int(np.flatnonzero(fixed & np.any(twists, axis=1))[0])]
             raise InvalidArgumentError(f"entity {bad!r} is static: it cannot be given a "
                                        "non-zero twist")
-        for row in np.flatnonzero(jointed):
+        for row in np.flatnonzero(jointed).tolist():
             mst.check_jointed(names[row], self._entities[names[row]].initial_pose,
                               None if poses is None else poses[row],
                               None if twists is None else twists[row])
@@ -542,7 +542,7 @@ class MujocoEngine(Engine):
         if poses is not None and mocap.any():
             mst.write_mocap_poses(d, self._index, ids[mocap], poses[mocap])
         if poses is not None and static.any():
-            self._move_static([names[i] for i in np.flatnonzero(static)], ids[static],
+            self._move_static([names[i] for i in np.flatnonzero(static).tolist()], ids[static],
                               poses[static])
         if poses is not None and fixed.any():
             mst.wake_all(self._model, d)

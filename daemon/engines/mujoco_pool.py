@@ -151,7 +151,8 @@ class Pool:
         """Which of these (soon former) entities the pool would park, while there is room
         (those still of their kind), and which must leave the spec; nothing changes yet."""
         room = CAPACITY - len(self)
-        parked, removed = [], []
+        parked: list[Any] = []
+        removed: list[Any] = []
         for e in entities:
             fits = e.key is not None and len(parked) < room
             (parked if fits else removed).append(e)

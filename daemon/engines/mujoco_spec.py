@@ -177,7 +177,7 @@ def damping_floor(values: dict[str, Any]) -> float:
     """
     timestep = values["timestep"]
     timeconst = max(values["mujoco.solref"][0], 2 * timestep)
-    return max(MIN_DAMPRATIO, timestep / (values["mujoco.solimp"][1] * timeconst))
+    return float(max(MIN_DAMPRATIO, timestep / (values["mujoco.solimp"][1] * timeconst)))
 
 
 def damping_ratio(restitution: float, floor: float) -> float:

@@ -65,6 +65,7 @@ from galton.daemon.engines.pybullet_shapes import (
     DENSITY,
     BodyMaker,
     ShapeCache,
+    as_rgba,
     link_masses,
     load_bodies,
     read_text,
@@ -214,7 +215,7 @@ class PybulletEngine(Parameters, Rebuilding, Engine):
                 self._reset_velocity(uid, twists[k][:3], twists[k][3:])
             self._change(uid, -1, **dynamics)
         self._set_margin(ids[0], group.shape, size)
-        rgba = None if group.rgba is None else tuple(float(c) for c in group.rgba)
+        rgba = None if group.rgba is None else as_rgba(group.rgba)
         inertia = None if group.static else unit_inertia(group.shape, size)
         return {name: _Body(uid, group.static, group.shape, size, inertia, batch,
                             follows_friction=group.friction is None,
@@ -305,7 +306,7 @@ class PybulletEngine(Parameters, Rebuilding, Engine):
         if dynamics:
             self._change(body.uid, -1, **dynamics)
         if props.rgba is not None:
-            body.rgba = tuple(float(c) for c in props.rgba)
+            body.rgba = as_rgba(props.rgba)
             self._bc.changeVisualShape(body.uid, -1, rgbaColor=list(props.rgba))
 
     def _edit_model(self, body: _Body, props: BodyProperties) -> None:

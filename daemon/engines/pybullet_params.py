@@ -10,13 +10,15 @@ mu = 0.25), contacts made from 0.01 m, 10 solver iterations and pyramid friction
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from galton.daemon.engines.pybullet_shapes import margin_for
 from galton.daemon.params import ParamSpec, flag, integer, number, vector
 
 if TYPE_CHECKING:
-    from galton.daemon.engines.pybullet_engine import PybulletEngine
+    from pybullet_utils.bullet_client import BulletClient
+
     from galton.daemon.engines.pybullet_rebuild import Body
 
 SPECS: dict[str, ParamSpec] = {spec.name: spec for spec in (
@@ -87,14 +89,20 @@ def default_keys(static: bool) -> tuple[str, str]:
 class Parameters:
     """The engine's part that applies parameters: world settings and per-body values."""
 
-    def _configure_world(self: PybulletEngine) -> None:
+    # What it uses of the engine it is a part of (PybulletEngine sets them).
+    _bc: BulletClient
+    _bodies: dict[str, Body]
+    _values: dict[str, Any]
+    _change: Callable[..., Any]
+
+    def _configure_world(self) -> None:
         """Every setting of a fresh (or reset) world: resetSimulation forgets them all."""
         # The file cache keys on file names and keeps every file read: with temporary files
         # it only grows, and with a rewritten file it serves the old text.
         self._bc.setPhysicsEngineParameter(enableFileCaching=0)
         self._apply(self._values)
 
-    def _apply(self: PybulletEngine, values: dict[str, Any]) -> None:
+    def _apply(self, values: dict[str, Any]) -> None:
         """Hand changed values to PyBullet: world settings, then the bodies they reach."""
         world = {WORLD_PARAMS[k]: int(v) if isinstance(v, bool) else v
                  for k, v in values.items() if k in WORLD_PARAMS}
@@ -117,7 +125,7 @@ class Parameters:
                     done.add((body.shape, body.size))
                     self._set_margin(body.uid, body.shape, body.size)
 
-    def _follow_surface_defaults(self: PybulletEngine, bodies: list[Body],
+    def _follow_surface_defaults(self, bodies: list[Body],
                                  values: dict[str, Any]) -> None:
         """Bodies spawned without a friction or restitution take their kind's new default."""
         for body in bodies:
@@ -129,7 +137,7 @@ class Parameters:
                 body.restitution = values[restitution_key]
                 self._change(body.uid, -1, restitution=body.restitution)
 
-    def _set_margin(self: PybulletEngine, uid: int, shape: str, size: tuple[float, ...]) -> None:
+    def _set_margin(self, uid: int, shape: str, size: tuple[float, ...]) -> None:
         margin = margin_for(shape, size, self._values["pybullet.collision_margin"])
         if margin is not None:
             self._change(uid, -1, collisionMargin=margin)

@@ -56,7 +56,10 @@ from galton.protocol import (
 )
 
 if TYPE_CHECKING:
-    from galton.daemon.engines.pybullet_engine import PybulletEngine
+    from collections.abc import Callable
+    from typing import Any
+
+    from galton.daemon.engines.pybullet_shapes import BodyMaker
 
 REBUILD_AFTER = 5_000  # bodies removed since the last rebuild, at the least
 PLACE_TRIES = 4  # quaternion corrections before a pose is held instead
@@ -114,7 +117,7 @@ class Body:
     turned: bool = False
     friction: float = 0.0
     restitution: float = 0.0
-    rgba: tuple[float, ...] | None = None  # None: the default look
+    rgba: tuple[float, float, float, float] | None = None  # None: the default look
     model: Model | None = None
 
 
@@ -241,7 +244,25 @@ def merged(edits: BodyProperties, props: BodyProperties) -> BodyProperties:
 class Rebuilding:
     """The engine's part that rebuilds its world."""
 
-    def _rebuild(self: PybulletEngine) -> None:
+    # What it uses of the engine it is a part of (PybulletEngine sets and defines them).
+    _bc: BulletClient
+    _bodies: dict[str, Body]
+    _given: dict[str, list[float]]
+    _held: dict[str, Held]
+    _maker: BodyMaker
+    _reset_pose: Callable[..., Any]
+    _reset_velocity: Callable[..., Any]
+    rebuilds: int
+
+    if TYPE_CHECKING:
+        def clear(self) -> None: ...
+        def _spawn_group(self, group: BodyGroup, made: list[int], batch: int,
+                         redo: Redo | None = None) -> dict[str, Body]: ...
+        def _edit_spawned(self, body: Body, props: BodyProperties) -> None: ...
+        def _edit_model(self, body: Body, props: BodyProperties) -> None: ...
+        def _adopt_model_body(self, uid: int, name: str, batch: int) -> Body: ...
+
+    def _rebuild(self) -> None:
         """resetSimulation, then every body made again, in the order it was first made, as
         the protocol sees it (see the module's docstring)."""
         kept = dict(self._bodies)
@@ -257,7 +278,7 @@ class Rebuilding:
         self._given = {name: states[name][0] for name in exact}
         self.rebuilds += 1
 
-    def _remake(self: PybulletEngine, names: list[str], kept: dict[str, Body],
+    def _remake(self, names: list[str], kept: dict[str, Body],
                 states: dict[str, State]) -> None:
         """A spawn group's remaining bodies made again as spawn first made them, then given
         what update or a default has changed since."""
@@ -273,7 +294,7 @@ class Rebuilding:
             body.turned, body.rgba = old.turned, old.rgba
         self._bodies.update(bodies)
 
-    def _reload(self: PybulletEngine, names: list[str], kept: dict[str, Body],
+    def _reload(self, names: list[str], kept: dict[str, Body],
                 states: dict[str, State]) -> None:
         """A model loaded again (from its file while the file is unchanged), the bodies
         deleted since its load removed again, the others restored."""
@@ -294,7 +315,7 @@ class Rebuilding:
                 self._restore_model_body(uid, name, kept[name].batch, models[name],
                                          states[name])
 
-    def _restore_model_body(self: PybulletEngine, uid: int, name: str, batch: int,
+    def _restore_model_body(self, uid: int, name: str, batch: int,
                             model: Model, state: State) -> None:
         """A body loaded again, given what update changed and its state; its joints are
         back as loaded, at rest. A state as loaded is not set again: a pose read back and

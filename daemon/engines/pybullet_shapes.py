@@ -43,6 +43,12 @@ MESH_SEGMENTS = 8
 WHITE = (1.0, 1.0, 1.0, 1.0)
 
 
+def as_rgba(colour: Sequence[float]) -> tuple[float, float, float, float]:
+    """A colour as four plain floats, whatever numbers it was given as."""
+    red, green, blue, alpha = (float(c) for c in colour)
+    return (red, green, blue, alpha)
+
+
 def collision_args(shape: str, size: tuple[float, ...]) -> dict[str, Any]:
     """Keyword arguments of createCollisionShape for one protocol shape and size."""
     if shape == "sphere":
@@ -258,7 +264,7 @@ class BodyMaker:
                 raise OperationFailedError("PyBullet could not create a body")
             made.append(uid)
             self._free.discard(uid)
-            return uid
+            return int(uid)
 
         holes = min(len(self._free), len(positions))
         ids = [one(position) for position in positions[:holes]]
