@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import inspect
 import json
+import math
 import re
 from collections.abc import Callable
 from dataclasses import asdict
@@ -77,6 +78,8 @@ def main_options(
         "--version", is_eager=True, callback=print_version,
         help="Print the version and exit.")] = False,
 ) -> None:
+    if not math.isfinite(timeout) or timeout <= 0:
+        raise typer.BadParameter(f"--timeout must be a number of seconds above 0, got {timeout}")
     ctx.obj = Target(connect, instance, timeout)
 
 

@@ -101,12 +101,10 @@ def call(
     """
     wire_args = pack_args(op, parse_args(args))
     target: Target = ctx.obj
-    declared = OPERATIONS.get(op)
-    timeout = target.timeout if declared is None else declared.client_timeout(target.timeout)
 
-    def send() -> Reply:
+    def send() -> Reply:  # waits as long as the operation's declaration asks
         with target.client() as client:
-            return client.request(op, wire_args, timeout)
+            return client.request(op, wire_args)
     reply = run_guarded(send)
     shown = reply_dict(reply) if whole else unpacked(reply.result)
     if whole or reply.ok:

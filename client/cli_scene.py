@@ -16,6 +16,7 @@ from galton.client.cli_values import (
     EntityKind,
     ModelFormat,
     Shape,
+    counted,
     numbers,
     rows,
     split_list,
@@ -113,7 +114,7 @@ def spawn(
         restitution=restitution, rgba=rgba_values(rgba), tags=tag_values(tags) or ())
     spawned = with_client(ctx, lambda c: c.spawn(group))
     emit({"names": spawned}, as_json, lambda: console.print(
-        f"spawned {len(spawned)} bodies: {', '.join(spawned[:5])}"
+        f"spawned {counted(len(spawned), 'body', 'bodies')}: {', '.join(spawned[:5])}"
         f"{', ...' if len(spawned) > 5 else ''}", markup=False))
 
 
@@ -149,7 +150,7 @@ def load_model(
     loaded = with_client(ctx, lambda c: c.load_model(chosen, text=text, path=path,
                                                      prefix=prefix))
     emit({"names": loaded}, as_json, lambda: console.print(
-        f"loaded {len(loaded)} entities: {', '.join(loaded)}", markup=False))
+        f"loaded {counted(len(loaded), 'entity', 'entities')}: {', '.join(loaded)}", markup=False))
 
 
 @app.command(rich_help_panel=PANEL)
@@ -199,12 +200,12 @@ def update(
     if not given:
         raise typer.BadParameter("give at least one property to change")
     stamp = with_client(ctx, lambda c: c.update(names, **given))
-    show_stamp(f"updated {len(names)} entities", stamp, as_json, names=names)
+    show_stamp(f"updated {counted(len(names), 'entity', 'entities')}", stamp, as_json, names=names)
 
 
 @app.command(rich_help_panel=PANEL)
 def delete(ctx: typer.Context, names: NamesArg, as_json: JsonOpt = False) -> None:
     """Remove entities in one request (all or none: an unknown name deletes nothing)."""
     stamp = with_client(ctx, lambda c: c.delete(names))
-    show_stamp(f"deleted {len(names)} entities", stamp, as_json, names=names)
+    show_stamp(f"deleted {counted(len(names), 'entity', 'entities')}", stamp, as_json, names=names)
 

@@ -9,7 +9,7 @@ import typer
 from rich.table import Table
 
 from galton.client.cli import JsonOpt, app, console, emit, show_stamp, with_client
-from galton.client.cli_values import LIST_HELP, numbers, rows
+from galton.client.cli_values import LIST_HELP, counted, numbers, rows
 from galton.client.sdk import States
 from galton.protocol import POSE_WIDTH, TWIST_WIDTH
 
@@ -78,7 +78,8 @@ def set_states(
     pose_rows = None if poses is None else pose_values(poses, len(names), "--poses")
     twist_rows = None if twists is None else rows(twists, len(names), TWIST_WIDTH, "--twists")
     stamp = with_client(ctx, lambda c: c.set_states(names, pose_rows, twist_rows))
-    show_stamp(f"set {len(names)} states", stamp, as_json, names=names)
+    show_stamp(f"set the state of {counted(len(names), 'body', 'bodies')}", stamp, as_json,
+               names=names)
 
 
 def pose_values(text: str, count: int, where: str) -> np.ndarray:

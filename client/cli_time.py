@@ -8,7 +8,7 @@ import typer
 
 from galton.client.cli import JsonOpt, app, show_stamp, show_status, with_client
 from galton.client.cli_states import show_states
-from galton.client.cli_values import LIST_HELP, ResetScope, numbers, split_list
+from galton.client.cli_values import LIST_HELP, ResetScope, counted, numbers, split_list
 
 PANEL = "Clock"
 Read = Annotated[str | None, typer.Option(
@@ -68,7 +68,7 @@ def step(ctx: typer.Context,
     names = read_names(read)
     if names is None:
         stamp = with_client(ctx, lambda c: c.step(count))
-        show_stamp(f"{count} steps done", stamp, as_json, steps=count)
+        show_stamp(f"{counted(count, 'step', 'steps')} done", stamp, as_json, steps=count)
         return
     show_states(with_client(ctx, lambda c: c.step_and_read(count, names)), as_json)
 

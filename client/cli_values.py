@@ -54,6 +54,11 @@ else:
     ResetScope = choice_enum("ResetScope", RESET_SCOPES)
 
 
+def counted(count: int, one: str, many: str) -> str:
+    """``1 entity``, ``2 entities``: a count with its noun."""
+    return f"{count} {one if count == 1 else many}"
+
+
 def split_list(text: str, where: str) -> list[str]:
     """The items of one comma-separated option value; empty items are an error."""
     items = [item.strip() for item in text.split(",")]

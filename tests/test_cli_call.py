@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 import json
+import re
+import shlex
 import subprocess
+from pathlib import Path
 
 import pytest
 from cli_support import CONSOLE_COMMAND, flat, invoke, run, target_of
@@ -97,3 +100,21 @@ def test_events_prints_a_scene_change(mujoco_sim: Client, target: list[str]) -> 
         process.wait()
     event = json.loads(out)
     assert event["kind"] == "scene" and event["op"] == "spawn" and event["seq"] >= 1
+
+
+def readme_cli_commands() -> list[list[str]]:
+    """The galton-client lines of the README's CLI section's shell snippets."""
+    text = (Path(__file__).parents[1] / "README.md").read_text()
+    section = text.split("\n## CLI\n", 1)[1].split("\n## ", 1)[0]
+    snippets = re.findall(r"```sh\n(.*?)```", section, flags=re.DOTALL)
+    return [shlex.split(line)[1:] for snippet in snippets for line in snippet.splitlines()
+            if line.startswith("galton-client ")]
+
+
+def test_the_readme_cli_snippets_run(target: list[str]) -> None:
+    invoke([*target, "spawn", "sphere", "ball", "--json"])
+    lines = readme_cli_commands()
+    assert lines
+    for args in lines:
+        result = run([*target, *args])
+        assert result.exit_code == 0, (args, result.output)
