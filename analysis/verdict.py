@@ -25,7 +25,7 @@ SUITABLE = "suitable"
 NOT_SUITABLE = "not suitable"
 
 THRESHOLDS_TEXT = (
-    f"fidelity: at each ball count {TARGETS_TEXT} (the targets of galton-client check); "
+    f"fidelity: at each ball count, {TARGETS_TEXT} (the targets galton-client check applies); "
     f"loss: <= {MAX_LOST_PERCENT} % of released balls lost; speed: mean RTF >= "
     f"{MIN_RTF} at the largest ball count; footprint: peak RSS <= "
     f"{MAX_PEAK_RSS_BYTES / 1e6:.0f} MB and mean CPU <= {MAX_CPU_PERCENT:.0f} % of one core"
