@@ -18,16 +18,24 @@ message lists every failed check with what was expected and what was seen; the r
 on the error as ``.report``. ``run_check(factory, name)`` runs one check alone, which is
 how a test suite parametrizes over ``ENGINE_CHECKS`` with readable ids.
 
-The checks: the interface contract (methods, shapes and dtypes of what they return), spawn
-of every shape static and dynamic, the get/set states round trip, effective properties,
-delete, clear, unknown names, refused parameters, model loading and refused models, the
-timestep, free fall, a ball coming to rest on a plane, static bodies, determinism, the
-rewind to the created state, edits that keep other bodies' states, and state_within.
+The checks: the interface contract (methods and description; shapes and dtypes of what
+they return), spawn of every shape static and dynamic, the get/set states round trip,
+effective properties, delete, clear, unknown names, refused parameters, model loading and
+refused models, the timestep, free fall, a ball coming to rest on a plane, static bodies,
+determinism, the rewind to the created state, edits that keep other bodies' states, and
+state_within. Each check's docstring says what it guarantees (``Check.guarantee``).
 
-Errors: ``EngineCheckError`` is a ``GaltonError`` (the project's root error), raised here
-and only here; a check fails inside with ``CheckFailedError`` and the runner turns any other
-exception an engine raises into a failure of that check, never into a crash of the run.
-This module imports no engine: it knows an engine only through the interface.
+Errors, all ``GaltonError`` (the project's root error)::
+
+    GaltonError
+    ├── EngineCheckError       check_engine: the engine failed checks (``.report``)
+    ├── CheckFailedError       inside a check: what was expected, what was seen
+    ├── CheckSkippedError      inside a check: the engine does not list that feature
+    └── InvalidArgumentError   no engine or no check of that name ("did you mean")
+
+The runner turns any other exception an engine raises into a failure of that check, never
+into a crash of the run. This module and its checks import no engine: they know an engine
+only through the interface (and a name only through the registry, which imports lazily).
 """
 
 from __future__ import annotations
@@ -46,7 +54,7 @@ from galton.daemon.engine_check_support import (
     EngineFactory,
 )
 from galton.daemon.engines import ENGINE_CLASSES, create_engine
-from galton.protocol import GaltonError
+from galton.protocol import GaltonError, InvalidArgumentError
 from galton.protocol.errors import did_you_mean
 
 __all__ = ["ENGINE_CHECKS", "Check", "CheckFailedError", "CheckReport", "CheckResult",
@@ -70,6 +78,7 @@ class Check:
 
 ENGINE_CHECKS: tuple[Check, ...] = (
     Check("interface", contract.check_interface),
+    Check("return-shapes", contract.check_return_shapes),
     Check("spawn-shapes", contract.check_spawn_shapes),
     Check("state-round-trip", contract.check_state_round_trip),
     Check("properties", contract.check_properties),
@@ -151,7 +160,9 @@ def run_check(factory_or_name: EngineFactory | str, name: str, *,
     failure of the engine: the result says it)."""
     check = _BY_NAME.get(name)
     if check is None:
-        raise GaltonError(f"no engine check named {name!r}{did_you_mean(name, _BY_NAME)}")
+        raise InvalidArgumentError(
+            f"no engine check named {name!r}{did_you_mean(name, _BY_NAME)}; "
+            f"known: {', '.join(_BY_NAME)}")
     context = CheckContext(engine_factory(factory_or_name), dict(params or {}))
     try:
         check.run(context)

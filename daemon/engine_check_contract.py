@@ -13,10 +13,14 @@ import numpy as np
 
 from galton.daemon.engine import (
     FEATURE_DELETE,
+    FEATURE_LOAD_MODEL,
     FEATURE_SET_STATE,
+    FEATURE_SPAWN,
+    FEATURE_STATIC_POSE,
     FEATURE_UPDATE_FRICTION,
     FEATURE_UPDATE_MASS,
     FEATURE_UPDATE_RESTITUTION,
+    FEATURE_UPDATE_RGBA,
     Engine,
 )
 from galton.daemon.engine_check_support import (
@@ -39,34 +43,44 @@ from galton.protocol import BODY_SHAPES, BodyProperties, Capabilities, NotFoundE
 
 STATE_ATOL = 1e-9  # what a pose or twist set may lose on its way into an engine and back
 TWIST = (0.3, -0.2, 0.5, 1.0, -2.0, 0.5)
+FEATURES = (FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDATE_MASS,
+            FEATURE_UPDATE_FRICTION, FEATURE_UPDATE_RESTITUTION, FEATURE_UPDATE_RGBA,
+            FEATURE_LOAD_MODEL, FEATURE_STATIC_POSE)
 
 
 def check_interface(ctx: CheckContext) -> None:
-    """Every abstract method of Engine is there; capabilities, parameters and timestep
-    describe the engine; states and properties come as float64 arrays of (n, 7), (n, 6)
-    and (n, 3), for no bodies as for some; state_within answers a bool."""
+    """Every abstract method of Engine is there; the engine's name, capabilities (shapes
+    and features the protocol knows), parameters (each with a default, all of them in
+    get_params) and timestep (positive, the "timestep" parameter's value) describe it."""
     engine = ctx.engine
-    missing = [name for name in getattr(Engine, "__abstractmethods__", ())
-               if not hasattr(engine, name)]
+    missing = sorted(name for name in getattr(Engine, "__abstractmethods__", ())
+                     if not callable(getattr(engine, name, None)) and name != "timestep")
     expect(not missing, "Engine's methods", "all of them", f"{missing} missing")
     expect(isinstance(getattr(engine, "name", None), str), "the engine's name",
            "a str class attribute", getattr(engine, "name", None))
     caps = engine.capabilities()
     expect(isinstance(caps, Capabilities), "capabilities()", "a Capabilities", caps)
     expect(caps.engine == engine.name, "capabilities().engine", repr(engine.name), caps.engine)
-    unknown = set(caps.body_shapes) - set(BODY_SHAPES)
+    unknown = sorted(set(caps.body_shapes) - set(BODY_SHAPES))
     expect(not unknown, "capabilities().body_shapes", f"shapes among {BODY_SHAPES}", unknown)
-    expect(set(caps.params) == set(engine.get_params()), "get_params()'s names",
-           f"those of capabilities().params, {sorted(caps.params)}",
-           sorted(engine.get_params()))
+    unknown = sorted(set(caps.features) - set(FEATURES))
+    expect(not unknown, "capabilities().features", f"features among {FEATURES}", unknown)
+    params = engine.get_params()
+    expect(set(caps.params) == set(params), "get_params()'s names",
+           f"those of capabilities().params, {sorted(caps.params)}", sorted(params))
     no_default = [k for k, spec in caps.params.items() if "default" not in spec]
     expect(not no_default, "capabilities().params", "a default for each", no_default)
     dt = engine.timestep
     expect(isinstance(dt, float) and math.isfinite(dt) and dt > 0, "timestep",
            "a positive finite float", dt)
-    if "timestep" in caps.params:
-        expect(engine.get_params()["timestep"] == dt, 'get_params()["timestep"]',
-               repr(dt), engine.get_params()["timestep"])
+    expect(params.get("timestep", dt) == dt, 'get_params()["timestep"]', repr(dt),
+           params.get("timestep"))
+
+
+def check_return_shapes(ctx: CheckContext) -> None:
+    """States and properties come as float64 arrays of (n, 7), (n, 6) and (n, 3), for no
+    bodies as for some; state_within answers a bool; spawn and step return None."""
+    engine = ctx.engine
     states(engine, [])
     expect_array(engine.properties([]), (0, 3), "properties of no bodies")
     answer = engine.state_within(1e6, 1e5)
@@ -74,11 +88,11 @@ def check_interface(ctx: CheckContext) -> None:
     names = ["first", "second"]
     expect(engine.spawn([group("sphere", names, [[0, 0, 1], [1, 0, 1]])]) is None,
            "spawn's result", "None", "a value")
+    expect(engine.step(1) is None, "step's result", "None", "a value")
     states(engine, names)
     expect_array(engine.properties(names), (2, 3), "properties of 2 bodies")
-    expect(isinstance(engine.state_within(1e6, 1e5), bool), "state_within's answer",
-           "a bool", engine.state_within(1e6, 1e5))
-    expect(engine.step(1) is None, "step's result", "None", "a value")
+    answer = engine.state_within(1e6, 1e5)
+    expect(answer is True, "state_within of 2 falling balls", "True (a bool)", answer)
 
 
 def check_spawn_shapes(ctx: CheckContext) -> None:

@@ -3,6 +3,8 @@ interface fail the check that names their breach, with what was expected and see
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 import pytest
 
@@ -16,7 +18,7 @@ from galton.daemon.engine_check import (
 from galton.daemon.engines import ENGINE_CLASSES
 from galton.daemon.engines.mujoco_engine import MujocoEngine
 from galton.daemon.engines.pybullet_engine import PybulletEngine
-from galton.protocol import Capabilities, GaltonError, InvalidArgumentError
+from galton.protocol import Capabilities, InvalidArgumentError
 
 
 @pytest.mark.parametrize(("engine", "check"), [
@@ -44,7 +46,7 @@ def test_each_check_has_a_name_and_says_what_it_guarantees() -> None:
 class ForgetfulEngine(MujocoEngine):
     """Breaks "None leaves that part as it is": a pose set alone stops the body."""
 
-    def set_states(self, names: list[str], poses: np.ndarray | None,  # type: ignore[override]
+    def set_states(self, names: Sequence[str], poses: np.ndarray | None,
                    twists: np.ndarray | None) -> None:
         if poses is not None and twists is None:
             twists = np.zeros((len(names), 6))
@@ -57,7 +59,7 @@ def test_a_broken_engine_fails_the_check_it_breaks_with_a_clear_message() -> Non
     report = caught.value.report
     assert [r.name for r in report.failures] == ["state-round-trip"]
     message = str(caught.value)
-    assert "the mujoco engine failed 1 of 18 checks" in message
+    assert f"the mujoco engine failed 1 of {len(ENGINE_CHECKS)} checks" in message
     assert ("state-round-trip: twists after a pose set alone: expected 3.0 within 1e-09 at "
             "[1, 4]; saw 0.0 (off by 3)") in message
 
@@ -68,7 +70,7 @@ class BlindEngine(PybulletEngine):
     def state_within(self, max_position: float, max_speed: float) -> bool:
         return True
 
-    def properties(self, names: list[str]) -> np.ndarray:  # type: ignore[override]
+    def properties(self, names: Sequence[str]) -> np.ndarray:
         raise ZeroDivisionError("no properties today")
 
 
@@ -95,7 +97,8 @@ def test_checks_of_features_an_engine_does_not_list_are_skipped() -> None:
     report = check_engine(NoModels)
     skipped = [r.name for r in report.results if r.outcome == "skipped"]
     assert report.ok and skipped == ["load-model", "bad-models"]
-    assert "'load_model' feature" in report.results[8].message
+    assert all("'load_model' feature" in r.message for r in report.results
+               if r.outcome == "skipped")
 
 
 def test_params_are_set_on_every_engine_a_check_makes() -> None:
@@ -108,5 +111,5 @@ def test_params_are_set_on_every_engine_a_check_makes() -> None:
 def test_unknown_engines_and_checks_are_refused_by_name() -> None:
     with pytest.raises(InvalidArgumentError, match="did you mean 'mujoco'"):
         check_engine("mujuco")
-    with pytest.raises(GaltonError, match="did you mean 'determinism'"):
+    with pytest.raises(InvalidArgumentError, match="did you mean 'determinism'"):
         run_check("mujoco", "determinsm")
