@@ -129,6 +129,14 @@ def model_format(fmt: ModelFormat | None, file: Path | None, path: str | None) -
     return FORMAT_OF_SUFFIX[suffix]
 
 
+def model_text(file: Path) -> str:
+    try:
+        return file.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as error:
+        raise typer.BadParameter(f"--file {str(file)!r} cannot be read as text: {error}") \
+            from None
+
+
 @app.command("load-model", rich_help_panel=PANEL)
 def load_model(
     ctx: typer.Context,
@@ -146,7 +154,7 @@ def load_model(
     if (file is None) == (path is None):
         raise typer.BadParameter("give exactly one of --file and --path")
     chosen = model_format(fmt, file, path)
-    text = None if file is None else file.read_text()
+    text = None if file is None else model_text(file)
     loaded = with_client(ctx, lambda c: c.load_model(chosen, text=text, path=path,
                                                      prefix=prefix))
     emit({"names": loaded}, as_json, lambda: console.print(

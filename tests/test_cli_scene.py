@@ -114,6 +114,10 @@ def test_load_model_needs_one_source_and_a_known_format(target: list[str],
     assert run([*target, "load-model"]).exit_code == 2
     unknown = run([*target, "load-model", "--file", str(odd)])
     assert unknown.exit_code == 2 and "give --format" in flat(unknown.output)
+    binary = tmp_path / "binary.xml"
+    binary.write_bytes(b"\xff\xfe\x00<mujoco")
+    unreadable = run([*target, "load-model", "--file", str(binary)])
+    assert unreadable.exit_code == 2 and "cannot be read as text" in flat(unreadable.output)
 
 
 @pytest.fixture
