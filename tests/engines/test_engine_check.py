@@ -3,6 +3,8 @@ interface fail the check that names their breach, with what was expected and see
 
 from __future__ import annotations
 
+import subprocess
+import sys
 from collections.abc import Sequence
 
 import numpy as np
@@ -113,3 +115,13 @@ def test_unknown_engines_and_checks_are_refused_by_name() -> None:
         check_engine("mujuco")
     with pytest.raises(InvalidArgumentError, match="did you mean 'determinism'"):
         run_check("mujoco", "determinsm")
+
+
+def test_the_checker_imports_no_engine() -> None:
+    """It works on any class implementing the interface: importing it loads no engine."""
+    probe = ("import sys, galton.daemon.engine_check; "
+             "print(sorted(m for m in sys.modules if m.split('.')[0] in "
+             "('mujoco', 'pybullet') or 'engines.' in m))")
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                         check=True, timeout=60)
+    assert out.stdout.strip() == "[]"
