@@ -64,7 +64,8 @@ def pack_group(group: Any) -> Any:
 
 
 def unpacked(value: Any, key: str = "") -> Any:
-    """A result with every bin as rows of numbers (flat when its width is unknown)."""
+    """A result with every bin as numbers: rows for poses and twists, a flat list for another
+    bin of float64, hex for one that is not."""
     if isinstance(value, dict):
         return {k: unpacked(v, str(k)) for k, v in value.items()}
     if isinstance(value, list):

@@ -8,11 +8,14 @@ import shlex
 import subprocess
 from pathlib import Path
 
+import numpy as np
 import pytest
 from cli_support import CONSOLE_COMMAND, flat, invoke, run, target_of
 
 from galton.client import Client, EmbeddedDaemon, spheres
 from galton.client.cli import package_version
+from galton.client.cli_call import unpacked
+from galton.protocol import pack_f64
 
 EVENT_WAIT_S = 1.0  # per try: the subscription may take a moment to reach the daemon
 EVENT_TRIES = 30
@@ -49,6 +52,14 @@ def test_a_failed_call_names_the_wire_code(target: list[str]) -> None:
     whole = run([*target, "call", "stepp", "--reply"])
     assert whole.exit_code == 1 and "UNKNOWN_OPERATION (8)" in whole.stderr
     assert json.loads(whole.stdout)["code_name"] == "UNKNOWN_OPERATION"
+
+
+def test_unpacked_turns_every_bin_into_numbers() -> None:
+    pose = [0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]
+    result = {"poses": pack_f64(np.array([pose])), "other": pack_f64(np.array([1.5, 2.5])),
+              "odd": b"\x01\x02", "nested": [{"twists": pack_f64(np.zeros((1, 6)))}]}
+    assert unpacked(result) == {"poses": [pose], "other": [1.5, 2.5], "odd": "0102",
+                                "nested": [{"twists": [[0.0] * 6]}]}
 
 
 @pytest.mark.parametrize("args", ["{oops", "[1, 2]"])
