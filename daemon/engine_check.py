@@ -180,11 +180,13 @@ def run_check(factory_or_name: EngineFactory | str, name: str, *,
 def check_engine(factory_or_name: EngineFactory | str, *,
                  params: Mapping[str, Any] | None = None) -> CheckReport:
     """Run every check of ``ENGINE_CHECKS``; the report, or EngineCheckError naming every
-    failure."""
+    failure. Parameters an engine refuses are refused here, before any check runs."""
     factory = engine_factory(factory_or_name)
     probe = factory()
     try:
         label = str(getattr(probe, "name", type(probe).__name__))
+        if params:
+            probe.set_params(dict(params))
     finally:
         probe.close()
     report = CheckReport(label, [run_check(factory, c.name, params=params)

@@ -108,6 +108,8 @@ def test_params_are_set_on_every_engine_a_check_makes() -> None:
         "passed"
     result = run_check("mujoco", "timestep", params={"nonsense": 1})
     assert result.outcome == "failed" and "unknown parameter 'nonsense'" in result.message
+    with pytest.raises(InvalidArgumentError, match="unknown parameter 'nonsense'"):
+        check_engine("mujoco", params={"nonsense": 1})
 
 
 def test_unknown_engines_and_checks_are_refused_by_name() -> None:
