@@ -9,14 +9,16 @@ requests rather than running a few long ones.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
-from typing import Any
+from collections.abc import Callable, Sequence
+from typing import Any, TypeVar
 
 import msgpack
 import numpy as np
 
 from galton.protocol import PROTOCOL_VERSION, pack_f64
 from galton.protocol.operations import OPERATIONS, Arg, Operation
+
+T = TypeVar("T")
 
 MJCF = ('<mujoco><worldbody><body name="{name}" pos="0 0 1"><freejoint/>'
         '<geom size=".05"/></body></worldbody></mujoco>')
@@ -44,7 +46,7 @@ class RequestMaker:
     def chance(self, p: float) -> bool:
         return bool(self.rng.random() < p)
 
-    def pick(self, items: Any) -> Any:
+    def pick(self, items: Sequence[T]) -> T:
         return items[int(self.rng.integers(len(items)))]
 
     def fresh_name(self) -> str:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections import defaultdict
+from typing import Any
 
 import numpy as np
 
@@ -24,7 +25,7 @@ def surface(spec: BoardSpec, engine: str, role: str) -> SurfaceSpec:
 
 def board_groups(spec: BoardSpec, engine: str, offset_x: float = 0.0) -> list[BodyGroup]:
     """Every static solid of the board, grouped so that one spawn request builds it."""
-    grouped: dict[tuple, list[Primitive]] = defaultdict(list)
+    grouped: dict[tuple[Any, ...], list[Primitive]] = defaultdict(list)
     for prim in board_primitives(spec, offset_x):
         grouped[(prim.shape, prim.size, prim.role, prim.rgba)].append(prim)
     groups = []
