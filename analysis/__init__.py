@@ -33,6 +33,7 @@ _MODULES: dict[str, tuple[str, ...]] = {
         "pool_tails", "pooled_over_repetitions", "sum_over_repetitions",
     ),
     "summary": ("EngineSummary", "GroupSummary", "score_trial", "score_trials", "summarise"),
+    "targets": ("TARGETS_TEXT", "CellVerdict", "cell_verdict", "verdicts", "load_trials"),
     "verdict": ("Check", "Verdict", "judge", "judge_all"),
 }
 _HOME = {name: module for module, names in _MODULES.items() for name in names}

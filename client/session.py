@@ -120,4 +120,4 @@ def query(session: zenoh.Session, keys: Keys, op: str, args: dict[str, Any] | No
             "timeout)")
     raise DaemonUnreachableError(
         f"{op}: no daemon serves instance {keys.instance!r} (not running, or another "
-        "instance name: `galton-client ls` lists them)")
+        "instance name: `galton-client daemons` lists them)")

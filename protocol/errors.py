@@ -17,7 +17,9 @@
     │   └── ResourceLimitError       RESOURCE_LIMIT: the request is over one of the daemon's limits
     ├── DaemonUnreachableError       no daemon answered (client side only)
     ├── RequestTimeoutError          a daemon exists but did not answer in time (client side)
-    └── ClientClosedError            the SDK Client was closed before this call (client side)
+    ├── ClientClosedError            the SDK Client was closed before this call (client side)
+    └── EngineCheckError             an engine breaks the engine contract (galton.daemon.engine_check,
+                                     with CheckFailedError / CheckSkippedError per check)
 """
 
 from __future__ import annotations

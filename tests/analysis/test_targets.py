@@ -143,3 +143,11 @@ def test_files_and_folders_are_pooled(tmp_path: Path) -> None:
     b = write_results(tmp_path / "b", second)
     loaded: list[TrialRecord] = load_trials([a, b / "results.json"])
     assert loaded == ExperimentResults.from_json(a / "results.json").trials + second
+
+
+def test_every_name_galton_analysis_exports_resolves() -> None:
+    """The package imports its names on first use: each must exist where it says."""
+    import galton.analysis as analysis
+
+    for name in analysis.__all__:
+        assert getattr(analysis, name) is not None, name
