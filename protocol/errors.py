@@ -18,8 +18,9 @@
     ├── DaemonUnreachableError       no daemon answered (client side only)
     ├── RequestTimeoutError          a daemon exists but did not answer in time (client side)
     ├── ClientClosedError            the SDK Client was closed before this call (client side)
-    └── EngineCheckError             an engine breaks the engine contract (galton.daemon.engine_check,
-                                     with CheckFailedError / CheckSkippedError per check)
+    └── EngineCheckError             an engine breaks the engine contract
+                                     (galton.daemon.engine_check; CheckFailedError and
+                                     CheckSkippedError report one check each)
 """
 
 from __future__ import annotations
