@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import queue
 import sys
+from collections.abc import Callable
 from dataclasses import asdict
 from typing import Annotated, Any
 
@@ -30,10 +31,7 @@ def watch(ctx: typer.Context, count: Count = 0, as_json: JsonOpt = False) -> Non
                 print_telemetry(sample, as_json)
                 if count and seen >= count:
                     return
-    try:
-        with_client(ctx, go)
-    except KeyboardInterrupt:
-        return
+    until_interrupted(ctx, go)
 
 
 def print_telemetry(sample: Telemetry, as_json: bool) -> None:
@@ -67,10 +65,7 @@ def events(ctx: typer.Context,
                 print_event(received.get(), as_json)
                 if count and seen >= count:
                     return
-    try:
-        with_client(ctx, go)
-    except KeyboardInterrupt:
-        return
+    until_interrupted(ctx, go)
 
 
 def print_event(event: dict[str, Any], as_json: bool) -> None:
@@ -82,3 +77,11 @@ def print_event(event: dict[str, Any], as_json: bool) -> None:
                       if key not in ("seq", "kind", "instance"))
     console.print(f"#{event.get('seq', '?'):<6} {event.get('kind', '?'):<14} {fields}",
                   markup=False)
+
+
+def until_interrupted(ctx: typer.Context, go: Callable[[Client], None]) -> None:
+    """Run a streaming command until it ends or the user presses Ctrl-C (no traceback)."""
+    try:
+        with_client(ctx, go)
+    except KeyboardInterrupt:
+        return
