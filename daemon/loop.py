@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from galton.daemon import time_control
+from galton.daemon import loop_status, time_control
 from galton.daemon.calls import Call, StepJob, Task
 from galton.daemon.handlers import HANDLERS
 from galton.daemon.limits import DEFAULT_LIMITS, Limits
@@ -91,11 +91,12 @@ class SimLoop:
         self.engine_factory = engine_factory
         self._step_cost = 1e-4
         self._last_verify = 0.0
-        self._seq = 0
+        self.telemetry_seq = 0
         self._event_seq = 0
         self._stopping = False
         self.rtf = 0.0
-        self._status_reply: tuple[bytes, tuple[Any, ...], bytes] | None = None
+        # The last status reply with the request and snapshot it answered (loop_status.py).
+        self.status_reply: tuple[bytes, tuple[Any, ...], bytes] | None = None
         # Wraps each scene-changing request (spawn, delete, load_model...): galton-daemon
         # makes SIGTERM end the process at once inside it (server.sigterm_ends_at_once).
         self.work_guard: Callable[[], AbstractContextManager[None]] = nullcontext
@@ -136,7 +137,7 @@ class SimLoop:
         self._advance()
         now = time.monotonic()
         if now >= next_telemetry:
-            self._publish_telemetry(now)
+            loop_status.publish_telemetry(self, now)
             next_telemetry = max(next_telemetry + self.telemetry_period, now)
         self._take_calls(self._idle_timeout(next_telemetry))
         return next_telemetry
@@ -216,7 +217,7 @@ class SimLoop:
             request = decode_request(call.payload, call.op, self.decode_limits)
             op = operation(request.op)
             op.check_arg_names(request.args)
-            self._require_world(request.args)
+            self.require_world(request.args)
             call.client = request.client
             with self.work_guard() if op.mutates and not op.steps else nullcontext():
                 result = self._dispatch(op, call, request.args)
@@ -276,7 +277,7 @@ class SimLoop:
         except Exception:
             log.exception("could not publish an event")
 
-    def _require_world(self, args: dict[str, Any]) -> None:
+    def require_world(self, args: dict[str, Any]) -> None:
         """Requests may name a world; this daemon serves one (room for several later)."""
         world = args.get("world", self.world.name)
         if world != self.world.name:
@@ -287,14 +288,14 @@ class SimLoop:
         self.refresh_clock()
         reply = Reply(ResultCode.OK, result=result, step=self.world.step_index,
                       sim_time=self.world.sim_time)
-        self._send(call, encode_reply(reply))
+        self.send(call, encode_reply(reply))
 
     def reply_error(self, call: Call, error: RemoteError) -> None:
         self.refresh_clock()
         reply = error_reply(error, self.world.step_index, self.world.sim_time)
-        self._send(call, encode_reply(reply))
+        self.send(call, encode_reply(reply))
 
-    def _send(self, call: Call, data: bytes) -> None:
+    def send(self, call: Call, data: bytes) -> None:
         try:
             call.respond(data)
         except Exception:
@@ -388,64 +389,11 @@ class SimLoop:
 
     def status(self) -> SimStatus:
         """Safe to call from any thread: reads only values swapped atomically."""
-        return self._status_from(self._status_snapshot())
-
-    def _status_snapshot(self) -> tuple[Any, ...]:
-        """Everything a status reply says, read once: equal snapshots give equal replies."""
-        return (self.clock, self.state, self.target_rtf, self.rtf, self.world)
-
-    def _status_from(self, snapshot: tuple[Any, ...]) -> SimStatus:
-        (step, sim_time, timestep, count, faulted), state, target_rtf, rtf, world = snapshot
-        return SimStatus(
-            state=state, step=step, sim_time=sim_time, timestep=timestep,
-            target_rtf=target_rtf, rtf=rtf, entity_count=count, engine=world.engine.name,
-            instance=self.instance, world=world.name, faulted=faulted)
+        return loop_status.status_from(self, loop_status.snapshot(self))
 
     def handle_readonly(self, call: Call) -> None:
-        """Answer a status request on the caller's thread, from the atomic snapshot.
-
-        A controller polling a paused or idle daemon asks the same thing of the same
-        snapshot again and again, so the last reply's bytes are kept with the request and
-        snapshot they answer: a repeated poll costs one comparison, not a decode and an
-        encode (about 30 µs of a 0.3 ms round trip, docs/PERFORMANCE.md)."""
-        snapshot = self._status_snapshot()
-        cached = self._status_reply
-        if cached is not None and cached[0] == call.payload and cached[1] == snapshot:
-            self._send(call, cached[2])
-            return
-        status = self._status_from(snapshot)
-        try:
-            request = decode_request(call.payload, call.op, self.decode_limits)
-            operation(request.op).check_arg_names(request.args)
-            self._require_world(request.args)
-            reply = Reply(ResultCode.OK, result=status.to_wire(), step=status.step,
-                          sim_time=status.sim_time)
-        except Exception as exc:  # on Zenoh's thread: whatever happens, one typed reply
-            error = exc if isinstance(exc, RemoteError) else OperationFailedError(
-                f"{type(exc).__name__}: {brief(str(exc))}")
-            self._send(call, encode_reply(error_reply(error, status.step, status.sim_time)))
-            return
-        data = encode_reply(reply)
-        self._status_reply = (call.payload, snapshot, data)
-        self._send(call, data)
-
-    def _publish_telemetry(self, now: float) -> None:
-        if not self.world.faulted:
-            self.verify_physics()
-        cpu, rss, peak = self.monitor.sample()
-        rtf = self.rtf = self.rtf_window.add(now, self.world.sim_time)
-        self._seq += 1
-        world = self.world
-        sample = Telemetry(
-            seq=self._seq, instance=self.instance, engine=world.engine.name, state=self.state,
-            step=world.step_index, sim_time=world.sim_time, wall_time=time.time(), rtf=rtf,
-            target_rtf=self.target_rtf, timestep=world.engine.timestep,
-            entity_count=len(world.entities), cpu_percent=cpu, rss_bytes=rss,
-            peak_rss_bytes=peak, world=world.name)
-        try:
-            self.publish_telemetry(sample)
-        except Exception:
-            log.exception("could not publish telemetry")
+        """Answer a status request on the caller's thread (daemon/loop_status.py)."""
+        loop_status.answer_status(self, call)
 
 
 def _resting(twists: np.ndarray, job: StepJob) -> bool:

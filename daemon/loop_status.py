@@ -1,0 +1,92 @@
+"""Status and telemetry. A status request is answered from the loop's atomic
+snapshot, without waiting for the physics thread (the one ``fast`` operation of
+protocol/operations.py).
+
+A controller polling a paused or idle daemon asks the same thing of the same snapshot
+again and again, so the last reply's bytes are kept with the request and snapshot they
+answer: a repeated poll costs one comparison, not a decode and an encode (about 30 µs of a
+0.3 ms round trip, docs/PERFORMANCE.md).
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from typing import TYPE_CHECKING, Any
+
+from galton.daemon.calls import Call
+from galton.protocol import (
+    OperationFailedError,
+    RemoteError,
+    Reply,
+    ResultCode,
+    SimStatus,
+    Telemetry,
+    decode_request,
+    encode_reply,
+    error_reply,
+)
+from galton.protocol.errors import brief
+from galton.protocol.operations import operation
+
+if TYPE_CHECKING:
+    from galton.daemon.loop import SimLoop
+
+log = logging.getLogger("galton.daemon")
+
+
+def snapshot(loop: SimLoop) -> tuple[Any, ...]:
+    """Everything a status reply says, read once: equal snapshots give equal replies."""
+    return (loop.clock, loop.state, loop.target_rtf, loop.rtf, loop.world)
+
+
+def status_from(loop: SimLoop, taken: tuple[Any, ...]) -> SimStatus:
+    (step, sim_time, timestep, count, faulted), state, target_rtf, rtf, world = taken
+    return SimStatus(
+        state=state, step=step, sim_time=sim_time, timestep=timestep,
+        target_rtf=target_rtf, rtf=rtf, entity_count=count, engine=world.engine.name,
+        instance=loop.instance, world=world.name, faulted=faulted)
+
+
+def answer_status(loop: SimLoop, call: Call) -> None:
+    """Answer one status request on the caller's thread; never raises."""
+    taken = snapshot(loop)
+    cached = loop.status_reply
+    if cached is not None and cached[0] == call.payload and cached[1] == taken:
+        loop.send(call, cached[2])
+        return
+    status = status_from(loop, taken)
+    try:
+        request = decode_request(call.payload, call.op, loop.decode_limits)
+        operation(request.op).check_arg_names(request.args)
+        loop.require_world(request.args)
+        reply = Reply(ResultCode.OK, result=status.to_wire(), step=status.step,
+                      sim_time=status.sim_time)
+    except Exception as exc:  # on the transport's thread: whatever happens, one typed reply
+        error = exc if isinstance(exc, RemoteError) else OperationFailedError(
+            f"{type(exc).__name__}: {brief(str(exc))}")
+        loop.send(call, encode_reply(error_reply(error, status.step, status.sim_time)))
+        return
+    data = encode_reply(reply)
+    loop.status_reply = (call.payload, taken, data)
+    loop.send(call, data)
+
+
+def publish_telemetry(loop: SimLoop, now: float) -> None:
+    """Publish one telemetry sample (after checking the world is still finite)."""
+    if not loop.world.faulted:
+        loop.verify_physics()
+    cpu, rss, peak = loop.monitor.sample()
+    rtf = loop.rtf = loop.rtf_window.add(now, loop.world.sim_time)
+    loop.telemetry_seq += 1
+    world = loop.world
+    sample = Telemetry(
+        seq=loop.telemetry_seq, instance=loop.instance, engine=world.engine.name, state=loop.state,
+        step=world.step_index, sim_time=world.sim_time, wall_time=time.time(), rtf=rtf,
+        target_rtf=loop.target_rtf, timestep=world.engine.timestep,
+        entity_count=len(world.entities), cpu_percent=cpu, rss_bytes=rss,
+        peak_rss_bytes=peak, world=world.name)
+    try:
+        loop.publish_telemetry(sample)
+    except Exception:
+        log.exception("could not publish telemetry")
