@@ -13,14 +13,16 @@ recompile, and balls resting on them can sleep (see ``mujoco_spec.add_group``). 
 read and written in batches through numpy index arrays (``mujoco_state``) rebuilt after each
 compile: nothing in Python runs per body per step.
 
-Contacts: a contact takes the larger of its two geoms' frictions and the average of their
-solref (MuJoCo's rules); restitution maps to solref as ``mujoco_spec.damping_ratio`` says.
-
 Every change is all or nothing. What can fail (a recompile MuJoCo rejects, a world MuJoCo
 cannot hold) comes before anything that cannot; a failed recompile leaves the model and data
 in use untouched, and the spec's edits and the engine's books are put back. Removed bodies
 cannot be put back, so a delete in a world holding a loaded model (whose references may
 reach other bodies) is first tried on a copy of the spec.
+
+The engine keeps the compiled world, its index and the time; its verbs that edit the
+spec are plain functions of the engine in their own modules: ``mujoco_spawn``,
+``mujoco_models`` (MJCF loads), ``mujoco_removal`` (delete, clear) and ``mujoco_props``
+(update, properties, MuJoCo's contact rules); ``mujoco_entity`` holds what they share.
 
 Size: MuJoCo holds at most ``mujoco_spec.MAX_BODIES`` bodies, and its compile costs
 O(free bodies x degrees of freedom): about 1.6 s for 4,000 free spheres, four times that for
@@ -30,7 +32,6 @@ twice as many. Everything else here is linear in the bodies a call touches.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import mujoco
@@ -48,10 +49,15 @@ from galton.daemon.engine import (
     FEATURE_UPDATE_RGBA,
     Engine,
 )
+from galton.daemon.engines import mujoco_models as models
 from galton.daemon.engines import mujoco_pool as mp
+from galton.daemon.engines import mujoco_props as mpr
+from galton.daemon.engines import mujoco_removal as removal
+from galton.daemon.engines import mujoco_spawn as adding
 from galton.daemon.engines import mujoco_spec as ms
 from galton.daemon.engines import mujoco_state as mst
 from galton.daemon.engines.mujoco_balance import BalanceGuard
+from galton.daemon.engines.mujoco_entity import MUJOCO_ERRORS, Entity, mujoco_error
 from galton.daemon.engines.mujoco_state import FREE, JOINTED, MOCAP, STATIC
 from galton.daemon.params import check_updates
 from galton.protocol import (
@@ -61,44 +67,14 @@ from galton.protocol import (
     BodyProperties,
     Capabilities,
     EntityInfo,
-    FeatureUnsupportedError,
-    GaltonError,
     InvalidArgumentError,
-    NameNotUniqueError,
     NotFoundError,
     OperationFailedError,
-    ResourceLimitError,
 )
 
 FEATURES = (FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDATE_MASS,
             FEATURE_UPDATE_FRICTION, FEATURE_UPDATE_RESTITUTION, FEATURE_UPDATE_RGBA,
             FEATURE_LOAD_MODEL, FEATURE_STATIC_POSE)
-_GEOM = mujoco.mjtObj.mjOBJ_GEOM
-_BODY = mujoco.mjtObj.mjOBJ_BODY
-# What MuJoCo raises for a model or a change it cannot take (FatalError: its mju_error).
-_MUJOCO_ERRORS = (ValueError, TypeError, RuntimeError, mujoco.FatalError)
-# Body names the engine keeps for itself: the world body's and the parked bodies'.
-_WORLD = "world"
-
-
-@dataclass(eq=False)
-class _Entity:
-    """An entity's spec body and what the engine must remember about it."""
-
-    body: Any
-    static: bool
-    source: str = "spawn"
-    friction: float | None = None
-    restitution: float | None = None
-    initial_pose: np.ndarray | None = None
-    key: mp.Key | None = None  # its pool kind while its compiled values are still that kind's
-    parts: tuple[str, ...] = ()  # a model entity's inner bodies' names (taken while it lives)
-
-    def geoms(self) -> list[Any]:
-        return [self.body.first_geom()] if self.source == "spawn" else \
-            self.body.find_all(_GEOM)
-
-
 # Contacts at which MuJoCo's worker threads start helping, and below which they stop.
 WORKERS_ON_CONTACTS = 400
 WORKERS_OFF_CONTACTS = 200
@@ -106,14 +82,6 @@ WORKERS_OFF_CONTACTS = 200
 # Counted across requests, so the looks fall on the same steps however the steps are split
 # into requests (a step(1) loop or one long run_until give the same trajectory).
 LOOK_EVERY_STEPS = 50
-
-
-def _mujoco_error(exc: Exception, what: str) -> GaltonError:
-    """A typed error for MuJoCo's refusal, in its words: too big is a resource limit."""
-    words = str(exc)
-    if "allocate memory" in words or "must be less than" in words:
-        return ResourceLimitError(f"{what}: MuJoCo cannot hold the world ({words})")
-    return InvalidArgumentError(f"{what}: {words}")
 
 
 class MujocoEngine(Engine):
@@ -125,7 +93,7 @@ class MujocoEngine(Engine):
     def __init__(self) -> None:
         ms.route_warnings()
         self._values: dict[str, Any] = {n: p.default for n, p in ms.PARAMS.items()}
-        self._entities: dict[str, _Entity] = {}
+        self._entities: dict[str, Entity] = {}
         self._diverged = False
         self._crowded = False
         self._workers = 0
@@ -166,9 +134,9 @@ class MujocoEngine(Engine):
                                            m.nv if nv is None else nv)
         try:
             self._model, self._data = self._spec.recompile(self._model, self._data)
-        except _MUJOCO_ERRORS as exc:
+        except MUJOCO_ERRORS as exc:
             self._spec.memory = memory
-            raise _mujoco_error(exc, "MuJoCo rejected the change") from exc
+            raise mujoco_error(exc, "MuJoCo rejected the change") from exc
         self._workers = 0  # the recompiled MjData has no thread pool
         self._start_workers()
 
@@ -260,45 +228,10 @@ class MujocoEngine(Engine):
             self._apply_contacts(list(self._entities))
 
     def _apply_contacts(self, names: Sequence[str]) -> None:
-        """Write these entities' contact values into the model and the spec: friction
-        (sliding, torsional, rolling), condim, solref, solimp.
-
-        Spawned bodies follow the defaults where they were given none; a loaded model keeps
-        its file's values except those set by ``update``.
-        """
-        m, v = self._model, self._values
-        for name in names:
-            e = self._entities[name]
-            spawned = e.source == "spawn"
-            default_friction, default_restitution = ms.default_surface(e.static, v)
-            friction = default_friction if e.friction is None and spawned else e.friction
-            restitution = default_restitution if e.restitution is None and spawned \
-                else e.restitution
-            if friction is None and restitution is None:
-                continue
-            ms.write_contacts(m, e.geoms(), self._geom_ids([name]), v, friction, restitution,
-                              spawned)
+        mpr.apply_contacts(self, names)
 
     def properties(self, names: Sequence[str]) -> np.ndarray:
-        """Mass from the compiled model (a model's subtree; NaN when static), the first geom's
-        sliding friction, and the nominal restitution: the one given, the default a spawned
-        body follows, NaN for a model's own contacts (MuJoCo has no restitution as such)."""
-        m, ids = self._model, self._body_ids(names)
-        entities = [self._entities[n] for n in names]
-        spawned = np.array([e.source == "spawn" for e in entities], dtype=bool)
-        mass = np.where(spawned, m.body_mass[ids], m.body_subtreemass[ids])
-        mass[[e.static for e in entities]] = np.nan
-        geoms = mst.first_geoms(m, ids, spawned)
-        friction = np.where(geoms >= 0, m.geom_friction[np.maximum(geoms, 0), 0], np.nan)
-        restitution = [self._restitution(e) for e in entities]
-        return np.column_stack([mass, friction, np.array(restitution, dtype=float)])
-
-    def _restitution(self, e: _Entity) -> float:
-        if e.restitution is not None:
-            return e.restitution
-        if e.source == "spawn":
-            return ms.default_surface(e.static, self._values)[1]
-        return float("nan")
+        return mpr.properties(self, names)
 
     def _free_bodies(self) -> int:
         """Free joints in the compiled model: what its compile is quadratic in."""
@@ -306,206 +239,17 @@ class MujocoEngine(Engine):
 
     # -- Engine: create & delete ---------------------------------------------------------
     def spawn(self, groups: Sequence[BodyGroup]) -> None:
-        """Bind parked bodies where the pool has enough of a group's kind; compile the other
-        groups (with spare parked twins) in one recompile."""
-        self._check_new([n for g in groups for n in g.names])
-        pooled, compiled = self._pool.plan(groups, self._values, self._model.nbody,
-                                           len(self._entities), self._free_bodies())
-        if compiled:
-            self._compile_groups(compiled)
-        for group, key in pooled:
-            self._bind(group, key)
-        if pooled:
-            mp.refresh(self._model, self._data)
-        for group in groups:
-            if group.twists is not None and not group.static:
-                mst.write_twists(self._data, self._index, self._body_ids(group.names),
-                                 np.asarray(group.twists, dtype=float), None)
-
-    def _check_new(self, names: Sequence[str]) -> None:
-        if len(set(names)) != len(names):
-            raise InvalidArgumentError("MuJoCo rejected the change: a name is repeated")
-        for name in names:
-            if name in self._entities:
-                raise NameNotUniqueError(f"an entity named {name!r} already exists")
-            if name in self._parts:  # a model's inner link, which is no entity of the World's
-                raise InvalidArgumentError(f"MuJoCo already has a body named {name!r} (a part "
-                                           "of a loaded model); choose another name")
-            if name == _WORLD or name.startswith(mp.PREFIX):
-                raise InvalidArgumentError(f"the body name {name!r} is the MuJoCo engine's own "
-                                           f"(the world, or beginning {mp.PREFIX!r})")
-
-    def _compile_groups(self, compiled: Sequence[mp.Planned]) -> None:
-        """Add the groups' bodies and spares, recompile; on any failure take them out."""
-        snapshot = self._pool.snapshot()
-        additions = mp.Additions(self._spec, self._home, self._builders)
-        nbody, nv = self._model.nbody, self._model.nv
-        try:
-            for group, material, _, spares in compiled:
-                additions.add(group, material)
-                if spares:
-                    additions.add(self._pool.spare_group(group, spares), material, parked=True)
-                nbody += len(group) + spares
-                nv += 0 if group.static else 6 * (len(group) + spares)
-            self._compile(nbody, nv)
-        except BaseException:
-            self._pool.restore(snapshot)
-            additions.undo()
-            raise
-        made = iter(additions.bodies())
-        self._litter += additions.litter
-        for group, _, key, spares in compiled:
-            for name, body in zip(group.names, next(made), strict=True):
-                self._entities[name] = _Entity(body, group.static, friction=group.friction,
-                                               restitution=group.restitution, key=key)
-            if spares:
-                self._pool.adopt(key, next(made))
-        self._reindex()
-
-    def _bind(self, group: BodyGroup, key: mp.Key) -> None:
-        """Give a group's names to parked bodies of its kind and release them: no compile."""
-        bodies = self._pool.take(key, len(group))
-        poses = np.asarray(group.poses, dtype=float)
-        mp.bind_spec(bodies, group.names, poses)
-        for name, body in zip(group.names, bodies, strict=True):
-            self._entities[name] = _Entity(body, group.static, friction=group.friction,
-                                           restitution=group.restitution, key=key)
-            self._ids[name] = body.id
-        self._watch = None
-        mp.bind_arrays(self._model, self._data, self._index, self._body_ids(group.names),
-                       poses)
+        adding.spawn(self, groups)
 
     def load_model(self, fmt: str, text: str | None, path: str | None,
                    prefix: str) -> list[EntityInfo]:
-        if fmt != "mjcf":
-            raise FeatureUnsupportedError(f"model format {fmt!r} is not supported by MuJoCo "
-                                          "here; supported: mjcf")
-        child = ms.parse_mjcf(text, path)
-        tops, parts = ms.model_names(child, prefix)
-        self._check_model_names([*tops, *(n for names in parts for n in names)])
-        try:
-            trial = self._spec.copy()  # attaching cannot be undone: try it on a copy first
-            trial.attach(child.copy(), prefix=prefix, frame=trial.worldbody.add_frame())
-            size = trial.compile()
-        except _MUJOCO_ERRORS as exc:
-            raise _mujoco_error(exc, "the MJCF model does not fit this world") from exc
-        frame = self._spec.worldbody.add_frame()
-        try:
-            self._spec.attach(child, prefix=prefix, frame=frame)
-            for name, inner in zip(tops, parts, strict=True):
-                body = self._spec.body(name)
-                self._entities[name] = _Entity(body, static=bool(body.mocap), source="model",
-                                               parts=inner)
-            self._recompile(size.nbody, size.nv)
-        except (GaltonError, *_MUJOCO_ERRORS) as exc:
-            for name in tops:
-                self._entities.pop(name, None)
-            mp.remove_frame(self._spec, frame)  # with the model's bodies and what uses them
-            if isinstance(exc, GaltonError):
-                raise
-            raise _mujoco_error(exc, "the MJCF model does not fit this world") from exc
-        self._models += len(tops)
-        self._parts.update(n for names in parts for n in names)
-        return [self._model_info(name) for name in tops]
-
-    def _check_model_names(self, names: Sequence[str]) -> None:
-        for name in names:
-            if name in self._entities or name in self._parts or name == _WORLD or \
-                    name.startswith(mp.PREFIX):
-                raise NameNotUniqueError(
-                    f"the model's body {name!r} has the name of a body already in the MuJoCo "
-                    "world; load it with another prefix")
-
-    def _model_info(self, name: str) -> EntityInfo:
-        bid = self._ids[name]
-        entity = self._entities[name]
-        if self._index.kind[bid] == JOINTED:
-            poses, _ = mst.jointed_states(self._model, self._data, np.array([bid]))
-            entity.initial_pose = poses[0]
-        return EntityInfo(name=name, shape="model", static=entity.static,
-                          mass=float(self._model.body_subtreemass[bid]), source="model")
+        return models.load_model(self, fmt, text, path, prefix)
 
     def delete(self, names: Sequence[str]) -> None:
-        """Spawned bodies still of their kind go back to the pool, parked (no compile while
-        they all fit); the others leave the spec, and one recompile follows."""
-        ids = self._body_ids(names)
-        entities = [self._entities[n] for n in names]
-        parked, removed = self._pool.split(entities)
-        if removed and self._models:
-            self._try_removing(removed)
-        for name, entity in zip(names, entities, strict=True):
-            self._forget(name, entity)
-        if self._put_away(parked, removed):
-            try:
-                self._recompile()
-            except GaltonError as exc:
-                self._broken = True  # the bodies are out of the spec, not of the model
-                raise OperationFailedError(
-                    f"MuJoCo failed to recompile after a delete ({exc}); the world must be "
-                    "reset") from exc
-            park = np.array([e.body.id for e in parked], dtype=np.int64)
-        else:
-            chosen = {id(e) for e in parked}
-            park = ids[[i for i, e in enumerate(entities) if id(e) in chosen]]
-            if self._balance is not None:
-                self._balance.forget(self._model, self._model.body_treeid[park])
-        mp.park_arrays(self._model, self._data, self._index, park)
-
-    def _put_away(self, parked: Sequence[_Entity], removed: Sequence[_Entity]) -> bool:
-        """Park what the pool takes and take the rest out of the spec; whether a recompile
-        must follow."""
-        self._pool.park(parked)
-        if removed:
-            mp.remove_bodies(self._spec, [e.body for e in removed], self._sweep())
-        return bool(removed) or self._gravcomp_missing(parked)
-
-    def _forget(self, name: str, entity: _Entity) -> None:
-        del self._entities[name]
-        del self._ids[name]
-        self._watch = None
-        self._parts.difference_update(entity.parts)
-        self._models -= entity.source == "model"
-
-    def _sweep(self) -> list[Any]:
-        """The litter (see mujoco_pool.Additions.bodies), handed over to be deleted."""
-        litter, self._litter = self._litter, []
-        return litter
-
-    def _gravcomp_missing(self, parked: Sequence[_Entity]) -> bool:
-        """Whether parking these needs a recompile: a model compiled without any gravity
-        compensation ignores the body_gravcomp that holds parked bodies up."""
-        return self._model.ngravcomp == 0 and not all(e.static for e in parked)
-
-    def _try_removing(self, removed: Sequence[_Entity]) -> None:
-        """Compile a copy of the spec without these bodies; raise, changing nothing, if
-        MuJoCo refuses it."""
-        trial = self._spec.copy()
-        mp.remove_bodies(trial, [trial.body(e.body.name) for e in removed])
-        try:
-            trial.compile()
-        except _MUJOCO_ERRORS as exc:
-            raise _mujoco_error(exc, "MuJoCo cannot delete these bodies") from exc
+        removal.delete(self, names)
 
     def clear(self) -> None:
-        """An empty world at time 0; the pool stays warm: every spawned body is parked."""
-        self._restart_looks()  # held balls get their sleep policy back: the model may stay
-        entities = list(self._entities.values())
-        self._entities.clear()
-        self._diverged = False
-        if self._models or self._broken:
-            self._build_empty()  # a model may bring more than bodies: start afresh
-            return
-        parked, removed = self._pool.split(entities)
-        if self._put_away(parked, removed):
-            try:
-                self._recompile()
-            except GaltonError:
-                self._build_empty()
-                return
-        mp.park_arrays(self._model, self._data, self._index,
-                       np.array([e.body.id for e in parked], dtype=np.int64))
-        mujoco.mj_resetData(self._model, self._data)
-        self._reindex()
+        removal.clear(self)
 
     # -- Engine: state --------------------------------------------------------------------
     def get_states(self, names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
@@ -560,49 +304,7 @@ class MujocoEngine(Engine):
             body.quat = quats[row]
 
     def update(self, names: Sequence[str], props: BodyProperties) -> None:
-        """The mass first, the one change MuJoCo may refuse (its recompile); the rest
-        cannot fail, so a refused mass leaves every property as it was."""
-        self._body_ids(names)
-        if props.mass is not None:
-            self._set_masses(names, props.mass)
-        for name in names:
-            entity = self._entities[name]
-            entity.key = None  # no longer like its parked twins: deleting it removes it
-            if props.friction is not None:
-                entity.friction = props.friction
-            if props.restitution is not None:
-                entity.restitution = props.restitution
-        if props.friction is not None or props.restitution is not None:
-            self._apply_contacts(names)
-        if props.rgba is not None:
-            self._model.geom_rgba[self._geom_ids(names)] = props.rgba
-            for name in names:
-                for geom in self._entities[name].geoms():
-                    geom.rgba = props.rgba
-
-    def _set_masses(self, names: Sequence[str], mass: float) -> None:
-        """Give each entity this total mass (a model's bodies scaled alike); one recompile,
-        the spec's old values put back if MuJoCo refuses it."""
-        m = self._model
-        undo: list[tuple[Any, str, Any]] = []
-        for name in names:
-            entity = self._entities[name]
-            if entity.source == "spawn":
-                undo += ms.set_values(entity.body.first_geom(), mass=mass)
-                continue
-            scale = mass / max(float(m.body_subtreemass[self._ids[name]]), 1e-12)
-            for body in [entity.body, *entity.body.find_all(_BODY)]:
-                bid = body.id
-                undo += ms.set_values(body, mass=float(m.body_mass[bid]) * scale,
-                                      inertia=m.body_inertia[bid] * scale,
-                                      ipos=m.body_ipos[bid], iquat=m.body_iquat[bid],
-                                      explicitinertial=True)
-        try:
-            self._recompile()
-        except GaltonError:
-            for element, attribute, value in reversed(undo):
-                setattr(element, attribute, value)
-            raise
+        mpr.update(self, names, props)
 
     # -- Engine: time ---------------------------------------------------------------------
     def step(self, count: int) -> None:
