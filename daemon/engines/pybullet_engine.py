@@ -28,7 +28,9 @@ made, so that a stopped world replays its first run bit for bit (Bullet would ot
 contact points and their warm starts across the teleport).
 
 The engine is three parts: this module (bodies, states, models), ``Parameters``
-(pybullet_params.py) and ``Rebuilding`` (pybullet_rebuild.py).
+(pybullet_params.py) and ``Rebuilding`` (pybullet_rebuild.py). Plain functions do the rest:
+a spawn group's values and books (pybullet_spawn.py), a body's updates and properties
+(pybullet_props.py), a model load's checks and names (pybullet_models.py).
 """
 
 from __future__ import annotations
@@ -36,7 +38,6 @@ from __future__ import annotations
 import functools
 import importlib.metadata
 import itertools
-import math
 import typing
 from collections.abc import Callable, Sequence
 from typing import Any, TypeVar
@@ -57,22 +58,19 @@ from galton.daemon.engine import (
     FEATURE_UPDATE_RGBA,
     Engine,
 )
+from galton.daemon.engines import pybullet_models as models
+from galton.daemon.engines import pybullet_props as bodyprops
 from galton.daemon.engines import pybullet_rebuild as rebuild
-from galton.daemon.engines.pybullet_params import SPECS, Parameters, default_keys
+from galton.daemon.engines import pybullet_spawn as spawning
+from galton.daemon.engines.pybullet_models import MODEL_FORMATS
+from galton.daemon.engines.pybullet_params import SPECS, Parameters
 from galton.daemon.engines.pybullet_rebuild import Body as _Body
 from galton.daemon.engines.pybullet_rebuild import Rebuilding
 from galton.daemon.engines.pybullet_shapes import (
-    DENSITY,
     BodyMaker,
     ShapeCache,
-    as_rgba,
     link_masses,
     load_bodies,
-    read_text,
-    scale_masses,
-    unique_name,
-    unit_inertia,
-    volume,
 )
 from galton.daemon.params import check_updates
 from galton.protocol import (
@@ -81,15 +79,12 @@ from galton.protocol import (
     BodyProperties,
     Capabilities,
     EntityInfo,
-    FeatureUnsupportedError,
     InvalidArgumentError,
     NameNotUniqueError,
     NotFoundError,
     OperationFailedError,
 )
 from galton.protocol.model import BODY_SHAPES, POSE_WIDTH, TWIST_WIDTH
-
-MODEL_FORMATS = ("urdf", "mjcf")
 
 _P = typing.ParamSpec("_P")
 _R = TypeVar("_R")
@@ -189,23 +184,17 @@ class PybulletEngine(Parameters, Rebuilding, Engine):
         """The group's bodies in (at most) one createMultiBody call, all turned like the
         first, then each one's own orientation where it differs, velocity and dynamics. A
         rebuild (``redo``) makes them as they were first made."""
-        if group.shape not in BODY_SHAPES:
-            raise InvalidArgumentError(f"unknown shape {group.shape!r}")
-        if group.shape == "plane" and not group.static:
-            raise InvalidArgumentError("a plane must be static")
+        spawning.check_group(group)
         size = tuple(float(s) for s in group.size)
         poses = np.asarray(group.poses, dtype=float).reshape(-1, POSE_WIDTH).tolist()
         if redo is None:
-            turn = tuple(poses[0][3:])
-            redo = rebuild.Redo(turn, [any(pose[3:] != poses[0][3:] for pose in poses)]
-                                * len(poses))
-        mass = 0.0 if group.static else (
-            group.mass if group.mass is not None else DENSITY * volume(group.shape, size))
+            redo = spawning.first_redo(poses)
+        mass = spawning.group_mass(group, size)
         ids = self._maker.create(mass, self._shapes.get(group.shape, size),
                                  self._shapes.visual(group.shape, size, group.rgba),
                                  [pose[:3] for pose in poses], list(redo.turn), self._owned(),
                                  made)
-        friction, restitution, dynamics = self._dynamics(group, size, mass)
+        friction, restitution, dynamics = spawning.dynamics(group, size, mass, self._values)
         twists = None if group.twists is None else np.asarray(
             group.twists, dtype=float).reshape(-1, TWIST_WIDTH).tolist()
         for k, uid in enumerate(ids):
@@ -215,30 +204,7 @@ class PybulletEngine(Parameters, Rebuilding, Engine):
                 self._reset_velocity(uid, twists[k][:3], twists[k][3:])
             self._change(uid, -1, **dynamics)
         self._set_margin(ids[0], group.shape, size)
-        rgba = None if group.rgba is None else as_rgba(group.rgba)
-        inertia = None if group.static else unit_inertia(group.shape, size)
-        return {name: _Body(uid, group.static, group.shape, size, inertia, batch,
-                            follows_friction=group.friction is None,
-                            follows_restitution=group.restitution is None, mass=mass,
-                            friction=friction, restitution=restitution, rgba=rgba,
-                            made_mass=mass, turn=redo.turn, turned=turned)
-                for name, uid, turned in zip(group.names, ids, redo.turned, strict=True)}
-
-    def _dynamics(self, group: BodyGroup, size: tuple[float, ...],
-                  mass: float) -> tuple[float, float, dict[str, Any]]:
-        """A group's friction, restitution, and the changeDynamics arguments of its bodies."""
-        friction_key, restitution_key = default_keys(group.static)
-        friction = group.friction if group.friction is not None else (
-            self._values[friction_key])
-        restitution = group.restitution if group.restitution is not None else (
-            self._values[restitution_key])
-        dynamics: dict[str, Any] = {"lateralFriction": friction, "restitution": restitution}
-        if not group.static:
-            inertia = unit_inertia(group.shape, size)
-            # Mass and inertia together: an inertia alone sets a rigid body's mass to 0.
-            dynamics.update(mass=mass, localInertiaDiagonal=[mass * i for i in inertia],
-                            ccdSweptSphereRadius=self._values["pybullet.ccd_swept_sphere_radius"])
-        return friction, restitution, dynamics
+        return spawning.books(group, ids, size, mass, (friction, restitution), batch, redo)
 
     @_engine_call
     def delete(self, names: Sequence[str]) -> None:
@@ -292,36 +258,10 @@ class PybulletEngine(Parameters, Rebuilding, Engine):
                 self._edit_spawned(body, props)
 
     def _edit_spawned(self, body: _Body, props: BodyProperties) -> None:
-        dynamics: dict[str, Any] = {}
-        if props.mass is not None and body.unit_inertia is not None:
-            body.mass = props.mass
-            dynamics.update(mass=props.mass,
-                            localInertiaDiagonal=[props.mass * i for i in body.unit_inertia])
-        if props.friction is not None:
-            dynamics["lateralFriction"] = body.friction = props.friction
-            body.follows_friction = False
-        if props.restitution is not None:
-            dynamics["restitution"] = body.restitution = props.restitution
-            body.follows_restitution = False
-        if dynamics:
-            self._change(body.uid, -1, **dynamics)
-        if props.rgba is not None:
-            body.rgba = as_rgba(props.rgba)
-            self._bc.changeVisualShape(body.uid, -1, rgbaColor=list(props.rgba))
+        bodyprops.edit_spawned(self._bc, self._change, body, props)
 
     def _edit_model(self, body: _Body, props: BodyProperties) -> None:
-        """A model's mass is its whole body's (every link scaled alike); friction and
-        restitution are its base's, the look every link's."""
-        if body.model is not None and props.mass is not None and not body.static:
-            scale_masses(self._bc, body.uid, body.model.links, props.mass)
-        dynamics = {key: value for key, value in (("lateralFriction", props.friction),
-                                                  ("restitution", props.restitution))
-                    if value is not None}
-        if dynamics:
-            self._change(body.uid, -1, **dynamics)
-        if props.rgba is not None:
-            for link in range(-1, body.links):
-                self._bc.changeVisualShape(body.uid, link, rgbaColor=list(props.rgba))
+        bodyprops.edit_model(self._bc, self._change, body, props)
 
     def _owned(self) -> set[int]:
         return {b.uid for b in self._bodies.values()}
@@ -396,12 +336,7 @@ class PybulletEngine(Parameters, Rebuilding, Engine):
         return np.array(rows, dtype=float).reshape(len(rows), 3)
 
     def _properties(self, body: _Body) -> tuple[float, float, float]:
-        if body.shape != "model":
-            return (math.nan if body.static else body.mass, body.friction, body.restitution)
-        info = self._bc.getDynamicsInfo(body.uid, -1)
-        mass = info[0] + sum(self._bc.getDynamicsInfo(body.uid, link)[0]
-                             for link in range(body.links))
-        return (math.nan if body.static else mass, info[1], info[5])
+        return bodyprops.properties(self._bc, body)
 
     # -- models ---------------------------------------------------------------------------
     @_engine_call
@@ -410,12 +345,7 @@ class PybulletEngine(Parameters, Rebuilding, Engine):
         """URDF (one body) or MJCF (one body per top-level body, plus one for the world's
         own geoms). Text is loaded from a temporary file, so relative mesh paths only work
         when a path is given. A model's pose is its base's centre of mass (PyBullet's)."""
-        if fmt not in MODEL_FORMATS:
-            raise FeatureUnsupportedError(
-                f"PyBullet cannot load {fmt!r} models; it loads {', '.join(MODEL_FORMATS)}")
-        if (text is None) == (path is None):
-            raise InvalidArgumentError("give a model as text or as a path, not both or neither")
-        source = text if text is not None else read_text(path or "")
+        source = models.model_text(fmt, text, path)
         ids = load_bodies(self._bc, self._maker, fmt, source, path)
         try:
             return self._adopt_model(fmt, ids, prefix, source, path)
@@ -429,40 +359,21 @@ class PybulletEngine(Parameters, Rebuilding, Engine):
                      path: str | None) -> list[EntityInfo]:
         """Name the loaded bodies, refuse names in use, and register the bodies with what it
         takes to load them again."""
-        if not ids:
-            raise InvalidArgumentError(f"the {fmt.upper()} model holds no bodies")
-        names: list[str] = []
-        for uid in ids:
-            base = self._bc.getBodyInfo(uid)[0].decode("utf-8", "replace")
-            names.append(unique_name(prefix + base, set(names)))
-        # Checked here, not left to the World: registering a taken name would orphan the
-        # body that holds it, and the World's undo (delete by name) would remove the wrong one.
-        taken = [n for n in names if n in self._bodies]
-        if taken:
-            raise NameNotUniqueError(
-                f"the model's body {taken[0]!r} has the name of an existing entity; load it "
-                "with another prefix")
+        names = models.body_names(self._bc, fmt, ids, prefix, self._bodies)
         batch, infos = next(self._batches), []
         for index, (uid, name) in enumerate(zip(ids, names, strict=True)):
             body = self._adopt_model_body(uid, name, batch)
             poses, twists = self._read([uid])
-            body.model = rebuild.Model(fmt, text, path, index,
-                                       link_masses(self._bc, uid, body.links),
-                                       (poses[0].tolist(), twists[0].tolist()))
-            _, friction, restitution = self._properties(body)
-            infos.append(EntityInfo(name=name, shape="model", static=body.static,
-                                    mass=sum(m for m, _ in body.model.links),
-                                    friction=friction, restitution=restitution,
-                                    source="model"))
+            body.model = model = rebuild.Model(fmt, text, path, index,
+                                               link_masses(self._bc, uid, body.links),
+                                               (poses[0].tolist(), twists[0].tolist()))
+            infos.append(models.entity_info(self._bc, name, body, model))
         return infos
 
     def _adopt_model_body(self, uid: int, name: str, batch: int) -> _Body:
-        """Register one loaded body, with the settings every dynamic body gets."""
-        static = self._bc.getDynamicsInfo(uid, -1)[0] <= 0
-        if not static:
-            self._change(uid, -1, linearDamping=0.0, angularDamping=0.0,
-                         ccdSweptSphereRadius=self._values["pybullet.ccd_swept_sphere_radius"])
-        body = _Body(uid, static, "model", (), None, batch, links=self._bc.getNumJoints(uid))
+        """Register one loaded body (see pybullet_models.model_body)."""
+        body = models.model_body(self._bc, self._change,
+                                 self._values["pybullet.ccd_swept_sphere_radius"], uid, batch)
         self._bodies[name] = body
         return body
 

@@ -1,0 +1,72 @@
+"""Loading URDF and MJCF models into a PyBullet world: what the engine's ``load_model`` checks,
+names and registers.
+
+Every body a load makes becomes an entity named ``prefix + its name`` (made unique among the
+load's own), a multibody with damping set to zero like every dynamic body here.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Container
+from typing import Any
+
+from pybullet_utils.bullet_client import BulletClient
+
+from galton.daemon.engines import pybullet_props as props
+from galton.daemon.engines.pybullet_rebuild import Body, Model
+from galton.daemon.engines.pybullet_shapes import read_text, unique_name
+from galton.protocol import (
+    EntityInfo,
+    FeatureUnsupportedError,
+    InvalidArgumentError,
+    NameNotUniqueError,
+)
+
+MODEL_FORMATS = ("urdf", "mjcf")
+
+
+def model_text(fmt: str, text: str | None, path: str | None) -> str:
+    """The model's text, given as text or read from its path, in a format PyBullet loads."""
+    if fmt not in MODEL_FORMATS:
+        raise FeatureUnsupportedError(
+            f"PyBullet cannot load {fmt!r} models; it loads {', '.join(MODEL_FORMATS)}")
+    if (text is None) == (path is None):
+        raise InvalidArgumentError("give a model as text or as a path, not both or neither")
+    return text if text is not None else read_text(path or "")
+
+
+def body_names(bc: BulletClient, fmt: str, ids: list[int], prefix: str,
+               taken: Container[str]) -> list[str]:
+    """The loaded bodies' entity names; refuse a load with no body or a name in use."""
+    if not ids:
+        raise InvalidArgumentError(f"the {fmt.upper()} model holds no bodies")
+    names: list[str] = []
+    for uid in ids:
+        base = bc.getBodyInfo(uid)[0].decode("utf-8", "replace")
+        names.append(unique_name(prefix + base, set(names)))
+    # Checked here, not left to the World: registering a taken name would orphan the
+    # body that holds it, and the World's undo (delete by name) would remove the wrong one.
+    in_use = [n for n in names if n in taken]
+    if in_use:
+        raise NameNotUniqueError(
+            f"the model's body {in_use[0]!r} has the name of an existing entity; load it "
+            "with another prefix")
+    return names
+
+
+def model_body(bc: BulletClient, change: Callable[..., Any], ccd_radius: float, uid: int,
+               batch: int) -> Body:
+    """A loaded body's books, with the settings every dynamic body gets."""
+    static = bc.getDynamicsInfo(uid, -1)[0] <= 0
+    if not static:
+        change(uid, -1, linearDamping=0.0, angularDamping=0.0,
+               ccdSweptSphereRadius=ccd_radius)
+    return Body(uid, static, "model", (), None, batch, links=bc.getNumJoints(uid))
+
+
+def entity_info(bc: BulletClient, name: str, body: Body, model: Model) -> EntityInfo:
+    """A loaded entity as the World lists it: its mass is all its links'."""
+    _, friction, restitution = props.properties(bc, body)
+    return EntityInfo(name=name, shape="model", static=body.static,
+                      mass=sum(m for m, _ in model.links), friction=friction,
+                      restitution=restitution, source="model")
