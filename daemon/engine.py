@@ -18,7 +18,14 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from galton.protocol import BodyGroup, BodyProperties, Capabilities, EntityInfo
+from galton.protocol import (
+    BodyGroup,
+    BodyProperties,
+    Capabilities,
+    EntityInfo,
+    FeatureUnsupportedError,
+    JointInfo,
+)
 
 # Feature flags an engine may list in its capabilities.
 FEATURE_SPAWN = "spawn"
@@ -30,6 +37,12 @@ FEATURE_UPDATE_RESTITUTION = "update_restitution"
 FEATURE_UPDATE_RGBA = "update_rgba"
 FEATURE_LOAD_MODEL = "load_model"
 FEATURE_STATIC_POSE = "set_static_pose"
+FEATURE_JOINTS = "joints"  # joints, get_joint_states, set_joint_states
+FEATURE_JOINT_TARGETS = "joint_targets"
+FEATURE_TARGET_POSITION = "target_position"
+FEATURE_TARGET_VELOCITY = "target_velocity"
+FEATURE_TARGET_EFFORT = "target_effort"
+FEATURE_WRENCH = "wrench"
 
 
 class Engine(ABC):
@@ -56,13 +69,20 @@ class Engine(ABC):
 
     @abstractmethod
     def load_model(self, fmt: str, text: str | None, path: str | None,
-                   prefix: str) -> list[EntityInfo]:
+                   prefix: str, *, fixed_base: bool = True) -> list[EntityInfo]:
         """Load a model (format from capabilities().model_formats) given as text or path.
 
-        Every top-level body becomes an entity named ``prefix + body name``; return them
-        (``source="model"``). Raise InvalidArgumentError for a model that does not parse,
-        and NameNotUniqueError (or InvalidArgumentError) when a body's name is taken; in
-        both cases leave the world unchanged.
+        The daemon hands over text whose file references (meshes, textures) are already
+        absolute (daemon/model_files.py), so an engine never resolves files itself.
+
+        Every top-level body is a model: its root becomes an entity named ``prefix + body
+        name`` with ``shape="model"``, and every other body (link) of its subtree an entity
+        ``prefix + link name`` with ``shape="link"``; all have ``source="model"`` and
+        ``model`` set to the root's name. Return them, each root before its links.
+        ``fixed_base`` (URDF only) welds a URDF's root to the world; False gives it a free
+        joint. Raise InvalidArgumentError for a model that does not parse, and
+        NameNotUniqueError (or InvalidArgumentError) when a name is taken; in both cases
+        leave the world unchanged.
         """
 
     @abstractmethod
@@ -130,3 +150,49 @@ class Engine(ABC):
 
     def close(self) -> None:  # noqa: B027 - optional hook, a no-op by default
         """Release the engine's resources."""
+
+    # -- articulated models: joints, targets, wrenches (optional features) ---------------
+    def joints(self) -> list[JointInfo]:
+        """Every joint of every loaded model, in load order (docs/protocol.md, "joints")."""
+        return []
+
+    def get_joint_states(self, names: Sequence[str]
+                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Positions, velocities and actuator efforts, (n,) each, of these 1-DOF joints.
+
+        The effort is the generalized force the joint's target applied in the last step
+        (0 with no target), passive damping and constraint forces excluded."""
+        raise self._unsupported("joint states")
+
+    def set_joint_states(self, names: Sequence[str], positions: np.ndarray,
+                         velocities: np.ndarray | None) -> None:
+        """Teleport these 1-DOF joints (velocities None: keep them) between steps."""
+        raise self._unsupported("joint states")
+
+    def set_joint_targets(self, names: Sequence[str], mode: str, targets: np.ndarray,
+                          kp: np.ndarray, kd: np.ndarray, max_effort: np.ndarray) -> None:
+        """Hold a target on these 1-DOF joints, applied every step by the engine itself.
+
+        position: tau = kp (target - q) - kd qdot; velocity: tau = kd (target - qdot);
+        effort: tau = target; none: tau = 0. tau is clipped to +-max_effort (inf: no clip).
+        Arrays are (n,), checked and broadcast by the World."""
+        raise self._unsupported("joint targets")
+
+    def set_wrenches(self, names: Sequence[str], wrenches: np.ndarray,
+                     points: np.ndarray | None) -> None:
+        """Hold a world-frame wrench (n, 6: force, torque) on each body until cleared.
+
+        ``points`` (n, 3) are world-frame application points (None: each body's centre of
+        mass c); the wrench is F at c plus tau + (p - c) x F, with c taken now, then held
+        constant in the world frame. A new wrench on a body replaces its old one."""
+        raise self._unsupported("wrenches")
+
+    def clear_wrenches(self, names: Sequence[str] | None) -> None:  # noqa: B027 - none held
+        """Remove the wrenches of these bodies (None: of every body)."""
+
+    def restore_joints(self) -> None:  # noqa: B027 - nothing to restore without joints
+        """Every joint back to its as-loaded position at rest, every target to none, every
+        wrench cleared (reset "state" and stop, after the roots' poses are restored)."""
+
+    def _unsupported(self, what: str) -> FeatureUnsupportedError:
+        return FeatureUnsupportedError(f"the {self.name} engine does not support {what}")

@@ -35,6 +35,12 @@ class SimState(StrEnum):
 SIM_STATES = tuple(state.value for state in SimState)
 RESET_SCOPES = ("time", "state", "spawned", "all")
 BODY_SHAPES = ("sphere", "box", "cylinder", "capsule", "plane")
+# What list reports for the bodies of a loaded model: its root, and every other link.
+MODEL_SHAPES = ("model", "link")
+JOINT_TYPES = ("revolute", "prismatic", "spherical", "free", "fixed")
+SCALAR_JOINT_TYPES = ("revolute", "prismatic")  # one degree of freedom: states and targets
+TARGET_MODES = ("none", "position", "velocity", "effort")
+WRENCH_WIDTH = 6  # fx fy fz tx ty tz, world frame
 # How many numbers ``size`` holds per shape, and what they mean (all half sizes, metres).
 SIZE_LAYOUT: dict[str, tuple[str, ...]] = {
     "sphere": ("radius",),
@@ -293,6 +299,7 @@ class EntityInfo:
     friction: float | None = None
     restitution: float | None = None
     source: str = "spawn"
+    model: str | None = None  # a loaded model's root entity, for the root and its links
 
     def to_wire(self) -> dict[str, Any]:
         out = asdict(self)
@@ -304,6 +311,39 @@ class EntityInfo:
     def from_wire(cls, body: dict[str, Any]) -> EntityInfo:
         return cls(**{**body, "size": tuple(body.get("size", ())),
                       "tags": tuple(body.get("tags", ()))})
+
+
+@dataclass
+class JointInfo:
+    """One joint of a loaded model (docs/protocol.md, "joints")."""
+
+    name: str
+    model: str
+    type: str  # one of JOINT_TYPES
+    parent: str  # parent link entity ("" for a root's free joint)
+    child: str  # child link entity
+    axis: tuple[float, float, float] = (0.0, 0.0, 0.0)  # unit, in the child link's frame
+    lower: float | None = None  # rad or m; None when unlimited
+    upper: float | None = None
+    damping: float = 0.0
+    effort_limit: float | None = None
+    velocity_limit: float | None = None
+    mode: str = "none"  # the target mode now held, one of TARGET_MODES
+
+    @property
+    def scalar(self) -> bool:
+        """Whether it has one degree of freedom (states and targets address it)."""
+        return self.type in SCALAR_JOINT_TYPES
+
+    def to_wire(self) -> dict[str, Any]:
+        out = asdict(self)
+        out["axis"] = list(self.axis)
+        return out
+
+    @classmethod
+    def from_wire(cls, body: dict[str, Any]) -> JointInfo:
+        axis = body.get("axis", (0.0, 0.0, 0.0))
+        return cls(**{**body, "axis": (float(axis[0]), float(axis[1]), float(axis[2]))})
 
 
 @dataclass
