@@ -239,10 +239,18 @@ def _world(maker: RequestMaker) -> Any:
     return maker.pick(["default", "other"])
 
 
+def _values(maker: RequestMaker, arg: Arg) -> Any:
+    """One number per joint: a number, or packed float64 (sometimes of the wrong length)."""
+    if maker.chance(0.4):
+        return float(maker.rng.uniform(-2, 2))
+    count = maker.last_count if maker.chance(0.8) else int(maker.rng.integers(1, 4))
+    return pack_f64(maker.rng.normal(0, 1, count))
+
+
 KIND_VALUES: dict[str, Callable[[RequestMaker, Arg], Any]] = {
     "number": _number, "count": _count, "string": _string, "bool": lambda m, a: m.chance(0.5),
     "names": _names, "map": _map, "groups": _groups, "poses": _rows(7), "twists": _rows(6),
-    "choice": _choice,
+    "choice": _choice, "values": _values, "wrenches": _rows(6), "points": _rows(3),
 }
 SPECIAL: dict[tuple[str, str], Callable[[RequestMaker], Any]] = {
     ("update", "properties"): _properties,

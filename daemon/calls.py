@@ -42,6 +42,7 @@ class StepJob:
     remaining: int
     read: list[str] | None = None  # entities whose states the reply carries, checked up front
     rest: RestCheck | None = None
+    read_joints: list[str] | None = None  # 1-DOF joints whose states the reply carries
 
     @property
     def done(self) -> int:

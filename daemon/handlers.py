@@ -14,7 +14,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
-from galton.daemon import ops, time_control
+from galton.daemon import ops, ops_joints, time_control
 from galton.daemon.calls import Call
 from galton.protocol.operations import OPERATIONS
 
@@ -57,6 +57,12 @@ HANDLERS: dict[str, Handler] = {
     "set_states": _scene("set_states", ops.set_states),
     "update": _scene("update", ops.update),
     "delete": _scene("delete", ops.delete),
+    "joints": _scene("joints", ops_joints.joints),
+    "get_joint_states": _scene("get_joint_states", ops_joints.get_joint_states),
+    "set_joint_states": _scene("set_joint_states", ops_joints.set_joint_states),
+    "set_joint_targets": _scene("set_joint_targets", ops_joints.set_joint_targets),
+    "apply_wrench": _scene("apply_wrench", ops_joints.apply_wrench),
+    "clear_wrenches": _scene("clear_wrenches", ops_joints.clear_wrenches),
     "get_params": _scene("get_params", ops.get_params),
     "set_params": _scene("set_params", ops.set_params),
 }

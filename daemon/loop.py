@@ -23,6 +23,7 @@ from galton.daemon.calls import Call, StepJob, Task
 from galton.daemon.handlers import HANDLERS
 from galton.daemon.limits import DEFAULT_LIMITS, Limits
 from galton.daemon.monitor import Pacer, ProcessMonitor, RtfWindow
+from galton.daemon.ops_joints import joint_states
 from galton.daemon.world import World
 from galton.protocol import (
     DecodeLimits,
@@ -251,13 +252,14 @@ class SimLoop:
     def check_job_reads(self) -> None:
         """A step job whose read entities are gone is answered now, not after its steps."""
         job = self.job
-        if job is None or job.read is None:
+        if job is None:
             return
-        gone = [name for name in job.read if name not in self.world.entities]
+        gone = [name for name in job.read or () if name not in self.world.entities]
+        gone += [name for name in job.read_joints or () if name not in self.world.joints.by_name]
         if gone:
             self.job = None
             self.reply_error(job.call, NotFoundError(
-                f"entity {brief(gone[0])} that this step request reads was deleted after "
+                f"{brief(gone[0])}, which this step request reads, was deleted after "
                 f"{job.done} of {job.total} steps", {"missing": gone[:100],
                                                      "steps_done": job.done}))
 
@@ -358,6 +360,13 @@ class SimLoop:
             result.update(names=job.read, poses=pack_f64(poses), twists=pack_f64(twists))
             if job.rest is not None:
                 result["at_rest"] = _resting(twists, job)
+        if job.read_joints is not None:
+            try:
+                result["joints"] = joint_states(self.world, job.read_joints, "read_joints")
+            except RemoteError as error:
+                error.details["steps_done"] = job.done
+                self.reply_error(job.call, error)
+                return
         self._reply_ok(job.call, result)
 
     def verify_physics(self) -> bool:

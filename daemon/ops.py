@@ -13,6 +13,7 @@ from collections.abc import Callable
 from typing import Any
 
 from galton.daemon.engines import ENGINE_CLASSES
+from galton.daemon.model_files import search_folders
 from galton.daemon.world import World
 from galton.protocol import (
     BodyGroup,
@@ -78,8 +79,13 @@ def load_model(world: World, args: dict[str, Any]) -> dict[str, Any]:
     else:
         path = model_file(check_type(path, str, "load_model.path"), limit)
     prefix = check_prefix(args.get("prefix", ""))
+    fixed_base = check_type(args.get("fixed_base", True), bool, "load_model.fixed_base")
+    raw_search = args.get("search_path")
+    search = search_folders(None if raw_search is None else check_type(
+        raw_search, str, "load_model.search_path"))
     world.require_room(1)
-    return {"names": world.load_model(fmt, text, path, prefix)}
+    return {"names": world.load_model(fmt, text, path, prefix, fixed_base=fixed_base,
+                                      search=search)}
 
 
 def model_file(path: str, limit: int) -> str:

@@ -99,7 +99,8 @@ def step(loop: SimLoop, call: Call, args: dict[str, Any]) -> None:
         raise InvalidArgumentError("step takes no until_rest: use run_until with "
                                    "until_rest and read to stop once bodies rest")
     count = _check_count(args.get("count", 1), loop.limits.max_steps)
-    _start_job(loop, call, count, _read_list(loop, args, "step"))
+    _start_job(loop, call, count, _read_list(loop, args, "step"),
+               read_joints=_read_joint_list(loop, args, "step"))
 
 
 def run_until(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any] | None:
@@ -118,7 +119,8 @@ def run_until(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]
             f"run_until.sim_time {target} is not after the current sim time "
             f"{loop.world.sim_time}")
     read = _read_list(loop, args, "run_until")
-    _start_job(loop, call, count, read, _rest_check(args, read, dt))
+    _start_job(loop, call, count, read, _rest_check(args, read, dt),
+               _read_joint_list(loop, args, "run_until"))
     return None
 
 
@@ -167,8 +169,18 @@ def _read_list(loop: SimLoop, args: dict[str, Any], where: str) -> list[str] | N
     return names
 
 
+def _read_joint_list(loop: SimLoop, args: dict[str, Any], where: str) -> list[str] | None:
+    """The joints a step request wants read back when done, checked before any step."""
+    read = args.get("read_joints")
+    if read is None:
+        return None
+    names = check_names(read, f"{where}.read_joints")
+    loop.world.joints.require_scalar(names, f"{where}.read_joints")
+    return names
+
+
 def _start_job(loop: SimLoop, call: Call, count: int, read: list[str] | None = None,
-               rest: RestCheck | None = None) -> None:
+               rest: RestCheck | None = None, read_joints: list[str] | None = None) -> None:
     if loop.state == SimState.PLAYING:
         raise IncorrectStateError("cannot step while playing: pause first")
     if loop.job is not None:
@@ -176,7 +188,7 @@ def _start_job(loop: SimLoop, call: Call, count: int, read: list[str] | None = N
     loop.world.require_valid()
     if loop.state == SimState.STOPPED:
         loop.set_state(SimState.PAUSED)
-    loop.job = StepJob(call, count, count, read, rest)
+    loop.job = StepJob(call, count, count, read, rest, read_joints)
 
 
 def client_gone(loop: SimLoop, client: str) -> None:

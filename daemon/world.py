@@ -12,12 +12,16 @@ import fnmatch
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from galton.daemon.engine import Engine
 from galton.daemon.limits import DEFAULT_LIMITS, Limits
+from galton.daemon.model_files import resolve_model
+from galton.daemon.world_joints import JointTable
+from galton.daemon.world_wrenches import WrenchSchedule
 from galton.protocol import (
     POSE_WIDTH,
     RESET_SCOPES,
@@ -59,6 +63,8 @@ class World:
         self.faulted = False
         self.verified_step = 0  # the last step whose state was checked finite
         self._time_base = (0, 0.0, engine.timestep)  # (step, sim time, dt) since dt changed
+        self.joints = JointTable(engine)
+        self.wrenches = WrenchSchedule()
 
     # -- lookup -------------------------------------------------------------------------
     def require_known(self, names: Sequence[str]) -> None:
@@ -135,8 +141,15 @@ class World:
                 self.entities[name] = Entity(info, group.poses[i].copy(), twists[i].copy())
         return names
 
-    def load_model(self, fmt: str, text: str | None, path: str | None, prefix: str) -> list[str]:
-        infos = self.engine.load_model(fmt, text, path, prefix)
+    def load_model(self, fmt: str, text: str | None, path: str | None, prefix: str, *,
+                   fixed_base: bool = True, search: Sequence[Path] = ()) -> list[str]:
+        """Load a model's roots and links as entities (the files it names made absolute
+        first, daemon/model_files.py); its joints join the joint table."""
+        if text is None:
+            assert path is not None
+            text = Path(path).read_text(encoding="utf-8", errors="replace")
+        text = resolve_model(fmt, text, path, search)
+        infos = self.engine.load_model(fmt, text, path, prefix, fixed_base=fixed_base)
         names = [info.name for info in infos]
         try:
             self.require_room(len(names))
@@ -147,13 +160,31 @@ class World:
             np.zeros((0, POSE_WIDTH)), np.zeros((0, TWIST_WIDTH)))
         for i, info in enumerate(infos):
             self.entities[info.name] = Entity(info, poses[i].copy(), twists[i].copy())
+        self.joints.refresh()
         return names
 
     def delete(self, names: Sequence[str]) -> None:
+        """Delete entities; a model goes whole, by its root (its links with it)."""
         self.require_known(names)
+        self.require_no_links(names, "delete", "a link is deleted with its model")
         self.engine.delete(names)
-        for name in names:
+        roots = {n for n in names if self.entities[n].info.shape == "model"}
+        gone = [*names, *(n for n, e in self.entities.items()
+                          if e.info.model in roots and n not in roots)]
+        for name in gone:
             del self.entities[name]
+        self.wrenches.forget(gone)
+        if roots:
+            self.joints.refresh()
+
+    def require_no_links(self, names: Sequence[str], where: str, why: str) -> None:
+        """Refuse a request that would act on a model's link alone."""
+        for name in names:
+            info = self.entities[name].info
+            if info.shape == "link":
+                raise InvalidArgumentError(
+                    f"{where}: {name!r} is a link of model {info.model!r}: {why} (act on "
+                    f"{info.model!r}, or on its joints)", {"model": info.model})
 
     # -- state --------------------------------------------------------------------------
     def get_states(self, names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
@@ -165,6 +196,7 @@ class World:
     def set_states(self, names: Sequence[str], poses: np.ndarray | None,
                    twists: np.ndarray | None) -> None:
         self.require_known(names)
+        self.require_no_links(names, "set_states", "a link moves with its joints")
         if twists is not None:
             static = [n for i, n in enumerate(names)
                       if self.entities[n].info.static and np.any(twists[i])]
@@ -175,6 +207,7 @@ class World:
 
     def update(self, names: Sequence[str], props: BodyProperties) -> None:
         self.require_known(names)
+        self.require_no_links(names, "update", "a model is updated as a whole")
         if props.mass is not None:
             static = [n for n in names if self.entities[n].info.static]
             if static:
@@ -209,8 +242,13 @@ class World:
         self.require_valid()
         if self.engine.timestep != self._time_base[2]:
             self._rebase_clock()
-        self.engine.step(count)
-        self.step_index += count
+        while count > 0:  # in chunks that end where a held wrench ends
+            until_end = self.wrenches.steps_to_next_end(self.step_index)
+            chunk = count if until_end is None else max(1, min(count, until_end))
+            self.engine.step(chunk)
+            self.step_index += chunk
+            count -= chunk
+            self.wrenches.expire(self.engine, self.step_index)
 
     def verify(self) -> None:
         """Check the steps taken since the last check; a non-finite state faults the world.
@@ -241,17 +279,24 @@ class World:
         if scope in ("spawned", "all"):
             self.engine.clear()
             self.entities.clear()
+            self.joints.refresh()
+            self.wrenches.ends.clear()
             self.faulted = False
             self.verified_step = self.step_index
         if scope == "state":
             self.restore_initial_states()
 
     def restore_initial_states(self) -> None:
-        names = list(self.entities)
+        """Every entity to its created state: bodies and model roots by their poses and
+        twists, models' joints to their as-loaded positions, targets and wrenches off."""
+        names = [n for n, e in self.entities.items() if e.info.shape != "link"]
         if names:
             poses = np.stack([self.entities[n].initial_pose for n in names])
             twists = np.stack([self.entities[n].initial_twist for n in names])
             self.engine.set_states(names, poses, twists)
+        self.engine.restore_joints()
+        self.joints.release_all()
+        self.wrenches.ends.clear()
         self.engine.reset_dynamics()
         self.faulted = False
         self.verified_step = self.step_index

@@ -156,6 +156,32 @@ def decode_twists(data: Any, count: int, where: str) -> np.ndarray:
     return check_rows(unpack_f64(data, TWIST_WIDTH, where), count, TWIST_WIDTH, where)
 
 
+def decode_values(data: Any, count: int, where: str, *, allow_inf: bool = False
+                  ) -> np.ndarray:
+    """One number per joint: a number (the same for all ``count``) or msgpack bin of
+    ``count`` float64; finite (or +inf where ``allow_inf``: an effort without a limit)."""
+    if isinstance(data, int | float) and not isinstance(data, bool):
+        values = np.full(count, float(data))
+    else:
+        values = unpack_f64(data, 1, where).reshape(-1)
+        if values.shape != (count,):
+            raise InvalidArgumentError(f"{where} holds {values.shape[0]} numbers; expected "
+                                       f"{count} (one per name) or a single number")
+    bad = np.isnan(values) | (np.isinf(values) & ~(allow_inf & (values > 0)))
+    if bad.any():
+        i = int(np.argmax(bad))
+        raise InvalidArgumentError(f"{where}[{i}] is {values[i]}: a finite number is needed")
+    return values
+
+
+def decode_wrenches(data: Any, count: int, where: str) -> np.ndarray:
+    return check_rows(unpack_f64(data, WRENCH_WIDTH, where), count, WRENCH_WIDTH, where)
+
+
+def decode_points(data: Any, count: int, where: str) -> np.ndarray:
+    return check_rows(unpack_f64(data, 3, where), count, 3, where)
+
+
 def check_tags(value: Any, where: str) -> tuple[str, ...]:
     check_type(value, list, where)
     return tuple(check_name(t, f"{where}[{i}]") for i, t in enumerate(value))

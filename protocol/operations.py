@@ -8,7 +8,9 @@ to them by a test. Each argument's ``kind`` names the value it takes on the wire
 - ``names``: a list of entity names; ``map``: a msgpack map (its fields checked by the op);
 - ``groups``: a list of body-group maps (docs/protocol.md, "spawn");
 - ``poses`` / ``twists``: msgpack bin of packed float64 rows (7 and 6 wide);
-- ``choice``: a string, one of ``choices``.
+- ``choice``: a string, one of ``choices``;
+- ``values``: one number per named joint, as a number (the same for all) or msgpack bin of
+  packed float64; ``wrenches`` / ``points``: bin of packed float64 rows, 6 and 3 wide.
 """
 
 from __future__ import annotations
@@ -17,10 +19,10 @@ from dataclasses import dataclass
 from typing import Any
 
 from galton.protocol.errors import UnknownOperationError, did_you_mean
-from galton.protocol.model import check_fields
+from galton.protocol.model import TARGET_MODES, check_fields
 
 ARG_KINDS = ("number", "count", "string", "bool", "names", "map", "groups", "poses", "twists",
-             "choice")
+             "choice", "values", "wrenches", "points")
 # Every request may name the world it is for (one world per daemon for now).
 WORLD_ARG = "world"
 
@@ -89,9 +91,11 @@ OPERATIONS: dict[str, Operation] = {op.name: op for op in (
     Operation("set_rtf", (Arg("rtf", "number", required=True),), mutates=True),
     Operation("pause", mutates=True),
     Operation("stop", mutates=True),
-    Operation("step", (Arg("count", "count"), Arg("read", "names")), mutates=True, steps=True),
+    Operation("step", (Arg("count", "count"), Arg("read", "names"), Arg("read_joints", "names")),
+              mutates=True, steps=True),
     Operation("run_until", (Arg("sim_time", "number", required=True), Arg("read", "names"),
-                            Arg("until_rest", "map")), mutates=True, steps=True),
+                            Arg("until_rest", "map"), Arg("read_joints", "names")),
+              mutates=True, steps=True),
     Operation("reset", (Arg("scope", "choice", choices=("time", "state", "spawned", "all")),),
               mutates=True),
     Operation("load_world", (Arg("engine", "choice", required=True,
@@ -101,7 +105,8 @@ OPERATIONS: dict[str, Operation] = {op.name: op for op in (
               timeout_floor_s=_REBUILDS),
     Operation("load_model", (Arg("format", "choice", required=True, choices=("mjcf", "urdf")),
                              Arg("text", "string", long_text=True), Arg("path", "string"),
-                             Arg("prefix", "string")), mutates=True,
+                             Arg("prefix", "string"), Arg("fixed_base", "bool"),
+                             Arg("search_path", "string")), mutates=True,
               timeout_floor_s=_REBUILDS),
     Operation("list", (Arg("name", "string"), Arg("tag", "string"),
                        Arg("kind", "choice", choices=("static", "dynamic")))),
@@ -110,6 +115,19 @@ OPERATIONS: dict[str, Operation] = {op.name: op for op in (
               mutates=True),
     Operation("update", (_NAMES, Arg("properties", "map", required=True)), mutates=True),
     Operation("delete", (_NAMES,), mutates=True, timeout_floor_s=_REBUILDS),
+    Operation("joints", (Arg("model", "string"), Arg("names", "names"))),
+    Operation("get_joint_states", (Arg("names", "names"),)),
+    Operation("set_joint_states", (_NAMES, Arg("positions", "values", required=True),
+                                   Arg("velocities", "values")), mutates=True),
+    Operation("set_joint_targets", (_NAMES, Arg("mode", "choice", required=True,
+                                                choices=TARGET_MODES),
+                                    Arg("targets", "values"), Arg("kp", "values"),
+                                    Arg("kd", "values"), Arg("max_effort", "values")),
+              mutates=True),
+    Operation("apply_wrench", (_NAMES, Arg("wrenches", "wrenches", required=True),
+                               Arg("points", "points"), Arg("duration", "number")),
+              mutates=True),
+    Operation("clear_wrenches", (Arg("names", "names"),), mutates=True),
     Operation("get_params"),
     Operation("set_params", (Arg("params", "map", required=True),), mutates=True),
 )}
