@@ -154,7 +154,7 @@ class World:
         try:
             self.require_room(len(names))
         except ResourceLimitError:
-            self.engine.delete(names)
+            self.engine.delete([info.name for info in infos if info.shape != "link"])
             raise
         poses, twists = self.engine.get_states(names) if names else (
             np.zeros((0, POSE_WIDTH)), np.zeros((0, TWIST_WIDTH)))
