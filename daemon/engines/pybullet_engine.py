@@ -35,12 +35,10 @@ a spawn group's values and books (pybullet_spawn.py), a body's updates and prope
 
 from __future__ import annotations
 
-import functools
 import importlib.metadata
 import itertools
-import typing
-from collections.abc import Callable, Sequence
-from typing import Any, TypeVar
+from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 import pybullet
@@ -48,30 +46,34 @@ from pybullet_utils.bullet_client import BulletClient
 
 from galton.daemon.engine import (
     FEATURE_DELETE,
+    FEATURE_JOINT_TARGETS,
+    FEATURE_JOINTS,
     FEATURE_LOAD_MODEL,
     FEATURE_SET_STATE,
     FEATURE_SPAWN,
     FEATURE_STATIC_POSE,
+    FEATURE_TARGET_EFFORT,
+    FEATURE_TARGET_POSITION,
+    FEATURE_TARGET_VELOCITY,
     FEATURE_UPDATE_FRICTION,
     FEATURE_UPDATE_MASS,
     FEATURE_UPDATE_RESTITUTION,
     FEATURE_UPDATE_RGBA,
+    FEATURE_WRENCH,
     Engine,
 )
-from galton.daemon.engines import pybullet_models as models
 from galton.daemon.engines import pybullet_props as bodyprops
 from galton.daemon.engines import pybullet_rebuild as rebuild
 from galton.daemon.engines import pybullet_spawn as spawning
+from galton.daemon.engines.pybullet_articulated import Articulated
+from galton.daemon.engines.pybullet_calls import engine_call
+from galton.daemon.engines.pybullet_frames import Offset, com_to_frame, frame_to_com
 from galton.daemon.engines.pybullet_models import MODEL_FORMATS
 from galton.daemon.engines.pybullet_params import SPECS, Parameters
 from galton.daemon.engines.pybullet_rebuild import Body as _Body
 from galton.daemon.engines.pybullet_rebuild import Rebuilding
-from galton.daemon.engines.pybullet_shapes import (
-    BodyMaker,
-    ShapeCache,
-    link_masses,
-    load_bodies,
-)
+from galton.daemon.engines.pybullet_robots import Robots
+from galton.daemon.engines.pybullet_shapes import BodyMaker, ShapeCache
 from galton.daemon.params import check_updates
 from galton.protocol import (
     PROTOCOL_VERSION,
@@ -82,27 +84,11 @@ from galton.protocol import (
     InvalidArgumentError,
     NameNotUniqueError,
     NotFoundError,
-    OperationFailedError,
 )
 from galton.protocol.model import BODY_SHAPES, POSE_WIDTH, TWIST_WIDTH
 
-_P = typing.ParamSpec("_P")
-_R = TypeVar("_R")
 
-
-def _engine_call(method: Callable[_P, _R]) -> Callable[_P, _R]:
-    """Report PyBullet's own failures (a lost connection, a refused call) as
-    OperationFailedError, as the Engine contract asks."""
-    @functools.wraps(method)
-    def wrapper(*args: _P.args, **kwargs: _P.kwargs) -> _R:
-        try:
-            return method(*args, **kwargs)
-        except pybullet.error as exc:
-            raise OperationFailedError(f"PyBullet {method.__name__} failed: {exc}") from exc
-    return wrapper
-
-
-class PybulletEngine(Parameters, Rebuilding, Engine):
+class PybulletEngine(Parameters, Rebuilding, Articulated, Engine):
     """Named rigid bodies in a headless PyBullet world."""
 
     name = "pybullet"
@@ -128,6 +114,8 @@ class PybulletEngine(Parameters, Rebuilding, Engine):
         # them again as given, which reading them back (a rotation matrix) cannot promise.
         self._given: dict[str, list[float]] = {}
         self._batches = itertools.count()  # spawn groups and model loads, in order
+        self._robots = Robots()  # models' links, joints, targets, held wrenches
+        self._frames: dict[str, Offset] = {}  # roots whose inertial frame is offset
         self.rebuilds = 0
         self._configure_world()
 
@@ -141,7 +129,9 @@ class PybulletEngine(Parameters, Rebuilding, Engine):
             model_formats=MODEL_FORMATS,
             features=(FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDATE_MASS,
                       FEATURE_UPDATE_FRICTION, FEATURE_UPDATE_RESTITUTION, FEATURE_UPDATE_RGBA,
-                      FEATURE_LOAD_MODEL, FEATURE_STATIC_POSE),
+                      FEATURE_LOAD_MODEL, FEATURE_STATIC_POSE, FEATURE_JOINTS,
+                      FEATURE_JOINT_TARGETS, FEATURE_TARGET_POSITION, FEATURE_TARGET_VELOCITY,
+                      FEATURE_TARGET_EFFORT, FEATURE_WRENCH),
             params={name: spec.describe() for name, spec in SPECS.items()},
         )
 
@@ -153,14 +143,14 @@ class PybulletEngine(Parameters, Rebuilding, Engine):
     def get_params(self) -> dict[str, Any]:
         return {k: list(v) if isinstance(v, tuple) else v for k, v in self._values.items()}
 
-    @_engine_call
+    @engine_call
     def set_params(self, params: dict[str, Any]) -> None:
         clean = check_updates(self.name, SPECS, params)
         self._values.update(clean)
         self._apply(clean)
 
     # -- bodies ---------------------------------------------------------------------------
-    @_engine_call
+    @engine_call
     def spawn(self, groups: Sequence[BodyGroup]) -> None:
         taken = [n for g in groups for n in g.names if n in self._bodies]
         if taken:
@@ -206,7 +196,7 @@ class PybulletEngine(Parameters, Rebuilding, Engine):
         self._set_margin(ids[0], group.shape, size)
         return spawning.books(group, ids, size, mass, (friction, restitution), batch, redo)
 
-    @_engine_call
+    @engine_call
     def delete(self, names: Sequence[str]) -> None:
         bodies = self._lookup(names)
         self._maker.remove([b.uid for b in bodies])
@@ -215,6 +205,8 @@ class PybulletEngine(Parameters, Rebuilding, Engine):
             del self._bodies[name]
             self._held.pop(name, None)
             self._given.pop(name, None)
+            self._frames.pop(name, None)
+        self._robots.forget(names)
         # removeBody keeps about 0.9 kB per body (measured with shared shapes) until
         # resetSimulation: an empty world is reset for free, a fuller one rebuilt now and then.
         if not self._bodies:
@@ -222,7 +214,7 @@ class PybulletEngine(Parameters, Rebuilding, Engine):
         elif rebuild.due(self._removed, self._bodies):
             self._rebuild()
 
-    @_engine_call
+    @engine_call
     def clear(self) -> None:
         """resetSimulation: the only call that frees PyBullet's collision shapes."""
         self._bc.resetSimulation()
@@ -230,11 +222,12 @@ class PybulletEngine(Parameters, Rebuilding, Engine):
         self._held.clear()
         self._given.clear()
         self._removed = 0
+        self._robots, self._frames = Robots(), {}
         self._maker.forget()
         self._shapes.forget()
         self._configure_world()
 
-    @_engine_call
+    @engine_call
     def reset_dynamics(self) -> None:
         """A new world, every body made again in order at the state just set: Bullet keeps
         contact points and their warm-start impulses across a teleport, so a rewound world
@@ -243,7 +236,7 @@ class PybulletEngine(Parameters, Rebuilding, Engine):
         if self._bodies:
             self._rebuild()
 
-    @_engine_call
+    @engine_call
     def update(self, names: Sequence[str], props: BodyProperties) -> None:
         bodies = self._lookup(names)
         if props.mass is not None:
@@ -273,11 +266,31 @@ class PybulletEngine(Parameters, Rebuilding, Engine):
             raise NotFoundError(f"no entity named {exc.args[0]!r} in the PyBullet world") from None
 
     # -- state ----------------------------------------------------------------------------
-    @_engine_call
+    @engine_call
     def get_states(self, names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
+        """Link frames, not PyBullet's centres of mass (pybullet_frames.py)."""
+        links = self._robots.links
+        if links and any(name in links for name in names):
+            return self._states_with_links(names)
         poses, twists = self._read([b.uid for b in self._lookup(names)])
         if self._held:  # right after a rebuild: the states as they were before it
             rebuild.report_held(self._held, names, poses, twists)
+        if self._frames:
+            rows = [k for k, name in enumerate(names) if name in self._frames]
+            if rows:
+                some_poses, some_twists = poses[rows], twists[rows]
+                com_to_frame(some_poses, some_twists, [self._frames[names[k]] for k in rows])
+                poses[rows], twists[rows] = some_poses, some_twists
+        return poses, twists
+
+    def _states_with_links(self, names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
+        links = self._robots.links
+        rows = [k for k, name in enumerate(names) if name in links]
+        others = [k for k, name in enumerate(names) if name not in links]
+        poses, twists = np.zeros((len(names), POSE_WIDTH)), np.zeros((len(names), TWIST_WIDTH))
+        if others:
+            poses[others], twists[others] = self.get_states([names[k] for k in others])
+        self._link_states(names, rows, poses, twists)
         return poses, twists
 
     def _read(self, ids: list[int]) -> tuple[np.ndarray, np.ndarray]:
@@ -288,7 +301,7 @@ class PybulletEngine(Parameters, Rebuilding, Engine):
         twists = np.fromiter(flat(flat(map(self._get_velocity, ids))), float, n * TWIST_WIDTH)
         return poses.reshape(n, POSE_WIDTH), twists.reshape(n, TWIST_WIDTH)
 
-    @_engine_call
+    @engine_call
     def set_states(self, names: Sequence[str], poses: np.ndarray | None,
                    twists: np.ndarray | None) -> None:
         """A pose alone keeps each body's twist, a twist alone its pose, as on every engine:
@@ -296,6 +309,8 @@ class PybulletEngine(Parameters, Rebuilding, Engine):
         ids = [b.uid for b in self._lookup(names)]
         if self._held:
             rebuild.release_held(self._held, names, poses is not None, twists is not None)
+        if self._frames and any(name in self._frames for name in names):
+            poses, twists = self._to_centres(names, poses, twists)
         if poses is not None:
             rows = np.asarray(poses, dtype=float).tolist()
             if twists is None:
@@ -307,15 +322,41 @@ class PybulletEngine(Parameters, Rebuilding, Engine):
             for uid, twist in zip(ids, np.asarray(twists, dtype=float).tolist(), strict=True):
                 self._reset_velocity(uid, twist[:3], twist[3:])
 
-    @_engine_call
+    def _to_centres(self, names: Sequence[str], poses: np.ndarray | None,
+                    twists: np.ndarray | None) -> tuple[np.ndarray | None, np.ndarray | None]:
+        """Link-frame states of offset roots as PyBullet's centre-of-mass ones."""
+        poses = None if poses is None else np.array(poses, dtype=float)
+        twists = None if twists is None else np.array(twists, dtype=float)
+        rows = [k for k, name in enumerate(names) if name in self._frames]
+        offsets = [self._frames[names[k]] for k in rows]
+        turns = poses[rows, 3:] if poses is not None else self.get_states(
+            [names[k] for k in rows])[0][:, 3:]
+        some_poses = None if poses is None else poses[rows]
+        some_twists = None if twists is None else twists[rows]
+        frame_to_com(some_poses, some_twists, offsets, turns)
+        if poses is not None and some_poses is not None:
+            poses[rows] = some_poses
+        if twists is not None and some_twists is not None:
+            twists[rows] = some_twists
+        return poses, twists
+
+    @engine_call
     def step(self, count: int) -> None:
+        """stepSimulation alone, unless targets or wrenches are held: then they are
+        applied before each step (they last one step in PyBullet)."""
         step = self._step
         self._held.clear()
         self._given.clear()
+        if self._robots.busy():
+            actuate, bc, uid_of = self._robots.actuate, self._bc, self._uid_of
+            for _ in range(count):
+                actuate(bc, uid_of)
+                step()
+            return
         for _ in range(count):
             step()
 
-    @_engine_call
+    @engine_call
     def state_within(self, max_position: float, max_speed: float) -> bool:
         """Static bodies cannot move in a step, so only the others are read: a board's
         hundreds of pins cost nothing here. Bullet itself reports no divergence: a ball at
@@ -328,54 +369,27 @@ class PybulletEngine(Parameters, Rebuilding, Engine):
                     and np.abs(poses[:, :3]).max() <= max_position
                     and np.abs(twists).max() <= max_speed)
 
-    @_engine_call
+    @engine_call
     def properties(self, names: Sequence[str]) -> np.ndarray:
         """Spawned bodies from what the engine last gave PyBullet (getDynamicsInfo reports
         a rigid body's restitution as 0); models from PyBullet, the mass summed over links."""
-        rows = [self._properties(body) for body in self._lookup(names)]
+        links = self._robots.links
+        self._lookup([name for name in names if name not in links])  # NotFound for others
+        rows = [self._link_properties(name) if name in links
+                else self._properties(self._bodies[name]) for name in names]
         return np.array(rows, dtype=float).reshape(len(rows), 3)
 
     def _properties(self, body: _Body) -> tuple[float, float, float]:
         return bodyprops.properties(self._bc, body)
 
     # -- models ---------------------------------------------------------------------------
-    @_engine_call
+    @engine_call
     def load_model(self, fmt: str, text: str | None, path: str | None,
-                   prefix: str) -> list[EntityInfo]:
-        """URDF (one body) or MJCF (one body per top-level body, plus one for the world's
-        own geoms). Text is loaded from a temporary file, so relative mesh paths only work
-        when a path is given. A model's pose is its base's centre of mass (PyBullet's)."""
-        source = models.model_text(fmt, text, path)
-        ids = load_bodies(self._bc, self._maker, fmt, source, path)
-        try:
-            return self._adopt_model(fmt, ids, prefix, source, path)
-        except BaseException:
-            self._maker.remove(ids)
-            for name in [n for n, b in self._bodies.items() if b.uid in ids]:
-                del self._bodies[name]
-            raise
-
-    def _adopt_model(self, fmt: str, ids: list[int], prefix: str, text: str,
-                     path: str | None) -> list[EntityInfo]:
-        """Name the loaded bodies, refuse names in use, and register the bodies with what it
-        takes to load them again."""
-        names = models.body_names(self._bc, fmt, ids, prefix, self._bodies)
-        batch, infos = next(self._batches), []
-        for index, (uid, name) in enumerate(zip(ids, names, strict=True)):
-            body = self._adopt_model_body(uid, name, batch)
-            poses, twists = self._read([uid])
-            body.model = model = rebuild.Model(fmt, text, path, index,
-                                               link_masses(self._bc, uid, body.links),
-                                               (poses[0].tolist(), twists[0].tolist()))
-            infos.append(models.entity_info(self._bc, name, body, model))
-        return infos
-
-    def _adopt_model_body(self, uid: int, name: str, batch: int) -> _Body:
-        """Register one loaded body (see pybullet_models.model_body)."""
-        body = models.model_body(self._bc, self._change,
-                                 self._values["pybullet.ccd_swept_sphere_radius"], uid, batch)
-        self._bodies[name] = body
-        return body
+                   prefix: str, *, fixed_base: bool = True) -> list[EntityInfo]:
+        """URDF (one model) or MJCF (one model per top-level body, plus one for the world's
+        own geoms), roots and links (pybullet_articulated.py). Text is loaded from a
+        temporary file, so relative mesh paths only work when a path is given."""
+        return self._load(fmt, text, path, prefix, fixed_base)
 
     # -- life -----------------------------------------------------------------------------
     def close(self) -> None:

@@ -54,6 +54,25 @@ def body_names(bc: BulletClient, fmt: str, ids: list[int], prefix: str,
     return names
 
 
+def link_names(bc: BulletClient, ids: list[int], roots: list[str], prefix: str,
+               taken: Container[str]) -> list[list[str]]:
+    """Each loaded body's link entity names (``prefix`` + the file's link name), made
+    unique among the load's own names; refuse a name in use."""
+    seen = set(roots)
+    names: list[list[str]] = []
+    for uid in ids:
+        links = [unique_name(prefix + bc.getJointInfo(uid, j)[12].decode("utf-8", "replace"),
+                             seen) for j in range(bc.getNumJoints(uid))]
+        seen.update(links)
+        names.append(links)
+    in_use = [n for links in names for n in links if n in taken]
+    if in_use:
+        raise NameNotUniqueError(
+            f"the model's link {in_use[0]!r} has the name of an existing entity; load it "
+            "with another prefix")
+    return names
+
+
 def model_body(bc: BulletClient, change: Callable[..., Any], ccd_radius: float, uid: int,
                batch: int) -> Body:
     """A loaded body's books, with the settings every dynamic body gets."""
@@ -69,4 +88,11 @@ def entity_info(bc: BulletClient, name: str, body: Body, model: Model) -> Entity
     _, friction, restitution = props.properties(bc, body)
     return EntityInfo(name=name, shape="model", static=body.static,
                       mass=sum(m for m, _ in model.links), friction=friction,
-                      restitution=restitution, source="model")
+                      restitution=restitution, source="model", model=name)
+
+
+def link_info(bc: BulletClient, uid: int, link: int, name: str, root: str) -> EntityInfo:
+    """A model's link as the World lists it (never static: it moves with its joint)."""
+    info = bc.getDynamicsInfo(uid, link)
+    return EntityInfo(name=name, shape="link", mass=float(info[0]), friction=float(info[1]),
+                      restitution=float(info[5]), source="model", model=root)

@@ -30,10 +30,11 @@ third of the turned bodies read back a quaternion one or two units in the last p
 old state as what ``get_states`` reports until its state is next set or the world steps
 (the simulation goes on from a pose that differs by rounding only).
 
-Loaded models are loaded again from their text, with the changes ``update`` made since.
-Their joints come back as loaded, at rest, so a rewound model replays its first run too;
-for that reason a world holding a model is not rebuilt to free deleted bodies, where its
-joints would have to be kept as they are: there removeBody's leak stays.
+Loaded models are loaded again from their text, with the changes ``update`` made since,
+their joints set again to the states they had (left as loaded where they are as loaded, so
+that a rewound model replays its first run bit for bit), their targets and held wrenches
+kept (the books are by name). A world holding a model is still not rebuilt to free
+deleted bodies: the contact caches its joints rely on would go; removeBody's leak stays.
 """
 
 from __future__ import annotations
@@ -59,6 +60,8 @@ if TYPE_CHECKING:
     from collections.abc import Callable
     from typing import Any
 
+    from galton.daemon.engines.pybullet_frames import Offset
+    from galton.daemon.engines.pybullet_robots import Robots
     from galton.daemon.engines.pybullet_shapes import BodyMaker
 
 REBUILD_AFTER = 5_000  # bodies removed since the last rebuild, at the least
@@ -79,6 +82,7 @@ class Model:
     links: tuple[Link, ...]  # base first, as loaded: ``update(mass=...)`` scales these
     loaded: State  # the state it was loaded in, as read back
     edits: BodyProperties = field(default_factory=BodyProperties)  # the latest of each
+    fixed_base: bool = False  # a URDF's root welded to the world
 
 
 @dataclass(frozen=True, slots=True)
@@ -252,6 +256,8 @@ class Rebuilding:
     _maker: BodyMaker
     _reset_pose: Callable[..., Any]
     _reset_velocity: Callable[..., Any]
+    _robots: Robots  # models' joints, targets and wrenches: kept, by name, across a rebuild
+    _frames: dict[str, Offset]
     rebuilds: int
 
     if TYPE_CHECKING:
@@ -261,6 +267,7 @@ class Rebuilding:
         def _edit_spawned(self, body: Body, props: BodyProperties) -> None: ...
         def _edit_model(self, body: Body, props: BodyProperties) -> None: ...
         def _adopt_model_body(self, uid: int, name: str, batch: int) -> Body: ...
+        def _uid_of(self, name: str) -> int: ...
 
     def _rebuild(self) -> None:
         """resetSimulation, then every body made again, in the order it was first made, as
@@ -268,12 +275,16 @@ class Rebuilding:
         kept = dict(self._bodies)
         states = read_states(self._bc, kept, self._given, self._held)
         exact = set(self._given)
+        robots, frames = self._robots, self._frames
+        joints = robots.snapshot(self._bc, self._uid_of)
         self.clear()
         for names in batches(kept):
             if kept[names[0]].model is not None:
                 self._reload(names, kept, states)
             else:
                 self._remake(names, kept, states)
+        self._robots, self._frames = robots, frames
+        robots.put_back(self._bc, self._uid_of, joints)
         self._held = settle(self._bc, self._bodies, states, exact)
         self._given = {name: states[name][0] for name in exact}
         self.rebuilds += 1
@@ -303,7 +314,7 @@ class Rebuilding:
         unchanged = first.path is not None and text_of(first.path) == first.text
         try:
             ids = load_bodies(self._bc, self._maker, first.fmt, first.text,
-                              first.path if unchanged else None)
+                              first.path if unchanged else None, first.fixed_base)
         except InvalidArgumentError as exc:  # its meshes gone from beside its file?
             raise OperationFailedError(f"a model could not be loaded again: {exc}") from exc
         wanted = {model.index: name for name, model in models.items()}

@@ -351,15 +351,16 @@ def model_file(fmt: str, text: str | None, path: str | None) -> Iterator[str]:
 
 
 def load_bodies(bc: BulletClient, maker: BodyMaker, fmt: str, text: str,
-                path: str | None) -> list[int]:
-    """Load a URDF or MJCF model (its ``text``, from ``path`` when it came from a file); a
-    model PyBullet refuses leaves no body behind."""
+                path: str | None, fixed_base: bool = False) -> list[int]:
+    """Load a URDF or MJCF model (its ``text``, from ``path`` when it came from a file), a
+    URDF's root welded to the world with ``fixed_base``; a model PyBullet refuses leaves
+    no body behind."""
     check_xml(fmt, text)
     before = maker.known_ids()
     try:
         with model_file(fmt, None if path else text, path) as file_name:
             if fmt == "urdf":
-                ids = [bc.loadURDF(file_name, flags=URDF_FLAGS)]
+                ids = [bc.loadURDF(file_name, useFixedBase=fixed_base, flags=URDF_FLAGS)]
             else:
                 ids = list(bc.loadMJCF(file_name, flags=pybullet.MJCF_COLORS_FROM_FILE))
     except pybullet.error as exc:

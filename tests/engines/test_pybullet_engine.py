@@ -152,7 +152,7 @@ def test_a_pose_alone_keeps_the_twist_and_a_twist_alone_the_pose(
         engine: PybulletEngine) -> None:
     """resetBasePositionAndOrientation zeroes a body's twist; the engine sets it again."""
     engine.spawn([balls(["a"], [0, 0, 1], twists=np.array([[1.0, 0, 2, 0, 3, 0]]))])
-    (arm,) = engine.load_model("urdf", ARM_URDF, None, "m/")
+    arm, _ = engine.load_model("urdf", ARM_URDF, None, "m/", fixed_base=False)
     names = ["a", arm.name]
     engine.set_states([arm.name], None, np.array([[0.5, 0, 0, 0, 0, 0.2]]))
     _, twists = engine.get_states(names)
@@ -298,7 +298,7 @@ def test_properties_are_what_pybullet_simulates(engine: PybulletEngine) -> None:
     engine.spawn([ground(), balls(["plain"], [0, 0, 1]),
                   balls(["own"], [1, 0, 1], mass=3.0, friction=0.9, restitution=0.3),
                   BodyGroup("box", (0.1, 0.2, 0.3), ["box"], poses_at([2, 0, 1]))])
-    (arm,) = engine.load_model("urdf", ARM_URDF, None, "m/")
+    arm, _ = engine.load_model("urdf", ARM_URDF, None, "m/", fixed_base=False)
     names = ["ground", "plain", "own", "box", arm.name]
     ball_mass = 1000 * 4 / 3 * math.pi * RADIUS**3
     np.testing.assert_allclose(engine.properties(names), [
@@ -378,7 +378,7 @@ def test_a_rewound_world_replays_its_first_run(engine: PybulletEngine) -> None:
     engine.spawn(groups)
     engine.update(["s1", "b0"], BodyProperties(mass=0.3, friction=0.9, rgba=(1, 0, 0, 1)))
     engine.delete(["s2"])
-    (arm,) = engine.load_model("urdf", ARM_URDF, None, "m/")
+    arm, _ = engine.load_model("urdf", ARM_URDF, None, "m/", fixed_base=False)
     engine.set_states([arm.name], poses_at([0.3, 0.3, 0.3]), None)
     names, poses, twists = created_states(groups)
     keep = [k for k, name in enumerate(names) if name != "s2"]
@@ -390,6 +390,7 @@ def test_a_rewound_world_replays_its_first_run(engine: PybulletEngine) -> None:
         engine.step(steps)
         states = engine.get_states(names)
         engine.set_states(names, poses, twists)
+        engine.restore_joints()  # as the World's stop does, before the rewind
         engine.reset_dynamics()
         return states
 
@@ -401,13 +402,18 @@ def test_a_rewound_world_replays_its_first_run(engine: PybulletEngine) -> None:
     assert np.abs(first[0][:, :3] - poses[:, :3]).max() > 0.3  # they burst apart
 
 
-def test_a_rewound_model_has_its_joints_back_as_loaded(engine: PybulletEngine) -> None:
-    (arm,) = engine.load_model("urdf", ARM_URDF, None, "m/")
+def test_a_rebuild_keeps_joint_states_and_restore_joints_brings_them_back(
+        engine: PybulletEngine) -> None:
+    arm, _ = engine.load_model("urdf", ARM_URDF, None, "m/", fixed_base=False)
     pose, twist = engine.get_states([arm.name])
     engine.update([arm.name], BodyProperties(mass=5.0, friction=0.3))
-    engine._bc.resetJointState(body_id(engine, arm.name), 0, 0.5, 2.0)
+    engine.set_joint_states(["m/hinge"], np.array([0.5]), np.array([2.0]))
+    engine.reset_dynamics()
+    assert engine.get_joint_states(["m/hinge"])[0].tolist() == [0.5]
+    assert engine.get_joint_states(["m/hinge"])[1].tolist() == [2.0]
     engine.step(10)
     engine.set_states([arm.name], pose, twist)
+    engine.restore_joints()
     engine.reset_dynamics()
     uid = body_id(engine, arm.name)
     assert engine._bc.getJointState(uid, 0)[:2] == (0.0, 0.0)
@@ -417,7 +423,7 @@ def test_a_rewound_model_has_its_joints_back_as_loaded(engine: PybulletEngine) -
 
 def test_a_model_mass_scales_every_link(engine: PybulletEngine) -> None:
     """As MuJoCo does: the whole model weighs what update says, its links in proportion."""
-    (arm,) = engine.load_model("urdf", ARM_URDF, None, "m/")
+    arm, _ = engine.load_model("urdf", ARM_URDF, None, "m/", fixed_base=False)
     uid = body_id(engine, arm.name)
     for mass in (5.0, 1.25):
         engine.update([arm.name], BodyProperties(mass=mass))
@@ -435,7 +441,7 @@ def test_rewinding_an_empty_world_does_nothing(engine: PybulletEngine) -> None:
 # -- models ------------------------------------------------------------------------------
 def test_load_urdf_text(engine: PybulletEngine) -> None:
     engine.spawn([ground()])
-    (info,) = engine.load_model("urdf", TINY_URDF, None, "m1/")
+    (info,) = engine.load_model("urdf", TINY_URDF, None, "m1/", fixed_base=False)
     assert (info.name, info.shape, info.source, info.static) == ("m1/crate", "model", "model",
                                                                  False)
     assert info.mass == pytest.approx(2.0)
@@ -446,10 +452,10 @@ def test_load_urdf_text(engine: PybulletEngine) -> None:
 
 
 def test_a_model_name_in_use_is_refused(engine: PybulletEngine) -> None:
-    engine.load_model("urdf", TINY_URDF, None, "m/")
+    engine.load_model("urdf", TINY_URDF, None, "m/", fixed_base=False)
     before = engine._maker.known_ids()
     with pytest.raises(NameNotUniqueError, match="m/crate"):
-        engine.load_model("urdf", TINY_URDF, None, "m/")
+        engine.load_model("urdf", TINY_URDF, None, "m/", fixed_base=False)
     assert engine._maker.known_ids() == before and list(engine._bodies) == ["m/crate"]
 
 
@@ -545,7 +551,7 @@ def test_churn_rebuilds_every_five_thousand_deleted(engine: PybulletEngine) -> N
 def test_a_world_with_a_model_is_not_rebuilt(engine: PybulletEngine, monkeypatch: Any) -> None:
     monkeypatch.setattr("galton.daemon.engines.pybullet_rebuild.REBUILD_AFTER", 10)
     engine.spawn([ground()])
-    (info,) = engine.load_model("urdf", TINY_URDF, None, "m/")
+    (info,) = engine.load_model("urdf", TINY_URDF, None, "m/", fixed_base=False)
     junk = [f"j{i}" for i in range(20)]
     engine.spawn([balls(junk, grid(20, z=4.0))])
     uid = body_id(engine, info.name)
