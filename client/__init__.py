@@ -9,7 +9,7 @@ from galton.client.discovery import DaemonInfo, discover, discover_at, instances
 from galton.client.embedded import EmbeddedDaemon
 from galton.client.sdk import Client, body_group, boxes, plane, spheres
 from galton.client.telemetry import Subscription, TelemetryStream
-from galton.client.values import Stamp, States
+from galton.client.values import JointStates, Stamp, States
 from galton.protocol import (
     BodyGroup,
     BodyProperties,
@@ -21,6 +21,7 @@ from galton.protocol import (
     GaltonError,
     IncorrectStateError,
     InvalidArgumentError,
+    JointInfo,
     MalformedRequestError,
     NameNotUniqueError,
     NotFoundError,
@@ -52,6 +53,8 @@ __all__ = [
     "GaltonError",
     "IncorrectStateError",
     "InvalidArgumentError",
+    "JointInfo",
+    "JointStates",
     "MalformedRequestError",
     "NameNotUniqueError",
     "NotFoundError",

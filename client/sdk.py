@@ -5,6 +5,9 @@
 ...     sim.step(500)
 ...     states = sim.get_states(["ball"])
 
+Joints and wrenches (issue 24) take numpy arrays or scalars; their wire arguments are built
+in ``galton.client.sdk_joints``.
+
 A Client holds no per-request state: each result is built from its own reply (stamps
 included), so one Client may serve several threads. Timeouts come from the operation
 registry (``galton.protocol.operations``) unless the caller names one.
@@ -12,13 +15,18 @@ registry (``galton.protocol.operations``) unless the caller names one.
 
 from __future__ import annotations
 
+import builtins
+import os
 import uuid
 from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
 import zenoh
+from numpy.typing import ArrayLike
 
+from galton.client import sdk_joints
+from galton.client.sdk_joints import SearchPath
 from galton.client.session import (
     Declared,
     checked_timeout,
@@ -28,7 +36,7 @@ from galton.client.session import (
     undeclare,
 )
 from galton.client.telemetry import Subscription, TelemetryStream, subscribe_events
-from galton.client.values import Stamp, States
+from galton.client.values import JointStates, Stamp, States
 from galton.protocol import (
     POSE_WIDTH,
     TWIST_WIDTH,
@@ -36,6 +44,7 @@ from galton.protocol import (
     BodyProperties,
     Capabilities,
     EntityInfo,
+    JointInfo,
     Keys,
     Reply,
     SimStatus,
@@ -48,8 +57,8 @@ from galton.protocol.operations import OPERATIONS
 
 DEFAULT_TIMEOUT_S = 5.0
 
-__all__ = ["DEFAULT_TIMEOUT_S", "Client", "Stamp", "States", "body_group", "boxes", "plane",
-           "spheres"]
+__all__ = ["DEFAULT_TIMEOUT_S", "Client", "JointStates", "Stamp", "States", "body_group",
+           "boxes", "plane", "spheres"]
 
 
 class Client:
@@ -172,11 +181,31 @@ class Client:
         return States.from_reply(
             self._ok("step", {"count": count, "read": list(names)}, timeout))
 
+    def step_and_read_joints(self, count: int, joints: Sequence[str],
+                             timeout: float | None = None) -> JointStates:
+        """Advance ``count`` steps and return these joints' states after the last one: with
+        ``set_joint_targets`` before it, a lockstep control cycle."""
+        return JointStates.from_step_reply(
+            self._ok("step", sdk_joints.step_args(count, None, joints), timeout))
+
+    def step_and_read_both(self, count: int, names: Sequence[str], joints: Sequence[str],
+                           timeout: float | None = None) -> tuple[States, JointStates]:
+        """Advance ``count`` steps; return bodies' (or links') and joints' states after the
+        last one, both from one reply (one round trip)."""
+        reply = self._ok("step", sdk_joints.step_args(count, names, joints), timeout)
+        return States.from_reply(reply), JointStates.from_step_reply(reply)
+
     def run_until_and_read(self, sim_time: float, names: Sequence[str],
                            timeout: float | None = None) -> States:
         """``run_until`` and ``get_states(names)`` in one round trip."""
         return States.from_reply(
             self._ok("run_until", {"sim_time": sim_time, "read": list(names)}, timeout))
+
+    def run_until_and_read_joints(self, sim_time: float, joints: Sequence[str],
+                                  timeout: float | None = None) -> JointStates:
+        """``run_until`` and ``get_joint_states(joints)`` in one round trip."""
+        return JointStates.from_step_reply(
+            self._ok("run_until", {"sim_time": sim_time, "read_joints": list(joints)}, timeout))
 
     def run_until_rest(self, sim_time: float, names: Sequence[str], speed: float,
                        every: float, timeout: float | None = None) -> tuple[States, bool]:
@@ -211,10 +240,16 @@ class Client:
         args = {"groups": [g.to_wire() for g in groups]}
         return _names(self.call("spawn", args, timeout))
 
-    def load_model(self, fmt: str, *, text: str | None = None, path: str | None = None,
-                   prefix: str = "") -> list[str]:
-        args = {"format": fmt, "text": text, "path": path, "prefix": prefix}
-        return _names(self.call("load_model", {k: v for k, v in args.items() if v is not None}))
+    def load_model(self, fmt: str, *, text: str | None = None,
+                   path: str | os.PathLike[str] | None = None, prefix: str = "",
+                   fixed_base: bool | None = None,
+                   search_path: SearchPath | None = None) -> list[str]:
+        """Load an MJCF or URDF model from ``text`` or a ``path`` on the daemon's machine;
+        return its entities, each root before its links. ``fixed_base`` (URDF; daemon's
+        default True) welds the root to the world; ``search_path``: folders (a list, or one
+        str joined by ':') where the files the model names are looked for."""
+        return _names(self.call("load_model", sdk_joints.load_model_args(
+            fmt, text, path, prefix, fixed_base, search_path)))
 
     def list(self, name: str | None = None, tag: str | None = None,
              kind: str | None = None) -> list[EntityInfo]:
@@ -244,6 +279,47 @@ class Client:
 
     def delete(self, names: Sequence[str]) -> Stamp:
         return Stamp.of(self._ok("delete", {"names": list(names)}))
+
+    # -- joints and wrenches ------------------------------------------------------------
+    def joints(self, model: str | None = None,
+               names: Sequence[str] | None = None) -> builtins.list[JointInfo]:
+        """Every joint of every loaded model, or of one ``model`` (its root entity), or
+        these ``names``; in load order."""
+        result = self.call("joints", sdk_joints.joints_args(model, names))
+        return [JointInfo.from_wire(joint) for joint in result["joints"]]
+
+    def get_joint_states(self, names: Sequence[str] | None = None) -> JointStates:
+        """Positions, velocities, efforts of these 1-DOF joints (all when None)."""
+        return JointStates.from_reply(
+            self._ok("get_joint_states", sdk_joints.names_arg(names)))
+
+    def set_joint_states(self, names: Sequence[str], positions: ArrayLike,
+                         velocities: ArrayLike | None = None) -> Stamp:
+        """Teleport joints between steps (velocities None: each keeps its own)."""
+        return Stamp.of(self._ok("set_joint_states", sdk_joints.set_joint_states_args(
+            names, positions, velocities)))
+
+    def set_joint_targets(self, names: Sequence[str], mode: str,
+                          targets: ArrayLike | None = None, kp: ArrayLike | None = None,
+                          kd: ArrayLike | None = None,
+                          max_effort: ArrayLike | None = None) -> Stamp:
+        """Hold a target (mode "position", "velocity", "effort" or "none") on these joints,
+        applied every step by the engine until changed. Each of ``targets``, ``kp``, ``kd``
+        and ``max_effort`` is one value per joint or a scalar for all."""
+        return Stamp.of(self._ok("set_joint_targets", sdk_joints.set_joint_targets_args(
+            names, mode, targets, kp, kd, max_effort)))
+
+    def apply_wrench(self, names: Sequence[str], wrenches: ArrayLike,
+                     points: ArrayLike | None = None, duration: float | None = None) -> Stamp:
+        """Hold a world-frame wrench (rows fx fy fz tx ty tz) on bodies or links, at
+        ``points`` (rows x y z, world frame; None: each centre of mass), for ``duration``
+        seconds or until cleared. One row alone acts on every body."""
+        return Stamp.of(self._ok("apply_wrench", sdk_joints.apply_wrench_args(
+            names, wrenches, points, duration)))
+
+    def clear_wrenches(self, names: Sequence[str] | None = None) -> Stamp:
+        """Remove the wrenches of these bodies (every wrench when None)."""
+        return Stamp.of(self._ok("clear_wrenches", sdk_joints.names_arg(names)))
 
     # -- streams ------------------------------------------------------------------------
     def telemetry(self, timeout: float | None = None) -> TelemetryStream:
