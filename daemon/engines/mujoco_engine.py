@@ -39,14 +39,20 @@ import numpy as np
 
 from galton.daemon.engine import (
     FEATURE_DELETE,
+    FEATURE_JOINT_TARGETS,
+    FEATURE_JOINTS,
     FEATURE_LOAD_MODEL,
     FEATURE_SET_STATE,
     FEATURE_SPAWN,
     FEATURE_STATIC_POSE,
+    FEATURE_TARGET_EFFORT,
+    FEATURE_TARGET_POSITION,
+    FEATURE_TARGET_VELOCITY,
     FEATURE_UPDATE_FRICTION,
     FEATURE_UPDATE_MASS,
     FEATURE_UPDATE_RESTITUTION,
     FEATURE_UPDATE_RGBA,
+    FEATURE_WRENCH,
     Engine,
 )
 from galton.daemon.engines import mujoco_models as models
@@ -58,7 +64,9 @@ from galton.daemon.engines import mujoco_spec as ms
 from galton.daemon.engines import mujoco_state as mst
 from galton.daemon.engines.mujoco_balance import BalanceGuard
 from galton.daemon.engines.mujoco_entity import MUJOCO_ERRORS, Entity, mujoco_error
+from galton.daemon.engines.mujoco_joints import Joints
 from galton.daemon.engines.mujoco_state import FREE, JOINTED, MOCAP, STATIC
+from galton.daemon.engines.mujoco_wrench import Wrenches
 from galton.daemon.params import check_updates
 from galton.protocol import (
     BODY_SHAPES,
@@ -68,13 +76,16 @@ from galton.protocol import (
     Capabilities,
     EntityInfo,
     InvalidArgumentError,
+    JointInfo,
     NotFoundError,
     OperationFailedError,
 )
 
 FEATURES = (FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDATE_MASS,
             FEATURE_UPDATE_FRICTION, FEATURE_UPDATE_RESTITUTION, FEATURE_UPDATE_RGBA,
-            FEATURE_LOAD_MODEL, FEATURE_STATIC_POSE)
+            FEATURE_LOAD_MODEL, FEATURE_STATIC_POSE, FEATURE_JOINTS, FEATURE_JOINT_TARGETS,
+            FEATURE_TARGET_POSITION, FEATURE_TARGET_VELOCITY, FEATURE_TARGET_EFFORT,
+            FEATURE_WRENCH)
 # Contacts at which MuJoCo's worker threads start helping, and below which they stop.
 WORKERS_ON_CONTACTS = 400
 WORKERS_OFF_CONTACTS = 200
@@ -110,7 +121,9 @@ class MujocoEngine(Engine):
         self._litter: list[Any] = []  # empty frames, deleted with the next bodies removed
         self._builders = mp.Builders()
         self._spec.memory = ms.arena_bytes(1, 0)
-        self._parts: set[str] = set()  # names of loaded models' inner bodies
+        self._parts: set[str] = set()  # names of loaded models' links
+        self._joints = Joints()
+        self._wrenches = Wrenches()
         self._models = 0  # model entities alive
         self._broken = False
         ms.write_options(self._spec.option, self._values)
@@ -166,6 +179,9 @@ class MujocoEngine(Engine):
         self._ids = {name: e.body.id for name, e in self._entities.items()}
         self._watch: np.ndarray | None = None
         self._warnings = self._data.warning.number
+        self._joints.reindex(self._model)
+        self._joints.apply(self._model, self._data)
+        self._wrenches.apply(self._data, self._ids)
 
     def _balance_guard(self) -> BalanceGuard | None:
         """A guard for the compiled model, if wanted (see mujoco_balance)."""
@@ -201,7 +217,7 @@ class MujocoEngine(Engine):
         return Capabilities(
             engine=self.name, engine_version=mujoco.__version__,
             protocol_version=PROTOCOL_VERSION, body_shapes=tuple(BODY_SHAPES),
-            model_formats=("mjcf",), features=FEATURES,
+            model_formats=models.FORMATS, features=FEATURES,
             params={n: p.describe() for n, p in ms.PARAMS.items()})
 
     @property
@@ -242,8 +258,8 @@ class MujocoEngine(Engine):
         adding.spawn(self, groups)
 
     def load_model(self, fmt: str, text: str | None, path: str | None,
-                   prefix: str) -> list[EntityInfo]:
-        return models.load_model(self, fmt, text, path, prefix)
+                   prefix: str, *, fixed_base: bool = True) -> list[EntityInfo]:
+        return models.load_model(self, fmt, text, path, prefix, fixed_base)
 
     def delete(self, names: Sequence[str]) -> None:
         removal.delete(self, names)
@@ -359,6 +375,47 @@ class MujocoEngine(Engine):
         if self._balance is not None:
             self._balance.release_all(self._model)
             self._balance = self._balance_guard()
+
+    # -- Engine: joints and wrenches (mujoco_joints, mujoco_wrench) ------------------------
+    def joints(self) -> list[JointInfo]:
+        return self._joints.describe()
+
+    def get_joint_states(self, names: Sequence[str]
+                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        return self._joints.read(self._data, names)
+
+    def set_joint_states(self, names: Sequence[str], positions: np.ndarray,
+                         velocities: np.ndarray | None) -> None:
+        """Written into qpos/qvel; a model's trees never sleep (their actuators keep them
+        awake), so nothing needs waking."""
+        self._joints.write(self._data, names, positions, velocities)
+
+    def set_joint_targets(self, names: Sequence[str], mode: str, targets: np.ndarray,
+                          kp: np.ndarray, kd: np.ndarray, max_effort: np.ndarray) -> None:
+        self._joints.hold(self._model, self._data, names, mode, targets, kp, kd, max_effort)
+
+    def set_wrenches(self, names: Sequence[str], wrenches: np.ndarray,
+                     points: np.ndarray | None) -> None:
+        """The centres of mass are computed from the current state (the data's were taken
+        before the last step's integration)."""
+        ids = self._body_ids(names)
+        if points is not None:
+            mujoco.mj_kinematics(self._model, self._data)
+        self._wrenches.hold(self._data, names, ids, wrenches, points)
+        self._wrenches.apply(self._data, self._ids)
+
+    def clear_wrenches(self, names: Sequence[str] | None) -> None:
+        if names is not None:
+            self._body_ids(names)
+        self._wrenches.drop(names)
+        self._wrenches.apply(self._data, self._ids)
+
+    def restore_joints(self) -> None:
+        roots = np.fromiter((self._ids[n] for n in self._joints.infos), dtype=np.int64,
+                            count=len(self._joints.infos))
+        self._joints.restore(self._model, self._data, roots)
+        self._wrenches.drop(None)
+        self._wrenches.apply(self._data, self._ids)
 
     def close(self) -> None:
         self._entities.clear()

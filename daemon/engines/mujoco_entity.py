@@ -26,12 +26,13 @@ class Entity:
 
     body: Any
     static: bool
-    source: str = "spawn"
+    source: str = "spawn"  # "spawn", "model" (a model's root) or "link"
     friction: float | None = None
     restitution: float | None = None
     initial_pose: np.ndarray | None = None
     key: mp.Key | None = None  # its pool kind while its compiled values are still that kind's
-    parts: tuple[str, ...] = ()  # a model entity's inner bodies' names (taken while it lives)
+    parts: tuple[str, ...] = ()  # a model root's links' names (taken while it lives)
+    model: str | None = None  # a model root's or link's root entity
 
     def geoms(self) -> list[Any]:
         return [self.body.first_geom()] if self.source == "spawn" else \

@@ -1,7 +1,9 @@
-"""Loading MJCF models into the MuJoCo world, as functions of the engine.
+"""Loading MJCF and URDF models into the MuJoCo world, as functions of the engine.
 
-Every top-level body of the model becomes an entity; its inner bodies' names stay taken
-while it lives. Attaching cannot be undone, so it is tried on a copy of the spec first.
+Every top-level body of the model is a model: its root becomes an entity, and so does every
+other body of its subtree (a link). The parsed model is rigged first (``mujoco_rig``: names,
+a floating base, one actuator per joint); its joints are described once compiled
+(``mujoco_joints``). Attaching cannot be undone, so it is tried on a copy of the spec first.
 """
 
 from __future__ import annotations
@@ -9,13 +11,17 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
+import mujoco
 import numpy as np
 
+from galton.daemon.engines import mujoco_joints as mj
 from galton.daemon.engines import mujoco_pool as mp
 from galton.daemon.engines import mujoco_spec as ms
 from galton.daemon.engines import mujoco_state as mst
 from galton.daemon.engines.mujoco_entity import MUJOCO_ERRORS, WORLD, Entity, mujoco_error
+from galton.daemon.engines.mujoco_rig import Facts, rig
 from galton.daemon.engines.mujoco_state import JOINTED
+from galton.daemon.engines.mujoco_urdf import parse_urdf
 from galton.protocol import (
     EntityInfo,
     FeatureUnsupportedError,
@@ -26,40 +32,71 @@ from galton.protocol import (
 if TYPE_CHECKING:
     from galton.daemon.engines.mujoco_engine import MujocoEngine
 
+FORMATS = ("mjcf", "urdf")
+
 
 def load_model(engine: MujocoEngine, fmt: str, text: str | None, path: str | None,
-               prefix: str) -> list[EntityInfo]:
-    """Attach an MJCF model's bodies to the spec, tried on a copy first; one recompile."""
-    if fmt != "mjcf":
-        raise FeatureUnsupportedError(f"model format {fmt!r} is not supported by MuJoCo "
-                                      "here; supported: mjcf")
-    child = ms.parse_mjcf(text, path)
+               prefix: str, fixed_base: bool = True) -> list[EntityInfo]:
+    """Attach a model's bodies to the spec, tried on a copy first; one recompile. Each
+    top-level body is a model: its root entity, then one entity per link of its subtree."""
+    child, facts = parse(fmt, text, path, fixed_base)
     tops, parts = ms.model_names(child, prefix)
     check_model_names(engine, [*tops, *(n for names in parts for n in names)])
+    what = f"the {fmt.upper()} model does not fit this world"
     try:
         trial = engine._spec.copy()  # attaching cannot be undone: try it on a copy first
         trial.attach(child.copy(), prefix=prefix, frame=trial.worldbody.add_frame())
         size = trial.compile()
     except MUJOCO_ERRORS as exc:
-        raise mujoco_error(exc, "the MJCF model does not fit this world") from exc
+        raise mujoco_error(exc, what) from exc
     frame = engine._spec.worldbody.add_frame()
     try:
         engine._spec.attach(child, prefix=prefix, frame=frame)
         for name, inner in zip(tops, parts, strict=True):
             body = engine._spec.body(name)
             engine._entities[name] = Entity(body, static=bool(body.mocap), source="model",
-                                            parts=inner)
+                                            parts=inner, model=name)
+            for link in inner:
+                engine._entities[link] = Entity(engine._spec.body(link), static=False,
+                                                source="link", model=name)
         engine._recompile(size.nbody, size.nv)
     except (GaltonError, *MUJOCO_ERRORS) as exc:
-        for name in tops:
+        for name in [*tops, *(n for names in parts for n in names)]:
             engine._entities.pop(name, None)
         mp.remove_frame(engine._spec, frame)  # with the model's bodies and what uses them
         if isinstance(exc, GaltonError):
             raise
-        raise mujoco_error(exc, "the MJCF model does not fit this world") from exc
+        raise mujoco_error(exc, what) from exc
     engine._models += len(tops)
     engine._parts.update(n for names in parts for n in names)
-    return [model_info(engine, name) for name in tops]
+    infos: list[EntityInfo] = []
+    for name in tops:
+        root = engine._ids[name]
+        engine._joints.add_model(name, mj.describe_model(engine._model, root, name, prefix,
+                                                         facts))
+        infos.append(model_info(engine, name))
+        infos += [link_info(engine, int(b), name)
+                  for b in np.flatnonzero(engine._model.body_rootid == root)[1:]]
+    return infos
+
+
+def parse(fmt: str, text: str | None, path: str | None,
+          fixed_base: bool) -> tuple[mujoco.MjSpec, Facts]:
+    """A model parsed and rigged (mujoco_rig); URDF's base floats unless ``fixed_base``,
+    MJCF's is as the file says."""
+    if fmt == "mjcf":
+        child, facts = ms.parse_mjcf(text, path), Facts()
+    elif fmt == "urdf":
+        child, facts = parse_urdf(text, path)
+    else:
+        raise FeatureUnsupportedError(f"model format {fmt!r} is not supported by MuJoCo "
+                                      f"here; supported: {', '.join(FORMATS)}")
+    try:
+        rig(child, facts, float_base=fmt == "urdf" and not fixed_base)
+        ms.ready_tops(child, fmt)
+    except MUJOCO_ERRORS as exc:
+        raise mujoco_error(exc, f"the {fmt.upper()} model cannot be rigged") from exc
+    return child, facts
 
 
 def check_model_names(engine: MujocoEngine, names: Sequence[str]) -> None:
@@ -80,4 +117,11 @@ def model_info(engine: MujocoEngine, name: str) -> EntityInfo:
         poses, _ = mst.jointed_states(engine._model, engine._data, np.array([bid]))
         entity.initial_pose = poses[0]
     return EntityInfo(name=name, shape="model", static=entity.static,
-                      mass=float(engine._model.body_subtreemass[bid]), source="model")
+                      mass=float(engine._model.body_subtreemass[bid]), source="model",
+                      model=name)
+
+
+def link_info(engine: MujocoEngine, bid: int, model: str) -> EntityInfo:
+    """A model's link as the World lists it (its own mass)."""
+    return EntityInfo(name=engine._model.body(bid).name, shape="link",
+                      mass=float(engine._model.body_mass[bid]), source="model", model=model)

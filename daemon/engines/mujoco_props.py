@@ -90,15 +90,16 @@ def apply_contacts(engine: MujocoEngine, names: Sequence[str]) -> None:
 
 
 def properties(engine: MujocoEngine, names: Sequence[str]) -> np.ndarray:
-    """Mass from the compiled model (a model's subtree; NaN when static), the first geom's
-    sliding friction, and the nominal restitution: the one given, the default a spawned
-    body follows, NaN for a model's own contacts (MuJoCo has no restitution as such)."""
+    """Mass from the compiled model (a model root's subtree, a link's own; NaN when
+    static), the first geom's sliding friction (a link's own geoms only), and the nominal
+    restitution: the one given, the default a spawned body follows, NaN for a model's own
+    contacts (MuJoCo has no restitution as such)."""
     m, ids = engine._model, engine._body_ids(names)
     entities = [engine._entities[n] for n in names]
-    spawned = np.array([e.source == "spawn" for e in entities], dtype=bool)
-    mass = np.where(spawned, m.body_mass[ids], m.body_subtreemass[ids])
+    alone = np.array([e.source != "model" for e in entities], dtype=bool)  # no subtree
+    mass = np.where(alone, m.body_mass[ids], m.body_subtreemass[ids])
     mass[[e.static for e in entities]] = np.nan
-    geoms = mst.first_geoms(m, ids, spawned)
+    geoms = mst.first_geoms(m, ids, alone)
     friction = np.where(geoms >= 0, m.geom_friction[np.maximum(geoms, 0), 0], np.nan)
     values = [restitution(e, engine._values) for e in entities]
     return np.column_stack([mass, friction, np.array(values, dtype=float)])

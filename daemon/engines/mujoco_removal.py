@@ -16,7 +16,7 @@ import numpy as np
 
 from galton.daemon.engines import mujoco_pool as mp
 from galton.daemon.engines.mujoco_entity import MUJOCO_ERRORS, Entity, mujoco_error
-from galton.protocol import GaltonError, OperationFailedError
+from galton.protocol import GaltonError, InvalidArgumentError, OperationFailedError
 
 if TYPE_CHECKING:
     from galton.daemon.engines.mujoco_engine import MujocoEngine
@@ -27,6 +27,10 @@ def delete(engine: MujocoEngine, names: Sequence[str]) -> None:
     they all fit); the others leave the spec, and one recompile follows."""
     ids = engine._body_ids(names)
     entities = [engine._entities[n] for n in names]
+    for name, entity in zip(names, entities, strict=True):
+        if entity.source == "link":
+            raise InvalidArgumentError(f"entity {name!r} is a link of the model "
+                                       f"{entity.model!r}: delete the model")
     parked, removed = engine._pool.split(entities)
     if removed and engine._models:
         try_removing(engine._spec, removed)
@@ -47,6 +51,7 @@ def delete(engine: MujocoEngine, names: Sequence[str]) -> None:
         if engine._balance is not None:
             engine._balance.forget(engine._model, engine._model.body_treeid[park])
     mp.park_arrays(engine._model, engine._data, engine._index, park)
+    engine._wrenches.apply(engine._data, engine._ids)
 
 
 def clear(engine: MujocoEngine) -> None:
@@ -54,6 +59,7 @@ def clear(engine: MujocoEngine) -> None:
     engine._restart_looks()  # held balls get their sleep policy back: the model may stay
     entities = list(engine._entities.values())
     engine._entities.clear()
+    engine._wrenches.drop(None)
     engine._diverged = False
     if engine._models or engine._broken:
         engine._build_empty()  # a model may bring more than bodies: start afresh
@@ -82,9 +88,13 @@ def put_away(engine: MujocoEngine, parked: Sequence[Entity],
 
 
 def forget(engine: MujocoEngine, name: str, entity: Entity) -> None:
-    """Strike an entity from the engine's books."""
-    del engine._entities[name]
-    del engine._ids[name]
+    """Strike an entity (with a model's links, joints and targets) from the engine's
+    books, and its wrenches."""
+    for gone in (name, *entity.parts):
+        del engine._entities[gone]
+        del engine._ids[gone]
+    engine._wrenches.drop([name, *entity.parts])
+    engine._joints.forget_model(name)
     engine._watch = None
     engine._parts.difference_update(entity.parts)
     engine._models -= entity.source == "model"

@@ -326,7 +326,8 @@ def arena_bytes(nbody: int, nv: int) -> int:
 
 # -- loaded models -----------------------------------------------------------------------
 def parse_mjcf(text: str | None, path: str | None) -> mujoco.MjSpec:
-    """Parse an MJCF model; its top-level bodies get names and, when jointless, mocap."""
+    """Parse an MJCF model (its top-level bodies named and jointless ones made mocap by
+    ``ready_tops``)."""
     if (text is None) == (path is None):
         raise InvalidArgumentError("give the MJCF model as exactly one of text and path")
     try:
@@ -334,21 +335,26 @@ def parse_mjcf(text: str | None, path: str | None) -> mujoco.MjSpec:
             else mujoco.MjSpec.from_file(str(path))
     except ValueError as exc:
         raise InvalidArgumentError(f"the MJCF model does not parse: {exc}") from exc
+    return child
+
+
+def ready_tops(child: mujoco.MjSpec, fmt: str) -> None:
+    """Refuse geoms of the world itself; name the top-level bodies, and make jointless ones
+    mocap (a fixed base the World can still move)."""
     if child.worldbody.geoms:
         raise InvalidArgumentError(
-            "the MJCF model has geoms directly in <worldbody>; they would belong to no entity: "
-            "put them in a <body> (or spawn a plane for the ground)")
+            f"the {fmt.upper()} model has geoms directly in its world; they would belong "
+            "to no entity: put them in a body (or spawn a plane for the ground)")
     for i, body in enumerate(child.worldbody.bodies):
         body.name = body.name or f"body{i}"
         if not body.joints and not body.mocap:
             body.mocap = True
-    return child
 
 
 def model_names(child: mujoco.MjSpec, prefix: str) -> tuple[list[str], list[tuple[str, ...]]]:
     """The names a parsed model's bodies take once attached with this prefix: its top-level
-    bodies (the entities), and the named bodies inside each."""
+    bodies (the entities), and the bodies inside each (its links), in MuJoCo's order."""
     tops = child.worldbody.bodies
-    parts = [tuple(prefix + b.name for b in top.find_all(mujoco.mjtObj.mjOBJ_BODY) if b.name)
+    parts = [tuple(prefix + b.name for b in top.find_all(mujoco.mjtObj.mjOBJ_BODY))
              for top in tops]
     return [prefix + top.name for top in tops], parts

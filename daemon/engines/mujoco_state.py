@@ -87,15 +87,18 @@ class StateIndex:
 
 def jointed_states(m: mujoco.MjModel, d: mujoco.MjData,
                    ids: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Pose and world twist of bodies held by joints other than a free one."""
+    """Pose and world twist of the frames of bodies held by joints other than a free one
+    (a link's frame: its origin, not its centre of mass).
+
+    MuJoCo's cvel is a body's (angular, linear) velocity at its tree's centre of mass; the
+    frame origin's linear velocity is v + w x (origin - that centre), as mj_objectVelocity
+    computes it for one body."""
     mujoco.mj_kinematics(m, d)
     mujoco.mj_comPos(m, d)
     mujoco.mj_comVel(m, d)
-    twists = np.empty((len(ids), 6))
-    velocity = np.empty(6)
-    for row, bid in enumerate(ids):
-        mujoco.mj_objectVelocity(m, d, mujoco.mjtObj.mjOBJ_BODY, int(bid), velocity, 0)
-        twists[row] = np.concatenate([velocity[3:], velocity[:3]])
+    spin, linear = d.cvel[ids, :3], d.cvel[ids, 3:]
+    offset = d.xpos[ids] - d.subtree_com[m.body_rootid[ids]]
+    twists = np.hstack([linear + np.cross(spin, offset), spin])
     return np.hstack([d.xpos[ids], to_xyzw(d.xquat[ids])]), twists
 
 

@@ -79,7 +79,7 @@ def engine() -> MujocoEngine:
 def test_capabilities_describe_the_engine(engine: MujocoEngine) -> None:
     caps = engine.capabilities()
     assert caps.engine == "mujoco" and caps.engine_version
-    assert set(caps.body_shapes) == set(BODY_SHAPES) and caps.model_formats == ("mjcf",)
+    assert set(caps.body_shapes) == set(BODY_SHAPES) and caps.model_formats == ("mjcf", "urdf")
     assert {FEATURE_LOAD_MODEL, FEATURE_STATIC_POSE} <= set(caps.features)
     assert caps.params["timestep"]["default"] == DEFAULT_STEP
     assert set(caps.params) == set(engine.get_params())
@@ -277,12 +277,16 @@ def test_params_are_all_or_none(engine: MujocoEngine) -> None:
     assert engine.timestep == DEFAULT_STEP
 
 
-def test_load_model_makes_top_level_bodies_entities(engine: MujocoEngine) -> None:
+def test_load_model_makes_top_level_bodies_models_and_inner_ones_links(
+        engine: MujocoEngine) -> None:
     engine.spawn([ground()])
     infos = engine.load_model("mjcf", ROBOT, None, "r1/")
-    assert [(i.name, i.static, i.source, i.shape) for i in infos] == [
-        ("r1/base", False, "model", "model"), ("r1/post", True, "model", "model"),
-        ("r1/pendulum", False, "model", "model")]
+    assert [(i.name, i.static, i.source, i.shape, i.model) for i in infos] == [
+        ("r1/base", False, "model", "model", "r1/base"),
+        ("r1/arm", False, "model", "link", "r1/base"),
+        ("r1/post", True, "model", "model", "r1/post"),
+        ("r1/pendulum", False, "model", "model", "r1/pendulum")]
+    infos = [i for i in infos if i.shape == "model"]
     poses, _ = engine.get_states([i.name for i in infos])
     np.testing.assert_allclose(poses[:, :3], [[0, 0, 1], [1, 0, 0.5], [-1, 0, 1]])
     engine.load_model("mjcf", ROBOT, None, "r2/")
@@ -312,7 +316,7 @@ def test_a_broken_model_changes_nothing(engine: MujocoEngine, tmp_path: Path) ->
     engine.load_model("mjcf", ROBOT, None, "x/")
     with pytest.raises(NameNotUniqueError, match="x/base"):
         engine.load_model("mjcf", ROBOT, None, "x/")
-    with pytest.raises(InvalidArgumentError, match="x/arm"):
+    with pytest.raises(NameNotUniqueError, match="x/arm"):
         engine.spawn([ball("fine"), ball("x/arm")])
     with pytest.raises(NotFoundError):
         engine.get_states(["fine"])
@@ -327,7 +331,7 @@ def test_a_broken_model_changes_nothing(engine: MujocoEngine, tmp_path: Path) ->
 def test_a_model_loads_from_a_path(engine: MujocoEngine, tmp_path: Path) -> None:
     path = tmp_path / "robot.xml"
     path.write_text(ROBOT)
-    assert len(engine.load_model("mjcf", None, str(path), "p/")) == 3
+    assert len(engine.load_model("mjcf", None, str(path), "p/")) == 4
 
 
 def test_divergence_is_reported_logged_and_recoverable(engine: MujocoEngine,
@@ -518,8 +522,8 @@ def test_a_model_body_with_a_taken_name_is_refused(engine: MujocoEngine) -> None
         '"pendulum"', '"pendulum2"').replace('"post"', '"arm"')  # "r/arm": r's inner arm
     with pytest.raises(NameNotUniqueError, match="r/arm"):
         engine.load_model("mjcf", clash, None, "r/")
-    with pytest.raises(InvalidArgumentError, match="r/arm"):
-        engine.spawn([ball("r/arm")])  # an inner body, no entity of the World's
+    with pytest.raises(NameNotUniqueError, match="r/arm"):
+        engine.spawn([ball("r/arm")])  # a link
     engine.delete(["r/base"])  # its arm goes with it
     engine.spawn([ball("r/arm")])
 
@@ -544,7 +548,7 @@ def test_any_printable_prefix_loads_or_is_refused_with_a_typed_error(
             infos = engine.load_model("mjcf", ROBOT, None, prefix)
         except GaltonError:
             continue
-        engine.delete([info.name for info in infos])
+        engine.delete([info.name for info in infos if info.shape == "model"])
     for got, want in zip(engine.get_states(["keep"]), before, strict=True):
         np.testing.assert_array_equal(got, want)
 

@@ -1,0 +1,96 @@
+"""Parsing URDF for the MuJoCo world, keeping every link and what MuJoCo drops of the joints.
+
+MuJoCo reads URDF itself; told (a ``<mujoco><compiler>`` element written into the text)
+not to fuse fixed-joint links away, to keep visual geoms (as non-colliding group-1 geoms)
+and to keep mesh paths as given (the daemon makes them absolute). What MuJoCo does not keep
+is read from the XML here: the joints' effort and velocity limits, and the fixed joints'
+names. A link named ``world`` is MuJoCo's world body, as in ROS: the links jointed to it
+become the model's roots.
+"""
+
+from __future__ import annotations
+
+import os
+import xml.etree.ElementTree as ET
+
+import mujoco
+
+from galton.daemon.engines.mujoco_rig import Facts
+from galton.protocol import InvalidArgumentError
+
+COMPILER = {"fusestatic": "false", "discardvisual": "false", "strippath": "false",
+            "autolimits": "true"}
+
+
+def parse_urdf(text: str | None, path: str | None) -> tuple[mujoco.MjSpec, Facts]:
+    """A URDF model as a spec with every link a body, and the facts MuJoCo drops."""
+    if (text is None) == (path is None):
+        raise InvalidArgumentError("give the URDF model as exactly one of text and path")
+    folder = None
+    if text is None:
+        folder = os.path.dirname(os.path.abspath(str(path)))
+        text = read_text(str(path))
+    try:
+        robot = ET.fromstring(text)
+    except ET.ParseError as exc:
+        raise InvalidArgumentError(f"the URDF model does not parse: {exc}") from exc
+    if robot.tag != "robot":
+        raise InvalidArgumentError(f"the URDF model's root element is <{robot.tag}>, not "
+                                   "<robot>")
+    facts = joint_facts(robot)
+    set_compiler(robot, folder)
+    try:
+        child = mujoco.MjSpec.from_string(ET.tostring(robot, encoding="unicode"))
+    except ValueError as exc:
+        raise InvalidArgumentError(f"the URDF model does not parse: {exc}") from exc
+    return child, facts
+
+
+def read_text(path: str) -> str:
+    try:
+        with open(path, encoding="utf-8") as file:
+            return file.read()
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InvalidArgumentError(f"cannot read the URDF model {path!r}: {exc}") from exc
+
+
+def joint_facts(robot: ET.Element) -> Facts:
+    """Effort and velocity limits by joint name, fixed joints' names by child link."""
+    facts = Facts()
+    for joint in robot.findall("joint"):
+        name = joint.get("name", "")
+        limit = joint.find("limit")
+        if limit is not None:
+            for attribute, book in (("effort", facts.effort), ("velocity", facts.velocity)):
+                value = number(limit.get(attribute), f"joint {name!r} limit {attribute}")
+                if value is not None:
+                    book[name] = value
+        child = joint.find("child")
+        if joint.get("type") == "fixed" and child is not None:
+            facts.fixed[child.get("link", "")] = name
+    return facts
+
+
+def number(value: str | None, where: str) -> float | None:
+    if value is None:
+        return None
+    try:
+        return float(value)
+    except ValueError as exc:
+        raise InvalidArgumentError(f"the URDF model's {where} is not a number: "
+                                   f"{value!r}") from exc
+
+
+def set_compiler(robot: ET.Element, folder: str | None) -> None:
+    """Write MuJoCo's compiler options into the robot (its own <mujoco> kept otherwise);
+    a model read from a file finds its relative meshes in the file's folder."""
+    extension = robot.find("mujoco")
+    if extension is None:
+        extension = ET.SubElement(robot, "mujoco")
+    compiler = extension.find("compiler")
+    if compiler is None:
+        compiler = ET.SubElement(extension, "compiler")
+    for key, value in COMPILER.items():
+        compiler.set(key, value)
+    if folder is not None and compiler.get("meshdir") is None:
+        compiler.set("meshdir", folder)
