@@ -171,6 +171,7 @@ from galton.client import (  # noqa: E402,F401
     cli_call,
     cli_check,
     cli_fuzz,
+    cli_joints,
     cli_scene,
     cli_states,
     cli_streams,

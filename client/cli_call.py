@@ -1,7 +1,8 @@
 """galton-client call OP JSON: any request of the protocol, for scripts.
 
-Arguments are JSON; poses and twists (of set_states, or of spawn's groups) may be nested
-lists of numbers, packed here as the wire's float64 bins. Bins of the result are unpacked
+Arguments are JSON; poses and twists (of set_states, or of spawn's groups), joint values,
+wrenches and points may be (nested) lists of numbers, packed here as the wire's float64
+bins. Bins of the result are unpacked
 back into lists of rows. The result prints as JSON; a failure prints its wire code and
 exits 1.
 """
@@ -19,6 +20,8 @@ from galton.protocol import POSE_WIDTH, TWIST_WIDTH, GaltonError, Reply, pack_f6
 from galton.protocol.operations import OPERATIONS
 
 BIN_WIDTHS = {"poses": POSE_WIDTH, "twists": TWIST_WIDTH}
+# Argument kinds sent as float64 bins (a single number of kind "values" stays a number).
+PACKED_KINDS = (*BIN_WIDTHS, "values", "wrenches", "points")
 
 
 def parse_args(text: str) -> dict[str, Any]:
@@ -42,7 +45,7 @@ def packed(value: Any) -> Any:
 
 
 def pack_args(op: str, args: dict[str, Any]) -> dict[str, Any]:
-    """Pack the poses and twists of an operation's arguments (and of spawn's groups)."""
+    """Pack the numeric arrays of an operation's arguments (and of spawn's groups)."""
     declared = OPERATIONS.get(op)
     if declared is None:
         return args
@@ -50,7 +53,7 @@ def pack_args(op: str, args: dict[str, Any]) -> dict[str, Any]:
     for arg in declared.args:
         if arg.name not in out:
             continue
-        if arg.kind in BIN_WIDTHS:
+        if arg.kind in PACKED_KINDS:
             out[arg.name] = packed(out[arg.name])
         elif arg.kind == "groups" and isinstance(out[arg.name], list):
             out[arg.name] = [pack_group(group) for group in out[arg.name]]

@@ -147,16 +147,27 @@ def load_model(
         help="A model file on the daemon's machine: the daemon reads it.")] = None,
     fmt: Annotated[ModelFormat | None, typer.Option(
         "--format", help="Model format (default: from the suffix, .xml is mjcf).")] = None,
-    prefix: Annotated[str, typer.Option(help="Prepended to every entity name.")] = "",
+    prefix: Annotated[str, typer.Option(help="Prepended to every entity and joint name.")
+                      ] = "",
+    fixed_base: Annotated[bool | None, typer.Option(
+        "--fixed-base/--floating-base",
+        help="URDF: weld the root link to the world, or give it a free joint (default: "
+             "fixed). An MJCF file says itself.", show_default=False)] = None,
+    search_path: Annotated[str | None, typer.Option(
+        help=f"Folders on the daemon's machine where the files the model names (meshes, "
+             f"package://) are looked for, {LIST_HELP}.")] = None,
     as_json: JsonOpt = False,
 ) -> None:
-    """Load an MJCF or URDF model into the world; each top-level body becomes an entity."""
+    """Load an MJCF or URDF model into the world: each model's root and links become
+    entities, its joints appear in joints."""
     if (file is None) == (path is None):
         raise typer.BadParameter("give exactly one of --file and --path")
     chosen = model_format(fmt, file, path)
     text = None if file is None else model_text(file)
-    loaded = with_client(ctx, lambda c: c.load_model(chosen, text=text, path=path,
-                                                     prefix=prefix))
+    folders = None if search_path is None else split_list(search_path, "--search-path")
+    loaded = with_client(ctx, lambda c: c.load_model(
+        chosen, text=text, path=path, prefix=prefix, fixed_base=fixed_base,
+        search_path=folders))
     emit({"names": loaded}, as_json, lambda: console.print(
         f"loaded {counted(len(loaded), 'entity', 'entities')}: {', '.join(loaded)}", markup=False))
 

@@ -2,17 +2,23 @@
 
 from __future__ import annotations
 
+import json
 from typing import Annotated
 
 import typer
 
 from galton.client.cli import JsonOpt, app, show_stamp, show_status, with_client
-from galton.client.cli_states import show_states
+from galton.client.cli_joints import joint_states_dict, render_joint_states, show_joint_states
+from galton.client.cli_states import show_states, states_dict
 from galton.client.cli_values import LIST_HELP, ResetScope, counted, numbers, split_list
+from galton.client.sdk import Client, JointStates, States
 
 PANEL = "Clock"
 Read = Annotated[str | None, typer.Option(
     help=f"Entities whose states the reply carries, read after the last step, {LIST_HELP}.")]
+ReadJoints = Annotated[str | None, typer.Option(
+    help=f"1-DOF joints whose states the reply carries, read after the last step, "
+         f"{LIST_HELP}.")]
 Rtf = Annotated[float, typer.Argument(
     help="Target real-time factor (0 = as fast as possible).", min=0.0, show_default=False)]
 
@@ -55,22 +61,48 @@ def reset(ctx: typer.Context,
     show_status(with_client(ctx, lambda c: c.reset(str(scope))), as_json)
 
 
-def read_names(read: str | None) -> list[str] | None:
-    return None if read is None else split_list(read, "--read")
+def read_names(read: str | None, where: str = "--read") -> list[str] | None:
+    return None if read is None else split_list(read, where)
+
+
+def show_reading(states: States | None, joints: JointStates | None, as_json: bool) -> None:
+    """What a reading step brought back: bodies, joints, or both (JSON: the states' map with
+    the joints' under "joints")."""
+    if joints is None:
+        if states is not None:
+            show_states(states, as_json)
+    elif states is None:
+        show_joint_states(joints, as_json)
+    elif as_json:
+        typer.echo(json.dumps({**states_dict(states), "joints": joint_states_dict(joints)},
+                              indent=2))
+    else:
+        show_states(states, False)
+        render_joint_states(joints)
+
+
+def read_step(client: Client, count: int, names: list[str] | None,
+              joints: list[str] | None) -> tuple[States | None, JointStates | None]:
+    if joints is None:
+        return client.step_and_read(count, names or []), None
+    if names is None:
+        return None, client.step_and_read_joints(count, joints)
+    return client.step_and_read_both(count, names, joints)
 
 
 @app.command(rich_help_panel=PANEL)
 def step(ctx: typer.Context,
          count: Annotated[int, typer.Argument(help="Steps to advance.", min=1)] = 1,
          read: Read = None,
+         read_joints: ReadJoints = None,
          as_json: JsonOpt = False) -> None:
     """Advance exactly COUNT steps (paused or stopped); returns when they are done."""
-    names = read_names(read)
-    if names is None:
+    names, joints = read_names(read), read_names(read_joints, "--read-joints")
+    if names is None and joints is None:
         stamp = with_client(ctx, lambda c: c.step(count))
         show_stamp(f"{counted(count, 'step', 'steps')} done", stamp, as_json, steps=count)
         return
-    show_states(with_client(ctx, lambda c: c.step_and_read(count, names)), as_json)
+    show_reading(*with_client(ctx, lambda c: read_step(c, count, names, joints)), as_json)
 
 
 def rest_rule(text: str) -> tuple[float, float]:
@@ -87,14 +119,21 @@ def run_until(
     sim_time: Annotated[float, typer.Argument(help="Sim time to reach, s.",
                                               show_default=False)],
     read: Read = None,
+    read_joints: ReadJoints = None,
     until_rest: Annotated[str | None, typer.Option(
         help="SPEED,EVERY: stop early once every --read body moves slower than SPEED m/s, "
              "looked at every EVERY s of sim time.")] = None,
     as_json: JsonOpt = False,
 ) -> None:
     """Step until the sim time reaches SIM_TIME (or the --read bodies come to rest)."""
-    names = read_names(read)
-    if until_rest is not None:
+    names, joints = read_names(read), read_names(read_joints, "--read-joints")
+    if joints is not None:
+        if names is not None or until_rest is not None:
+            raise typer.BadParameter("run-until takes --read-joints without --read and "
+                                     "--until-rest (step reads bodies and joints at once)")
+        show_joint_states(with_client(
+            ctx, lambda c: c.run_until_and_read_joints(sim_time, joints)), as_json)
+    elif until_rest is not None:
         if names is None:
             raise typer.BadParameter("--until-rest needs --read (the bodies to watch)")
         speed, every = rest_rule(until_rest)

@@ -46,12 +46,14 @@ if TYPE_CHECKING:
     ModelFormat: TypeAlias = str
     EntityKind: TypeAlias = str
     ResetScope: TypeAlias = str
+    TargetMode: TypeAlias = str
 else:
     Shape = choice_enum("Shape", BODY_SHAPES)
     Engine = choice_enum("Engine", protocol_choices("load_world", "engine"))
     ModelFormat = choice_enum("ModelFormat", protocol_choices("load_model", "format"))
     EntityKind = choice_enum("EntityKind", protocol_choices("list", "kind"))
     ResetScope = choice_enum("ResetScope", RESET_SCOPES)
+    TargetMode = choice_enum("TargetMode", protocol_choices("set_joint_targets", "mode"))
 
 
 def counted(count: int, one: str, many: str) -> str:
