@@ -77,9 +77,10 @@ def model_body(bc: BulletClient, change: Callable[..., Any], ccd_radius: float, 
                batch: int) -> Body:
     """A loaded body's books, with the settings every dynamic body gets."""
     static = bc.getDynamicsInfo(uid, -1)[0] <= 0
+    # A multibody's damping (0.04 by default) slows its links too, welded base or not.
+    change(uid, -1, linearDamping=0.0, angularDamping=0.0)
     if not static:
-        change(uid, -1, linearDamping=0.0, angularDamping=0.0,
-               ccdSweptSphereRadius=ccd_radius)
+        change(uid, -1, ccdSweptSphereRadius=ccd_radius)
     return Body(uid, static, "model", (), None, batch, links=bc.getNumJoints(uid))
 
 
