@@ -8,8 +8,10 @@ a floating base, one actuator per joint); its joints are described once compiled
 
 from __future__ import annotations
 
+import logging
+import warnings
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import mujoco
 import numpy as np
@@ -19,7 +21,7 @@ from galton.daemon.engines import mujoco_pool as mp
 from galton.daemon.engines import mujoco_spec as ms
 from galton.daemon.engines import mujoco_state as mst
 from galton.daemon.engines.mujoco_entity import MUJOCO_ERRORS, WORLD, Entity, mujoco_error
-from galton.daemon.engines.mujoco_rig import Facts, rig
+from galton.daemon.engines.mujoco_rig import Facts, rename_attached, rig
 from galton.daemon.engines.mujoco_state import JOINTED
 from galton.daemon.engines.mujoco_urdf import parse_urdf
 from galton.protocol import (
@@ -32,7 +34,11 @@ from galton.protocol import (
 if TYPE_CHECKING:
     from galton.daemon.engines.mujoco_engine import MujocoEngine
 
+log = logging.getLogger(__name__)
 FORMATS = ("mjcf", "urdf")
+# MuJoCo warns that a model attached without a prefix may not save back to XML: this world
+# is never saved.
+EMPTY_PREFIX = "Attaching a spec with an empty prefix"
 
 
 def load_model(engine: MujocoEngine, fmt: str, text: str | None, path: str | None,
@@ -40,18 +46,23 @@ def load_model(engine: MujocoEngine, fmt: str, text: str | None, path: str | Non
     """Attach a model's bodies to the spec, tried on a copy first; one recompile. Each
     top-level body is a model: its root entity, then one entity per link of its subtree."""
     child, facts = parse(fmt, text, path, fixed_base)
-    tops, parts = ms.model_names(child, prefix)
+    tops, parts = ms.model_names(child, prefix, facts.link_name)
     check_model_names(engine, [*tops, *(n for names in parts for n in names)])
     what = f"the {fmt.upper()} model does not fit this world"
     try:
         trial = engine._spec.copy()  # attaching cannot be undone: try it on a copy first
-        trial.attach(child.copy(), prefix=prefix, frame=trial.worldbody.add_frame())
-        size = trial.compile()
+        with warnings.catch_warnings(record=True) as said:
+            warnings.simplefilter("always")
+            attach(trial, child.copy(), prefix, trial.worldbody.add_frame(), facts)
+            size = trial.compile()
+        for warning in said:  # the compile's words go where MuJoCo's others go: to the log
+            if EMPTY_PREFIX not in str(warning.message):
+                log.warning("MuJoCo: %s", warning.message)
     except MUJOCO_ERRORS as exc:
         raise mujoco_error(exc, what) from exc
     frame = engine._spec.worldbody.add_frame()
     try:
-        engine._spec.attach(child, prefix=prefix, frame=frame)
+        attach(engine._spec, child, prefix, frame, facts)
         for name, inner in zip(tops, parts, strict=True):
             body = engine._spec.body(name)
             engine._entities[name] = Entity(body, static=bool(body.mocap), source="model",
@@ -78,6 +89,15 @@ def load_model(engine: MujocoEngine, fmt: str, text: str | None, path: str | Non
         infos += [link_info(engine, int(b), name)
                   for b in np.flatnonzero(engine._model.body_rootid == root)[1:]]
     return infos
+
+
+def attach(spec: mujoco.MjSpec, child: mujoco.MjSpec, prefix: str, frame: Any,
+           facts: Facts) -> None:
+    """Attach the model under this frame, its bodies renamed as the facts say."""
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message=EMPTY_PREFIX)
+        spec.attach(child, prefix=prefix, frame=frame)
+    rename_attached(spec, prefix, facts)
 
 
 def parse(fmt: str, text: str | None, path: str | None,

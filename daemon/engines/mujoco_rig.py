@@ -23,12 +23,24 @@ _TRUE = mujoco.mjtLimited.mjLIMITED_TRUE
 
 @dataclass
 class Facts:
-    """What the compiled model no longer tells about a model's joints, by unprefixed name:
-    effort and velocity limits, and the names of fixed joints by their child link."""
+    """What the compiled model does not tell about a model, by unprefixed name: joints'
+    effort and velocity limits, fixed joints' names by their child link, and the links
+    that go by a stand-in name until attached (a URDF's ``world``)."""
 
     effort: dict[str, float] = field(default_factory=dict)
     velocity: dict[str, float] = field(default_factory=dict)
     fixed: dict[str, str] = field(default_factory=dict)
+    renamed: dict[str, str] = field(default_factory=dict)  # stand-in body -> link name
+
+    def link_name(self, body: str) -> str:
+        """A body's link name (the stand-in's real one), unprefixed."""
+        return self.renamed.get(body, body)
+
+
+def rename_attached(spec: mujoco.MjSpec, prefix: str, facts: Facts) -> None:
+    """Give the bodies that went by stand-in names their link names, once attached."""
+    for stand_in, name in facts.renamed.items():
+        spec.body(prefix + stand_in).name = prefix + name
 
 
 def free_joint_name(body: str) -> str:

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import logging
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -351,10 +352,11 @@ def ready_tops(child: mujoco.MjSpec, fmt: str) -> None:
             body.mocap = True
 
 
-def model_names(child: mujoco.MjSpec, prefix: str) -> tuple[list[str], list[tuple[str, ...]]]:
-    """The names a parsed model's bodies take once attached with this prefix: its top-level
-    bodies (the entities), and the bodies inside each (its links), in MuJoCo's order."""
+def model_names(child: mujoco.MjSpec, prefix: str, rename: Callable[[str], str] = str
+                ) -> tuple[list[str], list[tuple[str, ...]]]:
+    """The names a parsed model's bodies take once attached with this prefix (and renamed):
+    its top-level bodies (the roots), and the other bodies of each (its links)."""
     tops = child.worldbody.bodies
-    parts = [tuple(prefix + b.name for b in top.find_all(mujoco.mjtObj.mjOBJ_BODY))
+    parts = [tuple(prefix + rename(b.name) for b in top.find_all(mujoco.mjtObj.mjOBJ_BODY))
              for top in tops]
-    return [prefix + top.name for top in tops], parts
+    return [prefix + rename(top.name) for top in tops], parts

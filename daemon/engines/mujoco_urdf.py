@@ -4,8 +4,9 @@ MuJoCo reads URDF itself; told (a ``<mujoco><compiler>`` element written into th
 not to fuse fixed-joint links away, to keep visual geoms (as non-colliding group-1 geoms)
 and to keep mesh paths as given (the daemon makes them absolute). What MuJoCo does not keep
 is read from the XML here: the joints' effort and velocity limits, and the fixed joints'
-names. A link named ``world`` is MuJoCo's world body, as in ROS: the links jointed to it
-become the model's roots.
+names. MuJoCo would take a root link named ``world`` for its world body; it goes by a
+stand-in name until attached (``Facts.renamed``), so it stays a link (the model's fixed
+root) as in PyBullet.
 """
 
 from __future__ import annotations
@@ -18,6 +19,8 @@ import mujoco
 from galton.daemon.engines.mujoco_rig import Facts
 from galton.protocol import InvalidArgumentError
 
+WORLD_LINK = "world"
+_STAND_IN = "galton.urdf.world"  # a root link named "world", while MuJoCo parses
 COMPILER = {"fusestatic": "false", "discardvisual": "false", "strippath": "false",
             "autolimits": "true"}
 
@@ -39,11 +42,26 @@ def parse_urdf(text: str | None, path: str | None) -> tuple[mujoco.MjSpec, Facts
                                    "<robot>")
     facts = joint_facts(robot)
     set_compiler(robot, folder)
+    renamed = rename_links(robot, WORLD_LINK, _STAND_IN)
     try:
         child = mujoco.MjSpec.from_string(ET.tostring(robot, encoding="unicode"))
     except ValueError as exc:
         raise InvalidArgumentError(f"the URDF model does not parse: {exc}") from exc
+    if renamed:
+        facts.renamed[_STAND_IN] = WORLD_LINK
     return child, facts
+
+
+def rename_links(robot: ET.Element, old: str, new: str) -> bool:
+    """Rename a link and the joints' references to it; whether there was one."""
+    links = [link for link in robot.findall("link") if link.get("name") == old]
+    for link in links:
+        link.set("name", new)
+    for joint in robot.findall("joint"):
+        for end in (joint.find("parent"), joint.find("child")):
+            if end is not None and end.get("link") == old:
+                end.set("link", new)
+    return bool(links)
 
 
 def read_text(path: str) -> str:
