@@ -3,7 +3,11 @@
 The daemon's engine applies tau = kp (target - q) - kd q' on every joint, every step,
 clipped to max_effort (set_joint_targets, mode "position"): no Python runs per step. The
 arm starts upright, in its as-loaded pose; after SECONDS of sim time the program prints
-each joint's remaining error. Gains fall along the chain with the inertia each joint moves.
+each joint's remaining error: what is left is gravity's torque over kp (a PD law has no
+integral term). Gains fall along the chain with the inertia each joint moves. The law is
+explicit (computed from the state before each step), so the light wrist needs a short
+step: the program sets 1 ms (PyBullet's default 1/240 s lets the wrist oscillate at these
+gains).
 
 Starts its own daemon on a free loopback port unless --connect is given:
 python examples/pd_arm.py [--engine mujoco|pybullet] [--seconds S]
@@ -23,6 +27,7 @@ from galton.client import Client, EmbeddedDaemon, JointStates
 
 KUKA = Path(pybullet_data.getDataPath()) / "kuka_iiwa" / "model.urdf"
 # A reachable pose (rad): shoulder and elbow bent, wrist turned.
+TIMESTEP_S = 0.001
 TARGET = np.array([0.4, 0.6, -0.3, -1.2, 0.5, 0.8, -0.6])
 KP = np.array([2000.0, 2000.0, 1000.0, 1000.0, 100.0, 50.0, 10.0])  # N·m/rad
 KD = np.array([100.0, 100.0, 50.0, 50.0, 5.0, 2.0, 0.3])  # N·m·s/rad
@@ -39,6 +44,7 @@ def load_kuka(sim: Client) -> list[str]:
 def reach(sim: Client, seconds: float) -> JointStates:
     """Hold TARGET from t = 0 for ``seconds``; return the joints' states then."""
     sim.reset("all")
+    sim.set_params({"timestep": TIMESTEP_S})
     joints = load_kuka(sim)
     sim.set_joint_targets(joints, "position", TARGET, kp=KP, kd=KD, max_effort=MAX_EFFORT)
     final = sim.run_until_and_read_joints(seconds, joints)

@@ -110,6 +110,7 @@ def test_joint_states_round_trip_as_arrays_and_scalars(sim: Client) -> None:
 
 
 def test_a_position_target_is_reached_and_shown(sim: Client) -> None:
+    sim.set_params({"timestep": 0.001})  # an explicit PD law on a light wrist: a short step
     load_kuka(sim)
     target = np.array([0.4, 0.6, -0.3, -1.2, 0.5, 0.8, -0.6])  # away from singular poses
     sim.set_joint_targets(KUKA_JOINTS, "position", target,
