@@ -112,7 +112,7 @@ def parse(fmt: str, text: str | None, path: str | None,
         raise FeatureUnsupportedError(f"model format {fmt!r} is not supported by MuJoCo "
                                       f"here; supported: {', '.join(FORMATS)}")
     try:
-        rig(child, facts, float_base=fmt == "urdf" and not fixed_base)
+        rig(child, facts, float_base=fmt == "urdf" and not fixed_base, urdf=fmt == "urdf")
         ms.ready_tops(child, fmt)
     except MUJOCO_ERRORS as exc:
         raise mujoco_error(exc, f"the {fmt.upper()} model cannot be rigged") from exc

@@ -17,6 +17,11 @@ import mujoco
 
 BODY = mujoco.mjtObj.mjOBJ_BODY
 SCALAR_JOINTS = (mujoco.mjtJoint.mjJNT_HINGE, mujoco.mjtJoint.mjJNT_SLIDE)
+# A URDF's joint limits are meant hard; MuJoCo's are soft, their default time constant
+# (0.02 s) letting a driven kuka_iiwa joint pass its limit by 0.02 rad under 50 N·m. URDF
+# joints get this stiffer one: twice the default timestep (MuJoCo itself never goes below
+# twice the timestep in use, so a larger timestep stays stable).
+URDF_LIMIT_SOLREF = (0.004, 1.0)
 _FALSE = mujoco.mjtLimited.mjLIMITED_FALSE
 _TRUE = mujoco.mjtLimited.mjLIMITED_TRUE
 
@@ -53,8 +58,9 @@ def fixed_joint_name(body: str) -> str:
     return f"{body}:fixed"
 
 
-def rig(child: mujoco.MjSpec, facts: Facts, *, float_base: bool) -> None:
-    """Name, float (URDF's ``fixed_base=False``) and actuate a parsed model, in place."""
+def rig(child: mujoco.MjSpec, facts: Facts, *, float_base: bool, urdf: bool) -> None:
+    """Name, float (URDF's ``fixed_base=False``) and actuate a parsed model, in place;
+    a URDF's joint limits made stiff."""
     name_bodies(child)
     if float_base:
         for top in child.worldbody.bodies:
@@ -65,6 +71,8 @@ def rig(child: mujoco.MjSpec, facts: Facts, *, float_base: bool) -> None:
         child.delete(actuator)
     for joint in child.joints:
         keep_effort_limit(joint, facts)
+        if urdf:
+            joint.solref_limit = URDF_LIMIT_SOLREF
         if joint.type in SCALAR_JOINTS:
             add_actuator(child, joint.name)
 
