@@ -4,9 +4,11 @@ the actuator law in pybullet_joints.py, link frames in pybullet_frames.py).
 
 A URDF model is one multibody: its base is the root entity, every other link a link
 entity, under the link names of the file. An MJCF file gives one multibody per top-level
-body (and one for the world's own geoms); PyBullet's MJCF importer turns each joint into
-a link of its own (named ``link<i>_<j>``) and welds the file's body to it with a fixed
-joint ``jointfix_<i>_<j>``: those links and joints are listed as PyBullet has them.
+body (and one for the world's own geoms, named after PyBullet's name for it); PyBullet's
+MJCF importer turns each joint into a link of its own (``link<i>_<j>``) and welds the
+file's body to it (``jointfix_<i>_<j>``): those are hidden, and the file's bodies and
+joints listed (pybullet_files.py). A top-level MJCF body with a joint that is not free
+has such a link as PyBullet's base: that root entity keeps PyBullet's name.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ import numpy as np
 from pybullet_utils.bullet_client import BulletClient
 
 from galton.daemon.engines import pybullet_models as models
+from galton.daemon.engines.pybullet_files import facts
 from galton.daemon.engines.pybullet_frames import Offset, base_offset, link_states
 from galton.daemon.engines.pybullet_joints import articulation, free_motors
 from galton.daemon.engines.pybullet_rebuild import Body, Model
@@ -75,12 +78,13 @@ class Articulated:
         (appending each root to ``roots`` as it is registered)."""
         taken = set(self._bodies) | set(self._robots.links)
         names = models.body_names(self._bc, fmt, ids, prefix, taken)
-        links = models.link_names(self._bc, ids, names, prefix, taken)
+        file = facts(fmt, text)
+        links = models.link_names(self._bc, ids, names, prefix, taken, file)
         joints = self._robots.joint_names()
         batch, infos = next(self._batches), []
         for index, (uid, name) in enumerate(zip(ids, names, strict=True)):
-            model = articulation(self._bc, uid, name, links[index], prefix,
-                                 floating=self._bc.getDynamicsInfo(uid, -1)[0] > 0 and not fixed)
+            floating = self._bc.getDynamicsInfo(uid, -1)[0] > 0 and not fixed
+            model = articulation(self._bc, uid, name, links[index], prefix, floating, file)
             used = [j.name for j in model.infos if j.name in joints]
             if used:
                 raise NameNotUniqueError(f"the model's joint {used[0]!r} has the name of a "
@@ -97,7 +101,7 @@ class Articulated:
                 self._frames[name] = offset
             infos.append(models.entity_info(self._bc, name, body, body.model))
             infos.extend(models.link_info(self._bc, uid, j, link, name)
-                         for j, link in enumerate(model.links))
+                         for j, link in enumerate(model.links) if link is not None)
         return infos
 
     def _adopt_model_body(self, uid: int, name: str, batch: int) -> Body:

@@ -16,12 +16,14 @@ getJointStates and one setJointMotorControlArray per model per step, no loop per
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 import pybullet
 from pybullet_utils.bullet_client import BulletClient
 
+from galton.daemon.engines.pybullet_files import Axis, FileFacts
 from galton.daemon.engines.pybullet_frames import rotate
 from galton.protocol import JointInfo
 
@@ -36,7 +38,7 @@ class Articulation:
     that the books outlive a rebuild), with the targets its 1-DOF joints hold."""
 
     root: str
-    links: list[str]  # entity names; position j is PyBullet link j
+    links: list[str | None]  # entity names (None: hidden); position j is PyBullet link j
     infos: list[JointInfo]  # as ``joints`` lists them
     scalar: dict[str, int]  # 1-DOF joint name -> its place in the arrays below
     indices: list[int]  # PyBullet joint index of each 1-DOF joint
@@ -97,14 +99,19 @@ def free_motors(bc: BulletClient, uid: int) -> None:
                                      forces=[0.0] * len(indices))
 
 
-def articulation(bc: BulletClient, uid: int, root: str, links: list[str],
-                 prefix: str, floating: bool) -> Articulation:
-    """Read a freshly loaded body's joints (a floating base first, as ``root:free``)."""
+def articulation(bc: BulletClient, uid: int, root: str, links: list[str | None],
+                 prefix: str, floating: bool, file: FileFacts) -> Articulation:
+    """Read a freshly loaded body's joints (a floating base first, as ``root:free``), those
+    the file declares (not the welds PyBullet's MJCF importer adds)."""
     infos = [JointInfo(f"{root}:free", root, "free", "", root)] if floating else []
     scalar: dict[str, int] = {}
     indices: list[int] = []
+    tree = Tree(bc, uid, root, links)
     for j in range(bc.getNumJoints(uid)):
-        info = joint_info(bc, uid, j, root, links, prefix)
+        own = bc.getJointInfo(uid, j)[1].decode("utf-8", "replace")
+        if file.hides_joint(own):
+            continue
+        info = joint_info(bc, uid, j, tree, prefix, file)
         infos.append(info)
         if info.scalar:
             scalar[info.name] = len(indices)
@@ -114,24 +121,53 @@ def articulation(bc: BulletClient, uid: int, root: str, links: list[str],
     return Articulation(root, links, infos, scalar, indices, loaded)
 
 
-def joint_info(bc: BulletClient, uid: int, j: int, root: str, links: list[str],
-               prefix: str) -> JointInfo:
-    """One PyBullet joint as the protocol lists it: its axis turned from the child's
-    inertial frame (PyBullet's) into its link frame; a continuous joint (PyBullet gives it
-    lower > upper) unlimited; an effort or velocity limit of 0 (none given) as None."""
+class Tree:
+    """A body's links as entities: a hidden link (an MJCF importer's joint link) stands
+    for its nearest shown ancestor as a parent and its shown descendant as a child."""
+
+    def __init__(self, bc: BulletClient, uid: int, root: str, links: list[str | None]) -> None:
+        self.root, self.links = root, links
+        self.parents = [bc.getJointInfo(uid, j)[16] for j in range(len(links))]
+        self.children: dict[int, list[int]] = {}
+        for j, parent in enumerate(self.parents):
+            self.children.setdefault(parent, []).append(j)
+
+    def parent(self, index: int) -> str:
+        while index >= 0 and self.links[index] is None:
+            index = self.parents[index]
+        return self.root if index < 0 else self.links[index] or self.root
+
+    def child(self, index: int) -> str:
+        while self.links[index] is None and self.children.get(index):
+            index = self.children[index][0]
+        return self.links[index] or ""
+
+
+def joint_info(bc: BulletClient, uid: int, j: int, tree: Tree, prefix: str,
+               file: FileFacts) -> JointInfo:
+    """One PyBullet joint as the protocol lists it: a URDF's axis and continuous joints as
+    the file has them (pybullet_files.py); an MJCF joint's axis turned from the child's
+    inertial frame (PyBullet's) into its link frame; an effort or velocity limit of 0
+    (none given) as None."""
     info = bc.getJointInfo(uid, j)
-    kind = TYPES.get(info[2], "fixed")
+    own = info[1].decode("utf-8", "replace")
+    kind, file_axis = file.joints.get(own, ("", None))
     scalar = info[2] in SCALAR
     axis = (0.0, 0.0, 0.0)
     if scalar:
-        turn = np.array([bc.getDynamicsInfo(uid, j)[4]], float)
-        unit = rotate(turn, np.array([info[13]], float))[0]
-        unit /= np.linalg.norm(unit)
-        axis = (float(unit[0]), float(unit[1]), float(unit[2]))
-    limited = scalar and info[8] <= info[9]
+        axis = file_axis or turned_axis(bc, uid, j, info[13])
+    limited = scalar and info[8] <= info[9] and kind != "continuous"
     return JointInfo(
-        name=prefix + info[1].decode("utf-8", "replace"), model=root, type=kind,
-        parent=root if info[16] < 0 else links[info[16]], child=links[j], axis=axis,
+        name=prefix + own, model=tree.root, type=TYPES.get(info[2], "fixed"),
+        parent=tree.parent(info[16]), child=tree.child(j), axis=axis,
         lower=float(info[8]) if limited else None, upper=float(info[9]) if limited else None,
         damping=float(info[6]), effort_limit=float(info[10]) if info[10] > 0 else None,
         velocity_limit=float(info[11]) if info[11] > 0 else None)
+
+
+def turned_axis(bc: BulletClient, uid: int, j: int, axis: Sequence[float]) -> Axis:
+    """PyBullet's axis (in the child's inertial frame) in the child's link frame."""
+    turn = np.array([bc.getDynamicsInfo(uid, j)[4]], float)
+    unit = rotate(turn, np.array([axis], float))[0]
+    unit /= np.linalg.norm(unit)
+    return (float(unit[0]), float(unit[1]), float(unit[2]))

@@ -13,6 +13,7 @@ from typing import Any
 from pybullet_utils.bullet_client import BulletClient
 
 from galton.daemon.engines import pybullet_props as props
+from galton.daemon.engines.pybullet_files import FileFacts
 from galton.daemon.engines.pybullet_rebuild import Body, Model
 from galton.daemon.engines.pybullet_shapes import read_text, unique_name
 from galton.protocol import (
@@ -26,12 +27,13 @@ MODEL_FORMATS = ("urdf", "mjcf")
 
 
 def model_text(fmt: str, text: str | None, path: str | None) -> str:
-    """The model's text, given as text or read from its path, in a format PyBullet loads."""
+    """The model's text (the daemon passes it with its file names made absolute, and the
+    path it came from for information), or read from its path when only that is given."""
     if fmt not in MODEL_FORMATS:
         raise FeatureUnsupportedError(
             f"PyBullet cannot load {fmt!r} models; it loads {', '.join(MODEL_FORMATS)}")
-    if (text is None) == (path is None):
-        raise InvalidArgumentError("give a model as text or as a path, not both or neither")
+    if text is None and path is None:
+        raise InvalidArgumentError("give a model as text or as a path")
     return text if text is not None else read_text(path or "")
 
 
@@ -55,17 +57,20 @@ def body_names(bc: BulletClient, fmt: str, ids: list[int], prefix: str,
 
 
 def link_names(bc: BulletClient, ids: list[int], roots: list[str], prefix: str,
-               taken: Container[str]) -> list[list[str]]:
+               taken: Container[str], file: FileFacts) -> list[list[str | None]]:
     """Each loaded body's link entity names (``prefix`` + the file's link name), made
-    unique among the load's own names; refuse a name in use."""
+    unique among the load's own names, None for the links PyBullet's MJCF importer adds;
+    refuse a name in use."""
     seen = set(roots)
-    names: list[list[str]] = []
+    names: list[list[str | None]] = []
     for uid in ids:
-        links = [unique_name(prefix + bc.getJointInfo(uid, j)[12].decode("utf-8", "replace"),
-                             seen) for j in range(bc.getNumJoints(uid))]
-        seen.update(links)
+        links: list[str | None] = []
+        for j in range(bc.getNumJoints(uid)):
+            own = bc.getJointInfo(uid, j)[12].decode("utf-8", "replace")
+            links.append(None if file.hides_link(own) else unique_name(prefix + own, seen))
+            seen.add(links[-1] or "")
         names.append(links)
-    in_use = [n for links in names for n in links if n in taken]
+    in_use = [n for links in names for n in links if n is not None and n in taken]
     if in_use:
         raise NameNotUniqueError(
             f"the model's link {in_use[0]!r} has the name of an existing entity; load it "

@@ -48,7 +48,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from pybullet_utils.bullet_client import BulletClient
 
-from galton.daemon.engines.pybullet_shapes import WHITE, Link, load_bodies, read_text
+from galton.daemon.engines.pybullet_shapes import WHITE, Link, load_bodies
 from galton.protocol import (
     BodyGroup,
     BodyProperties,
@@ -230,14 +230,6 @@ def release_held(held: dict[str, Held], names: Sequence[str], poses: bool,
                 held[name] = (pose, twist)
 
 
-def text_of(path: str) -> str | None:
-    """A model file's text now, or None where it cannot be read any more."""
-    try:
-        return read_text(path)
-    except InvalidArgumentError:
-        return None
-
-
 def merged(edits: BodyProperties, props: BodyProperties) -> BodyProperties:
     """The latest value of each property ``update`` has set on a model body."""
     return dataclasses.replace(edits, **{
@@ -307,15 +299,14 @@ class Rebuilding:
 
     def _reload(self, names: list[str], kept: dict[str, Body],
                 states: dict[str, State]) -> None:
-        """A model loaded again (from its file while the file is unchanged), the bodies
+        """A model loaded again from its text, the bodies
         deleted since its load removed again, the others restored."""
         models = {name: model for name in names if (model := kept[name].model) is not None}
         first = models[names[0]]
-        unchanged = first.path is not None and text_of(first.path) == first.text
         try:
-            ids = load_bodies(self._bc, self._maker, first.fmt, first.text,
-                              first.path if unchanged else None, first.fixed_base)
-        except InvalidArgumentError as exc:  # its meshes gone from beside its file?
+            ids = load_bodies(self._bc, self._maker, first.fmt, first.text, None,
+                              first.fixed_base)
+        except InvalidArgumentError as exc:  # its meshes gone?
             raise OperationFailedError(f"a model could not be loaded again: {exc}") from exc
         wanted = {model.index: name for name, model in models.items()}
         for index, uid in enumerate(ids):

@@ -34,7 +34,8 @@ class Robots:
     # -- books ------------------------------------------------------------------------
     def add(self, model: Articulation) -> None:
         self.models[model.root] = model
-        self.links.update((name, (model.root, j)) for j, name in enumerate(model.links))
+        self.links.update((name, (model.root, j)) for j, name in enumerate(model.links)
+                          if name is not None)
         self._joints.update((name, (model.root, place)) for name, place in model.scalar.items())
 
     def joint_names(self) -> set[str]:
@@ -47,7 +48,7 @@ class Robots:
             model = self.models.pop(name, None)
             if model is None:
                 continue
-            for link in model.links:
+            for link in filter(None, model.links):
                 self.links.pop(link, None)
                 self.wrenches.pop(link, None)
             for joint in model.scalar:

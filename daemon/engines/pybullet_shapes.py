@@ -24,6 +24,7 @@ import numpy as np
 import pybullet
 from pybullet_utils.bullet_client import BulletClient
 
+from galton.daemon.engines.pybullet_files import fix_mjcf_inertia
 from galton.protocol import InvalidArgumentError, OperationFailedError
 
 # Shapes whose collision margin is a free setting. A sphere's and a capsule's margin is
@@ -352,17 +353,18 @@ def model_file(fmt: str, text: str | None, path: str | None) -> Iterator[str]:
 
 def load_bodies(bc: BulletClient, maker: BodyMaker, fmt: str, text: str,
                 path: str | None, fixed_base: bool = False) -> list[int]:
-    """Load a URDF or MJCF model (its ``text``, from ``path`` when it came from a file), a
-    URDF's root welded to the world with ``fixed_base``; a model PyBullet refuses leaves
-    no body behind."""
+    """Load a URDF or MJCF model from its ``text`` (its file names made absolute by the
+    daemon; ``path``, where it came from, is not read), a URDF's root welded to the world
+    with ``fixed_base``; a model PyBullet refuses leaves no body behind."""
     check_xml(fmt, text)
     before = maker.known_ids()
     try:
-        with model_file(fmt, None if path else text, path) as file_name:
+        with model_file(fmt, text, None) as file_name:
             if fmt == "urdf":
                 ids = [bc.loadURDF(file_name, useFixedBase=fixed_base, flags=URDF_FLAGS)]
             else:
                 ids = list(bc.loadMJCF(file_name, flags=pybullet.MJCF_COLORS_FROM_FILE))
+                fix_mjcf_inertia(bc, ids, text)
     except pybullet.error as exc:
         maker.remove(list(maker.known_ids() - before))  # what a half-done load left
         raise InvalidArgumentError(

@@ -90,6 +90,8 @@ def test_r2d2_floating_lists_every_joint_type(engine: PybulletEngine) -> None:
     assert joints["base_to_right_leg"].type == "fixed"
     wheel = joints["right_front_wheel_joint"]  # continuous: revolute without limits
     assert (wheel.type, wheel.lower, wheel.upper) == ("revolute", None, None)
+    head = joints["head_swivel"]  # continuous, with a <limit> PyBullet reports
+    assert (head.type, head.lower, head.upper) == ("revolute", None, None)
     grip = joints["gripper_extension"]
     assert (grip.type, grip.lower, grip.upper, grip.axis) == ("prismatic", -0.38, 0.0,
                                                               (1.0, 0.0, 0.0))
@@ -130,13 +132,31 @@ def test_a_floating_root_reads_and_sets_its_link_frame(engine: PybulletEngine) -
     np.testing.assert_allclose(twists, twist, atol=1e-12)
 
 
-def test_mjcf_bodies_are_models_with_pybullets_links(engine: PybulletEngine) -> None:
-    infos = engine.load_model("mjcf", None, os.path.join(DATA, "mjcf/inverted_pendulum.xml"),
-                              "ip/")
-    assert [i.shape for i in infos].count("model") == 2
-    assert {"ip/cart", "ip/pole"} <= {i.name for i in infos if i.shape == "link"}
-    types = {j.name: j.type for j in engine.joints()}
-    assert (types["ip/slider"], types["ip/hinge"]) == ("prismatic", "revolute")
+def test_mjcf_lists_the_files_bodies_and_joints(engine: PybulletEngine) -> None:
+    """Not the links and welds PyBullet's importer adds; the world's geoms are a model
+    (named by PyBullet), and so is the cart's anchor (PyBullet's base, under its name)."""
+    with open(os.path.join(DATA, "mjcf/inverted_pendulum.xml"), encoding="utf-8") as handle:
+        infos = engine.load_model("mjcf", handle.read(), None, "ip/")
+    assert [(i.name, i.shape, i.model) for i in infos] == [
+        ("ip/rail", "model", "ip/rail"), ("ip/link1_1", "model", "ip/link1_1"),
+        ("ip/cart", "link", "ip/link1_1"), ("ip/pole", "link", "ip/link1_1")]
+    assert [(j.name, j.type, j.parent, j.child, j.axis) for j in engine.joints()] == [
+        ("ip/slider", "prismatic", "ip/link1_1", "ip/cart", (1.0, 0.0, 0.0)),
+        ("ip/hinge", "revolute", "ip/cart", "ip/pole", (0.0, 1.0, 0.0))]
+    assert engine.get_states(["ip/pole"])[0].shape == (1, 7)
+
+
+def test_mjcf_inertia_is_the_files(engine: PybulletEngine) -> None:
+    """PyBullet's importer takes it from the geoms; the engine sets the file's again."""
+    text = """<mujoco><worldbody><body name="base" pos="0 0 2"><body name="bob">
+      <joint name="hinge" type="hinge" axis="0 1 0"/>
+      <inertial pos="0 0 -0.5" mass="1" diaginertia="0.01 0.02 0.03"/>
+      <geom type="sphere" size="0.02" pos="0 0 -0.5" mass="0"/></body></body>
+      </worldbody></mujoco>"""
+    engine.load_model("mjcf", text, None, "p/")
+    root, link = engine._robots.links["p/bob"]
+    info = engine._bc.getDynamicsInfo(engine._bodies[root].uid, link)
+    assert (info[0], info[2]) == (1.0, (0.01, 0.02, 0.03))
 
 
 def test_names_in_use_are_refused_and_leave_nothing(engine: PybulletEngine) -> None:
