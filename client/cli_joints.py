@@ -40,18 +40,21 @@ def joint_values(text: str, count: int, where: str) -> np.ndarray:
     return np.asarray(values, dtype=float)
 
 
-def _limit(value: float | None) -> str:
-    return "–" if value is None else f"{value:.4g}"
+def _limits(joint: JointInfo) -> str:
+    if joint.lower is None and joint.upper is None:
+        return "–"
+    low = "-inf" if joint.lower is None else f"{joint.lower:.4g}"
+    return f"{low} .. {'inf' if joint.upper is None else f'{joint.upper:.4g}'}"
 
 
 def show_joints(found: list[JointInfo], as_json: bool) -> None:
+    """A table of the joints (JSON: every field, model and file limits included)."""
     def render() -> None:
-        table = Table("name", "model", "type", "parent → child", "axis", "lower", "upper",
-                      "damping", "effort limit", "mode")
+        table = Table("joint", "type", "parent → child", "axis", "limits", "damping", "mode")
         for j in found:
-            table.add_row(j.name, j.model, j.type, f"{j.parent or '(world)'} → {j.child}",
-                          ", ".join(f"{a:g}" for a in j.axis), _limit(j.lower),
-                          _limit(j.upper), f"{j.damping:.4g}", _limit(j.effort_limit), j.mode)
+            table.add_row(j.name, j.type, f"{j.parent or '(world)'} → {j.child}",
+                          ",".join(f"{a:g}" for a in j.axis), _limits(j), f"{j.damping:.4g}",
+                          j.mode)
         console.print(table if found else "no joint")
     emit([j.to_wire() for j in found], as_json, render)
 
