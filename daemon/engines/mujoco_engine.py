@@ -21,8 +21,12 @@ reach other bodies) is first tried on a copy of the spec.
 
 The engine keeps the compiled world, its index and the time; its verbs that edit the
 spec are plain functions of the engine in their own modules: ``mujoco_spawn``,
-``mujoco_models`` (MJCF loads), ``mujoco_removal`` (delete, clear) and ``mujoco_props``
+``mujoco_models`` (MJCF and URDF loads: a model's root and links are entities),
+``mujoco_removal`` (delete, clear), ``mujoco_teleport`` (set_states) and ``mujoco_props``
 (update, properties, MuJoCo's contact rules); ``mujoco_entity`` holds what they share.
+Loaded models' joints, with one actuator each holding a target, are kept by
+``mujoco_joints``, wrenches by ``mujoco_wrench``; both books are written again into the
+compiled model after every compile.
 
 Size: MuJoCo holds at most ``mujoco_spec.MAX_BODIES`` bodies, and its compile costs
 O(free bodies x degrees of freedom): about 1.6 s for 4,000 free spheres, four times that for
@@ -62,10 +66,11 @@ from galton.daemon.engines import mujoco_removal as removal
 from galton.daemon.engines import mujoco_spawn as adding
 from galton.daemon.engines import mujoco_spec as ms
 from galton.daemon.engines import mujoco_state as mst
+from galton.daemon.engines import mujoco_teleport as teleport
 from galton.daemon.engines.mujoco_balance import BalanceGuard
 from galton.daemon.engines.mujoco_entity import MUJOCO_ERRORS, Entity, mujoco_error
 from galton.daemon.engines.mujoco_joints import Joints
-from galton.daemon.engines.mujoco_state import FREE, JOINTED, MOCAP, STATIC
+from galton.daemon.engines.mujoco_state import FREE
 from galton.daemon.engines.mujoco_wrench import Wrenches
 from galton.daemon.params import check_updates
 from galton.protocol import (
@@ -75,7 +80,6 @@ from galton.protocol import (
     BodyProperties,
     Capabilities,
     EntityInfo,
-    InvalidArgumentError,
     JointInfo,
     NotFoundError,
     OperationFailedError,
@@ -273,51 +277,7 @@ class MujocoEngine(Engine):
 
     def set_states(self, names: Sequence[str], poses: np.ndarray | None,
                    twists: np.ndarray | None) -> None:
-        ids = self._body_ids(names)
-        kind = self._index.kind[ids]
-        free, mocap, jointed = kind == FREE, kind == MOCAP, kind == JOINTED
-        static = kind == STATIC
-        poses = None if poses is None else np.asarray(poses, dtype=float)
-        twists = None if twists is None else np.asarray(twists, dtype=float)
-        fixed = mocap | static
-        if twists is not None and np.any(twists[fixed]):
-            bad = names[int(np.flatnonzero(fixed & np.any(twists, axis=1))[0])]
-            raise InvalidArgumentError(f"entity {bad!r} is static: it cannot be given a "
-                                       "non-zero twist")
-        for row in np.flatnonzero(jointed).tolist():
-            mst.check_jointed(names[row], self._entities[names[row]].initial_pose,
-                              None if poses is None else poses[row],
-                              None if twists is None else twists[row])
-        d = self._data
-        if poses is not None and twists is None and free.any():
-            # A pose alone keeps the world-frame twist: MuJoCo holds a free body's spin in
-            # its own frame, so it is read first and written back after the turn.
-            twists = np.zeros((len(ids), 6))
-            twists[free] = mst.read_states(self._model, d, self._index, ids[free])[1]
-        if poses is not None and free.any():
-            mst.write_free_poses(d, self._index, ids[free], poses[free])
-        if twists is not None and free.any():
-            mst.write_twists(d, self._index, ids[free], twists[free],
-                             None if poses is None else poses[free])
-        if poses is not None and mocap.any():
-            mst.write_mocap_poses(d, self._index, ids[mocap], poses[mocap])
-        if poses is not None and static.any():
-            self._move_static([names[i] for i in np.flatnonzero(static).tolist()], ids[static],
-                              poses[static])
-        if poses is not None and fixed.any():
-            mst.wake_all(self._model, d)
-        if jointed.any():
-            mst.reset_joints(self._model, d, ids[jointed])
-
-    def _move_static(self, names: Sequence[str], ids: np.ndarray, poses: np.ndarray) -> None:
-        """Pose static bodies in the compiled model and in the spec (kept by recompiles)."""
-        quats = mst.to_wxyz(poses[:, 3:])
-        self._model.body_pos[ids] = poses[:, :3]
-        self._model.body_quat[ids] = quats
-        for row, name in enumerate(names):
-            body = self._entities[name].body
-            body.pos = poses[row, :3]
-            body.quat = quats[row]
+        teleport.set_states(self, names, poses, twists)
 
     def update(self, names: Sequence[str], props: BodyProperties) -> None:
         mpr.update(self, names, props)
