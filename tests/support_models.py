@@ -27,6 +27,10 @@ ROBOTS = {
     "panda": DATA / "franka_panda" / "panda.urdf",  # package:// meshes
 }
 KUKA_JOINTS = [f"lbr_iiwa_joint_{i}" for i in range(1, 8)]
+# Position gains within what an explicit PD law allows at a 2 ms step: kd dt / I < 2 for
+# link 7's 0.001 kg·m² (stiffer ones diverge on MuJoCo and swing wildly on PyBullet).
+KUKA_KP = np.array([1000.0, 1500.0, 600.0, 600.0, 150.0, 60.0, 20.0])
+KUKA_KD = np.array([20.0, 30.0, 10.0, 10.0, 2.0, 1.0, 0.2])
 G = 9.81
 
 

@@ -11,9 +11,12 @@ import pytest
 from conftest import start_daemon
 from support_models import (
     KUKA_JOINTS,
+    KUKA_KD,
+    KUKA_KP,
     ROBOTS,
     Pendulum,
     apply_wrench,
+    free_box_urdf,
     get_joint_states,
     joints,
     load,
@@ -26,7 +29,7 @@ from support_models import (
     urdf_links,
 )
 
-from galton.client import Client, EmbeddedDaemon, body_group
+from galton.client import Client, EmbeddedDaemon, body_group, spheres
 from galton.protocol import InvalidArgumentError, NotFoundError
 
 
@@ -184,7 +187,8 @@ def test_deleting_a_root_removes_its_links_and_joints(sim: Client) -> None:
 def _drive(sim: Client) -> np.ndarray:
     """Joint states set, position targets on some joints, a wrench on a link: 200 steps."""
     set_joint_states(sim, KUKA_JOINTS, np.linspace(-0.5, 0.5, 7), 0.1)
-    set_targets(sim, KUKA_JOINTS[:4], "position", [0.4, -0.3, 0.2, 0.5], kp=300, kd=20)
+    set_targets(sim, KUKA_JOINTS[:4], "position", [0.4, -0.3, 0.2, 0.5], kp=KUKA_KP[:4],
+                kd=KUKA_KD[:4])
     set_targets(sim, KUKA_JOINTS[4:], "effort", [0.5, -0.5, 0.2])
     apply_wrench(sim, ["lbr_iiwa_link_7"], [[5, 0, 0, 0, 0, 0.3]])
     read = step_joints(sim, 200, KUKA_JOINTS)
@@ -332,3 +336,82 @@ def test_a_model_without_collision_geometry_loads(sim: Client, fmt: str) -> None
     load(sim, fmt, text=pendulum.urdf() if fmt == "urdf" else pendulum.mjcf())
     set_joint_states(sim, ["hinge"], 0.3)
     assert step_joints(sim, 10, ["hinge"]).positions[0] < 0.3
+
+
+# -- floating bases, roots and what a model carries ------------------------------------
+def test_a_floating_base_has_a_free_joint(sim: Client) -> None:
+    names = load(sim, "urdf", text=free_box_urdf(2.0), prefix="f/", fixed_base=False)
+    assert names == ["f/crate"]
+    [info] = sim.list()
+    assert (info.shape, info.static, info.model) == ("model", False, "f/crate")
+    [free] = joints(sim)
+    assert (free.name, free.type, free.parent, free.child) == (
+        "f/crate:free", "free", "", "f/crate")
+    assert free.axis == (0.0, 0.0, 0.0)
+    with pytest.raises(InvalidArgumentError, match="get_states"):
+        get_joint_states(sim, ["f/crate:free"])
+    sim.step(20)
+    assert sim.get_states(names).positions[0, 2] < 0  # it falls
+
+
+def test_a_root_teleport_carries_its_links(sim: Client) -> None:
+    load_robot(sim, "kuka")
+    set_joint_states(sim, KUKA_JOINTS, 0.3)
+    links = [e.name for e in sim.list()]
+    before = sim.get_states(links).poses
+    moved = before[0].copy()
+    moved[:3] += [1.0, -2.0, 0.5]
+    sim.set_states(links[:1], poses=moved[None])
+    after = sim.get_states(links).poses
+    np.testing.assert_allclose(after[:, :3] - before[:, :3], [[1.0, -2.0, 0.5]] * len(links),
+                               atol=1e-6)  # PyBullet's link frames are float32
+    np.testing.assert_allclose(get_joint_states(sim, KUKA_JOINTS).positions, 0.3, atol=1e-12)
+
+
+def test_joints_show_the_mode_they_hold(sim: Client) -> None:
+    load_robot(sim, "kuka")
+    set_targets(sim, KUKA_JOINTS[:2], "position", 0.1, kp=10.0)
+    set_targets(sim, KUKA_JOINTS[2:3], "velocity", 0.1, kd=1.0)
+    set_targets(sim, KUKA_JOINTS[3:4], "effort", 0.5)
+    modes = [j.mode for j in joints(sim, names=KUKA_JOINTS)]
+    assert modes == ["position", "position", "velocity", "effort", "none", "none", "none"]
+    set_targets(sim, KUKA_JOINTS[:1], "none")
+    assert joints(sim, names=KUKA_JOINTS[:1])[0].mode == "none"
+    assert step_joints(sim, 1, KUKA_JOINTS[:1]).efforts[0] == 0.0
+
+
+def test_a_reloaded_model_holds_no_old_target_or_wrench(sim: Client) -> None:
+    load_robot(sim, "kuka")
+    set_targets(sim, KUKA_JOINTS, "effort", 5.0)
+    apply_wrench(sim, ["lbr_iiwa_link_7"], [[0, 0, 50, 0, 0, 0]])
+    sim.delete(["lbr_iiwa_link_0"])
+    load_robot(sim, "kuka")
+    assert {j.mode for j in joints(sim)} == {"none"}
+    sim.set_params({"gravity": [0.0, 0.0, 0.0]})
+    read = step_joints(sim, 20, KUKA_JOINTS)
+    np.testing.assert_array_equal(read.efforts, 0.0)
+    np.testing.assert_allclose(read.positions, 0.0, atol=1e-12)  # nothing pushes it
+
+
+def _held_run(sim: Client, churn: bool) -> np.ndarray:
+    """Targets and a wrench held for 100 steps; between steps 50 and 51, when ``churn``,
+    5,000 static spheres spawned and deleted (PyBullet rebuilds its world past 5,000
+    removals and must carry joint states, targets and wrenches)."""
+    load_robot(sim, "kuka")
+    set_joint_states(sim, KUKA_JOINTS, np.linspace(-0.4, 0.4, 7), 0.2)
+    set_targets(sim, KUKA_JOINTS, "position", 0.3, kp=KUKA_KP, kd=KUKA_KD)
+    apply_wrench(sim, ["lbr_iiwa_link_5"], [[0, 10, 0, 0, 0, 0]])
+    sim.step(50)
+    if churn:
+        names = [f"s{i}" for i in range(5000)]
+        sim.spawn(spheres(names, np.column_stack([np.arange(5000) * 0.3, np.full(5000, 50.0),
+                                                  np.zeros(5000)]), 0.1, static=True))
+        sim.delete(names)
+    read = step_joints(sim, 50, KUKA_JOINTS)
+    return np.concatenate([read.positions, read.velocities, read.efforts])
+
+
+def test_a_rebuild_carries_joint_states_targets_and_wrenches(sim: Client) -> None:
+    quiet = _held_run(sim, churn=False)
+    sim.reset("all")
+    np.testing.assert_allclose(_held_run(sim, churn=True), quiet, rtol=0, atol=1e-9)
