@@ -22,7 +22,12 @@ from pybullet_utils.bullet_client import BulletClient
 
 from galton.daemon.engines import pybullet_models as models
 from galton.daemon.engines.pybullet_files import facts
-from galton.daemon.engines.pybullet_frames import Offset, base_offset, link_states
+from galton.daemon.engines.pybullet_frames import (
+    Offset,
+    base_offset,
+    frame_to_com,
+    link_states,
+)
 from galton.daemon.engines.pybullet_joints import articulation, free_motors
 from galton.daemon.engines.pybullet_rebuild import Body, Model
 from galton.daemon.engines.pybullet_robots import Robots
@@ -47,6 +52,7 @@ class Articulated:
 
     if TYPE_CHECKING:
         def _read(self, ids: list[int]) -> tuple[np.ndarray, np.ndarray]: ...
+        def get_states(self, names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]: ...
 
     def _uid_of(self, name: str) -> int:
         try:
@@ -126,10 +132,38 @@ class Articulated:
         for root, (links, order) in groups.items():
             poses[order], twists[order] = link_states(self._bc, self._uid_of(root), links)
 
+    def _to_centres(self, names: Sequence[str], poses: np.ndarray | None,
+                    twists: np.ndarray | None) -> tuple[np.ndarray | None, np.ndarray | None]:
+        """Link-frame states of offset roots as PyBullet's centre-of-mass ones."""
+        poses = None if poses is None else np.array(poses, dtype=float)
+        twists = None if twists is None else np.array(twists, dtype=float)
+        rows = [k for k, name in enumerate(names) if name in self._frames]
+        offsets = [self._frames[names[k]] for k in rows]
+        turns = poses[rows, 3:] if poses is not None else self.get_states(
+            [names[k] for k in rows])[0][:, 3:]
+        some_poses = None if poses is None else poses[rows]
+        some_twists = None if twists is None else twists[rows]
+        frame_to_com(some_poses, some_twists, offsets, turns)
+        if poses is not None and some_poses is not None:
+            poses[rows] = some_poses
+        if twists is not None and some_twists is not None:
+            twists[rows] = some_twists
+        return poses, twists
+
     def _link_properties(self, name: str) -> tuple[float, float, float]:
         root, link = self._robots.links[name]
         info = self._bc.getDynamicsInfo(self._uid_of(root), link)
         return float(info[0]), float(info[1]), float(info[5])
+
+    def _joints_finite(self) -> bool:
+        """Whether every model's joint positions and velocities are finite (a welded
+        model's links diverge where no base shows it)."""
+        for root, model in self._robots.models.items():
+            if model.indices:
+                states = self._bc.getJointStates(self._uid_of(root), model.indices)
+                if not np.isfinite([value for s in states for value in s[:2]]).all():
+                    return False
+        return True
 
     # -- joints ---------------------------------------------------------------------------
     def joints(self) -> list[JointInfo]:

@@ -67,7 +67,7 @@ from galton.daemon.engines import pybullet_rebuild as rebuild
 from galton.daemon.engines import pybullet_spawn as spawning
 from galton.daemon.engines.pybullet_articulated import Articulated
 from galton.daemon.engines.pybullet_calls import engine_call
-from galton.daemon.engines.pybullet_frames import Offset, com_to_frame, frame_to_com
+from galton.daemon.engines.pybullet_frames import Offset, com_to_frame
 from galton.daemon.engines.pybullet_models import MODEL_FORMATS
 from galton.daemon.engines.pybullet_params import SPECS, Parameters
 from galton.daemon.engines.pybullet_rebuild import Body as _Body
@@ -322,24 +322,6 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Engine):
             for uid, twist in zip(ids, np.asarray(twists, dtype=float).tolist(), strict=True):
                 self._reset_velocity(uid, twist[:3], twist[3:])
 
-    def _to_centres(self, names: Sequence[str], poses: np.ndarray | None,
-                    twists: np.ndarray | None) -> tuple[np.ndarray | None, np.ndarray | None]:
-        """Link-frame states of offset roots as PyBullet's centre-of-mass ones."""
-        poses = None if poses is None else np.array(poses, dtype=float)
-        twists = None if twists is None else np.array(twists, dtype=float)
-        rows = [k for k, name in enumerate(names) if name in self._frames]
-        offsets = [self._frames[names[k]] for k in rows]
-        turns = poses[rows, 3:] if poses is not None else self.get_states(
-            [names[k] for k in rows])[0][:, 3:]
-        some_poses = None if poses is None else poses[rows]
-        some_twists = None if twists is None else twists[rows]
-        frame_to_com(some_poses, some_twists, offsets, turns)
-        if poses is not None and some_poses is not None:
-            poses[rows] = some_poses
-        if twists is not None and some_twists is not None:
-            twists[rows] = some_twists
-        return poses, twists
-
     @engine_call
     def step(self, count: int) -> None:
         """stepSimulation alone, unless targets or wrenches are held: then they are
@@ -362,6 +344,8 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Engine):
         hundreds of pins cost nothing here. Bullet itself reports no divergence: a ball at
         x = 4e299 is finite, and falls on there as if nothing were wrong."""
         moving = [b.uid for b in self._bodies.values() if not b.static]
+        if not self._joints_finite():
+            return False
         if not moving:
             return True
         poses, twists = self._read(moving)

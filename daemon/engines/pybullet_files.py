@@ -27,6 +27,7 @@ class FileFacts:
 
     bodies: frozenset[str] | None = None
     joints: dict[str, tuple[str, Axis | None]] = field(default_factory=dict)
+    free: dict[str, str] = field(default_factory=dict)  # MJCF body -> its free joint's name
 
     def hides_link(self, name: str) -> bool:
         return self.bodies is not None and name not in self.bodies
@@ -39,12 +40,19 @@ def facts(fmt: str, text: str) -> FileFacts:
     """Parse what ``FileFacts`` holds (the text is well-formed: load_bodies checked it)."""
     root = ElementTree.fromstring(text)
     if fmt == "urdf":
-        return FileFacts(None, {joint.get("name", ""): (joint.get("type", ""), _axis(joint))
-                                for joint in root.iter("joint")})
+        urdf: dict[str, tuple[str, Axis | None]] = {
+            joint.get("name", ""): (joint.get("type", ""), _axis(joint))
+            for joint in root.iter("joint")}
+        return FileFacts(None, urdf)
     bodies = frozenset(body.get("name", "") for body in root.iter("body"))
-    joints = {joint.get("name", ""): ("", None)
-              for tag in ("joint", "freejoint") for joint in root.iter(tag)}
-    return FileFacts(bodies, joints)
+    joints: dict[str, tuple[str, Axis | None]] = {
+        joint.get("name", ""): ("", None)
+        for tag in ("joint", "freejoint") for joint in root.iter(tag)}
+    free = {body.get("name", ""): joint.get("name", "")
+            for body in root.iter("body") for joint in body
+            if joint.get("name") and (joint.tag == "freejoint" or (
+                joint.tag == "joint" and joint.get("type") == "free"))}
+    return FileFacts(bodies, joints, free)
 
 
 def _axis(joint: ElementTree.Element) -> Axis:

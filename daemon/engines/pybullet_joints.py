@@ -101,9 +101,12 @@ def free_motors(bc: BulletClient, uid: int) -> None:
 
 def articulation(bc: BulletClient, uid: int, root: str, links: list[str | None],
                  prefix: str, floating: bool, file: FileFacts) -> Articulation:
-    """Read a freshly loaded body's joints (a floating base first, as ``root:free``), those
-    the file declares (not the welds PyBullet's MJCF importer adds)."""
-    infos = [JointInfo(f"{root}:free", root, "free", "", root)] if floating else []
+    """Read a freshly loaded body's joints (a floating base first: its MJCF free joint's
+    name, else ``root:free``), those the file declares (not the welds PyBullet's MJCF
+    importer adds)."""
+    base = bc.getBodyInfo(uid)[0].decode("utf-8", "replace")
+    free = prefix + file.free[base] if base in file.free else f"{root}:free"
+    infos = [JointInfo(free, root, "free", "", root)] if floating else []
     scalar: dict[str, int] = {}
     indices: list[int] = []
     tree = Tree(bc, uid, root, links)

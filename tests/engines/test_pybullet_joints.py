@@ -146,6 +146,15 @@ def test_mjcf_lists_the_files_bodies_and_joints(engine: PybulletEngine) -> None:
     assert engine.get_states(["ip/pole"])[0].shape == (1, 7)
 
 
+def test_an_mjcf_free_joint_keeps_its_name(engine: PybulletEngine) -> None:
+    text = """<mujoco><worldbody><body name="ball" pos="0 0 1"><freejoint name="loose"/>
+      <geom type="sphere" size="0.1"/></body></worldbody></mujoco>"""
+    [info] = engine.load_model("mjcf", text, None, "m/")
+    assert (info.name, info.static) == ("m/ball", False)
+    assert [(j.name, j.type, j.parent, j.child) for j in engine.joints()] == [
+        ("m/loose", "free", "", "m/ball")]
+
+
 def test_mjcf_inertia_is_the_files(engine: PybulletEngine) -> None:
     """PyBullet's importer takes it from the geoms; the engine sets the file's again."""
     text = """<mujoco><worldbody><body name="base" pos="0 0 2"><body name="bob">
