@@ -56,7 +56,9 @@ def trajectory(sim: Client, seconds: float, every: int = 5) -> tuple[np.ndarray,
 def zero_crossings(times: np.ndarray, values: np.ndarray) -> np.ndarray:
     """Where ``values`` changes sign, by linear interpolation."""
     i = np.nonzero(np.sign(values[:-1]) * np.sign(values[1:]) < 0)[0]
-    return times[i] - values[i] * (times[i + 1] - times[i]) / (values[i + 1] - values[i])
+    crossings: np.ndarray = times[i] - values[i] * (times[i + 1] - times[i]) / (
+        values[i + 1] - values[i])
+    return crossings
 
 
 # -- a free pendulum -------------------------------------------------------------------
@@ -179,7 +181,8 @@ TRACKING_TOLERANCE = 0.05  # rad, worst joint, after the first half second
 def kuka_reference(t: float) -> np.ndarray:
     """0.4 rad at 0.5 Hz on every joint, phases spread, from the straight-up pose."""
     phases = np.arange(7) * 0.5
-    return 0.4 * (np.sin(2 * np.pi * 0.5 * t + phases) - np.sin(phases))
+    reference: np.ndarray = 0.4 * (np.sin(2 * np.pi * 0.5 * t + phases) - np.sin(phases))
+    return reference
 
 
 def track_kuka(sim: Client, seconds: float, rate: float = 100.0) -> np.ndarray:

@@ -5,6 +5,7 @@ leaves (nothing changed)."""
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -30,7 +31,7 @@ from support_models import (
 )
 
 from galton.client import Client, EmbeddedDaemon, body_group, spheres
-from galton.protocol import InvalidArgumentError, NotFoundError
+from galton.protocol import InvalidArgumentError, JointInfo, NotFoundError
 
 
 # -- loading: links and joints ---------------------------------------------------------
@@ -79,7 +80,8 @@ def test_both_engines_list_the_same_joints(daemons: dict[str, EmbeddedDaemon],
     assert not differ, f"(mujoco, pybullet) differ: {differ}"
 
 
-def _joints_and_links(daemon: EmbeddedDaemon, robot: str) -> tuple[dict, list]:
+def _joints_and_links(daemon: EmbeddedDaemon, robot: str
+                      ) -> tuple[dict[str, JointInfo], list[tuple[object, ...]]]:
     with Client(daemon.instance, daemon.endpoint, timeout=20.0) as client:
         client.load_world(daemon.engine)
         load_robot(client, robot)
@@ -258,7 +260,7 @@ def test_a_target_on_a_fixed_joint_is_invalid(sim: Client) -> None:
     {"kp": -1.0}, {"kp": 0.0}, {"kp": 10.0, "max_effort": 0.0},
 ], ids=["kp-nan", "kd-nan", "kp-nan-packed", "max-effort-nan", "kp-negative", "kp-zero",
         "max-effort-zero"])
-def test_bad_gains_are_invalid_and_apply_nothing(sim: Client, gains: dict) -> None:
+def test_bad_gains_are_invalid_and_apply_nothing(sim: Client, gains: dict[str, Any]) -> None:
     load_robot(sim, "kuka")
     set_targets(sim, KUKA_JOINTS[:2], "effort", 2.0)
     before = model_snapshot(sim)
