@@ -56,8 +56,9 @@ class BalanceGuard:
     def __init__(self, m: mujoco.MjModel) -> None:
         bodies = m.tree_bodyadr
         geoms = m.body_geomadr[bodies]
-        lone_sphere = (m.tree_bodynum == 1) & (m.body_geomnum[bodies] == 1) & \
-            (m.geom_type[np.maximum(geoms, 0)] == _SPHERE)
+        one_geom = (m.tree_bodynum == 1) & (m.body_geomnum[bodies] == 1)
+        lone_sphere = one_geom & (m.geom_type[np.where(one_geom, geoms, 0)] == _SPHERE) \
+            if m.ngeom else one_geom  # a world of bodies without geoms has no sphere
         self._trees = np.flatnonzero(lone_sphere)
         self._geoms = geoms[self._trees]
         self._was_asleep = np.zeros(len(self._trees), dtype=bool)

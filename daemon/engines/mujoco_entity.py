@@ -20,6 +20,37 @@ MUJOCO_ERRORS = (ValueError, TypeError, RuntimeError, mujoco.FatalError)
 WORLD = "world"
 
 
+# The spec's lists of assets a model brings (meshes, ...): deleting its bodies leaves them.
+ASSET_KINDS = ("meshes", "materials", "textures", "hfields", "skins")
+
+
+@dataclass(eq=False)
+class Assets:
+    """The assets one model load brought, and how many of its roots still live."""
+
+    names: set[tuple[str, str]]
+    roots: int
+
+
+def asset_names(spec: mujoco.MjSpec) -> set[tuple[str, str]]:
+    return {(kind, element.name) for kind in ASSET_KINDS for element in getattr(spec, kind)}
+
+
+def drop_assets(spec: mujoco.MjSpec, roots: list[Entity]) -> None:
+    """Delete the assets of these removed model roots' loads once no root of theirs lives
+    (else a model reloaded under the same prefix would repeat their names)."""
+    gone: set[tuple[str, str]] = set()
+    for root in roots:
+        if root.assets is not None:
+            root.assets.roots -= 1
+            if root.assets.roots == 0:
+                gone |= root.assets.names
+    for kind in ASSET_KINDS if gone else ():
+        for element in list(getattr(spec, kind)):
+            if (kind, element.name) in gone:
+                spec.delete(element)
+
+
 @dataclass(eq=False)
 class Entity:
     """An entity's spec body and what the engine must remember about it."""
@@ -33,6 +64,7 @@ class Entity:
     key: mp.Key | None = None  # its pool kind while its compiled values are still that kind's
     parts: tuple[str, ...] = ()  # a model root's links' names (taken while it lives)
     model: str | None = None  # a model root's or link's root entity
+    assets: Assets | None = None  # a model root's load's assets
 
     def geoms(self) -> list[Any]:
         return [self.body.first_geom()] if self.source == "spawn" else \

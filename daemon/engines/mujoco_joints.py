@@ -23,7 +23,7 @@ from dataclasses import dataclass, replace
 import mujoco
 import numpy as np
 
-from galton.daemon.engines.mujoco_rig import Facts, fixed_joint_name
+from galton.daemon.engines.mujoco_rig import Facts, entity_name, fixed_joint_name
 from galton.protocol import InvalidArgumentError, JointInfo, NotFoundError
 
 JOINT_TYPES = {mujoco.mjtJoint.mjJNT_FREE: "free", mujoco.mjtJoint.mjJNT_BALL: "spherical",
@@ -169,8 +169,8 @@ def describe_model(m: mujoco.MjModel, root: int, model: str, prefix: str,
     body's joints, or a fixed joint for a jointless link."""
     infos: list[JointInfo] = []
     for body in np.flatnonzero(m.body_rootid == root).tolist():
-        child = m.body(body).name
-        parent = "" if body == root else m.body(int(m.body_parentid[body])).name
+        child = entity_name(m.body(body).name)
+        parent = "" if body == root else entity_name(m.body(int(m.body_parentid[body])).name)
         first, count = int(m.body_jntadr[body]), int(m.body_jntnum[body])
         for j in range(first, first + count):
             infos.append(joint_info(m, j, model, parent, child, prefix, facts))

@@ -20,8 +20,21 @@ from galton.daemon.engines import mujoco_joints as mj
 from galton.daemon.engines import mujoco_pool as mp
 from galton.daemon.engines import mujoco_spec as ms
 from galton.daemon.engines import mujoco_state as mst
-from galton.daemon.engines.mujoco_entity import MUJOCO_ERRORS, WORLD, Entity, mujoco_error
-from galton.daemon.engines.mujoco_rig import Facts, rename_attached, rig
+from galton.daemon.engines.mujoco_entity import (
+    MUJOCO_ERRORS,
+    WORLD,
+    Assets,
+    Entity,
+    asset_names,
+    mujoco_error,
+)
+from galton.daemon.engines.mujoco_rig import (
+    Facts,
+    body_name,
+    entity_name,
+    rename_attached,
+    rig,
+)
 from galton.daemon.engines.mujoco_state import JOINTED
 from galton.daemon.engines.mujoco_urdf import parse_urdf
 from galton.protocol import (
@@ -47,7 +60,8 @@ def load_model(engine: MujocoEngine, fmt: str, text: str | None, path: str | Non
     top-level body is a model: its root entity, then one entity per link of its subtree."""
     child, facts = parse(fmt, text, path, fixed_base)
     tops, parts = ms.model_names(child, prefix, facts.link_name)
-    check_model_names(engine, [*tops, *(n for names in parts for n in names)])
+    check_model_names(engine, [*tops, *(n for names in parts for n in names)],
+                      world_link=bool(facts.renamed))
     what = f"the {fmt.upper()} model does not fit this world"
     try:
         trial = engine._spec.copy()  # attaching cannot be undone: try it on a copy first
@@ -61,15 +75,17 @@ def load_model(engine: MujocoEngine, fmt: str, text: str | None, path: str | Non
     except MUJOCO_ERRORS as exc:
         raise mujoco_error(exc, what) from exc
     frame = engine._spec.worldbody.add_frame()
+    assets = Assets(asset_names(engine._spec), len(tops))
     try:
         attach(engine._spec, child, prefix, frame, facts)
+        assets.names = asset_names(engine._spec) - assets.names
         for name, inner in zip(tops, parts, strict=True):
-            body = engine._spec.body(name)
+            body = engine._spec.body(body_name(name))
             engine._entities[name] = Entity(body, static=bool(body.mocap), source="model",
-                                            parts=inner, model=name)
+                                            parts=inner, model=name, assets=assets)
             for link in inner:
-                engine._entities[link] = Entity(engine._spec.body(link), static=False,
-                                                source="link", model=name)
+                engine._entities[link] = Entity(engine._spec.body(body_name(link)),
+                                                static=False, source="link", model=name)
         engine._recompile(size.nbody, size.nv)
     except (GaltonError, *MUJOCO_ERRORS) as exc:
         for name in [*tops, *(n for names in parts for n in names)]:
@@ -119,11 +135,13 @@ def parse(fmt: str, text: str | None, path: str | None,
     return child, facts
 
 
-def check_model_names(engine: MujocoEngine, names: Sequence[str]) -> None:
-    """Refuse a model whose bodies' names are taken, or the engine's own."""
+def check_model_names(engine: MujocoEngine, names: Sequence[str], *,
+                      world_link: bool = False) -> None:
+    """Refuse a model whose bodies' names are taken, or the engine's own (but "world" for
+    a URDF's world link, which MuJoCo knows by another name: ``mujoco_rig.body_name``)."""
     for name in names:
-        if name in engine._entities or name in engine._parts or name == WORLD or \
-                name.startswith(mp.PREFIX):
+        own = (name == WORLD and not world_link) or name.startswith(mp.PREFIX)
+        if name in engine._entities or name in engine._parts or own:
             raise NameNotUniqueError(
                 f"the model's body {name!r} has the name of a body already in the MuJoCo "
                 "world; load it with another prefix")
@@ -143,5 +161,5 @@ def model_info(engine: MujocoEngine, name: str) -> EntityInfo:
 
 def link_info(engine: MujocoEngine, bid: int, model: str) -> EntityInfo:
     """A model's link as the World lists it (its own mass)."""
-    return EntityInfo(name=engine._model.body(bid).name, shape="link",
+    return EntityInfo(name=entity_name(engine._model.body(bid).name), shape="link",
                       mass=float(engine._model.body_mass[bid]), source="model", model=model)

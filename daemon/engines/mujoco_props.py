@@ -100,7 +100,8 @@ def properties(engine: MujocoEngine, names: Sequence[str]) -> np.ndarray:
     mass = np.where(alone, m.body_mass[ids], m.body_subtreemass[ids])
     mass[[e.static for e in entities]] = np.nan
     geoms = mst.first_geoms(m, ids, alone)
-    friction = np.where(geoms >= 0, m.geom_friction[np.maximum(geoms, 0), 0], np.nan)
+    friction = np.full(len(ids), np.nan)  # no geom (a model may have none at all): NaN
+    friction[geoms >= 0] = m.geom_friction[geoms[geoms >= 0], 0]
     values = [restitution(e, engine._values) for e in entities]
     return np.column_stack([mass, friction, np.array(values, dtype=float)])
 

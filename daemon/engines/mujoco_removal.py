@@ -15,7 +15,12 @@ import mujoco
 import numpy as np
 
 from galton.daemon.engines import mujoco_pool as mp
-from galton.daemon.engines.mujoco_entity import MUJOCO_ERRORS, Entity, mujoco_error
+from galton.daemon.engines.mujoco_entity import (
+    MUJOCO_ERRORS,
+    Entity,
+    drop_assets,
+    mujoco_error,
+)
 from galton.protocol import GaltonError, InvalidArgumentError, OperationFailedError
 
 if TYPE_CHECKING:
@@ -84,6 +89,7 @@ def put_away(engine: MujocoEngine, parked: Sequence[Entity],
     engine._pool.park(parked)
     if removed:
         mp.remove_bodies(engine._spec, [e.body for e in removed], sweep(engine))
+        drop_assets(engine._spec, list(removed))
     return bool(removed) or gravcomp_missing(engine._model, parked)
 
 

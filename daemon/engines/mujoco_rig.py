@@ -23,6 +23,10 @@ SCALAR_JOINTS = (mujoco.mjtJoint.mjJNT_HINGE, mujoco.mjtJoint.mjJNT_SLIDE)
 # twice the timestep in use, so a larger timestep stays stable).
 URDF_LIMIT_SOLREF = (0.004, 1.0)
 _FALSE = mujoco.mjtLimited.mjLIMITED_FALSE
+# A URDF link named "world" (MuJoCo's name for its world body) goes by this name in MuJoCo:
+# until attached, and for good when attached without a prefix (see ``entity_name``).
+WORLD_LINK = "world"
+STAND_IN = "galton.urdf.world"
 _TRUE = mujoco.mjtLimited.mjLIMITED_TRUE
 
 
@@ -43,9 +47,21 @@ class Facts:
 
 
 def rename_attached(spec: mujoco.MjSpec, prefix: str, facts: Facts) -> None:
-    """Give the bodies that went by stand-in names their link names, once attached."""
+    """Give the bodies that went by stand-in names their link names, once attached (but a
+    link attached as "world" keeps its stand-in: the world body has that name)."""
     for stand_in, name in facts.renamed.items():
-        spec.body(prefix + stand_in).name = prefix + name
+        if prefix + name != WORLD_LINK:
+            spec.body(prefix + stand_in).name = prefix + name
+
+
+def entity_name(body: str) -> str:
+    """The entity a MuJoCo body of a model is: its name, but for a link named "world"."""
+    return WORLD_LINK if body == STAND_IN else body
+
+
+def body_name(entity: str) -> str:
+    """The MuJoCo body of a model's entity (``entity_name`` reversed)."""
+    return STAND_IN if entity == WORLD_LINK else entity
 
 
 def free_joint_name(body: str) -> str:

@@ -327,10 +327,10 @@ def arena_bytes(nbody: int, nv: int) -> int:
 
 # -- loaded models -----------------------------------------------------------------------
 def parse_mjcf(text: str | None, path: str | None) -> mujoco.MjSpec:
-    """Parse an MJCF model (its top-level bodies named and jointless ones made mocap by
-    ``ready_tops``)."""
-    if (text is None) == (path is None):
-        raise InvalidArgumentError("give the MJCF model as exactly one of text and path")
+    """Parse an MJCF model, from its text when given (the path is then for information);
+    see ``ready_tops`` for what its top-level bodies need."""
+    if text is None and path is None:
+        raise InvalidArgumentError("give the MJCF model as text or a path")
     try:
         child = mujoco.MjSpec.from_string(text) if text is not None \
             else mujoco.MjSpec.from_file(str(path))

@@ -16,19 +16,18 @@ import xml.etree.ElementTree as ET
 
 import mujoco
 
-from galton.daemon.engines.mujoco_rig import Facts
+from galton.daemon.engines.mujoco_rig import STAND_IN, WORLD_LINK, Facts
 from galton.protocol import InvalidArgumentError
 
-WORLD_LINK = "world"
-_STAND_IN = "galton.urdf.world"  # a root link named "world", while MuJoCo parses
 COMPILER = {"fusestatic": "false", "discardvisual": "false", "strippath": "false",
             "autolimits": "true"}
 
 
 def parse_urdf(text: str | None, path: str | None) -> tuple[mujoco.MjSpec, Facts]:
-    """A URDF model as a spec with every link a body, and the facts MuJoCo drops."""
-    if (text is None) == (path is None):
-        raise InvalidArgumentError("give the URDF model as exactly one of text and path")
+    """A URDF model as a spec with every link a body, and the facts MuJoCo drops; read from
+    its text when given (the path is then for information), else from the path."""
+    if text is None and path is None:
+        raise InvalidArgumentError("give the URDF model as text or a path")
     folder = None
     if text is None:
         folder = os.path.dirname(os.path.abspath(str(path)))
@@ -42,13 +41,13 @@ def parse_urdf(text: str | None, path: str | None) -> tuple[mujoco.MjSpec, Facts
                                    "<robot>")
     facts = joint_facts(robot)
     set_compiler(robot, folder)
-    renamed = rename_links(robot, WORLD_LINK, _STAND_IN)
+    renamed = rename_links(robot, WORLD_LINK, STAND_IN)
     try:
         child = mujoco.MjSpec.from_string(ET.tostring(robot, encoding="unicode"))
     except ValueError as exc:
         raise InvalidArgumentError(f"the URDF model does not parse: {exc}") from exc
     if renamed:
-        facts.renamed[_STAND_IN] = WORLD_LINK
+        facts.renamed[STAND_IN] = WORLD_LINK
     return child, facts
 
 

@@ -114,8 +114,15 @@ def test_a_urdf_world_link_stays_a_link(engine: MujocoEngine) -> None:
     infos = engine.load_model("urdf", urdf_text("pendulum5.urdf"), None, "p/")
     assert [i.name for i in infos] == ["p/" + n for n in urdf_links("pendulum5.urdf")]
     assert engine.joints()[0].parent == "p/world"
+    infos = engine.load_model("urdf", urdf_text("pendulum5.urdf"), None, "")
+    assert [i.name for i in infos] == urdf_links("pendulum5.urdf")
+    assert engine.joints()[5].parent == "world"
+    engine.step(10)
+    np.testing.assert_array_equal(engine.get_states(["world"])[0], [[0, 0, 0, 0, 0, 0, 1]])
     with pytest.raises(NameNotUniqueError, match="world"):
         engine.load_model("urdf", urdf_text("pendulum5.urdf"), None, "")
+    engine.delete(["world"])
+    engine.load_model("urdf", urdf_text("pendulum5.urdf"), None, "")
 
 
 def test_panda_loads_with_its_meshes(engine: MujocoEngine) -> None:
@@ -219,3 +226,11 @@ def test_a_broken_urdf_is_refused_and_changes_nothing(engine: MujocoEngine, text
 def test_a_urdf_loads_from_a_path_with_relative_meshes(engine: MujocoEngine) -> None:
     infos = engine.load_model("urdf", None, str(DATA / KUKA), "k/")
     assert len(infos) == 8
+
+
+def test_a_deleted_models_meshes_go_with_it(engine: MujocoEngine) -> None:
+    """Else the same model reloaded under the same prefix would repeat their names."""
+    for _ in range(2):
+        engine.load_model("urdf", urdf_text(KUKA), None, "")
+        engine.delete(["lbr_iiwa_link_0"])
+    assert not engine._spec.meshes
