@@ -42,6 +42,7 @@ DENSITY = 1000.0  # kg/m³, the protocol's default when a dynamic body has no ma
 # Segments around the axis of the visual meshes of spheres, cylinders and capsules.
 MESH_SEGMENTS = 8
 WHITE = (1.0, 1.0, 1.0, 1.0)
+LONG_LINE = 4096  # characters: a model's longer lines are broken between elements
 
 
 def as_rgba(colour: Sequence[float]) -> tuple[float, float, float, float]:
@@ -339,11 +340,11 @@ def check_xml(fmt: str, text: str) -> None:
 
 
 @contextmanager
-def model_file(fmt: str, text: str | None, path: str | None) -> Iterator[str]:
-    """The file PyBullet loads: the given path, or the text written to a temporary file."""
-    if text is None:
-        yield os.fspath(path or "")
-        return
+def model_file(fmt: str, text: str) -> Iterator[str]:
+    """The text written to a temporary file for PyBullet, a line break between elements
+    where a line is long: PyBullet's XML reader fails on lines past about 16 kB."""
+    if max(map(len, text.splitlines()), default=0) > LONG_LINE:
+        text = text.replace("><", ">\n<")
     with tempfile.TemporaryDirectory(prefix="galton-model-") as folder:
         file_name = os.path.join(folder, "model.urdf" if fmt == "urdf" else "model.xml")
         with open(file_name, "w", encoding="utf-8") as handle:
@@ -359,7 +360,7 @@ def load_bodies(bc: BulletClient, maker: BodyMaker, fmt: str, text: str,
     check_xml(fmt, text)
     before = maker.known_ids()
     try:
-        with model_file(fmt, text, None) as file_name:
+        with model_file(fmt, text) as file_name:
             if fmt == "urdf":
                 ids = [bc.loadURDF(file_name, useFixedBase=fixed_base, flags=URDF_FLAGS)]
             else:

@@ -130,6 +130,8 @@ def test_a_floating_root_reads_and_sets_its_link_frame(engine: PybulletEngine) -
     poses, twists = engine.get_states(["p/pivot"])
     np.testing.assert_allclose(poses, turned, atol=1e-12)
     np.testing.assert_allclose(twists, twist, atol=1e-12)
+    engine.reset_dynamics()  # a rebuild sets the pose as given again
+    np.testing.assert_array_equal(engine.get_states(["p/pivot"])[0], poses)
 
 
 def test_mjcf_lists_the_files_bodies_and_joints(engine: PybulletEngine) -> None:
@@ -411,3 +413,18 @@ def test_a_rewound_model_with_targets_replays_bit_for_bit(engine: PybulletEngine
     first, again = run(), run()
     np.testing.assert_array_equal(first, again)
     assert engine.joints()[0].mode == "none" and not engine._robots.wrenches
+
+
+def test_a_hundred_joint_chain_on_one_line_loads(engine: PybulletEngine) -> None:
+    """PyBullet's XML reader fails on lines past about 16 kB: the engine breaks them."""
+    inertial = ('<inertial><origin xyz="0 0 0.05"/><mass value="0.1"/><inertia ixx="0.0001" '
+                'iyy="0.0001" izz="0.0001" ixy="0" ixz="0" iyz="0"/></inertial>')
+    links = "".join(f'<link name="l{i}">{inertial}</link>' for i in range(101))
+    joints = "".join(
+        f'<joint name="j{i}" type="revolute"><parent link="l{i}"/><child link="l{i + 1}"/>'
+        '<origin xyz="0 0 0.1"/><axis xyz="1 0 0"/>'
+        '<limit lower="-1" upper="1" effort="10" velocity="10"/></joint>' for i in range(100))
+    engine.load_model("urdf", f'<robot name="chain">{links}{joints}</robot>', None, "c/")
+    names = [f"c/j{i}" for i in range(100)]
+    assert [j.name for j in engine.joints()] == names
+    assert engine.get_joint_states(names)[0].shape == (100,)
