@@ -299,6 +299,14 @@ class Client:
         return Stamp.of(self._ok("set_joint_states", sdk_joints.set_joint_states_args(
             names, positions, velocities)))
 
+    def set_joint_states_and_read(self, names: Sequence[str], positions: ArrayLike,
+                                  read: Sequence[str], velocities: ArrayLike | None = None
+                                  ) -> States:
+        """Teleport joints and return these bodies' or links' states where the joints now
+        put them (no step): mirroring a robot is one round trip per cycle."""
+        args = sdk_joints.set_joint_states_args(names, positions, velocities)
+        return States.from_reply(self._ok("set_joint_states", {**args, "read": list(read)}))
+
     def set_joint_targets(self, names: Sequence[str], mode: str,
                           targets: ArrayLike | None = None, kp: ArrayLike | None = None,
                           kd: ArrayLike | None = None,

@@ -61,9 +61,17 @@ def set_joint_states(world: World, args: dict[str, Any]) -> dict[str, Any]:
     velocities = None if raw is None else decode_values(raw, len(names),
                                                         "set_joint_states.velocities")
     world.joints.check_limits(infos, positions, "set_joint_states.positions")
+    read = args.get("read")
+    if read is not None:
+        read = check_names(read, "set_joint_states.read")
+        world.require_known(read)
     world.require_valid()
     world.engine.set_joint_states(names, positions, velocities)
-    return {"count": len(names)}
+    if read is None:
+        return {"count": len(names)}
+    poses, twists = world.get_states(read)  # the links where the joints put them
+    return {"count": len(names), "names": read, "poses": pack_f64(poses),
+            "twists": pack_f64(twists)}
 
 
 def set_joint_targets(world: World, args: dict[str, Any]) -> dict[str, Any]:

@@ -3,10 +3,9 @@ end effector back, as a robot's internal model follows the real arm.
 
 Loads pybullet_data's KUKA iiwa (fixed base) and generates a seeded "recording": smooth
 sums of sinusoids inside the joint limits, one sample per 10 ms. Each cycle sends the
-sample (set_joint_states, positions and velocities) and then steps once and reads the
-flange link's pose in the same reply (step_and_read). The program prints the p50 and p99
-of the cycle (both requests, each waiting for its reply) and of the step-and-read round
-trip alone (the protocol has no request that sets joints and reads in one).
+sample (positions and velocities) and reads the flange link's pose where those joints put
+it, in the same reply (set_joint_states with read: one round trip per cycle). The program
+prints the p50 and p99 of that round trip.
 
 Starts its own daemon on a free loopback port unless --connect is given:
 python examples/mirror_robot.py [--engine mujoco|pybullet] [--seconds S] [--seed N]
@@ -37,10 +36,8 @@ class MirrorRun:
     """What one run measured: cycles, round trips (ms) and where the flange went (m)."""
 
     cycles: int
-    p50_ms: float  # the cycle: set_joint_states, then step_and_read
+    p50_ms: float  # the cycle's one round trip: set the joints, read the flange
     p99_ms: float
-    read_p50_ms: float  # the step_and_read round trip alone
-    read_p99_ms: float
     flange: np.ndarray  # (cycles, 3) positions read back, world frame
 
 
@@ -71,23 +68,20 @@ def mirror(sim: Client, seconds: float, seed: int) -> MirrorRun:
     names = [j.name for j in joints]
     cycles = max(1, round(seconds * RATE_HZ))
     positions, velocities = recording(joints, cycles, seed)
-    round_trips, reads, flange = np.zeros(cycles), np.zeros(cycles), np.zeros((cycles, 3))
+    round_trips, flange = np.zeros(cycles), np.zeros((cycles, 3))
     start = time.perf_counter()
     for i in range(cycles):
         time.sleep(max(0.0, start + i / RATE_HZ - time.perf_counter()))  # the 100 Hz pace
         sent = time.perf_counter()
-        sim.set_joint_states(names, positions[i], velocities[i])
-        read = time.perf_counter()
-        flange[i] = sim.step_and_read(1, [END_EFFECTOR]).positions[0]
-        done = time.perf_counter()
-        round_trips[i], reads[i] = done - sent, done - read
+        states = sim.set_joint_states_and_read(names, positions[i], [END_EFFECTOR],
+                                               velocities[i])
+        round_trips[i] = time.perf_counter() - sent
+        flange[i] = states.positions[0]
     p50, p99 = np.percentile(round_trips, [50, 99]) * 1e3
-    read_p50, read_p99 = np.percentile(reads, [50, 99]) * 1e3
-    print(f"{sim.status().engine}: {cycles} cycles at {RATE_HZ:g} Hz; cycle (set joints, "
-          f"step and read) p50 {p50:.2f} ms, p99 {p99:.2f} ms; step and read alone p50 "
-          f"{read_p50:.2f} ms, p99 {read_p99:.2f} ms; flange travelled "
+    print(f"{sim.status().engine}: {cycles} cycles at {RATE_HZ:g} Hz; round trip (set "
+          f"joints, read the flange) p50 {p50:.2f} ms, p99 {p99:.2f} ms; flange travelled "
           f"{np.sum(np.linalg.norm(np.diff(flange, axis=0), axis=1)):.3f} m")
-    return MirrorRun(cycles, float(p50), float(p99), float(read_p50), float(read_p99), flange)
+    return MirrorRun(cycles, float(p50), float(p99), flange)
 
 
 def main(argv: list[str]) -> MirrorRun:

@@ -33,7 +33,6 @@ def connect(daemon: EmbeddedDaemon) -> list[str]:
 def test_mirror_robot_streams_and_reads_the_flange(daemon: EmbeddedDaemon) -> None:
     run = load_example("mirror_robot").main([*connect(daemon), "--seconds", "0.3"])
     assert run.cycles == 30 and 0 < run.p50_ms <= run.p99_ms
-    assert 0 < run.read_p50_ms <= run.p50_ms and run.read_p99_ms <= run.p99_ms
     assert np.all(np.isfinite(run.flange))
     travelled = np.linalg.norm(np.diff(run.flange, axis=0), axis=1)
     assert np.all(travelled > 0)  # every sample moved the flange

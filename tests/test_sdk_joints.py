@@ -250,3 +250,15 @@ def test_a_closed_client_refuses_every_joint_call(mujoco_sim: Client, method: st
     client.close()
     with pytest.raises(ClientClosedError):
         JOINT_CALLS[method](client)
+
+
+def test_set_joint_states_reads_links_where_the_joints_put_them(sim: Client) -> None:
+    load_kuka(sim)
+    seen = sim.set_joint_states_and_read(KUKA_JOINTS, 0.4, [FLANGE])
+    assert seen.names == [FLANGE]
+    np.testing.assert_array_equal(seen.poses, sim.get_states([FLANGE]).poses)
+    assert seen.step == sim.status().step  # no step was taken
+    before = sim.get_joint_states(KUKA_JOINTS).positions
+    with pytest.raises(NotFoundError, match="lbr_iiwa_link_7"):
+        sim.set_joint_states_and_read(KUKA_JOINTS, 0.0, ["lbr_iiwa_link_77"])
+    np.testing.assert_array_equal(sim.get_joint_states(KUKA_JOINTS).positions, before)
