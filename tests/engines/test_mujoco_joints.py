@@ -6,15 +6,19 @@ holding torque m g d), and what survives recompiles, teleports and restores.
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import mujoco
 import numpy as np
+import pybullet_data
 import pytest
 
 from galton.daemon.engines.mujoco_engine import MujocoEngine
+from galton.daemon.model_files import resolve_model
 from galton.protocol import BodyGroup
-from tests.engines.test_mujoco_models import KUKA, urdf_text
 
+DATA = Path(pybullet_data.getDataPath())
+KUKA = "kuka_iiwa/model.urdf"
 GRAVITY = 9.81
 INF = np.full(1, np.inf)
 ONE, ZERO = np.ones(1), np.zeros(1)
@@ -31,6 +35,12 @@ PENDULUM = """<mujoco><worldbody>
 </worldbody></mujoco>"""
 HANGING = PENDULUM.format(x=0, z=-1)
 HORIZONTAL = PENDULUM.format(x=1, z=0)
+
+
+def urdf_text(relative: str) -> str:
+    """The URDF as the daemon hands it over: its mesh file names absolute."""
+    path = DATA / relative
+    return resolve_model("urdf", path.read_text(), str(path), [])
 
 
 @pytest.fixture

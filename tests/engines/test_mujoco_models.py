@@ -1,14 +1,13 @@
 """Loaded models in the MuJoCo engine on its own: URDF and MJCF roots and links, their
 joints as described, states of links, and how models leave the world.
 
-URDF files come from pybullet_data, passed as text with absolute mesh paths (what the
-daemon's model_files does for the engine).
+URDF files come from pybullet_data, passed as text with absolute mesh paths (made so by
+the daemon's own model_files, as the daemon does for the engine).
 """
 
 from __future__ import annotations
 
 import math
-import re
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -17,6 +16,7 @@ import pybullet_data
 import pytest
 
 from galton.daemon.engines.mujoco_engine import MujocoEngine
+from galton.daemon.model_files import resolve_model
 from galton.protocol import (
     BodyGroup,
     FeatureUnsupportedError,
@@ -50,10 +50,9 @@ ARM = """<mujoco>
 
 
 def urdf_text(relative: str) -> str:
-    """The URDF with its mesh file names absolute (package:// from the model's folder)."""
+    """The URDF as the daemon hands it over: its mesh file names absolute."""
     path = DATA / relative
-    return re.sub(r'filename="(?:package://)?([^"]+)"',
-                  lambda m: f'filename="{path.parent / m.group(1)}"', path.read_text())
+    return resolve_model("urdf", path.read_text(), str(path), [])
 
 
 def urdf_links(relative: str) -> list[str]:
