@@ -44,11 +44,8 @@ def check_new(engine: MujocoEngine, names: Sequence[str]) -> None:
     if len(set(names)) != len(names):
         raise InvalidArgumentError("MuJoCo rejected the change: a name is repeated")
     for name in names:
-        if name in engine._entities:
+        if name in engine._entities:  # a model's links are entities too
             raise NameNotUniqueError(f"an entity named {name!r} already exists")
-        if name in engine._parts:  # a model's inner link, which is no entity of the World's
-            raise InvalidArgumentError(f"MuJoCo already has a body named {name!r} (a part "
-                                       "of a loaded model); choose another name")
         if name == WORLD or name.startswith(mp.PREFIX):
             raise InvalidArgumentError(f"the body name {name!r} is the MuJoCo engine's own "
                                        f"(the world, or beginning {mp.PREFIX!r})")

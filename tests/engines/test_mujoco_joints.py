@@ -251,3 +251,15 @@ def test_a_model_with_joints_never_falls_asleep(engine: MujocoEngine) -> None:
                              np.full(7, 10.0), np.full(7, np.inf))
     engine.step(3000)
     assert engine._data.ntree_awake == engine._model.ntree
+
+
+def test_a_wrench_wakes_a_sleeping_body(engine: MujocoEngine) -> None:
+    engine.spawn([BodyGroup(shape="plane", size=(5, 5), names=["ground"], static=True,
+                            poses=np.array([[0, 0, 0, 0, 0, 0, 1.0]])),
+                  BodyGroup(shape="sphere", size=(0.1,), names=["b"],
+                            poses=np.array([[0, 0, 0.1, 0, 0, 0, 1.0]]))])
+    engine.step(3000)
+    assert engine._data.ntree_awake == 0
+    engine.set_wrenches(["b"], np.array([[0, 0, 50.0, 0, 0, 0]]), None)
+    engine.step(50)
+    assert engine.get_states(["b"])[0][0, 2] > 0.2
