@@ -45,9 +45,13 @@ def drop_assets(spec: mujoco.MjSpec, roots: list[Entity]) -> None:
             root.assets.roots -= 1
             if root.assets.roots == 0:
                 gone |= root.assets.names
-    for kind in ASSET_KINDS if gone else ():
+    delete_assets(spec, gone)
+
+
+def delete_assets(spec: mujoco.MjSpec, names: set[tuple[str, str]]) -> None:
+    for kind in ASSET_KINDS if names else ():
         for element in list(getattr(spec, kind)):
-            if (kind, element.name) in gone:
+            if (kind, element.name) in names:
                 spec.delete(element)
 
 

@@ -26,6 +26,7 @@ from galton.daemon.engines.mujoco_entity import (
     Assets,
     Entity,
     asset_names,
+    delete_assets,
     mujoco_error,
 )
 from galton.daemon.engines.mujoco_rig import (
@@ -60,25 +61,50 @@ def load_model(engine: MujocoEngine, fmt: str, text: str | None, path: str | Non
     top-level body is a model: its root entity, then one entity per link of its subtree."""
     child, facts = parse(fmt, text, path, fixed_base)
     tops, parts = ms.model_names(child, prefix, facts.link_name)
-    check_model_names(engine, [*tops, *(n for names in parts for n in names)],
-                      world_link=bool(facts.renamed))
-    what = f"the {fmt.upper()} model does not fit this world"
+    links = [n for names in parts for n in names]
+    check_model_names(engine, [*tops, *links], world_link=bool(facts.renamed))
+    size = try_attaching(engine, child, prefix, facts, f"the {fmt.upper()} model")
+    enter(engine, child, prefix, facts, tops, parts, size)
+    engine._models += len(tops)
+    engine._parts.update(links)
+    infos: list[EntityInfo] = []
+    for name in tops:
+        root = engine._ids[name]
+        engine._joints.add_model(name, mj.describe_model(engine._model, root, name, prefix,
+                                                         facts))
+        infos.append(model_info(engine, name))
+        infos += [link_info(engine, int(b), name)
+                  for b in np.flatnonzero(engine._model.body_rootid == root)[1:]]
+    return infos
+
+
+def try_attaching(engine: MujocoEngine, child: mujoco.MjSpec, prefix: str, facts: Facts,
+                  what: str) -> mujoco.MjModel:
+    """The world compiled with the model on a copy of the spec (attaching cannot be
+    undone); the compile's warnings go where MuJoCo's others go: to the log."""
     try:
-        trial = engine._spec.copy()  # attaching cannot be undone: try it on a copy first
+        trial = engine._spec.copy()
         with warnings.catch_warnings(record=True) as said:
             warnings.simplefilter("always")
             attach(trial, child.copy(), prefix, trial.worldbody.add_frame(), facts)
             size = trial.compile()
-        for warning in said:  # the compile's words go where MuJoCo's others go: to the log
-            if EMPTY_PREFIX not in str(warning.message):
-                log.warning("MuJoCo: %s", warning.message)
     except MUJOCO_ERRORS as exc:
-        raise mujoco_error(exc, what) from exc
+        raise mujoco_error(exc, f"{what} does not fit this world") from exc
+    for warning in said:
+        if EMPTY_PREFIX not in str(warning.message):
+            log.warning("MuJoCo: %s", warning.message)
+    return size
+
+
+def enter(engine: MujocoEngine, child: mujoco.MjSpec, prefix: str, facts: Facts,
+          tops: list[str], parts: list[tuple[str, ...]], size: mujoco.MjModel) -> None:
+    """Attach the model to the world's spec, book its roots and links, recompile; on a
+    failure take it all out again (its bodies and what uses them, its assets)."""
     frame = engine._spec.worldbody.add_frame()
-    assets = Assets(asset_names(engine._spec), len(tops))
+    before = asset_names(engine._spec)
     try:
         attach(engine._spec, child, prefix, frame, facts)
-        assets.names = asset_names(engine._spec) - assets.names
+        assets = Assets(asset_names(engine._spec) - before, len(tops))
         for name, inner in zip(tops, parts, strict=True):
             body = engine._spec.body(body_name(name))
             engine._entities[name] = Entity(body, static=bool(body.mocap), source="model",
@@ -90,21 +116,11 @@ def load_model(engine: MujocoEngine, fmt: str, text: str | None, path: str | Non
     except (GaltonError, *MUJOCO_ERRORS) as exc:
         for name in [*tops, *(n for names in parts for n in names)]:
             engine._entities.pop(name, None)
-        mp.remove_frame(engine._spec, frame)  # with the model's bodies and what uses them
+        mp.remove_frame(engine._spec, frame)
+        delete_assets(engine._spec, asset_names(engine._spec) - before)
         if isinstance(exc, GaltonError):
             raise
-        raise mujoco_error(exc, what) from exc
-    engine._models += len(tops)
-    engine._parts.update(n for names in parts for n in names)
-    infos: list[EntityInfo] = []
-    for name in tops:
-        root = engine._ids[name]
-        engine._joints.add_model(name, mj.describe_model(engine._model, root, name, prefix,
-                                                         facts))
-        infos.append(model_info(engine, name))
-        infos += [link_info(engine, int(b), name)
-                  for b in np.flatnonzero(engine._model.body_rootid == root)[1:]]
-    return infos
+        raise mujoco_error(exc, "the model does not fit this world") from exc
 
 
 def attach(spec: mujoco.MjSpec, child: mujoco.MjSpec, prefix: str, frame: Any,

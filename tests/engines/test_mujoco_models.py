@@ -233,3 +233,19 @@ def test_a_deleted_models_meshes_go_with_it(engine: MujocoEngine) -> None:
         engine.load_model("urdf", urdf_text(KUKA), None, "")
         engine.delete(["lbr_iiwa_link_0"])
     assert not engine._spec.meshes
+
+
+def test_a_load_refused_at_its_recompile_leaves_no_meshes(
+        engine: MujocoEngine, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A refusal after the attach (the world's recompile, forced to fail here as MuJoCo
+    fails when out of memory) takes the model's assets out with its bodies."""
+    engine.load_model("urdf", urdf_text(KUKA), None, "a/")
+    meshes = len(engine._spec.meshes)
+
+    def refuse(*_: object) -> None:
+        raise InvalidArgumentError("refused")
+
+    monkeypatch.setattr(MujocoEngine, "_recompile", refuse)
+    with pytest.raises(InvalidArgumentError, match="refused"):
+        engine.load_model("urdf", urdf_text(KUKA), None, "b/")
+    assert len(engine._spec.meshes) == meshes and "b/lbr_iiwa_link_0" not in engine._entities
