@@ -62,6 +62,7 @@ class World:
         self.step_index = 0
         self.faulted = False
         self.verified_step = 0  # the last step whose state was checked finite
+        self.teleported = False  # a request set states since the last check
         self._time_base = (0, 0.0, engine.timestep)  # (step, sim time, dt) since dt changed
         self.joints = JointTable(engine)
         self.wrenches = WrenchSchedule()
@@ -204,6 +205,7 @@ class World:
                 raise InvalidArgumentError(
                     f"entity {static[0]!r} is static: it cannot be given a non-zero twist")
         self.engine.set_states(names, poses, twists)
+        self.teleported = True  # checked before anything reads or steps from it
 
     def update(self, names: Sequence[str], props: BodyProperties) -> None:
         self.require_known(names)
@@ -257,16 +259,18 @@ class World:
         before any state leaves the daemon, never per step.
         """
         self.require_valid()
-        if self.verified_step == self.step_index:
+        if self.verified_step == self.step_index and not self.teleported:
             return
         if not self.engine.state_within(self.limits.max_position, self.limits.max_speed):
             self.faulted = True
+            when = (f"within steps {self.verified_step + 1}..{self.step_index}"
+                    if self.verified_step < self.step_index else "by the states a request set")
             raise PhysicsError(
                 f"the simulation diverged (NaN, infinite, or beyond "
-                f"{self.limits.max_position:g} m or {self.limits.max_speed:g} m/s) within steps "
-                f"{self.verified_step + 1}..{self.step_index}; the world is paused and "
-                "its states will not be served until a reset")
+                f"{self.limits.max_position:g} m or {self.limits.max_speed:g} m/s) {when}; "
+                "the world is paused and its states will not be served until a reset")
         self.verified_step = self.step_index
+        self.teleported = False
 
     def reset(self, scope: str) -> None:
         check_scope(scope)
@@ -283,6 +287,7 @@ class World:
             self.wrenches.ends.clear()
             self.faulted = False
             self.verified_step = self.step_index
+            self.teleported = False
         if scope == "state":
             self.restore_initial_states()
 
@@ -300,6 +305,7 @@ class World:
         self.engine.reset_dynamics()
         self.faulted = False
         self.verified_step = self.step_index
+        self.teleported = False
 
 
 def check_scope(value: Any) -> str:

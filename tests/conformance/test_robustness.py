@@ -123,6 +123,18 @@ def test_a_world_diverging_while_playing_pauses_and_the_daemon_serves_on(sim: Cl
     assert sim.step(2).step == 2
 
 
+def test_a_diverged_state_set_by_a_request_is_never_served(sim: Client) -> None:
+    """The states a request sets are checked before anything reads them, steps or not."""
+    sim.spawn(plane(), spheres(["ball"], [[0, 0, 0.5]], 0.05))
+    sim.set_states(["ball"], poses=np.array([[4e299, 0, 0.5, 0, 0, 0, 1]]))
+    assert sim.status().step == 0
+    with pytest.raises(PhysicsError, match="by the states a request set"):
+        sim.get_states(["ball"])
+    assert sim.status().faulted
+    sim.reset("state")
+    np.testing.assert_array_equal(sim.get_states(["ball"]).positions, [[0, 0, 0.5]])
+
+
 # -- rejected yet applied --------------------------------------------------------------------
 def test_play_refused_during_a_step_leaves_the_target_rtf(sim: Client, long_step: Any) -> None:
     before = sim.status().target_rtf
