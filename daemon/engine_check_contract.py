@@ -13,14 +13,11 @@ import numpy as np
 
 from galton.daemon.engine import (
     FEATURE_DELETE,
-    FEATURE_LOAD_MODEL,
     FEATURE_SET_STATE,
-    FEATURE_SPAWN,
-    FEATURE_STATIC_POSE,
     FEATURE_UPDATE_FRICTION,
     FEATURE_UPDATE_MASS,
     FEATURE_UPDATE_RESTITUTION,
-    FEATURE_UPDATE_RGBA,
+    KNOWN_FEATURES,
     Engine,
 )
 from galton.daemon.engine_check_support import (
@@ -43,9 +40,7 @@ from galton.protocol import BODY_SHAPES, BodyProperties, Capabilities, NotFoundE
 
 STATE_ATOL = 1e-9  # what a pose or twist set may lose on its way into an engine and back
 TWIST = (0.3, -0.2, 0.5, 1.0, -2.0, 0.5)
-FEATURES = (FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDATE_MASS,
-            FEATURE_UPDATE_FRICTION, FEATURE_UPDATE_RESTITUTION, FEATURE_UPDATE_RGBA,
-            FEATURE_LOAD_MODEL, FEATURE_STATIC_POSE)
+FEATURES = KNOWN_FEATURES
 
 
 def check_interface(ctx: CheckContext) -> None:
