@@ -22,8 +22,10 @@ The checks: the interface contract (methods and description; shapes and dtypes o
 they return), spawn of every shape static and dynamic, the get/set states round trip,
 effective properties, delete, clear, unknown names, refused parameters, model loading and
 refused models, the timestep, free fall, a ball coming to rest on a plane, static bodies,
-determinism, the rewind to the created state, edits that keep other bodies' states, and
-state_within. Each check's docstring says what it guarantees (``Check.guarantee``).
+determinism, the rewind to the created state, edits that keep other bodies' states,
+state_within; and for articulated models, links and joints, joint states, the target law,
+wrenches and the rewind of joints. Each check's docstring says what it guarantees
+(``Check.guarantee``).
 
 Errors, all ``GaltonError`` (the project's root error)::
 
@@ -45,6 +47,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from galton.daemon import engine_check_contract as contract
+from galton.daemon import engine_check_joints as joints
 from galton.daemon import engine_check_physics as physics
 from galton.daemon import engine_check_refusals as refusals
 from galton.daemon.engine_check_support import (
@@ -96,6 +99,11 @@ ENGINE_CHECKS: tuple[Check, ...] = (
     Check("rewind", physics.check_rewind),
     Check("edits-keep-state", physics.check_edits_keep_state),
     Check("state-within", physics.check_state_within),
+    Check("model-links-and-joints", joints.check_model_links_and_joints),
+    Check("joint-state-round-trip", joints.check_joint_state_round_trip),
+    Check("target-law", joints.check_target_law),
+    Check("wrench", joints.check_wrench),
+    Check("joint-rewind", joints.check_joint_rewind),
 )
 _BY_NAME = {check.name: check for check in ENGINE_CHECKS}
 
