@@ -1,23 +1,19 @@
-"""Articulated models through a real daemon, the same on every engine: loading robots by
-path, their links and joints, joint states, targets and wrenches, and what a bad request
-leaves (nothing changed)."""
+"""Joints through a real daemon, the same on every engine: joint states, reads on a step,
+targets and their modes, stop and reset, wrenches, and what a bad request leaves (nothing
+changed)."""
 
 from __future__ import annotations
 
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
-from conftest import start_daemon
 from support_models import (
     KUKA_JOINTS,
     KUKA_KD,
     KUKA_KP,
-    ROBOTS,
     Pendulum,
     apply_wrench,
-    free_box_urdf,
     get_joint_states,
     joints,
     load,
@@ -26,91 +22,12 @@ from support_models import (
     set_joint_states,
     set_targets,
     step_joints,
-    urdf_joints,
-    urdf_links,
 )
 
-from galton.client import Client, EmbeddedDaemon, body_group, spheres
-from galton.protocol import InvalidArgumentError, JointInfo, NotFoundError
+from galton.client import Client, body_group, spheres
+from galton.protocol import InvalidArgumentError, NotFoundError
 
 
-# -- loading: links and joints ---------------------------------------------------------
-@pytest.mark.parametrize("robot", list(ROBOTS))
-def test_a_robot_loads_by_path_with_every_link(sim: Client, robot: str) -> None:
-    path = ROBOTS[robot]
-    names = load(sim, "urdf", path=path)
-    declared = urdf_links(path)
-    assert sorted(names) == sorted(declared)
-    root = names[0]
-    entities = {e.name: e for e in sim.list()}
-    assert set(entities) == set(declared)
-    assert (entities[root].shape, entities[root].static) == ("model", True)
-    assert {e.model for e in entities.values()} == {root}
-    assert {e.source for e in entities.values()} == {"model"}
-    assert {entities[n].shape for n in names[1:]} <= {"link"}
-    assert sim.get_states(names).poses.shape == (len(names), 7)
-
-
-@pytest.mark.parametrize("robot", list(ROBOTS))
-def test_joints_are_those_the_file_declares(sim: Client, robot: str) -> None:
-    path = ROBOTS[robot]
-    [root, *_] = load_robot(sim, robot)
-    listed = {j.name: j for j in joints(sim)}
-    declared = urdf_joints(path)
-    assert sorted(listed) == sorted(d.name for d in declared)
-    for want in declared:
-        got = listed[want.name]
-        assert (got.model, got.type, got.parent, got.child, got.mode) == (
-            root, want.type, want.parent, want.child, "none"), want.name
-        np.testing.assert_allclose(got.axis, want.axis, atol=1e-9, err_msg=want.name)
-        assert (got.lower, got.upper) == pytest.approx((want.lower, want.upper)), want.name
-        assert got.damping == pytest.approx(want.damping), want.name
-
-
-@pytest.mark.parametrize("robot", list(ROBOTS))
-def test_both_engines_list_the_same_joints(daemons: dict[str, EmbeddedDaemon],
-                                           robot: str) -> None:
-    (mj_joints, mj_links), (pb_joints, pb_links) = (
-        _joints_and_links(start_daemon(daemons, engine), robot)
-        for engine in ("mujoco", "pybullet"))
-    assert mj_links == pb_links
-    assert mj_joints.keys() == pb_joints.keys()
-    differ = {name: (mj_joints[name], pb_joints[name]) for name in mj_joints
-              if mj_joints[name] != pb_joints[name]}
-    assert not differ, f"(mujoco, pybullet) differ: {differ}"
-
-
-def _joints_and_links(daemon: EmbeddedDaemon, robot: str
-                      ) -> tuple[dict[str, JointInfo], list[tuple[object, ...]]]:
-    with Client(daemon.instance, daemon.endpoint, timeout=20.0) as client:
-        client.load_world(daemon.engine)
-        load_robot(client, robot)
-        return ({j.name: j for j in joints(client)},
-                sorted((e.name, e.shape, e.model, e.static) for e in client.list()))
-
-
-def test_an_mjcf_model_has_links_and_joints(sim: Client) -> None:
-    names = load(sim, "mjcf", text=Pendulum().mjcf(), prefix="p/")
-    assert names == ["p/base", "p/bob"]
-    shapes = {e.name: (e.shape, e.model) for e in sim.list()}
-    assert shapes == {"p/base": ("model", "p/base"), "p/bob": ("link", "p/base")}
-    [hinge] = joints(sim)
-    assert (hinge.name, hinge.model, hinge.type, hinge.parent, hinge.child) == (
-        "p/hinge", "p/base", "revolute", "p/base", "p/bob")
-    assert hinge.axis == pytest.approx((0, 1, 0))
-    assert joints(sim, model="p/base") == [hinge]
-    assert joints(sim, names=["p/hinge"]) == [hinge]
-
-
-def test_a_prefix_names_links_and_joints(sim: Client) -> None:
-    load_robot(sim, "kuka", "a/")
-    load_robot(sim, "kuka", "b/")
-    names = [j.name for j in joints(sim, model="b/lbr_iiwa_link_0")]
-    assert names == [f"b/{n}" for n in KUKA_JOINTS]
-    assert {j.parent.split("/")[0] for j in joints(sim, model="a/lbr_iiwa_link_0")} == {"a"}
-
-
-# -- joint states ----------------------------------------------------------------------
 def test_joint_states_round_trip(sim: Client) -> None:
     load_robot(sim, "kuka")
     rng = np.random.default_rng(24)
@@ -127,10 +44,12 @@ def test_joint_states_round_trip(sim: Client) -> None:
     np.testing.assert_allclose(read.velocities, velocities[:2], atol=1e-12)
 
 
+
 def test_every_scalar_joint_is_read_when_no_names_are_given(sim: Client) -> None:
     load_robot(sim, "r2d2")
     scalar = [j.name for j in joints(sim) if j.type in ("revolute", "prismatic")]
     assert sorted(get_joint_states(sim).names) == sorted(scalar)
+
 
 
 def test_a_link_pose_follows_its_joint(sim: Client) -> None:
@@ -140,6 +59,7 @@ def test_a_link_pose_follows_its_joint(sim: Client) -> None:
     np.testing.assert_allclose(pose[:3], [0, 0, 2], atol=1e-9)  # the link frame: the pivot
     # a quarter turn about y, scalar last, qw >= 0
     np.testing.assert_allclose(pose[3:], [0, np.sqrt(0.5), 0, np.sqrt(0.5)], atol=1e-9)
+
 
 
 def test_step_reads_joints_in_the_same_reply(sim: Client) -> None:
@@ -154,38 +74,14 @@ def test_step_reads_joints_in_the_same_reply(sim: Client) -> None:
     assert np.abs(stepped.velocities).max() > 0  # gravity moved the arm
 
 
+
 def test_run_until_reads_joints(sim: Client) -> None:
     load_robot(sim, "kuka")
     result = sim.call("run_until", {"sim_time": 0.05, "read_joints": KUKA_JOINTS[:3]})
     assert list(result["joints"]["names"]) == KUKA_JOINTS[:3]
 
 
-# -- links move with their model -------------------------------------------------------
-def test_a_link_alone_is_refused_and_nothing_changes(sim: Client) -> None:
-    load_robot(sim, "kuka")
-    link = "lbr_iiwa_link_3"
-    before = model_snapshot(sim)
-    with pytest.raises(InvalidArgumentError, match="lbr_iiwa_link_0"):
-        sim.set_states([link], poses=np.array([[0, 0, 1, 0, 0, 0, 1.0]]))
-    with pytest.raises(InvalidArgumentError, match="lbr_iiwa_link_0"):
-        sim.update([link], friction=0.3)
-    with pytest.raises(InvalidArgumentError, match="lbr_iiwa_link_0"):
-        sim.delete([link])
-    model_snapshot(sim).assert_same(before)
 
-
-def test_deleting_a_root_removes_its_links_and_joints(sim: Client) -> None:
-    load_robot(sim, "kuka")
-    load(sim, "urdf", text=Pendulum().urdf(), prefix="p/")
-    sim.delete(["lbr_iiwa_link_0"])
-    assert sorted(e.name for e in sim.list()) == ["p/base", "p/bob"]
-    assert [j.name for j in joints(sim)] == ["p/hinge"]
-    with pytest.raises(NotFoundError):
-        get_joint_states(sim, KUKA_JOINTS[:1])
-    step_joints(sim, 10, ["p/hinge"])  # the rest still steps
-
-
-# -- reset and stop --------------------------------------------------------------------
 def _drive(sim: Client) -> np.ndarray:
     """Joint states set, position targets on some joints, a wrench on a link: 200 steps."""
     set_joint_states(sim, KUKA_JOINTS, np.linspace(-0.5, 0.5, 7), 0.1)
@@ -196,6 +92,7 @@ def _drive(sim: Client) -> np.ndarray:
     read = step_joints(sim, 200, KUKA_JOINTS)
     poses = sim.get_states().poses
     return np.concatenate([read.positions, read.velocities, read.efforts, poses.ravel()])
+
 
 
 @pytest.mark.parametrize("how", ["stop", "reset-state"])
@@ -218,6 +115,7 @@ def test_stop_and_reset_restore_joints_and_release_targets(sim: Client, how: str
     np.testing.assert_array_equal(second, first)  # bit-identical replay
 
 
+
 def test_released_joints_swing_freely_after_stop(sim: Client) -> None:
     load(sim, "urdf", text=Pendulum().urdf())
     set_joint_states(sim, ["hinge"], 0.5)
@@ -229,7 +127,7 @@ def test_released_joints_swing_freely_after_stop(sim: Client) -> None:
     assert read.positions[0] < 0.4 and read.efforts[0] == 0.0  # gravity alone
 
 
-# -- bad input: a typed error, nothing changed -----------------------------------------
+
 def test_unknown_joint_is_not_found_with_a_suggestion(sim: Client) -> None:
     load_robot(sim, "kuka")
     before = model_snapshot(sim)
@@ -244,6 +142,7 @@ def test_unknown_joint_is_not_found_with_a_suggestion(sim: Client) -> None:
     model_snapshot(sim).assert_same(before)
 
 
+
 def test_a_target_on_a_fixed_joint_is_invalid(sim: Client) -> None:
     load_robot(sim, "panda")
     before = model_snapshot(sim)
@@ -252,6 +151,7 @@ def test_a_target_on_a_fixed_joint_is_invalid(sim: Client) -> None:
     with pytest.raises(InvalidArgumentError, match="panda_joint8"):
         get_joint_states(sim, ["panda_joint8"])
     model_snapshot(sim).assert_same(before)
+
 
 
 @pytest.mark.parametrize("gains", [
@@ -270,6 +170,7 @@ def test_bad_gains_are_invalid_and_apply_nothing(sim: Client, gains: dict[str, A
     assert step_joints(sim, 1, KUKA_JOINTS[:2]).efforts.tolist() == [2.0, 2.0]
 
 
+
 def test_bad_targets_and_states_are_invalid(sim: Client) -> None:
     load_robot(sim, "kuka")
     before = model_snapshot(sim)
@@ -284,16 +185,6 @@ def test_bad_targets_and_states_are_invalid(sim: Client) -> None:
     model_snapshot(sim).assert_same(before)
 
 
-def test_a_missing_mesh_is_invalid_naming_it(sim: Client, tmp_path: Path) -> None:
-    load(sim, "urdf", text=Pendulum().urdf(), prefix="p/")
-    before = model_snapshot(sim)
-    missing = tmp_path / "meshes" / "nowhere.stl"
-    text = ROBOTS["kuka"].read_text().replace("meshes/link_3.stl", str(missing))
-    with pytest.raises(InvalidArgumentError, match=r"nowhere\.stl") as error:
-        load(sim, "urdf", text=text, search_path=str(ROBOTS["kuka"].parent))
-    assert "nowhere.stl" in str(error.value.details.get("missing_file"))
-    model_snapshot(sim).assert_same(before)
-
 
 def test_a_wrench_on_a_fixed_base_is_invalid(sim: Client) -> None:
     load_robot(sim, "kuka")
@@ -305,7 +196,7 @@ def test_a_wrench_on_a_fixed_base_is_invalid(sim: Client) -> None:
     model_snapshot(sim).assert_same(before)
 
 
-# -- wrenches --------------------------------------------------------------------------
+
 def _push(sim: Client, groups: list[int], duration_steps: int | None) -> np.ndarray:
     """A 2 kg ball pushed along x (for ``duration_steps`` steps, or until cleared after
     10), stepped in these groups of steps; its state after them."""
@@ -320,6 +211,7 @@ def _push(sim: Client, groups: list[int], duration_steps: int | None) -> np.ndar
     return np.concatenate([states.poses[0], states.twists[0]])
 
 
+
 def test_a_wrench_duration_ends_on_its_exact_step(sim: Client) -> None:
     sim.set_params({"gravity": [0.0, 0.0, 0.0]})
     sim.spawn(body_group("sphere", (0.1,), ["ball"], [[0, 0, 1]], mass=2.0))
@@ -331,43 +223,6 @@ def test_a_wrench_duration_ends_on_its_exact_step(sim: Client) -> None:
     longer = _push(sim, [15], 11)
     assert longer[7] > cleared[7]  # one more step of push: faster
 
-
-@pytest.mark.parametrize("fmt", ["urdf", "mjcf"])
-def test_a_model_without_collision_geometry_loads(sim: Client, fmt: str) -> None:
-    pendulum = Pendulum(geom=False)
-    load(sim, fmt, text=pendulum.urdf() if fmt == "urdf" else pendulum.mjcf())
-    set_joint_states(sim, ["hinge"], 0.3)
-    assert step_joints(sim, 10, ["hinge"]).positions[0] < 0.3
-
-
-# -- floating bases, roots and what a model carries ------------------------------------
-def test_a_floating_base_has_a_free_joint(sim: Client) -> None:
-    names = load(sim, "urdf", text=free_box_urdf(2.0), prefix="f/", fixed_base=False)
-    assert names == ["f/crate"]
-    [info] = sim.list()
-    assert (info.shape, info.static, info.model) == ("model", False, "f/crate")
-    [free] = joints(sim)
-    assert (free.name, free.type, free.parent, free.child) == (
-        "f/crate:free", "free", "", "f/crate")
-    assert free.axis == (0.0, 0.0, 0.0)
-    with pytest.raises(InvalidArgumentError, match="get_states"):
-        get_joint_states(sim, ["f/crate:free"])
-    sim.step(20)
-    assert sim.get_states(names).positions[0, 2] < 0  # it falls
-
-
-def test_a_root_teleport_carries_its_links(sim: Client) -> None:
-    load_robot(sim, "kuka")
-    set_joint_states(sim, KUKA_JOINTS, 0.3)
-    links = [e.name for e in sim.list()]
-    before = sim.get_states(links).poses
-    moved = before[0].copy()
-    moved[:3] += [1.0, -2.0, 0.5]
-    sim.set_states(links[:1], poses=moved[None])
-    after = sim.get_states(links).poses
-    np.testing.assert_allclose(after[:, :3] - before[:, :3], [[1.0, -2.0, 0.5]] * len(links),
-                               atol=1e-6)  # PyBullet's link frames are float32
-    np.testing.assert_allclose(get_joint_states(sim, KUKA_JOINTS).positions, 0.3, atol=1e-12)
 
 
 def test_joints_show_the_mode_they_hold(sim: Client) -> None:
@@ -381,18 +236,6 @@ def test_joints_show_the_mode_they_hold(sim: Client) -> None:
     assert joints(sim, names=KUKA_JOINTS[:1])[0].mode == "none"
     assert step_joints(sim, 1, KUKA_JOINTS[:1]).efforts[0] == 0.0
 
-
-def test_a_reloaded_model_holds_no_old_target_or_wrench(sim: Client) -> None:
-    load_robot(sim, "kuka")
-    set_targets(sim, KUKA_JOINTS, "effort", 5.0)
-    apply_wrench(sim, ["lbr_iiwa_link_7"], [[0, 0, 50, 0, 0, 0]])
-    sim.delete(["lbr_iiwa_link_0"])
-    load_robot(sim, "kuka")
-    assert {j.mode for j in joints(sim)} == {"none"}
-    sim.set_params({"gravity": [0.0, 0.0, 0.0]})
-    read = step_joints(sim, 20, KUKA_JOINTS)
-    np.testing.assert_array_equal(read.efforts, 0.0)
-    np.testing.assert_allclose(read.positions, 0.0, atol=1e-12)  # nothing pushes it
 
 
 def _held_run(sim: Client, churn: bool) -> np.ndarray:
@@ -413,25 +256,9 @@ def _held_run(sim: Client, churn: bool) -> np.ndarray:
     return np.concatenate([read.positions, read.velocities, read.efforts])
 
 
+
 def test_a_rebuild_carries_joint_states_targets_and_wrenches(sim: Client) -> None:
     quiet = _held_run(sim, churn=False)
     sim.reset("all")
     np.testing.assert_array_equal(_held_run(sim, churn=True), quiet)
 
-
-def test_each_top_level_mjcf_body_is_a_model_with_its_joints(sim: Client) -> None:
-    text = Pendulum().mjcf().replace("</worldbody>", """<body name="arm" pos="1 0 2">
-      <body name="hand"><joint name="wrist" type="slide" axis="1 0 0" range="-0.1 0.1"
-          limited="true"/><geom type="sphere" size="0.05" mass="0.5"/></body></body>
-      </worldbody>""")
-    names = load(sim, "mjcf", text=text, prefix="m/")
-    assert sorted(names) == ["m/arm", "m/base", "m/bob", "m/hand"]
-    models = {e.name: e.model for e in sim.list()}
-    assert models == {"m/base": "m/base", "m/bob": "m/base", "m/arm": "m/arm",
-                      "m/hand": "m/arm"}
-    wrist = joints(sim, model="m/arm")
-    assert [(j.name, j.type, j.parent, j.child) for j in wrist] == [
-        ("m/wrist", "prismatic", "m/arm", "m/hand")]
-    assert (wrist[0].lower, wrist[0].upper) == pytest.approx((-0.1, 0.1))
-    sim.delete(["m/base"])
-    assert [j.name for j in joints(sim)] == ["m/wrist"]
