@@ -9,8 +9,8 @@ For each engine:
     engine, packing), timed in this process on a World like the daemon's; the same read
     through a daemon on loopback for comparison. Target: ≤ 1 ms inside the daemon.
 (b) the mirror loop of examples/mirror_robot.py on loopback: at 100 Hz (paced by the wall
-    clock), a 7-joint sample sent with set_joint_states, then step(1) reading the flange
-    link's pose; the cycle's two requests timed together. Target: p99 ≤ 2 ms.
+    clock), a 7-joint sample sent with set_joint_states reading the flange link's pose
+    back in the same reply: one round trip per cycle. Target: p99 ≤ 2 ms.
 (c) lockstep at 1 kHz: the KUKA at a 1 ms timestep; each cycle sets 7 position targets and
     steps once reading the 7 joints (set_joint_targets + step(1) with read_joints), as
     fast as it goes, for ``--lockstep-seconds`` of simulated time. Reported: the achieved
@@ -92,22 +92,17 @@ def mirror(sim: Client, seconds: float) -> dict[str, Any]:
     sim.call("load_model", kuka_args())
     cycles = round(seconds * 100)
     positions, velocities = recording(cycles)
-    cycle, set_states, step_read = [], [], []
+    cycle = []
     start = time.perf_counter()
     for i in range(cycles):
         time.sleep(max(0.0, start + i / 100 - time.perf_counter()))  # the 100 Hz pace
         sent = time.perf_counter()
-        sim.call("set_joint_states", {"names": KUKA_JOINTS, "positions": pack_f64(positions[i]),
-                                      "velocities": pack_f64(velocities[i])})
-        between = time.perf_counter()
-        result = sim.call("step", {"count": 1, "read": [FLANGE]})
-        done = time.perf_counter()
-        cycle.append(done - sent)
-        set_states.append(between - sent)
-        step_read.append(done - between)
+        result = sim.call("set_joint_states", {
+            "names": KUKA_JOINTS, "positions": pack_f64(positions[i]),
+            "velocities": pack_f64(velocities[i]), "read": [FLANGE]})
+        cycle.append(time.perf_counter() - sent)
         assert unpack_f64(result["poses"], 7).shape == (1, 7)
-    return {**percentiles_ms(cycle), "set_joint_states": percentiles_ms(set_states),
-            "step_read": percentiles_ms(step_read)}
+    return percentiles_ms(cycle)
 
 
 # -- (c) the 1 kHz lockstep loop -------------------------------------------------------
@@ -152,14 +147,12 @@ def print_tables(results: list[dict[str, Any]], args: argparse.Namespace) -> Non
     for r in results:
         print(f"| {r['engine']} | {_pair(r['engine_call'])} | {_pair(r['operation'])} | "
               f"{_pair(r['daemon_read'])} |")
-    print("\n| engine | mirror at 100 Hz: cycle p50 / p99 | set_joint_states p50 / p99 | "
-          "step(1) reading the flange p50 / p99 | lockstep 1 kHz: rate | cycle p50 / p99 | "
-          "cycles > 1 ms |")
-    print("| --- | --- | --- | --- | --- | --- | --- |")
+    print("\n| engine | mirror at 100 Hz: round trip p50 / p99 | lockstep 1 kHz: rate | "
+          "cycle p50 / p99 | cycles > 1 ms |")
+    print("| --- | --- | --- | --- | --- |")
     for r in results:
         lock, mir = r["lockstep"], r["mirror"]
-        print(f"| {r['engine']} | {_pair(mir)} | {_pair(mir['set_joint_states'])} | "
-              f"{_pair(mir['step_read'])} | {lock['rate_hz']:.0f} Hz | {_pair(lock)} | "
+        print(f"| {r['engine']} | {_pair(mir)} | {lock['rate_hz']:.0f} Hz | {_pair(lock)} | "
               f"{100 * lock['over_1ms']:.1f} % |")
     print(f"\n({args.reads} reads; mirror {args.mirror_seconds:g} s; lockstep "
           f"{args.lockstep_seconds:g} s of sim time; lockstep tracking error after 0.5 s: "
