@@ -43,12 +43,13 @@ FEATURE_TARGET_POSITION = "target_position"
 FEATURE_TARGET_VELOCITY = "target_velocity"
 FEATURE_TARGET_EFFORT = "target_effort"
 FEATURE_WRENCH = "wrench"
+FEATURE_SNAPSHOT = "snapshot"
 # Every feature flag the protocol knows: an engine lists those it has, and no other.
 KNOWN_FEATURES = (FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDATE_MASS,
                   FEATURE_UPDATE_FRICTION, FEATURE_UPDATE_RESTITUTION, FEATURE_UPDATE_RGBA,
                   FEATURE_LOAD_MODEL, FEATURE_STATIC_POSE, FEATURE_JOINTS,
                   FEATURE_JOINT_TARGETS, FEATURE_TARGET_POSITION, FEATURE_TARGET_VELOCITY,
-                  FEATURE_TARGET_EFFORT, FEATURE_WRENCH)
+                  FEATURE_TARGET_EFFORT, FEATURE_WRENCH, FEATURE_SNAPSHOT)
 
 
 class Engine(ABC):
@@ -199,6 +200,20 @@ class Engine(ABC):
     def restore_joints(self) -> None:  # noqa: B027 - nothing to restore without joints
         """Every joint back to its as-loaded position at rest, every target to none, every
         wrench cleared (reset "state" and stop, after the roots' poses are restored)."""
+
+    # -- snapshots (docs/protocol.md, "snapshot") -------------------------------------------
+    def snapshot(self) -> dict[str, Any]:
+        """The complete world (scene, parameters, dynamic state) as plain data msgpack can
+        carry (never pickle: clients send snapshots back). Restoring it into a fresh engine
+        and taking the same steps gives the same states bit for bit (each engine states
+        exactly what it promises in its own docstring)."""
+        raise self._unsupported("snapshots")
+
+    def restore(self, data: dict[str, Any]) -> None:
+        """Rebuild, on this FRESH engine, the world a snapshot describes. ``data`` is
+        untrusted: InvalidArgumentError for anything malformed or from another engine or
+        format (the daemon then discards this engine; the live world is untouched)."""
+        raise self._unsupported("snapshots")
 
     def _unsupported(self, what: str) -> FeatureUnsupportedError:
         return FeatureUnsupportedError(f"the {self.name} engine does not support {what}")
