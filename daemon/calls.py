@@ -4,6 +4,20 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, Protocol
+
+if TYPE_CHECKING:
+    from galton.daemon.world import World
+
+
+class Sampler(Protocol):
+    """What a prediction records every ``every`` steps, and the reply it makes of it."""
+
+    every: int
+
+    def take(self, world: World) -> None: ...
+
+    def result(self, steps: int) -> dict[str, Any]: ...
 
 
 @dataclass
@@ -43,6 +57,10 @@ class StepJob:
     read: list[str] | None = None  # entities whose states the reply carries, checked up front
     rest: RestCheck | None = None
     read_joints: list[str] | None = None  # 1-DOF joints whose states the reply carries
+    world: World | None = None  # a side world's (or a prediction's); None: the live world
+    sampler: Sampler | None = None  # a prediction's sampling
+    step_cost: float = 1e-4  # seconds per step, for chunks of a side world's steps
+    scratch: bool = False  # its world is a prediction's copy, closed when the job ends
 
     @property
     def done(self) -> int:
@@ -50,6 +68,9 @@ class StepJob:
 
     def steps_to_next_check(self) -> int:
         """Steps until the next rest check (all remaining ones when there is none)."""
-        if self.rest is None:
-            return self.remaining
-        return min(self.remaining, self.rest.every - self.done % self.rest.every)
+        left = self.remaining
+        if self.rest is not None:
+            left = min(left, self.rest.every - self.done % self.rest.every)
+        if self.sampler is not None:
+            left = min(left, self.sampler.every - self.done % self.sampler.every)
+        return left

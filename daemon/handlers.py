@@ -14,7 +14,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
-from galton.daemon import ops, ops_joints, time_control
+from galton.daemon import compare, ops, ops_joints, predict, time_control, worlds
 from galton.daemon.calls import Call
 from galton.protocol.operations import OPERATIONS
 
@@ -31,9 +31,11 @@ def _scene(name: str, apply: ops.SceneOp) -> Handler:
     mutates = OPERATIONS[name].mutates
 
     def handle(loop: SimLoop, call: Call, args: dict[str, Any]) -> Result:
-        result = apply(loop.world, args)
+        world = loop.world_for(args)
+        result = apply(world, args)
         if mutates:
-            loop.emit({"kind": "scene", "op": name, "step": loop.world.step_index})
+            loop.emit({"kind": "scene", "op": name, "world": world.name,
+                       "step": world.step_index})
             loop.check_job_reads()
         return result
     return handle
@@ -63,6 +65,16 @@ HANDLERS: dict[str, Handler] = {
     "set_joint_targets": _scene("set_joint_targets", ops_joints.set_joint_targets),
     "apply_wrench": _scene("apply_wrench", ops_joints.apply_wrench),
     "clear_wrenches": _scene("clear_wrenches", ops_joints.clear_wrenches),
+    "snapshot": worlds.snapshot,
+    "restore": worlds.restore,
+    "snapshots": worlds.snapshots,
+    "delete_snapshot": worlds.delete_snapshot,
+    "list_worlds": worlds.list_worlds,
+    "create_world": worlds.create_world,
+    "fork_world": worlds.fork_world,
+    "delete_world": worlds.delete_world,
+    "predict": predict.predict,
+    "compare": _scene("compare", compare.compare),
     "get_params": _scene("get_params", ops.get_params),
     "set_params": _scene("set_params", ops.set_params),
 }

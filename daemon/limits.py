@@ -22,6 +22,9 @@ class Limits:
     max_string_bytes: int = 4096  # any one string of a request (names are ≤ 128 chars)
     max_model_bytes: int = 16 * MIB  # a model's text, or the file a load_model path names
     max_entities: int = 100_000  # entities in one world
+    max_worlds: int = 8  # worlds one daemon holds, the live one included
+    max_snapshots: int = 16  # named snapshot slots one daemon holds
+    max_snapshot_bytes: int = 256 * MIB  # all slots together
     max_steps: int = 1_000_000_000  # steps one step / run_until request may take
     max_position: float = 1e6  # metres from the origin beyond which a world has diverged
     max_speed: float = 1e5  # m/s (or rad/s) beyond which a world has diverged

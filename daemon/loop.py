@@ -18,12 +18,13 @@ from typing import Any
 
 import numpy as np
 
-from galton.daemon import loop_status, time_control
+from galton.daemon import loop_status, side_jobs, time_control
 from galton.daemon.calls import Call, StepJob, Task
 from galton.daemon.handlers import HANDLERS
 from galton.daemon.limits import DEFAULT_LIMITS, Limits
 from galton.daemon.monitor import Pacer, ProcessMonitor, RtfWindow
 from galton.daemon.ops_joints import joint_states
+from galton.daemon.snapshot_slots import SnapshotSlots
 from galton.daemon.world import World
 from galton.protocol import (
     DecodeLimits,
@@ -41,7 +42,7 @@ from galton.protocol import (
     error_reply,
     pack_f64,
 )
-from galton.protocol.errors import brief
+from galton.protocol.errors import brief, did_you_mean
 from galton.protocol.operations import OPERATIONS, Operation, operation
 
 log = logging.getLogger("galton.daemon")
@@ -90,6 +91,8 @@ class SimLoop:
         self.publish_event = publish_event
         self.telemetry_period = 1.0 / telemetry_rate_hz if telemetry_rate_hz > 0 else math.inf
         self.engine_factory = engine_factory
+        self.side: dict[str, World] = {}  # side worlds by name (daemon/worlds.py)
+        self.slots = SnapshotSlots(limits)
         self._step_cost = 1e-4
         self._last_verify = 0.0
         self.telemetry_seq = 0
@@ -222,16 +225,17 @@ class SimLoop:
             call.client = request.client
             with self.work_guard() if op.mutates and not op.steps else nullcontext():
                 result = self._dispatch(op, call, request.args)
+            self._keep_invariants()  # before the reply: what the client asks next sees it
             if result is not None:
                 self._reply_ok(call, result)
         except RemoteError as error:
+            self._keep_invariants()
             self.reply_error(call, error)
         except Exception as exc:  # the daemon keeps serving whatever an engine does
             log.exception("operation %s failed", call.op)
+            self._keep_invariants()
             self.reply_error(call, OperationFailedError(
                 f"{type(exc).__name__}: {brief(str(exc))}"))
-        finally:
-            self._keep_invariants()
 
     def _dispatch(self, op: Operation, call: Call, args: dict[str, Any]) -> dict[str, Any] | None:
         return HANDLERS[op.name](self, call, args)
@@ -252,10 +256,11 @@ class SimLoop:
     def check_job_reads(self) -> None:
         """A step job whose read entities are gone is answered now, not after its steps."""
         job = self.job
-        if job is None:
+        if job is None or job.scratch:
             return
-        gone = [name for name in job.read or () if name not in self.world.entities]
-        gone += [name for name in job.read_joints or () if name not in self.world.joints.by_name]
+        world = job.world or self.world
+        gone = [name for name in job.read or () if name not in world.entities]
+        gone += [name for name in job.read_joints or () if name not in world.joints.by_name]
         if gone:
             self.job = None
             self.reply_error(job.call, NotFoundError(
@@ -265,7 +270,8 @@ class SimLoop:
 
     def _keep_invariants(self) -> None:
         """A diverged world never plays or steps, whoever noticed the divergence."""
-        if self.world.faulted and (self.state == SimState.PLAYING or self.job is not None):
+        live_job = self.job is not None and self.job.world is None
+        if self.world.faulted and (self.state == SimState.PLAYING or live_job):
             self._fault(PhysicsError(
                 f"the simulation diverged at step {self.world.step_index}; reset it (scope "
                 "'state' or 'all') before playing or stepping"))
@@ -280,11 +286,21 @@ class SimLoop:
             log.exception("could not publish an event")
 
     def require_world(self, args: dict[str, Any]) -> None:
-        """Requests may name a world; this daemon serves one (room for several later)."""
-        world = args.get("world", self.world.name)
-        if world != self.world.name:
-            raise NotFoundError(f"no world named {brief(world)}: this daemon serves one world, "
-                                f"{self.world.name!r}")
+        """A request's ``world`` must name one of this daemon's worlds."""
+        self.world_for(args)
+
+    def world_for(self, args: dict[str, Any]) -> World:
+        """The world a request is for: the one its ``world`` names, else the live one."""
+        name = args.get("world")
+        if name is None or name == self.world.name:
+            return self.world
+        found = self.side.get(name) if isinstance(name, str) else None
+        if found is None:
+            known = [self.world.name, *self.side]
+            raise NotFoundError(f"no world named {brief(name)}"
+                                f"{did_you_mean(str(name)[:64], known)}; worlds: "
+                                f"{', '.join(known)}")
+        return found
 
     def _reply_ok(self, call: Call, result: dict[str, Any]) -> None:
         self.refresh_clock()
@@ -305,15 +321,20 @@ class SimLoop:
 
     # -- physics ------------------------------------------------------------------------
     def _advance(self) -> None:
-        """Run one chunk of steps: a pending step job's, or the paced playing clock's."""
-        if self.job is not None:
-            self._run_steps(min(self.job.steps_to_next_check(), self._chunk_size()))
-        elif self.state == SimState.PLAYING:
+        """Run one chunk of steps: a live step job's, or the paced playing clock's and then
+        a side world's (or a prediction's) job, which never delays the live world."""
+        job = self.job
+        if job is not None and job.world is None:
+            self._run_steps(min(job.steps_to_next_check(), self._chunk_size()))
+            return
+        if self.state == SimState.PLAYING:
             due = self.pacer.steps_due(time.monotonic(), self.world.sim_time,
                                        self.world.engine.timestep)
             count = self._chunk_size() if due < 0 else min(due, self._chunk_size())
             if count:
                 self._run_steps(count)
+        if job is not None and self.job is job:
+            side_jobs.run_chunk(self, job)
 
     def _chunk_size(self) -> int:
         return max(1, min(10_000, int(CHUNK_WALL_S / self._step_cost)))
@@ -347,27 +368,36 @@ class SimLoop:
 
     def _finish_job(self, job: StepJob) -> None:
         """Answer a finished step request: {steps}, and the states it asked to read (after
-        the last step, verified), and with until_rest whether they rest. A body deleted
-        meanwhile fails the read, not the steps."""
+        the last step, verified), and with until_rest whether they rest (a prediction: its
+        samples). A body deleted meanwhile fails the read, not the steps."""
+        try:
+            result = self._job_result(job)
+        except RemoteError as error:
+            error.details["steps_done"] = job.done
+            self.reply_error(job.call, error)
+            return
+        finally:
+            if job.scratch and job.world is not None:
+                job.world.engine.close()
+        self._reply_ok(job.call, result)
+
+    def _job_result(self, job: StepJob) -> dict[str, Any]:
+        if job.sampler is not None:
+            return job.sampler.result(job.done)
+        world = job.world or self.world
         result: dict[str, Any] = {"steps": job.done}
         if job.read is not None:
-            try:
-                poses, twists = self.world.get_states(job.read)
-            except RemoteError as error:
-                error.details["steps_done"] = job.done
-                self.reply_error(job.call, error)
-                return
+            poses, twists = world.get_states(job.read)
             result.update(names=job.read, poses=pack_f64(poses), twists=pack_f64(twists))
             if job.rest is not None:
                 result["at_rest"] = _resting(twists, job)
         if job.read_joints is not None:
-            try:
-                result["joints"] = joint_states(self.world, job.read_joints, "read_joints")
-            except RemoteError as error:
-                error.details["steps_done"] = job.done
-                self.reply_error(job.call, error)
-                return
-        self._reply_ok(job.call, result)
+            result["joints"] = joint_states(world, job.read_joints, "read_joints")
+        return result
+
+    def finish_job(self, job: StepJob) -> None:
+        """A side world's job is done (daemon/side_jobs.py)."""
+        self._finish_job(job)
 
     def verify_physics(self) -> bool:
         """Check the unchecked steps; on a divergence, fault and return False."""
@@ -385,7 +415,7 @@ class SimLoop:
         self.set_state(SimState.PAUSED)
         self.emit({"kind": "physics_error", "message": error.message,
                    "step": self.world.step_index, "sim_time": self.world.sim_time})
-        if self.job is not None:
+        if self.job is not None and self.job.world is None:
             job, self.job = self.job, None
             self.reply_error(job.call, error)
 

@@ -19,6 +19,7 @@ from galton.protocol import (
     IncorrectStateError,
     InvalidArgumentError,
     OperationFailedError,
+    SimStatus,
 )
 from galton.protocol.errors import brief
 from galton.protocol.model import SimState, check_fields, check_names, check_type, finite_number
@@ -58,13 +59,32 @@ def _rest_check(args: dict[str, Any], read: list[str] | None,
 
 
 def status(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
-    return loop.status().to_wire()
+    world = loop.world_for(args)
+    if world is loop.world:
+        return loop.status().to_wire()
+    return side_status(loop, world).to_wire()
+
+
+def side_status(loop: SimLoop, world: World) -> SimStatus:
+    """A side world's status: it never plays."""
+    return SimStatus(
+        state=SimState.STOPPED if world.step_index == 0 else SimState.PAUSED,
+        step=world.step_index, sim_time=world.sim_time, timestep=world.engine.timestep,
+        target_rtf=0.0, rtf=0.0, entity_count=len(world.entities), engine=world.engine.name,
+        instance=loop.instance, world=world.name, faulted=world.faulted)
+
+
+def _live_only(loop: SimLoop, args: dict[str, Any], op: str) -> None:
+    if loop.world_for(args) is not loop.world:
+        raise IncorrectStateError(f"{op}: only the live world {loop.world.name!r} plays; a "
+                                  "side world moves by step and run_until")
 
 
 def play(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+    _live_only(loop, args, "play")
     rtf = args.get("rtf")
     target = loop.target_rtf if rtf is None else _check_rtf(rtf, "play.rtf")
-    if loop.job is not None:
+    if loop.job is not None and loop.job.world is None:
         raise IncorrectStateError("a step request is still running; wait for it or pause")
     loop.world.require_valid()
     loop.target_rtf = target
@@ -73,20 +93,31 @@ def play(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
 
 
 def set_rtf(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+    _live_only(loop, args, "set_rtf")
     loop.target_rtf = _check_rtf(args.get("rtf"), "set_rtf.rtf")
     loop.pacer.anchor(time.monotonic(), loop.world.sim_time, loop.target_rtf)
     return loop.status().to_wire()
 
 
 def pause(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
-    cancel_job(loop, "paused")
+    world = loop.world_for(args)
+    if world is not loop.world:
+        _cancel_job_on(loop, world, "paused")
+        return side_status(loop, world).to_wire()
+    _cancel_job_on(loop, world, "paused")
     loop.set_state(SimState.PAUSED)
     return loop.status().to_wire()
 
 
 def stop(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
     """Pause and rewind: time to 0 and every entity back to the state it was created in."""
-    cancel_job(loop, "stopped")
+    world = loop.world_for(args)
+    if world is not loop.world:
+        _cancel_job_on(loop, world, "stopped")
+        world.reset("state")
+        world.reset("time")
+        return side_status(loop, world).to_wire()
+    _cancel_job_on(loop, world, "stopped")
     loop.world.reset("state")
     loop.world.reset("time")
     _after_reset(loop)
@@ -99,35 +130,42 @@ def step(loop: SimLoop, call: Call, args: dict[str, Any]) -> None:
         raise InvalidArgumentError("step takes no until_rest: use run_until with "
                                    "until_rest and read to stop once bodies rest")
     count = _check_count(args.get("count", 1), loop.limits.max_steps)
-    _start_job(loop, call, count, _read_list(loop, args, "step"),
-               read_joints=_read_joint_list(loop, args, "step"))
+    world = loop.world_for(args)
+    _start_job(loop, call, count, _read_list(world, args, "step"),
+               read_joints=_read_joint_list(world, args, "step"), world=world)
 
 
 def run_until(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any] | None:
     target = finite_number(args.get("sim_time"), "run_until.sim_time", low=0.0)
-    dt = loop.world.engine.timestep
-    steps = (target - loop.world.sim_time) / dt - 1e-9
+    world = loop.world_for(args)
+    dt = world.engine.timestep
+    steps = (target - world.sim_time) / dt - 1e-9
     limit = loop.limits.max_steps
     if steps > limit:
         raise InvalidArgumentError(
             f"run_until.sim_time {target:g} s is {steps:.3g} steps of {dt:g} s away; one "
             f"request takes at most {limit} steps (to sim time "
-            f"{loop.world.sim_time + limit * dt:g} s)", {"max_steps": limit})
+            f"{world.sim_time + limit * dt:g} s)", {"max_steps": limit})
     count = math.ceil(steps)
     if count <= 0:
         raise InvalidArgumentError(
             f"run_until.sim_time {target} is not after the current sim time "
-            f"{loop.world.sim_time}")
-    read = _read_list(loop, args, "run_until")
+            f"{world.sim_time}")
+    read = _read_list(world, args, "run_until")
     _start_job(loop, call, count, read, _rest_check(args, read, dt),
-               _read_joint_list(loop, args, "run_until"))
+               _read_joint_list(world, args, "run_until"), world)
     return None
 
 
 def reset(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
     scope = check_scope(args.get("scope", "all"))
-    cancel_job(loop, "reset")
-    loop.world.reset(scope)
+    world = loop.world_for(args)
+    _cancel_job_on(loop, world, "reset")
+    world.reset(scope)
+    if world is not loop.world:
+        loop.emit({"kind": "scene", "op": "reset", "scope": scope, "world": world.name,
+                   "step": world.step_index})
+        return side_status(loop, world).to_wire()
     _after_reset(loop)
     loop.emit({"kind": "scene", "op": "reset", "scope": scope,
                "step": loop.world.step_index})
@@ -136,6 +174,7 @@ def reset(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
 
 def load_world(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
     """Replace the world with a fresh one on the named engine, in this process."""
+    _live_only(loop, args, "load_world")
     name = check_type(args.get("engine"), str, "load_world.engine")
     if loop.engine_factory is None:
         raise OperationFailedError("this daemon cannot switch engines")
@@ -158,37 +197,40 @@ def load_world(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any
 
 
 # -- helpers ------------------------------------------------------------------------
-def _read_list(loop: SimLoop, args: dict[str, Any], where: str) -> list[str] | None:
+def _read_list(world: World, args: dict[str, Any], where: str) -> list[str] | None:
     """The entities a step request wants read back when done; unknown names reject the
     request before any step is taken."""
     read = args.get("read")
     if read is None:
         return None
     names = check_names(read, f"{where}.read")
-    loop.world.require_known(names)
+    world.require_known(names)
     return names
 
 
-def _read_joint_list(loop: SimLoop, args: dict[str, Any], where: str) -> list[str] | None:
+def _read_joint_list(world: World, args: dict[str, Any], where: str) -> list[str] | None:
     """The joints a step request wants read back when done, checked before any step."""
     read = args.get("read_joints")
     if read is None:
         return None
     names = check_names(read, f"{where}.read_joints")
-    loop.world.joints.require_scalar(names, f"{where}.read_joints")
+    world.joints.require_scalar(names, f"{where}.read_joints")
     return names
 
 
 def _start_job(loop: SimLoop, call: Call, count: int, read: list[str] | None = None,
-               rest: RestCheck | None = None, read_joints: list[str] | None = None) -> None:
-    if loop.state == SimState.PLAYING:
+               rest: RestCheck | None = None, read_joints: list[str] | None = None,
+               world: World | None = None) -> None:
+    live = world is None or world is loop.world
+    if live and loop.state == SimState.PLAYING:
         raise IncorrectStateError("cannot step while playing: pause first")
     if loop.job is not None:
         raise IncorrectStateError("another step request is still running")
-    loop.world.require_valid()
-    if loop.state == SimState.STOPPED:
+    (loop.world if live or world is None else world).require_valid()
+    if live and loop.state == SimState.STOPPED:
         loop.set_state(SimState.PAUSED)
-    loop.job = StepJob(call, count, count, read, rest, read_joints)
+    loop.job = StepJob(call, count, count, read, rest, read_joints,
+                       world=None if live else world)
 
 
 def client_gone(loop: SimLoop, client: str) -> None:
@@ -202,10 +244,18 @@ def client_gone(loop: SimLoop, client: str) -> None:
                "steps_asked": job.total, "step": loop.world.step_index})
 
 
+def _cancel_job_on(loop: SimLoop, world: World, reason: str) -> None:
+    """Cancel the running step request if it steps this world."""
+    if loop.job is not None and (loop.job.world or loop.world) is world:
+        cancel_job(loop, reason)
+
+
 def cancel_job(loop: SimLoop, reason: str) -> None:
     if loop.job is None:
         return
     job, loop.job = loop.job, None
+    if job.scratch and job.world is not None:
+        job.world.engine.close()
     done = job.total - job.remaining
     loop.reply_error(job.call, OperationFailedError(
         f"step request interrupted ({reason}) after {done} of {job.total} steps",

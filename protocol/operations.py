@@ -10,7 +10,8 @@ to them by a test. Each argument's ``kind`` names the value it takes on the wire
 - ``poses`` / ``twists``: msgpack bin of packed float64 rows (7 and 6 wide);
 - ``choice``: a string, one of ``choices``;
 - ``values``: one number per named joint, as a number (the same for all) or msgpack bin of
-  packed float64; ``wrenches`` / ``points``: bin of packed float64 rows, 6 and 3 wide.
+  packed float64; ``wrenches`` / ``points``: bin of packed float64 rows, 6 and 3 wide;
+- ``blob``: msgpack bin (a snapshot's bytes).
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ from galton.protocol.errors import UnknownOperationError, did_you_mean
 from galton.protocol.model import TARGET_MODES, check_fields
 
 ARG_KINDS = ("number", "count", "string", "bool", "names", "map", "groups", "poses", "twists",
-             "choice", "values", "wrenches", "points")
+             "choice", "values", "wrenches", "points", "blob")
 # Every request may name the world it is for (one world per daemon for now).
 WORLD_ARG = "world"
 
@@ -129,6 +130,27 @@ OPERATIONS: dict[str, Operation] = {op.name: op for op in (
                                Arg("points", "points"), Arg("duration", "number")),
               mutates=True),
     Operation("clear_wrenches", (Arg("names", "names"),), mutates=True),
+    Operation("snapshot", (Arg("slot", "string"), Arg("blob", "bool"))),
+    Operation("restore", (Arg("slot", "string"), Arg("blob", "blob", long_text=True)),
+              mutates=True, timeout_floor_s=_REBUILDS),
+    Operation("snapshots"),
+    Operation("delete_snapshot", (Arg("slot", "string", required=True),)),
+    Operation("list_worlds"),
+    Operation("create_world", (Arg("name", "string", required=True),
+                               Arg("engine", "choice", choices=("mujoco", "pybullet")),
+                               Arg("params", "map")), timeout_floor_s=_REBUILDS),
+    Operation("fork_world", (Arg("name", "string", required=True), Arg("source", "string")),
+              timeout_floor_s=_REBUILDS),
+    Operation("delete_world", (Arg("name", "string", required=True),)),
+    Operation("predict", (Arg("horizon", "number", required=True), Arg("every", "number"),
+                          Arg("read", "names"), Arg("read_joints", "names"),
+                          Arg("slot", "string"), Arg("set_states", "map"),
+                          Arg("joint_targets", "map"), Arg("wrenches", "map")),
+              steps=True),
+    Operation("compare", (_NAMES, Arg("poses", "poses", required=True), Arg("twists", "twists"),
+                          Arg("sigma_position", "number"), Arg("sigma_angle", "number"),
+                          Arg("sigma_speed", "number"), Arg("correct", "bool")),
+              mutates=True),
     Operation("get_params"),
     Operation("set_params", (Arg("params", "map", required=True),), mutates=True),
 )}

@@ -37,8 +37,9 @@ def test_client_timeouts_follow_the_declaration(op: Operation) -> None:
         assert op.client_timeout(100.0) == 100.0  # a longer default is never shortened
 
 
-def test_only_status_is_fast_and_only_step_and_run_until_are_long_running() -> None:
+def test_only_status_is_fast_and_only_stepping_operations_are_long_running() -> None:
     assert [name for name, op in OPERATIONS.items() if op.fast] == ["status"]
-    assert [name for name, op in OPERATIONS.items() if op.steps] == ["step", "run_until"]
-    assert all(op.mutates for op in OPERATIONS.values() if op.steps)
+    assert [name for name, op in OPERATIONS.items() if op.steps] == ["step", "run_until",
+                                                                      "predict"]
+    assert all(op.mutates for op in OPERATIONS.values() if op.steps and op.name != "predict")
     assert operation("spawn").timeout_floor_s >= 30

@@ -1,0 +1,119 @@
+"""predict: run ahead on a copy of a world (its present, or a snapshot slot), optionally
+changed first, sampling named bodies and joints, then discard the copy. The copy is
+stepped as a side job (daemon/side_jobs.py), after the live world's due steps."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from galton.daemon import ops, ops_joints
+from galton.daemon.calls import Call, StepJob
+from galton.daemon.world import World
+from galton.daemon.world_snapshot import decode, snapshot_of, world_from
+from galton.protocol import IncorrectStateError, InvalidArgumentError, OperationFailedError
+from galton.protocol.arrays import pack_f64
+from galton.protocol.model import check_names, check_type, finite_number
+
+if TYPE_CHECKING:
+    from galton.daemon.loop import SimLoop
+
+
+@dataclass
+class PredictSampler:
+    """The samples of one prediction: sim times, body states, joint states."""
+
+    every: int
+    read: list[str] | None
+    read_joints: list[str] | None
+    times: list[float] = field(default_factory=list)
+    poses: list[np.ndarray] = field(default_factory=list)
+    twists: list[np.ndarray] = field(default_factory=list)
+    positions: list[np.ndarray] = field(default_factory=list)
+    velocities: list[np.ndarray] = field(default_factory=list)
+
+    def take(self, world: World) -> None:
+        world.verify()
+        self.times.append(world.sim_time)
+        if self.read is not None:
+            poses, twists = world.get_states(self.read)
+            self.poses.append(poses)
+            self.twists.append(twists)
+        if self.read_joints is not None:
+            positions, velocities, _ = world.engine.get_joint_states(self.read_joints)
+            self.positions.append(positions)
+            self.velocities.append(velocities)
+
+    def result(self, steps: int) -> dict[str, Any]:
+        out: dict[str, Any] = {"steps": steps, "times": pack_f64(np.array(self.times))}
+        if self.read is not None:
+            out.update(names=self.read, poses=pack_f64(np.concatenate(self.poses)),
+                       twists=pack_f64(np.concatenate(self.twists)))
+        if self.read_joints is not None:
+            out["joints"] = {"names": self.read_joints,
+                             "positions": pack_f64(np.concatenate(self.positions)),
+                             "velocities": pack_f64(np.concatenate(self.velocities))}
+        return out
+
+
+def predict(loop: SimLoop, call: Call, args: dict[str, Any]) -> None:
+    """Start a prediction job (answered when its horizon is done)."""
+    if loop.job is not None:
+        raise IncorrectStateError("another step request is still running; wait for it")
+    if loop.engine_factory is None:
+        raise OperationFailedError("this daemon cannot make engines")
+    horizon = finite_number(args.get("horizon"), "predict.horizon", low=0.0, low_open=True)
+    source = loop.world_for(args)
+    slot = args.get("slot")
+    if slot is None:
+        source.verify()
+        data = snapshot_of(source)
+    else:
+        data = decode(loop.slots.get(check_type(slot, str, "predict.slot")).blob, loop.limits)
+    copy = world_from(data, loop.engine_factory, f"{source.name}:prediction", loop.limits)
+    try:
+        job = _job(loop, call, copy, horizon, args)
+    except Exception:
+        copy.engine.close()
+        raise
+    loop.job = job
+
+
+def _job(loop: SimLoop, call: Call, copy: World, horizon: float,
+         args: dict[str, Any]) -> StepJob:
+    dt = copy.engine.timestep
+    steps = math.ceil(horizon / dt - 1e-9)
+    if steps > loop.limits.max_steps:
+        raise InvalidArgumentError(f"predict.horizon {horizon:g} s is {steps} steps; at most "
+                                   f"{loop.limits.max_steps}", {"max_steps": loop.limits.max_steps})
+    every_s = args.get("every")
+    every = 1 if every_s is None else max(1, round(finite_number(
+        every_s, "predict.every", low=0.0, low_open=True) / dt))
+    read = _names(args, "read")
+    joints = _names(args, "read_joints")
+    if read is not None:
+        copy.require_known(read)
+    if joints is not None:
+        copy.joints.require_scalar(joints, "predict.read_joints")
+    _apply_changes(copy, args)
+    sampler = PredictSampler(min(every, steps), read, joints)
+    sampler.take(copy)
+    return StepJob(call, steps, steps, world=copy, sampler=sampler, scratch=True)
+
+
+def _names(args: dict[str, Any], key: str) -> list[str] | None:
+    raw = args.get(key)
+    return None if raw is None else check_names(raw, f"predict.{key}")
+
+
+def _apply_changes(copy: World, args: dict[str, Any]) -> None:
+    """The changes a prediction starts from, each checked as its own request would be."""
+    for key, apply in (("set_states", ops.set_states),
+                       ("joint_targets", ops_joints.set_joint_targets),
+                       ("wrenches", ops_joints.apply_wrench)):
+        change = args.get(key)
+        if change is not None:
+            apply(copy, check_type(change, dict, f"predict.{key}"))

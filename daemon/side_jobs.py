@@ -1,0 +1,63 @@
+"""Steps of a side world or of a prediction: run in chunks on the physics thread after the
+live world's due steps, so they never delay it (each chunk is at most about CHUNK_WALL_S of
+work, sized from the job's own measured step cost)."""
+
+from __future__ import annotations
+
+import time
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from galton.daemon.calls import StepJob
+from galton.protocol import PhysicsError, RemoteError
+
+if TYPE_CHECKING:
+    from galton.daemon.loop import SimLoop
+
+CHUNK_WALL_S = 0.005
+
+
+def run_chunk(loop: SimLoop, job: StepJob) -> None:
+    """One chunk of a side job's steps; answers it when done, at rest, or failed."""
+    world = job.world
+    assert world is not None
+    count = min(job.steps_to_next_check(), max(1, int(CHUNK_WALL_S / job.step_cost)))
+    started = time.perf_counter()
+    try:
+        world.step(count)
+        job.step_cost = 0.8 * job.step_cost + 0.2 * max(
+            (time.perf_counter() - started) / count, 1e-7)
+        job.remaining -= count
+        finished = job.remaining == 0
+        if job.sampler is not None and job.done % job.sampler.every == 0:
+            job.sampler.take(world)
+        resting = job.rest is not None and job.done % job.rest.every == 0 and _at_rest(job)
+        if finished or resting:
+            world.verify()
+    except RemoteError as error:  # a diverged side world fails its job, not the daemon
+        end(loop, job, error)
+        return
+    if finished or resting:
+        loop.job = None
+        loop.finish_job(job)
+
+
+def _at_rest(job: StepJob) -> bool:
+    assert job.world is not None and job.rest is not None
+    try:
+        _, twists = job.world.get_states(job.read or [])
+    except RemoteError:
+        return True
+    return bool((np.linalg.norm(twists[:, :3], axis=1) < job.rest.speed).all())
+
+
+def end(loop: SimLoop, job: StepJob, error: RemoteError) -> None:
+    """Answer a side job with an error and release what it held."""
+    if loop.job is job:
+        loop.job = None
+    if isinstance(error, PhysicsError):
+        error.details["steps_done"] = job.done
+    if job.scratch and job.world is not None:
+        job.world.engine.close()
+    loop.reply_error(job.call, error)

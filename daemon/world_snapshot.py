@@ -1,0 +1,121 @@
+"""A world as bytes: the engine's own snapshot and the World's registry (entities with the
+states they were created in, joint modes, held wrenches, the clock), in msgpack.
+
+Never pickle: a client sends snapshots back, and a blob must not be able to run code. A
+blob is untrusted input, checked field by field; a world is rebuilt from it on a fresh
+engine, so a refused blob leaves every world as it was.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable
+from typing import Any
+
+import msgpack
+import numpy as np
+
+from galton.daemon.engine import Engine
+from galton.daemon.limits import Limits
+from galton.daemon.world import Entity, World
+from galton.protocol import (
+    POSE_WIDTH,
+    TARGET_MODES,
+    TWIST_WIDTH,
+    EntityInfo,
+    InvalidArgumentError,
+    pack_f64,
+    unpack_f64,
+)
+from galton.protocol.errors import brief
+
+FORMAT = 1
+
+
+def snapshot_of(world: World) -> dict[str, Any]:
+    """The world as plain data (the engine's part from ``Engine.snapshot``)."""
+    names = list(world.entities)
+    entities = [world.entities[n] for n in names]
+    return {
+        "format": FORMAT, "engine": world.engine.name,
+        "engine_state": world.engine.snapshot(),
+        "entities": [e.info.to_wire() for e in entities],
+        "initial_poses": pack_f64(np.array([e.initial_pose for e in entities]).reshape(
+            -1, POSE_WIDTH)),
+        "initial_twists": pack_f64(np.array([e.initial_twist for e in entities]).reshape(
+            -1, TWIST_WIDTH)),
+        "joint_modes": {n: j.mode for n, j in world.joints.by_name.items() if j.mode != "none"},
+        "wrench_ends": dict(world.wrenches.ends),
+        "clock": {"step": world.step_index, "base_step": world._time_base[0],
+                  "base_time": world._time_base[1], "base_dt": world._time_base[2]},
+    }
+
+
+def encode(data: dict[str, Any]) -> bytes:
+    blob: bytes = msgpack.packb(data, use_bin_type=True)
+    return blob
+
+
+def decode(blob: Any, limits: Limits) -> dict[str, Any]:
+    """A snapshot blob's data, or InvalidArgumentError saying why it is not one."""
+    if not isinstance(blob, bytes | bytearray):
+        raise InvalidArgumentError(f"restore.blob must be msgpack bin, got {brief(blob)}")
+    try:
+        data = msgpack.unpackb(bytes(blob), raw=False, strict_map_key=True,
+                               max_bin_len=limits.max_request_bytes)
+    except Exception as exc:  # msgpack raises several types for a corrupt blob
+        raise InvalidArgumentError(f"restore.blob is not a snapshot (corrupt msgpack: "
+                                   f"{type(exc).__name__})") from exc
+    if not isinstance(data, dict) or data.get("format") != FORMAT:
+        raise InvalidArgumentError(
+            f"restore.blob is not a snapshot of format {FORMAT} (format "
+            f"{brief(data.get('format') if isinstance(data, dict) else None)})")
+    return data
+
+
+def world_from(data: dict[str, Any], make_engine: Callable[[str], Engine], name: str,
+               limits: Limits, engine_name: str | None = None) -> World:
+    """A new World rebuilt from snapshot data on a fresh engine (closed again if refused).
+    ``engine_name``: the engine the snapshot must be of (the world it replaces)."""
+    kind = data.get("engine")
+    if not isinstance(kind, str) or (engine_name is not None and kind != engine_name):
+        raise InvalidArgumentError(f"the snapshot is of engine {brief(kind)}; this world runs "
+                                   f"{engine_name}: restore it into a world of its engine")
+    engine = make_engine(kind)
+    try:
+        state = data.get("engine_state")
+        if not isinstance(state, dict):
+            raise InvalidArgumentError("the snapshot holds no engine state")
+        engine.restore(state)
+        world = World(engine, name, limits)
+        _restore_registry(world, data)
+    except Exception:
+        engine.close()
+        raise
+    return world
+
+
+def _restore_registry(world: World, data: dict[str, Any]) -> None:
+    try:
+        infos = [EntityInfo.from_wire(body) for body in data["entities"]]
+        poses = unpack_f64(data["initial_poses"], POSE_WIDTH, "initial_poses")
+        twists = unpack_f64(data["initial_twists"], TWIST_WIDTH, "initial_twists")
+        clock = data["clock"]
+        step, base_step = int(clock["step"]), int(clock["base_step"])
+        base = (base_step, float(clock["base_time"]), float(clock["base_dt"]))
+        modes, ends = dict(data["joint_modes"]), dict(data["wrench_ends"])
+    except (KeyError, TypeError, ValueError, AttributeError) as exc:
+        raise InvalidArgumentError(f"the snapshot's registry is malformed: {brief(exc)}"
+                                   ) from exc
+    if len(poses) != len(infos) or len(twists) != len(infos):
+        raise InvalidArgumentError("the snapshot's registry and initial states disagree")
+    world.entities = {info.name: Entity(info, poses[i].copy(), twists[i].copy())
+                      for i, info in enumerate(infos)}
+    world.step_index, world._time_base = step, base
+    world.verified_step = step
+    world.joints.refresh()
+    for joint, mode in modes.items():
+        if joint in world.joints.by_name and mode in TARGET_MODES:
+            world.joints.by_name[joint] = dataclasses.replace(world.joints.by_name[joint],
+                                                              mode=mode)
+    world.wrenches.ends = {str(n): (None if e is None else int(e)) for n, e in ends.items()}
