@@ -50,6 +50,7 @@ from galton.daemon.engine import (
     FEATURE_JOINTS,
     FEATURE_LOAD_MODEL,
     FEATURE_SET_STATE,
+    FEATURE_SNAPSHOT,
     FEATURE_SPAWN,
     FEATURE_STATIC_POSE,
     FEATURE_TARGET_EFFORT,
@@ -74,6 +75,7 @@ from galton.daemon.engines.pybullet_rebuild import Body as _Body
 from galton.daemon.engines.pybullet_rebuild import Rebuilding
 from galton.daemon.engines.pybullet_robots import Robots
 from galton.daemon.engines.pybullet_shapes import BodyMaker, ShapeCache
+from galton.daemon.engines.pybullet_snapshot import Snapshots
 from galton.daemon.params import check_updates
 from galton.protocol import (
     PROTOCOL_VERSION,
@@ -88,7 +90,7 @@ from galton.protocol import (
 from galton.protocol.model import BODY_SHAPES, POSE_WIDTH, TWIST_WIDTH
 
 
-class PybulletEngine(Parameters, Rebuilding, Articulated, Engine):
+class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Engine):
     """Named rigid bodies in a headless PyBullet world."""
 
     name = "pybullet"
@@ -131,7 +133,7 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Engine):
                       FEATURE_UPDATE_FRICTION, FEATURE_UPDATE_RESTITUTION, FEATURE_UPDATE_RGBA,
                       FEATURE_LOAD_MODEL, FEATURE_STATIC_POSE, FEATURE_JOINTS,
                       FEATURE_JOINT_TARGETS, FEATURE_TARGET_POSITION, FEATURE_TARGET_VELOCITY,
-                      FEATURE_TARGET_EFFORT, FEATURE_WRENCH),
+                      FEATURE_TARGET_EFFORT, FEATURE_WRENCH, FEATURE_SNAPSHOT),
             params={name: spec.describe() for name, spec in SPECS.items()},
         )
 
@@ -374,6 +376,25 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Engine):
         own geoms), roots and links (pybullet_articulated.py). Text is loaded from a
         temporary file, so relative mesh paths only work when a path is given."""
         return self._load(fmt, text, path, prefix, fixed_base)
+
+    # -- snapshots (pybullet_snapshot.py) ------------------------------------------------
+    @engine_call
+    def snapshot(self) -> dict[str, Any]:
+        """The world as plain data: every body's books, model texts, articulations, targets,
+        wrenches, parameters and states. Taking it rebuilds this world (as
+        ``reset_dynamics`` does: Bullet's contact points and warm starts cannot be read
+        out, so they are forgotten here). The promise: from then on, this world and a
+        fresh engine restored from the snapshot, given the same steps and requests, have
+        the same states bit for bit (on the same PyBullet build); this world's own
+        continuation differs from the one it would have had without the snapshot as it
+        would after ``reset_dynamics``."""
+        return self._snapshot()
+
+    @engine_call
+    def restore(self, data: dict[str, Any]) -> None:
+        """Make this fresh engine the world ``data`` describes (checked whole first:
+        InvalidArgumentError naming the field for anything malformed)."""
+        self._restore(data)
 
     # -- life -----------------------------------------------------------------------------
     def close(self) -> None:

@@ -61,7 +61,7 @@ if TYPE_CHECKING:
     from typing import Any
 
     from galton.daemon.engines.pybullet_frames import Offset
-    from galton.daemon.engines.pybullet_robots import Robots
+    from galton.daemon.engines.pybullet_robots import JointStates, Robots
     from galton.daemon.engines.pybullet_shapes import BodyMaker
 
 REBUILD_AFTER = 5_000  # bodies removed since the last rebuild, at the least
@@ -123,6 +123,20 @@ class Body:
     restitution: float = 0.0
     rgba: tuple[float, float, float, float] | None = None  # None: the default look
     model: Model | None = None
+
+
+@dataclass(slots=True)
+class Plan:
+    """Everything a rebuild makes a world again from: the bodies' books in the order they
+    were made, their states (``exact``: poses given since the last step, set as given),
+    the models' articulations, inertial offsets and 1-DOF joint states."""
+
+    bodies: dict[str, Body]
+    states: dict[str, State]
+    exact: set[str]
+    robots: Robots
+    frames: dict[str, Offset]
+    joints: JointStates
 
 
 def due(removed: int, live: dict[str, Body]) -> bool:
@@ -264,21 +278,32 @@ class Rebuilding:
     def _rebuild(self) -> None:
         """resetSimulation, then every body made again, in the order it was first made, as
         the protocol sees it (see the module's docstring)."""
+        self._make_again(self._plan())
+
+    def _plan(self) -> Plan:
+        """What a rebuild makes the world again from, read from the world as it is."""
         kept = dict(self._bodies)
-        states = read_states(self._bc, kept, self._given, self._held)
-        exact = set(self._given)
-        robots, frames = self._robots, self._frames
-        joints = robots.snapshot(self._bc, self._uid_of)
+        return Plan(kept, read_states(self._bc, kept, self._given, self._held),
+                    set(self._given), self._robots, self._frames,
+                    self._robots.snapshot(self._bc, self._uid_of))
+
+    def _make_again(self, plan: Plan, check: Callable[[], None] | None = None) -> None:
+        """A new world holding what ``plan`` describes: the same calls, in the same order,
+        whether the plan was read from this world or from a snapshot of another (whose
+        ``check`` then looks at the bodies made before joints are set)."""
+        kept, states = plan.bodies, plan.states
         self.clear()
         for names in batches(kept):
             if kept[names[0]].model is not None:
                 self._reload(names, kept, states)
             else:
                 self._remake(names, kept, states)
-        self._robots, self._frames = robots, frames
-        robots.put_back(self._bc, self._uid_of, joints)
-        self._held = settle(self._bc, self._bodies, states, exact)
-        self._given = {name: states[name][0] for name in exact}
+        if check is not None:
+            check()
+        self._robots, self._frames = plan.robots, plan.frames
+        plan.robots.put_back(self._bc, self._uid_of, plan.joints)
+        self._held = settle(self._bc, self._bodies, states, plan.exact)
+        self._given = {name: states[name][0] for name in plan.exact}
         self.rebuilds += 1
 
     def _remake(self, names: list[str], kept: dict[str, Body],
@@ -323,6 +348,10 @@ class Rebuilding:
         back as loaded, at rest. A state as loaded is not set again: a pose read back and
         set makes a matrix a unit in the last place off the loaded one."""
         body = self._adopt_model_body(uid, name, batch)
+        if len(model.links) != body.links + 1:  # only a snapshot from elsewhere can differ
+            raise InvalidArgumentError(f"the books of model body {name!r} list "
+                                       f"{len(model.links)} links; its text makes "
+                                       f"{body.links + 1}")
         body.model = model
         self._edit_model(body, model.edits)
         if state != model.loaded:

@@ -1,0 +1,87 @@
+"""The PyBullet engine's snapshots: its world as plain data (pybullet_snapformat.py), and a
+fresh engine made into that world.
+
+Bullet's contact points and their warm-start impulses cannot be read out, so a snapshot
+cannot carry them. Instead, taking one makes the source world's hidden state canonical:
+the world is rebuilt from its books (as ``reset_dynamics`` does, pybullet_rebuild.py), and
+a restore makes the same world through the same calls in the same order. Both then start
+from a world with no contact history, and go on alike bit for bit.
+"""
+
+from __future__ import annotations
+
+import importlib.metadata
+import itertools
+from typing import TYPE_CHECKING, Any
+
+from pybullet_utils.bullet_client import BulletClient
+
+from galton.daemon.engines import pybullet_snapformat as snapformat
+from galton.daemon.engines.pybullet_frames import Offset, base_offset
+from galton.daemon.engines.pybullet_joints import SCALAR
+from galton.daemon.engines.pybullet_rebuild import Body, Plan
+from galton.protocol import InvalidArgumentError, OperationFailedError
+
+if TYPE_CHECKING:
+    from collections.abc import Callable
+
+    from galton.daemon.engines.pybullet_robots import Robots
+
+
+class Snapshots:
+    """The engine's part that takes and restores snapshots (mixed into PybulletEngine)."""
+
+    _bc: BulletClient
+    _bodies: dict[str, Body]
+    _values: dict[str, Any]
+    _batches: itertools.count[int]
+    _robots: Robots
+    _frames: dict[str, Offset]
+
+    if TYPE_CHECKING:
+        def _plan(self) -> Plan: ...
+        def _make_again(self, plan: Plan, check: Callable[[], None] | None = None) -> None: ...
+
+    def _snapshot(self) -> dict[str, Any]:
+        plan = self._plan()
+        data = snapformat.encode(plan, self._values, self._next_batch(),
+                                 importlib.metadata.version("pybullet"))
+        if self._bodies:
+            self._make_again(plan)
+        return data
+
+    def _restore(self, data: dict[str, Any]) -> None:
+        restored = snapformat.decode(data)
+        self._values = restored.params
+        self._batches = itertools.count(restored.next_batch)
+        plan = restored.plan
+        try:
+            self._make_again(plan, lambda: self._check_made(plan))
+        except OperationFailedError as exc:  # a model whose text or meshes fail here
+            raise InvalidArgumentError(f"the snapshot cannot be restored here: {exc}") from exc
+
+    def _next_batch(self) -> int:
+        """The number the next spawn group or model load takes (the counter keeps it)."""
+        number = next(self._batches)
+        self._batches = itertools.count(number)
+        return number
+
+    def _check_made(self, plan: Plan) -> None:
+        """After a snapshot's bodies are made, before its joints are set: every body is
+        there, and each articulation fits the model its text made; the roots' inertial
+        offsets are read from the bodies made (as a load reads them)."""
+        missing = [name for name in plan.bodies if name not in self._bodies]
+        if missing:
+            raise InvalidArgumentError(f"the snapshot's model body {missing[0]!r} is not "
+                                       "among the bodies its model text makes")
+        for root, model in plan.robots.models.items():
+            uid = self._bodies[root].uid
+            joints = self._bodies[root].links
+            if len(model.links) != joints or any(
+                    self._bc.getJointInfo(uid, j)[2] not in SCALAR for j in model.indices):
+                raise InvalidArgumentError(f"the snapshot's joints of model {root!r} do not "
+                                           "fit the model its text makes")
+        for name, body in self._bodies.items():
+            if body.model is not None and (
+                    offset := base_offset(self._bc, body.uid)) is not None:
+                plan.frames[name] = offset
