@@ -34,9 +34,13 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterator
+from typing import Any
 
 import mujoco
 import numpy as np
+
+from galton.protocol import InvalidArgumentError
+from galton.protocol.errors import brief
 
 CROWN_DEGREES = 30.0  # a ball on one round support this close to its top cannot rest alone
 SUPPORT_COSINE = 0.17  # a contact whose normal is within 80 degrees of up bears weight
@@ -48,6 +52,7 @@ _ROUND = frozenset(int(t) for t in (mujoco.mjtGeom.mjGEOM_SPHERE, mujoco.mjtGeom
                                     mujoco.mjtGeom.mjGEOM_CYLINDER))
 _CYLINDER = int(mujoco.mjtGeom.mjGEOM_CYLINDER)
 _NEVER = int(mujoco.mjtSleepPolicy.mjSLEEP_NEVER)
+_POLICIES = frozenset(int(p) for p in mujoco.mjtSleepPolicy.__members__.values())
 
 
 class BalanceGuard:
@@ -114,8 +119,54 @@ class BalanceGuard:
         for tree in list(self._held):
             self._release(m, tree)
 
+    def books(self) -> dict[str, Any]:
+        """What the guard remembers, as plain data (for a snapshot)."""
+        return {"held": [[t, g, p, s] for t, (g, p, s) in self._held.items()],
+                "let_go": [[t, slept] for t, slept in self._let_go.items()],
+                "was_asleep": self._was_asleep.astype(np.uint8).tobytes()}
+
+    def load(self, m: mujoco.MjModel, books: Any) -> None:
+        """Take over a snapshot's books (``books``) on a fresh guard of the same model,
+        holding its held balls awake again; InvalidArgumentError for malformed books."""
+        if not isinstance(books, dict) or set(books) != {"held", "let_go", "was_asleep"}:
+            raise InvalidArgumentError(f"snapshot.balance must be {{held, let_go, "
+                                       f"was_asleep}}, got {brief(books)}")
+        geoms = dict(zip(self._trees.tolist(), self._geoms.tolist(), strict=True))
+        held = {self._tree(row, geoms): (row[1], row[2], row[3]) for row in
+                _rows(books["held"], 4)}
+        if any(geoms[t] != g or type(p) is not int or p not in _POLICIES or
+               not isinstance(s, float) or not math.isfinite(s) for t, (g, p, s) in held.items()):
+            raise InvalidArgumentError("snapshot.balance.held holds a ball that is not one")
+        let_go = {self._tree(row, geoms): row[1] for row in _rows(books["let_go"], 2)}
+        if not all(isinstance(slept, bool) for slept in let_go.values()):
+            raise InvalidArgumentError("snapshot.balance.let_go must pair trees with bools")
+        was = books["was_asleep"]
+        if not isinstance(was, bytes) or len(was) != len(self._trees) or set(was) - {0, 1}:
+            raise InvalidArgumentError(f"snapshot.balance.was_asleep must be {len(self._trees)}"
+                                       f" bytes of 0 or 1, got {brief(was)}")
+        self._held, self._let_go = held, let_go
+        self._was_asleep = np.frombuffer(was, dtype=np.uint8).astype(bool)
+        for tree in held:
+            m.tree_sleep_policy[tree] = _NEVER
+
+    @staticmethod
+    def _tree(row: list[Any], geoms: dict[int, int]) -> int:
+        tree = row[0]
+        if type(tree) is not int or tree not in geoms:
+            raise InvalidArgumentError(f"snapshot.balance names tree {brief(tree)}, which is "
+                                       "no lone ball of this world")
+        return tree
+
     def _release(self, m: mujoco.MjModel, tree: int) -> None:
         m.tree_sleep_policy[tree] = self._held.pop(tree)[1]
+
+
+def _rows(value: Any, width: int) -> list[list[Any]]:
+    if not isinstance(value, list) or not all(isinstance(r, list) and len(r) == width
+                                              for r in value):
+        raise InvalidArgumentError(f"snapshot.balance rows must be lists of {width}, got "
+                                   f"{brief(value)}")
+    return value
 
 
 def _up(m: mujoco.MjModel) -> np.ndarray | None:

@@ -47,6 +47,7 @@ from galton.daemon.engine import (
     FEATURE_JOINTS,
     FEATURE_LOAD_MODEL,
     FEATURE_SET_STATE,
+    FEATURE_SNAPSHOT,
     FEATURE_SPAWN,
     FEATURE_STATIC_POSE,
     FEATURE_TARGET_EFFORT,
@@ -63,12 +64,13 @@ from galton.daemon.engines import mujoco_models as models
 from galton.daemon.engines import mujoco_pool as mp
 from galton.daemon.engines import mujoco_props as mpr
 from galton.daemon.engines import mujoco_removal as removal
+from galton.daemon.engines import mujoco_snapshot as snapshots
 from galton.daemon.engines import mujoco_spawn as adding
 from galton.daemon.engines import mujoco_spec as ms
 from galton.daemon.engines import mujoco_state as mst
 from galton.daemon.engines import mujoco_teleport as teleport
 from galton.daemon.engines.mujoco_balance import BalanceGuard
-from galton.daemon.engines.mujoco_entity import MUJOCO_ERRORS, Entity, mujoco_error
+from galton.daemon.engines.mujoco_entity import HOME, MUJOCO_ERRORS, Entity, mujoco_error
 from galton.daemon.engines.mujoco_joints import Joints
 from galton.daemon.engines.mujoco_state import FREE
 from galton.daemon.engines.mujoco_wrench import Wrenches
@@ -89,7 +91,7 @@ FEATURES = (FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDATE_MAS
             FEATURE_UPDATE_FRICTION, FEATURE_UPDATE_RESTITUTION, FEATURE_UPDATE_RGBA,
             FEATURE_LOAD_MODEL, FEATURE_STATIC_POSE, FEATURE_JOINTS, FEATURE_JOINT_TARGETS,
             FEATURE_TARGET_POSITION, FEATURE_TARGET_VELOCITY, FEATURE_TARGET_EFFORT,
-            FEATURE_WRENCH)
+            FEATURE_WRENCH, FEATURE_SNAPSHOT)
 # Contacts at which MuJoCo's worker threads start helping, and below which they stop.
 WORKERS_ON_CONTACTS = 400
 WORKERS_OFF_CONTACTS = 200
@@ -122,6 +124,7 @@ class MujocoEngine(Engine):
         self._spec.modelname = "galton"
         self._spec.copy_during_attach = True  # see mujoco_spec.add_group
         self._home = self._spec.worldbody.add_frame()  # where big spawned groups live
+        self._home.name = HOME
         self._litter: list[Any] = []  # empty frames, deleted with the next bodies removed
         self._builders = mp.Builders()
         self._spec.memory = ms.arena_bytes(1, 0)
@@ -376,6 +379,18 @@ class MujocoEngine(Engine):
         self._joints.restore(self._model, self._data, roots)
         self._wrenches.drop(None)
         self._wrenches.apply(self._data, self._ids)
+
+    # -- Engine: snapshots (mujoco_snapshot) -----------------------------------------------
+    def snapshot(self) -> dict[str, Any]:
+        """The whole world as plain data; the promise: restore it into a fresh MuJoCo
+        engine B (the same MuJoCo version), and this world A and B, given the same requests
+        from then on (steps, spawns, deletes, teleports, targets, wrenches, parameters,
+        updates), give the same states, joint states and properties bit for bit. A itself
+        is untouched. Mesh files named by the loaded models must still exist at restore."""
+        return snapshots.snapshot(self)
+
+    def restore(self, data: dict[str, Any]) -> None:
+        snapshots.restore(self, data)
 
     def close(self) -> None:
         self._entities.clear()
