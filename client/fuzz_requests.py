@@ -247,10 +247,17 @@ def _values(maker: RequestMaker, arg: Arg) -> Any:
     return pack_f64(maker.rng.normal(0, 1, count))
 
 
+def _blob(maker: RequestMaker, arg: Arg) -> Any:
+    """Not a snapshot: random bytes, msgpack of something else, or a wrong format."""
+    return maker.pick([bytes(maker.rng.integers(0, 256, 64, dtype=np.uint8)),
+                       msgpack.packb({"format": 99}), msgpack.packb([1, 2]), b""])
+
+
 KIND_VALUES: dict[str, Callable[[RequestMaker, Arg], Any]] = {
     "number": _number, "count": _count, "string": _string, "bool": lambda m, a: m.chance(0.5),
     "names": _names, "map": _map, "groups": _groups, "poses": _rows(7), "twists": _rows(6),
     "choice": _choice, "values": _values, "wrenches": _rows(6), "points": _rows(3),
+    "blob": _blob,
 }
 SPECIAL: dict[tuple[str, str], Callable[[RequestMaker], Any]] = {
     ("update", "properties"): _properties,
