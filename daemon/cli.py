@@ -55,6 +55,11 @@ def serve(
         help='Engine parameters as JSON, e.g. \'{"timestep": 0.001}\'.')] = None,
     limit: Annotated[list[str] | None, typer.Option(
         help=f"A limit as NAME=VALUE (repeatable); defaults: {describe_limits()}.")] = None,
+    state_dir: Annotated[Path | None, typer.Option(
+        help="Folder where the live world is checkpointed (every --checkpoint-every seconds "
+             "and on SIGTERM) and restored from when the daemon starts again.")] = None,
+    checkpoint_every: Annotated[float, typer.Option(
+        help="Seconds between checkpoints with --state-dir.", min=0.1)] = 10.0,
     log_level: Annotated[str, typer.Option(help="Logging level.")] = "warning",
 ) -> None:
     """Serve one world on ENGINE as INSTANCE until SIGINT or SIGTERM."""
@@ -66,7 +71,8 @@ def serve(
             engine=engine, instance=instance, listen=listen or [DEFAULT_LISTEN],
             connect=connect or [], zenoh_config=zenoh_config, multicast=multicast,
             telemetry_rate_hz=telemetry_rate, params=_parse_params(params),
-            limits=_parse_limits(limit or []))
+            limits=_parse_limits(limit or []), state_dir=state_dir,
+            checkpoint_period_s=checkpoint_every)
         code = run_daemon(options, announce=lambda line: print(line, flush=True))
     except GaltonError as error:
         typer.echo(f"galton-daemon: {error}", err=True)

@@ -92,6 +92,10 @@ class SimLoop:
         self.telemetry_period = 1.0 / telemetry_rate_hz if telemetry_rate_hz > 0 else math.inf
         self.engine_factory = engine_factory
         self.side: dict[str, World] = {}  # side worlds by name (daemon/worlds.py)
+        # galton-daemon --state-dir: saves the live world every checkpoint_period seconds.
+        self.checkpoint: Callable[[], None] | None = None
+        self.checkpoint_period = 10.0
+        self._next_checkpoint = time.monotonic() + self.checkpoint_period
         self.slots = SnapshotSlots(limits)
         self._step_cost = 1e-4
         self._last_verify = 0.0
@@ -107,6 +111,11 @@ class SimLoop:
         self.clock: tuple[int, float, float, int, bool] = (0, 0.0, 0.0, 0, False)
         self.refresh_clock()
         self.tune_switch_interval()
+
+    def schedule_checkpoints(self, save: Callable[[], None], period_s: float) -> None:
+        """Call ``save`` every ``period_s`` seconds between chunks of steps."""
+        self.checkpoint, self.checkpoint_period = save, period_s
+        self._next_checkpoint = time.monotonic() + period_s
 
     def tune_switch_interval(self) -> None:
         """Set the process's switch interval for this world's engine (see above)."""
@@ -143,6 +152,9 @@ class SimLoop:
         if now >= next_telemetry:
             loop_status.publish_telemetry(self, now)
             next_telemetry = max(next_telemetry + self.telemetry_period, now)
+        if self.checkpoint is not None and now >= self._next_checkpoint:
+            self._next_checkpoint = now + self.checkpoint_period
+            self.checkpoint()
         self._take_calls(self._idle_timeout(next_telemetry))
         return next_telemetry
 

@@ -16,7 +16,9 @@ from typing import Any
 import msgpack
 import zenoh
 
+from galton.daemon import checkpoint
 from galton.daemon.calls import Call, Task
+from galton.daemon.engine import Engine
 from galton.daemon.engines import ENGINE_CLASSES, create_engine
 from galton.daemon.limits import DEFAULT_LIMITS, Limits
 from galton.daemon.loop import SimLoop
@@ -46,6 +48,8 @@ class DaemonOptions:
     telemetry_rate_hz: float = 10.0
     params: dict[str, Any] = field(default_factory=dict)
     limits: Limits = DEFAULT_LIMITS
+    state_dir: Path | None = None  # checkpoints of the live world (daemon/checkpoint.py)
+    checkpoint_period_s: float = checkpoint.DEFAULT_PERIOD_S
 
 
 def zenoh_config(options: DaemonOptions) -> zenoh.Config:
@@ -75,7 +79,7 @@ class Daemon:
         self._telemetry_pub = self.session.declare_publisher(
             self.keys.telemetry, congestion_control=zenoh.CongestionControl.DROP)
         self._events_pub = self.session.declare_publisher(self.keys.events)
-        self.loop = SimLoop(World(engine, limits=options.limits), options.instance,
+        self.loop = SimLoop(self._first_world(engine), options.instance,
                             self._publish_telemetry, self._publish_event,
                             options.telemetry_rate_hz, create_engine, options.limits)
         self._thread: threading.Thread | None = None
@@ -83,6 +87,29 @@ class Daemon:
         self._token: Any = None
         self._clients: Any = None
         self.finished = threading.Event()
+
+    def _first_world(self, engine: Engine) -> World:
+        """The checkpointed world when --state-dir holds one, else an empty world."""
+        options = self.options
+        if options.state_dir is not None:
+            path = checkpoint.checkpoint_path(options.state_dir, options.instance)
+            restored = checkpoint.load(path, create_engine, "default", options.limits)
+            if restored is not None:
+                engine.close()
+                log.warning("restored the world of %s: %d entities at step %d", path,
+                            len(restored.entities), restored.step_index)
+                return restored
+        return World(engine, limits=options.limits)
+
+    def save_checkpoint(self) -> None:
+        """Save the live world to --state-dir (a faulted world is not saved)."""
+        if self.options.state_dir is None or self.loop.world.faulted:
+            return
+        path = checkpoint.checkpoint_path(self.options.state_dir, self.options.instance)
+        try:
+            checkpoint.save(self.loop.world, path)
+        except Exception:
+            log.exception("could not save a checkpoint to %s", path)
 
     def open(self) -> None:
         """Declare the control queryable and the liveliness token: clients can reach us.
@@ -186,6 +213,9 @@ def run_daemon(options: DaemonOptions, announce: Callable[[str], None] = print) 
     wake_read = signal_wakeup_pipe()
     daemon = Daemon(options)
     daemon.loop.work_guard = sigterm_ends_at_once
+    if options.state_dir is not None:
+        options.state_dir.mkdir(parents=True, exist_ok=True)
+        daemon.loop.schedule_checkpoints(daemon.save_checkpoint, options.checkpoint_period_s)
     daemon.open()
 
     def stop_on_signal() -> None:
@@ -200,6 +230,7 @@ def run_daemon(options: DaemonOptions, announce: Callable[[str], None] = print) 
              f"listen={','.join(options.listen)} engines={','.join(ENGINE_CLASSES)}")
     try:
         daemon.loop.run()
+        daemon.save_checkpoint()  # on SIGTERM or SIGINT, after the last request
         daemon.finished.set()
     finally:
         daemon.close()
