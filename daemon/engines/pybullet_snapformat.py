@@ -211,6 +211,8 @@ def read_spawn(value: dict[str, Any], where: str) -> dict[str, Body]:
     made_mass = sd.number(run["made_mass"], f"{where}.made_mass", low=low,
                           high=0.0 if static else MAX_MASS)
     turn = sd.numbers(run["turn"], 4, f"{where}.turn", low=-1.0, high=1.0)
+    if abs(math.hypot(*turn) - 1) > 1e-6:
+        raise InvalidArgumentError(f"{where}.turn is not a unit quaternion")
     mass = sd.unpack(run["mass"], (n,), f"{where}.mass")
     if (mass < low).any() or (mass > (0.0 if static else MAX_MASS)).any():
         raise InvalidArgumentError(f"{where}.mass is out of range (0 when static)")

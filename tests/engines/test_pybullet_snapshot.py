@@ -85,6 +85,15 @@ def record(engine: PybulletEngine, names: list[str], steps: int, every: int = 25
     return out
 
 
+def now(engine: PybulletEngine, names: list[str]) -> Run:
+    """Every state, joint state (with the last step's efforts) and property, read now."""
+    joints = [j.name for j in engine.joints() if j.type in ("revolute", "prismatic")]
+    arrays = [*engine.get_states(names), engine.properties(names)]
+    if joints:
+        arrays.extend(engine.get_joint_states(joints))
+    return [array.tobytes() for array in arrays]
+
+
 def restored(make: Callable[[], PybulletEngine], data: dict[str, Any]) -> PybulletEngine:
     engine = make()
     engine.restore(data)
@@ -104,11 +113,12 @@ def assert_continues_alike(make: Callable[[], PybulletEngine], source: PybulletE
     """Snapshot ``source``, restore it into a fresh engine, and check that both read the
     same states now and after the same steps and requests."""
     names = names_of(source)
+    before = now(source, names)
     data = source.snapshot()
+    assert now(source, names) == before  # rebuilt, and reads as it did
     copy_ = restored(make, data)
     assert names_of(copy_) == names
-    assert [a.tobytes() for a in copy_.get_states(names)] == [
-        a.tobytes() for a in source.get_states(names)]
+    assert now(copy_, names) == before
     assert copy_.get_params() == source.get_params()
     assert copy_.joints() == source.joints()
     assert_same_run(record(source, names, steps, between=between),
