@@ -133,6 +133,9 @@ class MujocoEngine(Engine):
         self._wrenches = Wrenches()
         self._models = 0  # model entities alive
         self._broken = False
+        # Bodies bound from or parked into the pool since the last compile: the compiled
+        # model then differs from what its spec compiles to (see snapshot).
+        self._pool_edited = False
         ms.write_options(self._spec.option, self._values)
         self._model = self._spec.compile()
         self._data = mujoco.MjData(self._model)
@@ -158,6 +161,7 @@ class MujocoEngine(Engine):
             self._spec.memory = memory
             raise mujoco_error(exc, "MuJoCo rejected the change") from exc
         self._workers = 0  # the recompiled MjData has no thread pool
+        self._pool_edited = False
         self._start_workers()
 
     def _start_workers(self) -> None:

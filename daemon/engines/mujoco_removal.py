@@ -53,6 +53,7 @@ def delete(engine: MujocoEngine, names: Sequence[str]) -> None:
     else:
         chosen = {id(e) for e in parked}
         park = ids[[i for i, e in enumerate(entities) if id(e) in chosen]]
+        engine._pool_edited |= bool(len(park))
         if engine._balance is not None:
             engine._balance.forget(engine._model, engine._model.body_treeid[park])
     mp.park_arrays(engine._model, engine._data, engine._index, park)
@@ -76,6 +77,8 @@ def clear(engine: MujocoEngine) -> None:
         except GaltonError:
             engine._build_empty()
             return
+    else:
+        engine._pool_edited |= bool(parked)
     mp.park_arrays(engine._model, engine._data, engine._index,
                    np.array([e.body.id for e in parked], dtype=np.int64))
     mujoco.mj_resetData(engine._model, engine._data)

@@ -61,6 +61,8 @@ def snapshot(engine: MujocoEngine) -> dict[str, Any]:
     if engine._broken:
         raise OperationFailedError("the MuJoCo world is broken (a failed step or delete); "
                                    "reset it before taking a snapshot")
+    if engine._pool_edited:
+        engine._recompile()  # the model as its spec compiles it, as a restore will
     m, d = engine._model, engine._data
     loads: dict[int, int] = {}  # id(Assets) -> its place in "loads"
     entities = [_entity(name, e, loads) for name, e in engine._entities.items()]

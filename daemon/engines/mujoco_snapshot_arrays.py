@@ -28,9 +28,6 @@ from galton.protocol import InvalidArgumentError
 from galton.protocol.errors import brief
 
 F64, I32 = np.dtype("<f8"), np.dtype("<i4")
-# Model arrays a compile derives from the geometry in its own layout (its bounding volume
-# hierarchy): compiled afresh, never copied.
-MODEL_DERIVED = frozenset({"bvh_aabb"})
 STAT_FIELDS = ("meaninertia", "meanmass", "meansize", "extent", "center")
 # Data arrays in MuJoCo's arena: made anew by every step (contacts, constraints, islands).
 ARENA_PREFIXES = ("efc_", "efm_", "iefc_", "island_", "map_", "contact", "iacc", "ifrc")
@@ -102,7 +99,7 @@ def _write_all(targets: dict[str, np.ndarray], obj: Any, where: str) -> None:
 
 # -- the model ---------------------------------------------------------------------------
 def model_numbers(m: mujoco.MjModel) -> dict[str, Any]:
-    return {"arrays": {n: pack(a) for n, a in _float_arrays(m, MODEL_DERIVED).items()},
+    return {"arrays": {n: pack(a) for n, a in _float_arrays(m).items()},
             "stat": {f: pack(np.atleast_1d(getattr(m.stat, f))) for f in STAT_FIELDS}}
 
 
@@ -111,7 +108,7 @@ def write_model_numbers(m: mujoco.MjModel, obj: Any) -> None:
     stat = _table(table.get("stat"), "snapshot.model.stat")
     values = {f: unpack(stat.get(f), f"snapshot.model.stat.{f}", F64,
                         np.atleast_1d(getattr(m.stat, f)).shape) for f in STAT_FIELDS}
-    _write_all(_float_arrays(m, MODEL_DERIVED), table.get("arrays"), "snapshot.model.arrays")
+    _write_all(_float_arrays(m), table.get("arrays"), "snapshot.model.arrays")
     for field, value in values.items():
         setattr(m.stat, field, value if field == "center" else float(value[0]))
 

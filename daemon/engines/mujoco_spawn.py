@@ -89,5 +89,6 @@ def bind(engine: MujocoEngine, group: BodyGroup, key: mp.Key) -> None:
                                         restitution=group.restitution, key=key)
         engine._ids[name] = body.id
     engine._watch = None
+    engine._pool_edited = True
     mp.bind_arrays(engine._model, engine._data, engine._index, engine._body_ids(group.names),
                    poses)

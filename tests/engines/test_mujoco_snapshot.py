@@ -1,0 +1,276 @@
+"""Snapshots of the MuJoCo engine: a world restored into a fresh engine continues bit for bit
+like its source (piles in contact and asleep, a KUKA under targets and a wrench, pool churn,
+changed parameters, a ball held awake on a pin's crown), as often as it is restored, after
+its source has closed and through msgpack; malformed snapshots are refused with typed
+errors.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import msgpack
+import numpy as np
+import pybullet_data
+import pytest
+
+from galton.daemon.engine import FEATURE_SNAPSHOT
+from galton.daemon.engines.mujoco_engine import MujocoEngine
+from galton.daemon.model_files import resolve_model
+from galton.protocol import BodyGroup, BodyProperties, InvalidArgumentError
+
+KUKA = Path(pybullet_data.getDataPath()) / "kuka_iiwa/model.urdf"
+ALONG_Y = (math.sin(math.pi / 4), 0.0, 0.0, math.cos(math.pi / 4))  # a lying cylinder
+SEED = 25
+
+
+def bodies(shape: str, names: list[str], size: tuple[float, ...], rng: np.random.Generator,
+           height: float = 0.3, **options: Any) -> BodyGroup:
+    """Bodies dropped at random over a 1 m square, turned at random."""
+    poses = np.zeros((len(names), 7))
+    poses[:, :2] = rng.uniform(-0.5, 0.5, (len(names), 2))
+    poses[:, 2] = height + rng.uniform(0.0, 1.0, len(names))
+    turns = rng.normal(size=(len(names), 4))
+    poses[:, 3:] = turns / np.linalg.norm(turns, axis=1, keepdims=True)
+    return BodyGroup(shape=shape, size=size, names=names, poses=poses, **options)
+
+
+def floor() -> BodyGroup:
+    return BodyGroup(shape="plane", size=(3.0, 3.0), names=["floor"],
+                     poses=np.array([[0, 0, 0, 0, 0, 0, 1.0]]), static=True)
+
+
+def pile(engine: MujocoEngine, rng: np.random.Generator, prefix: str = "",
+         count: int = 70) -> None:
+    """Spheres (a group big enough to be built apart and attached) and boxes on a floor."""
+    engine.spawn([bodies("sphere", [f"{prefix}s{i}" for i in range(count)], (0.04,), rng),
+                  bodies("box", [f"{prefix}b{i}" for i in range(12)], (0.05, 0.04, 0.03),
+                         rng, friction=0.8, restitution=0.1)])
+
+
+def kuka(engine: MujocoEngine) -> list[str]:
+    """kuka_iiwa, fixed, integrated implicitly (see test_mujoco_joints.kuka)."""
+    engine.set_params({"mujoco.integrator": "implicitfast"})
+    text = resolve_model("urdf", KUKA.read_text(), str(KUKA), [])
+    engine.load_model("urdf", text, None, "k/")
+    return [j.name for j in engine.joints() if j.type == "revolute"]
+
+
+def state(engine: MujocoEngine) -> np.ndarray:
+    """Every entity's pose and twist, every joint's state and effort, the properties."""
+    names = sorted(engine._entities)
+    joints = [j.name for j in engine.joints() if j.type in ("revolute", "prismatic")]
+    parts = [*engine.get_states(names), engine.properties(names)]
+    if joints:
+        parts += engine.get_joint_states(joints)
+    return np.concatenate(parts, axis=None)
+
+
+def restored(snapshot: dict[str, Any]) -> MujocoEngine:
+    engine = MujocoEngine()
+    engine.restore(snapshot)
+    return engine
+
+
+def assert_same_runs(a: MujocoEngine, b: MujocoEngine,
+                     requests: list[Callable[[MujocoEngine], None]]) -> None:
+    """The same requests on both give the same states, bit for bit, after each one."""
+    np.testing.assert_array_equal(state(a), state(b))
+    for request in requests:
+        request(a)
+        request(b)
+        np.testing.assert_array_equal(state(a), state(b))
+    assert a.state_within(1e6, 1e5) and b.state_within(1e6, 1e5)
+
+
+def steps(count: int) -> Callable[[MujocoEngine], None]:
+    return lambda engine: engine.step(count)
+
+
+@pytest.fixture
+def engine() -> MujocoEngine:
+    return MujocoEngine()
+
+
+@pytest.fixture
+def rng() -> np.random.Generator:
+    return np.random.default_rng(SEED)
+
+
+def test_the_snapshot_feature_is_listed(engine: MujocoEngine) -> None:
+    assert FEATURE_SNAPSHOT in engine.capabilities().features
+
+
+def test_a_pile_in_contact_and_asleep_continues_bit_identically(
+        engine: MujocoEngine, rng: np.random.Generator) -> None:
+    engine.spawn([floor()])
+    pile(engine, rng)
+    engine.step(1500)
+    assert (engine._data.tree_asleep >= 0).any() and engine._data.ncon > 0
+    copy_ = restored(engine.snapshot())
+    assert_same_runs(engine, copy_, [steps(1), steps(200), lambda e: e.set_states(
+        ["s3"], np.array([[0, 0, 1.0, 0, 0, 0, 1]]), np.array([[0, 0, -1.0, 0, 0, 3]])),
+        steps(400), lambda e: e.reset_dynamics(), steps(100)])
+
+
+def test_a_kuka_with_position_targets_and_a_wrench_continues_bit_identically(
+        engine: MujocoEngine, rng: np.random.Generator) -> None:
+    engine.spawn([floor()])
+    joints = kuka(engine)
+    pile(engine, rng, count=10)
+    n = len(joints)
+    engine.set_joint_targets(joints, "position", np.linspace(-0.5, 0.5, n), np.full(n, 300.0),
+                             np.full(n, 20.0), np.full(n, np.inf))
+    engine.set_wrenches(["k/lbr_iiwa_link_7"], np.array([[0, 0, 5.0, 0, 0, 1.0]]),
+                        np.array([[0.0, 0.0, 1.2]]))
+    engine.step(300)
+    copy_ = restored(engine.snapshot())
+    assert [j.mode for j in copy_.joints()] == [j.mode for j in engine.joints()]
+
+    def retarget(e: MujocoEngine) -> None:
+        e.set_joint_targets(joints[:2], "velocity", np.ones(2), np.zeros(2), np.full(2, 5.0),
+                            np.full(2, 50.0))
+        e.clear_wrenches(None)
+
+    assert_same_runs(engine, copy_, [steps(200), retarget, steps(200),
+                                     lambda e: e.set_joint_states(joints[3:], np.full(
+                                         n - 3, 0.2), None), steps(100),
+                                     lambda e: e.restore_joints(), steps(50)])
+
+
+def test_spawn_and_delete_churn_continues_and_later_edits_agree(
+        engine: MujocoEngine, rng: np.random.Generator) -> None:
+    engine.spawn([floor()])
+    pile(engine, rng)
+    engine.step(200)
+    engine.delete([f"s{i}" for i in range(0, 70, 3)])  # parked
+    pile(engine, rng, prefix="n", count=20)  # bound from the pool, no compile
+    engine.step(200)
+    copy_ = restored(engine.snapshot())
+    again = np.random.default_rng(SEED + 1)
+    later = [bodies("sphere", [f"x{i}" for i in range(100)], (0.04,), again, height=1.0),
+             bodies("sphere", [f"y{i}" for i in range(5)], (0.04,), again, height=1.0)]
+    assert_same_runs(engine, copy_, [
+        steps(100), lambda e: e.spawn(later), steps(200),
+        lambda e: e.delete(["b0", "ns1", "x7"]), steps(100),
+        lambda e: e.update(["s1"], BodyProperties(mass=0.3)), steps(100),
+        lambda e: e.clear(), lambda e: e.spawn([floor()]), lambda e: pile(
+            e, np.random.default_rng(SEED)), steps(300)])
+
+
+def test_changed_parameters_travel_and_later_changes_agree(
+        engine: MujocoEngine, rng: np.random.Generator) -> None:
+    engine.set_params({"timestep": 1 / 700, "default_friction": 0.6180339887,
+                       "mujoco.solref": [0.0123456789, 0.9], "mujoco.cone": "pyramidal",
+                       "mujoco.sleep_tolerance": 0.0071})
+    engine.spawn([floor()])
+    pile(engine, rng)
+    engine.step(300)
+    copy_ = restored(engine.snapshot())
+    assert copy_.get_params() == engine.get_params()
+    assert_same_runs(engine, copy_, [
+        steps(200), lambda e: e.set_params({"default_restitution": 0.4321, "gravity": [
+            0.1, 0.0, -9.7]}), steps(300), lambda e: e.set_params(
+                {"mujoco.wake_balanced": False, "mujoco.solver": "newton"}), steps(100)])
+
+
+def test_a_ball_held_awake_on_a_crown_stays_held_and_is_let_go_alike(
+        engine: MujocoEngine) -> None:
+    pin = BodyGroup(shape="cylinder", size=(0.1, 0.3), names=["pin"],
+                    poses=np.array([[0, 0, 1.0, *ALONG_Y]]), static=True)
+    ball = BodyGroup(shape="sphere", size=(0.045,), names=["a"], mass=0.38,
+                     poses=np.array([[0, 0, 1.145, 0, 0, 0, 1]]))
+    engine.spawn([floor(), pin, ball])
+    engine.step(500)
+    assert engine._balance is not None and engine._balance.held
+    copy_ = restored(engine.snapshot())
+    assert copy_._balance is not None and copy_._balance.held == engine._balance.held
+    assert_same_runs(engine, copy_, [steps(1000)] * 4)
+    assert not engine._balance.held
+
+
+def test_a_snapshot_restores_twice_alike_and_after_its_source_closed(
+        engine: MujocoEngine, rng: np.random.Generator) -> None:
+    engine.spawn([floor()])
+    pile(engine, rng)
+    engine.step(400)
+    snapshot = engine.snapshot()
+    engine.step(300)
+    expected = state(engine)
+    engine.close()
+    del engine
+    first, second = restored(snapshot), restored(snapshot)
+    first.step(300)
+    second.step(300)
+    np.testing.assert_array_equal(state(first), expected)
+    np.testing.assert_array_equal(state(second), expected)
+
+
+def test_a_snapshot_survives_msgpack(engine: MujocoEngine, rng: np.random.Generator) -> None:
+    engine.spawn([floor()])
+    pile(engine, rng)
+    engine.step(400)
+    blob = msgpack.packb(engine.snapshot(), use_bin_type=True)
+    assert_same_runs(engine, restored(msgpack.unpackb(blob, raw=False)), [steps(300)])
+
+
+# -- refusals -------------------------------------------------------------------------------
+@pytest.fixture
+def snapshot(engine: MujocoEngine, rng: np.random.Generator) -> dict[str, Any]:
+    engine.spawn([floor()])
+    kuka(engine)
+    pile(engine, rng, count=8)
+    engine.step(50)
+    return engine.snapshot()
+
+
+def _truncated(snap: dict[str, Any]) -> None:
+    qpos = snap["data"]["arrays"]["qpos"]
+    qpos["data"] = qpos["data"][:-8]
+
+
+def _sleep_cycles_broken(snap: dict[str, Any]) -> None:
+    asleep = snap["data"]["sleep"]["tree_asleep"]
+    asleep["data"] = b"\x7f" * len(asleep["data"])  # every tree names a tree far beyond
+
+
+def _set(path: str, value: Any) -> Callable[[dict[str, Any]], None]:
+    def change(snap: dict[str, Any]) -> None:
+        *parents, last = path.split(".")
+        node = snap
+        for key in parents:
+            node = node[key]
+        node[last] = value
+    return change
+
+
+@pytest.mark.parametrize(("change", "words"), [
+    (_set("engine", "pybullet"), "pybullet"),
+    (_set("format", 99), "format 99"),
+    (_set("engine_version", "2.0.0"), "MuJoCo '2.0.0'"),
+    (_truncated, "qpos must be"),
+    (_set("params", [1, 2]), "params"),
+    (_set("params.timestep", "fast"), "timestep"),
+    (_set("spec", 42), "MJCF text"),
+    (_set("spec", "<mujoco><worldbody/></mujoco>"), "compiles to a world"),
+    (_set("entities", {"a": 1}), "entities must be a list"),
+    (_set("data.arrays.qvel.dtype", "<i4"), "dtype"),
+    (_sleep_cycles_broken, "tree_asleep"),
+    (_set("targets", {"k/J0": ["position", 1.0, "two", 0.0, 1.0]}), "numbers"),
+    (_set("wrenches", {"nobody": None}), "nobody"),
+    (lambda s: s.pop("pool"), "missing ['pool']"),
+], ids=["other-engine", "format", "version", "truncated", "params-type", "param-value",
+        "spec-type", "other-world", "entities-type", "dtype", "sleep-cycles", "target-type",
+        "wrench-name", "missing-key"])
+def test_a_malformed_snapshot_is_refused_with_a_typed_error(
+        snapshot: dict[str, Any], change: Callable[[dict[str, Any]], None],
+        words: str) -> None:
+    bad = copy.deepcopy(snapshot)
+    change(bad)
+    with pytest.raises(InvalidArgumentError, match=words.replace("[", r"\[").replace(
+            "]", r"\]")):
+        MujocoEngine().restore(bad)
