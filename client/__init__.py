@@ -8,8 +8,17 @@ Everything a program using the SDK catches or reads is importable from here: the
 from galton.client.discovery import DaemonInfo, discover, discover_at, instances, wait_for_daemon
 from galton.client.embedded import EmbeddedDaemon
 from galton.client.sdk import Client, body_group, boxes, plane, spheres
+from galton.client.sdk_worlds import lockstep
 from galton.client.telemetry import Subscription, TelemetryStream
-from galton.client.values import JointStates, Stamp, States
+from galton.client.values import (
+    Comparison,
+    JointStates,
+    Prediction,
+    SnapshotInfo,
+    Stamp,
+    States,
+    WorldInfo,
+)
 from galton.protocol import (
     BodyGroup,
     BodyProperties,
@@ -45,6 +54,7 @@ __all__ = [
     "Capabilities",
     "Client",
     "ClientClosedError",
+    "Comparison",
     "DaemonInfo",
     "DaemonUnreachableError",
     "EmbeddedDaemon",
@@ -60,6 +70,7 @@ __all__ = [
     "NotFoundError",
     "OperationFailedError",
     "PhysicsError",
+    "Prediction",
     "RemoteError",
     "Reply",
     "RequestTimeoutError",
@@ -67,6 +78,7 @@ __all__ = [
     "ResultCode",
     "SimState",
     "SimStatus",
+    "SnapshotInfo",
     "Stamp",
     "States",
     "Subscription",
@@ -74,11 +86,13 @@ __all__ = [
     "TelemetryStream",
     "UnknownOperationError",
     "UnsupportedVersionError",
+    "WorldInfo",
     "body_group",
     "boxes",
     "discover",
     "discover_at",
     "instances",
+    "lockstep",
     "plane",
     "spheres",
     "wait_for_daemon",

@@ -27,6 +27,7 @@ from numpy.typing import ArrayLike
 
 from galton.client import sdk_joints
 from galton.client.sdk_joints import SearchPath
+from galton.client.sdk_worlds import WorldMethods
 from galton.client.session import (
     Declared,
     checked_timeout,
@@ -61,11 +62,12 @@ __all__ = ["DEFAULT_TIMEOUT_S", "Client", "JointStates", "Stamp", "States", "bod
            "boxes", "plane", "spheres"]
 
 
-class Client:
+class Client(WorldMethods):
     """A connection to one daemon instance (the session may be shared with others).
 
     ``timeout``: seconds a quick operation waits for its reply; operations that rebuild a
     world wait at least their registry floor, stepping ones ``LONG_RUNNING_TIMEOUT_S``.
+    Requests are for the daemon's live world; ``world(name)`` gives a view for another.
     """
 
     def __init__(self, instance: str = "galton", connect: str | Sequence[str] | None = None,
@@ -76,6 +78,8 @@ class Client:
         self._own_session = session is None
         self.session = session if session is not None else open_session(connect, config_file)
         self._closed = False
+        self._world: str | None = None  # None: the live world (views name theirs)
+        self._parent: WorldMethods | None = None
         # This client's liveliness: a daemon ends a step request whose client has vanished.
         self.client_id = uuid.uuid4().hex
         self._token: Declared | None = self.session.liveliness().declare_token(
@@ -87,7 +91,9 @@ class Client:
 
     @property
     def closed(self) -> bool:
-        return self._closed
+        """Closed itself, or a view of a client that was closed."""
+        parent = self._parent
+        return self._closed or (isinstance(parent, Client) and parent.closed)
 
     def close(self) -> None:
         """Withdraw this client's token and close its own session; closing twice is fine."""
@@ -108,7 +114,7 @@ class Client:
         self.close()
 
     def _check_open(self) -> None:
-        if self._closed:
+        if self.closed:
             raise ClientClosedError(
                 f"this Client (instance {self.instance!r}) was closed; open a new one")
 
@@ -128,6 +134,8 @@ class Client:
         self._check_open()
         wait = self.timeout_for(op, timeout)
         steps = op in OPERATIONS and OPERATIONS[op].steps
+        if self._world is not None:
+            args = {"world": self._world, **(args or {})}
         return query(self.session, self.keys, op, args, wait,
                      self.client_id if steps else None)
 

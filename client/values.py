@@ -101,3 +101,129 @@ class JointStates:
 
 def _column(result: dict[str, Any], key: str) -> FloatArray:
     return unpack_f64(result[key], 1, key)[:, 0]
+
+
+# -- worlds, snapshots, predictions, comparisons (issue 25) ------------------------------
+@dataclass(frozen=True)
+class WorldInfo:
+    """One world of a daemon, as ``list_worlds`` describes it: the live one plays, side
+    worlds move only when stepped."""
+
+    name: str
+    live: bool
+    engine: str
+    state: str
+    step: int
+    sim_time: float
+    entity_count: int
+    faulted: bool
+
+    @classmethod
+    def from_wire(cls, row: dict[str, Any]) -> WorldInfo:
+        return cls(str(row["name"]), bool(row["live"]), str(row["engine"]), str(row["state"]),
+                   int(row["step"]), float(row["sim_time"]), int(row["entity_count"]),
+                   bool(row["faulted"]))
+
+
+@dataclass(frozen=True)
+class SnapshotInfo:
+    """A snapshot: the slot keeping it (None when only its bytes were asked for), its world
+    and engine, its size (``nbytes``, the wire's ``bytes``), and the step it was taken at;
+    ``blob`` holds its bytes when asked (any daemon with the same engine restores it)."""
+
+    slot: str | None
+    world: str
+    engine: str
+    nbytes: int
+    step: int
+    sim_time: float
+    entity_count: int
+    blob: bytes | None = None
+
+    @classmethod
+    def from_wire(cls, row: dict[str, Any], world: str = "", engine: str = "") -> SnapshotInfo:
+        """A ``snapshots`` row, or a ``snapshot`` result (which names neither world nor
+        engine when they are not given here)."""
+        blob = row.get("blob")
+        slot = row.get("slot")
+        return cls(None if slot is None else str(slot), str(row.get("world", world)),
+                   str(row.get("engine", engine)), int(row["bytes"]), int(row["step"]),
+                   float(row["sim_time"]), int(row["entity_count"]),
+                   None if blob is None else bytes(blob))
+
+
+@dataclass
+class Prediction:
+    """What ``predict`` sampled on a discarded copy of a world: ``times`` (samples,) from
+    the world's sim time, the present first; ``poses`` (samples, bodies, 7) and ``twists``
+    (samples, bodies, 6) of ``names``; ``joint_positions`` and ``joint_velocities``
+    (samples, joints) of ``joint_names``. Stamped with the world's present."""
+
+    times: FloatArray
+    steps: int
+    names: list[str]
+    poses: FloatArray
+    twists: FloatArray
+    joint_names: list[str]
+    joint_positions: FloatArray
+    joint_velocities: FloatArray
+    step: int
+    sim_time: float
+
+    @classmethod
+    def from_reply(cls, reply: Reply) -> Prediction:
+        result = reply.result
+        times = unpack_f64(result["times"], 1, "times")[:, 0]
+        samples = len(times)
+        names = [str(n) for n in result.get("names", [])]
+        joints = result.get("joints") or {"names": []}
+        joint_names = [str(n) for n in joints["names"]]
+        return cls(times, int(result["steps"]), names,
+                   _samples(result.get("poses"), samples, len(names), POSE_WIDTH, "poses"),
+                   _samples(result.get("twists"), samples, len(names), TWIST_WIDTH, "twists"),
+                   joint_names,
+                   _samples(joints.get("positions"), samples, len(joint_names), 1,
+                            "positions")[:, :, 0],
+                   _samples(joints.get("velocities"), samples, len(joint_names), 1,
+                            "velocities")[:, :, 0],
+                   reply.step, reply.sim_time)
+
+    def __len__(self) -> int:
+        return len(self.times)
+
+    def at(self, name: str) -> FloatArray:
+        """The poses (samples, 7) of one body along the prediction."""
+        return self.poses[:, self.names.index(name)]
+
+
+def _samples(data: Any, samples: int, count: int, width: int, key: str) -> FloatArray:
+    """Rows of ``width`` sample after sample, as (samples, count, width); empty if absent."""
+    if data is None:
+        return np.zeros((samples, count, width))
+    return unpack_f64(data, width, key).reshape(samples, count, width)
+
+
+@dataclass
+class Comparison:
+    """Observed poses against the world's: per body the position error (m), the angle of
+    the rotation between the orientations (rad), the speed error (m/s, when twists were
+    given, else None), and the anomaly score, the RMS over bodies of the errors divided by
+    their sigmas (about 1 at the stated noise; above 3 is a surprise)."""
+
+    names: list[str]
+    position_errors: FloatArray
+    angle_errors: FloatArray
+    speed_errors: FloatArray | None
+    score: float
+    corrected: bool
+    step: int
+    sim_time: float
+
+    @classmethod
+    def from_reply(cls, reply: Reply, names: list[str]) -> Comparison:
+        result = reply.result
+        speeds = result.get("speed_errors")
+        return cls(names, _column(result, "position_errors"), _column(result, "angle_errors"),
+                   None if speeds is None else _column(result, "speed_errors"),
+                   float(result["score"]), bool(result["corrected"]), reply.step,
+                   reply.sim_time)

@@ -243,6 +243,17 @@ CALLS: dict[str, Callable[[Client], object]] = {
     "on_telemetry": lambda c: c.on_telemetry(lambda _: None),
     "on_event": lambda c: c.on_event(lambda _: None),
     "enter": Client.__enter__,
+    "world": lambda c: c.world("side"),
+    "list_worlds": Client.list_worlds,
+    "create_world": lambda c: c.create_world("side"),
+    "fork_world": lambda c: c.fork_world("side"),
+    "delete_world": lambda c: c.delete_world("side"),
+    "snapshot": lambda c: c.snapshot("s"),
+    "restore": lambda c: c.restore("s"),
+    "snapshots": Client.snapshots,
+    "delete_snapshot": lambda c: c.delete_snapshot("s"),
+    "predict": lambda c: c.predict(0.1),
+    "compare": lambda c: c.compare(["a"], np.zeros(7)),
 }
 
 
