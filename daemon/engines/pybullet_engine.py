@@ -27,8 +27,9 @@ Rewinding: ``reset_dynamics`` rebuilds the world too, every body made again as i
 made, so that a stopped world replays its first run bit for bit (Bullet would otherwise keep
 contact points and their warm starts across the teleport).
 
-The engine is three parts: this module (bodies, states, models), ``Parameters``
-(pybullet_params.py) and ``Rebuilding`` (pybullet_rebuild.py). Plain functions do the rest:
+The engine's parts: this module (bodies, states, models), ``Parameters``
+(pybullet_params.py), ``Rebuilding`` (pybullet_rebuild.py), ``Articulated`` (joints,
+pybullet_articulated.py) and ``Snapshots`` (pybullet_snapshot.py). Plain functions do the rest:
 a spawn group's values and books (pybullet_spawn.py), a body's updates and properties
 (pybullet_props.py), a model load's checks and names (pybullet_models.py).
 """
@@ -379,16 +380,17 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Engine):
 
     # -- snapshots (pybullet_snapshot.py) ------------------------------------------------
     @engine_call
-    def snapshot(self) -> dict[str, Any]:
+    def snapshot(self, *, canonical: bool = True) -> dict[str, Any]:
         """The world as plain data: every body's books, model texts, articulations, targets,
-        wrenches, parameters and states. Taking it rebuilds this world (as
-        ``reset_dynamics`` does: Bullet's contact points and warm starts cannot be read
-        out, so they are forgotten here). The promise: from then on, this world and a
-        fresh engine restored from the snapshot, given the same steps and requests, have
-        the same states bit for bit (on the same PyBullet build); this world's own
-        continuation differs from the one it would have had without the snapshot as it
-        would after ``reset_dynamics``."""
-        return self._snapshot()
+        wrenches, parameters and states. Bullet's contact points and warm starts cannot be
+        read out, so a restore starts without them, as ``reset_dynamics`` leaves a world.
+        The promise (on the same PyBullet build): a fresh engine restored from the
+        snapshot, given the same steps and requests, has the same states bit for bit as
+        this world, which ``canonical`` rebuilds now for that (its own continuation then
+        differs from the one it would have had, as after ``reset_dynamics``); with
+        ``canonical`` False this world is left untouched, and the restore goes on bit for
+        bit as this world would after ``reset_dynamics`` now."""
+        return self._snapshot(canonical)
 
     @engine_call
     def restore(self, data: dict[str, Any]) -> None:

@@ -33,7 +33,7 @@ def unpack(value: Any, shape: Sequence[int], where: str, *, finite: bool = True,
     """The array packed in ``value``, checked to have exactly ``shape``; NaN and infinity
     refused with ``finite`` (infinity allowed again with ``allow_inf``)."""
     fields(value, ("dtype", "shape", "data"), where)
-    if value["dtype"] not in DTYPES:
+    if not isinstance(value["dtype"], str) or value["dtype"] not in DTYPES:
         raise InvalidArgumentError(f"{where}.dtype must be one of {', '.join(DTYPES)}, "
                                    f"got {brief(value['dtype'])}")
     got = check_type(value["shape"], list, f"{where}.shape")

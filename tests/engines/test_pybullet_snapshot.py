@@ -212,6 +212,21 @@ def test_the_source_goes_on_as_after_reset_dynamics(
     assert_same_run(record(taken, names, 200), record(rewound, names, 200))
 
 
+def test_a_snapshot_that_is_not_canonical_leaves_its_source_alone(
+        engines: Callable[[], PybulletEngine]) -> None:
+    """The source goes on as an untouched twin; the restore as a rewound twin."""
+    groups = pile(np.random.default_rng(SEED))
+    source, twin, rewound = engines(), engines(), engines()
+    for engine in (source, twin, rewound):
+        engine.spawn(copy.deepcopy(groups))
+        engine.step(150)
+    names = names_of(source)
+    copy_ = restored(engines, source.snapshot(canonical=False))
+    rewound.reset_dynamics()
+    assert_same_run(record(source, names, 200), record(twin, names, 200))
+    assert_same_run(record(copy_, names, 200), record(rewound, names, 200))
+
+
 # -- restoring: many times, after the source is gone, through msgpack ------------------------
 def test_a_snapshot_restores_many_times_and_outlives_its_source(
         engines: Callable[[], PybulletEngine]) -> None:
@@ -320,3 +335,35 @@ def test_a_snapshot_is_plain_data() -> None:
             check(child)
     check(data)
     assert msgpack.unpackb(msgpack.packb(data, use_bin_type=True), raw=False) == data
+
+
+def test_mangled_snapshots_give_only_typed_errors(
+        engines: Callable[[], PybulletEngine]) -> None:
+    """Seeded mutations of every field: a restore succeeds or says InvalidArgumentError."""
+    source = engines()
+    source.load_model("urdf", kuka_text(), None, "k/")
+    source.spawn(pile(np.random.default_rng(SEED), count=2))
+    data = source.snapshot()
+    places = list(fields_of(data))
+    values = [None, -1, 1.5, np.nan, np.inf, "x", b"\0" * 8, [], {}, [1], True, 10**12, "s1"]
+    rng = np.random.default_rng(SEED)
+    for _ in range(150):
+        path = places[rng.integers(len(places))]
+        value = values[rng.integers(len(values))]
+        engine = PybulletEngine()
+        try:
+            engine.restore(cut(data, path, value))
+            engine.step(2)
+        except InvalidArgumentError:
+            pass
+        finally:
+            engine.close()
+
+
+def fields_of(value: Any, path: tuple[Any, ...] = ()) -> Iterator[tuple[Any, ...]]:
+    """The path of every field and item below ``value``."""
+    items = value.items() if isinstance(value, dict) else (
+        enumerate(value) if isinstance(value, list) else ())
+    for key, child in items:
+        yield (*path, key)
+        yield from fields_of(child, (*path, key))
