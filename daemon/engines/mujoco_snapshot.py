@@ -62,7 +62,7 @@ def snapshot(engine: MujocoEngine) -> dict[str, Any]:
         raise OperationFailedError("the MuJoCo world is broken (a failed step or delete); "
                                    "reset it before taking a snapshot")
     if engine._pool_edited:
-        engine._recompile()  # the model as its spec compiles it, as a restore will
+        _recompile(engine)
     m, d = engine._model, engine._data
     loads: dict[int, int] = {}  # id(Assets) -> its place in "loads"
     entities = [_entity(name, e, loads) for name, e in engine._entities.items()]
@@ -87,6 +87,19 @@ def snapshot(engine: MujocoEngine) -> dict[str, Any]:
         "looks": {"diverged": engine._diverged, "crowded": engine._crowded,
                   "steps_since_look": engine._steps_since_look},
     }
+
+
+def _recompile(engine: MujocoEngine) -> None:
+    """Compile the model as its spec compiles it, as a restore will: binding and parking
+    bodies in the pool edit the compiled model alone (collisions, hence its bounding volume
+    hierarchy). The bodies stay where they are in the model, so the whole data, sleep books
+    included, and the balance guard's books are carried over exactly."""
+    numbers = arrays.data_numbers(engine._model, engine._data)
+    guard = None if engine._balance is None else engine._balance.books()
+    engine._recompile()
+    arrays.write_data_numbers(engine._model, engine._data, numbers)
+    if guard is not None and engine._balance is not None:
+        engine._balance.load(engine._model, guard)
 
 
 def _entity(name: str, e: Entity, loads: dict[int, int]) -> dict[str, Any]:

@@ -27,7 +27,9 @@ import numpy as np
 from galton.protocol import InvalidArgumentError
 from galton.protocol.errors import brief
 
-F64, I32 = np.dtype("<f8"), np.dtype("<i4")
+F64, F32, I32 = np.dtype("<f8"), np.dtype("<f4"), np.dtype("<i4")
+# Single-precision model arrays that come from asset files (meshes...): compiled alike.
+FILE_PREFIXES = ("mesh_", "skin_", "flex_", "hfield_")
 STAT_FIELDS = ("meaninertia", "meanmass", "meansize", "extent", "center")
 # Data arrays in MuJoCo's arena: made anew by every step (contacts, constraints, islands).
 ARENA_PREFIXES = ("efc_", "efm_", "iefc_", "island_", "map_", "contact", "iacc", "ifrc")
@@ -71,20 +73,21 @@ def _table(obj: Any, where: str) -> dict[str, Any]:
     return obj
 
 
-def _float_arrays(struct: Any, skip: frozenset[str] = frozenset(),
-                  prefixes: tuple[str, ...] = ()) -> dict[str, np.ndarray]:
-    """The float64 arrays of an MjModel or MjData by name."""
+def _float_arrays(struct: Any, prefixes: tuple[str, ...] = (),
+                  dtype: np.dtype[Any] = F64) -> dict[str, np.ndarray]:
+    """The arrays of an MjModel or MjData of this dtype by name (but these prefixes')."""
     out = {}
     for name in dir(struct):
-        if name.startswith("_") or name in skip or name.startswith(prefixes):
+        if name.startswith("_") or name.startswith(prefixes):
             continue
         value = getattr(struct, name, None)
-        if isinstance(value, np.ndarray) and value.dtype == np.float64:
+        if isinstance(value, np.ndarray) and value.dtype == dtype:
             out[name] = value
     return out
 
 
-def _write_all(targets: dict[str, np.ndarray], obj: Any, where: str) -> None:
+def _write_all(targets: dict[str, np.ndarray], obj: Any, where: str,
+               dtype: np.dtype[Any] = F64) -> None:
     """Every target array from plain data: all of them, nothing more, each its own shape;
     all checked before any is written."""
     table = _table(obj, where)
@@ -92,7 +95,7 @@ def _write_all(targets: dict[str, np.ndarray], obj: Any, where: str) -> None:
         missing, extra = sorted(set(targets) - set(table)), sorted(set(table) - set(targets))
         raise InvalidArgumentError(f"{where} must hold this world's arrays: missing "
                                    f"{missing[:5]}, unknown {extra[:5]}")
-    values = {n: unpack(table[n], f"{where}.{n}", F64, a.shape) for n, a in targets.items()}
+    values = {n: unpack(table[n], f"{where}.{n}", dtype, a.shape) for n, a in targets.items()}
     for name, value in values.items():
         targets[name][...] = value
 
@@ -100,6 +103,8 @@ def _write_all(targets: dict[str, np.ndarray], obj: Any, where: str) -> None:
 # -- the model ---------------------------------------------------------------------------
 def model_numbers(m: mujoco.MjModel) -> dict[str, Any]:
     return {"arrays": {n: pack(a) for n, a in _float_arrays(m).items()},
+            "arrays32": {n: pack(a, F32) for n, a in
+                         _float_arrays(m, FILE_PREFIXES, F32).items()},
             "stat": {f: pack(np.atleast_1d(getattr(m.stat, f))) for f in STAT_FIELDS}}
 
 
@@ -109,13 +114,15 @@ def write_model_numbers(m: mujoco.MjModel, obj: Any) -> None:
     values = {f: unpack(stat.get(f), f"snapshot.model.stat.{f}", F64,
                         np.atleast_1d(getattr(m.stat, f)).shape) for f in STAT_FIELDS}
     _write_all(_float_arrays(m), table.get("arrays"), "snapshot.model.arrays")
+    _write_all(_float_arrays(m, FILE_PREFIXES, F32), table.get("arrays32"),
+               "snapshot.model.arrays32", F32)
     for field, value in values.items():
         setattr(m.stat, field, value if field == "center" else float(value[0]))
 
 
 # -- the data ----------------------------------------------------------------------------
 def _data_arrays(d: mujoco.MjData) -> dict[str, np.ndarray]:
-    return _float_arrays(d, prefixes=ARENA_PREFIXES)
+    return _float_arrays(d, ARENA_PREFIXES)
 
 
 def data_numbers(m: mujoco.MjModel, d: mujoco.MjData) -> dict[str, Any]:

@@ -87,6 +87,35 @@ def assert_same_runs(a: MujocoEngine, b: MujocoEngine,
     assert a.state_within(1e6, 1e5) and b.state_within(1e6, 1e5)
 
 
+def arrays(struct: Any) -> dict[str, np.ndarray]:
+    """Every array of an MjModel or MjData but the data's arena (remade by each step)."""
+    arena = ("efc_", "efm_", "iefc_", "island_", "map_", "iacc", "ifrc", "solver_")
+    return {n: getattr(struct, n) for n in dir(struct) if not n.startswith(("_", *arena))
+            and isinstance(getattr(struct, n, None), np.ndarray)}
+
+
+SLEEP_BOOKS = ("tree_asleep", "tree_awake", "body_awake", "body_awake_ind",
+               "parent_awake_ind", "dof_awake_ind")
+
+
+def carried(data: Any) -> dict[str, np.ndarray]:
+    """What a snapshot carries of an MjData: its float arrays and its sleep books."""
+    return {n: v for n, v in arrays(data).items() if v.dtype == np.float64 or n in SLEEP_BOOKS}
+
+
+def assert_same_world(a: MujocoEngine, b: MujocoEngine) -> None:
+    """The compiled models alike in every array, names included; the data in every float
+    array and the sleep books (its other integers are remade by the next step)."""
+    for one, other in ((a._model, b._model), (a._data, b._data)):
+        mine, theirs = arrays(one), arrays(other)
+        if one is a._data:
+            mine = carried(one)
+        assert [n for n in mine if not np.array_equal(mine[n], theirs[n],
+                                                      equal_nan=True)] == []
+    assert [(n, getattr(a._data, n)) for n in ("ntree_awake", "nbody_awake", "nv_awake")] == \
+        [(n, getattr(b._data, n)) for n in ("ntree_awake", "nbody_awake", "nv_awake")]
+
+
 def steps(count: int) -> Callable[[MujocoEngine], None]:
     return lambda engine: engine.step(count)
 
@@ -129,6 +158,7 @@ def test_a_kuka_with_position_targets_and_a_wrench_continues_bit_identically(
                         np.array([[0.0, 0.0, 1.2]]))
     engine.step(300)
     copy_ = restored(engine.snapshot())
+    assert_same_world(engine, copy_)
     assert [j.mode for j in copy_.joints()] == [j.mode for j in engine.joints()]
 
     def retarget(e: MujocoEngine) -> None:
@@ -151,6 +181,7 @@ def test_spawn_and_delete_churn_continues_and_later_edits_agree(
     pile(engine, rng, prefix="n", count=20)  # bound from the pool, no compile
     engine.step(200)
     copy_ = restored(engine.snapshot())
+    assert_same_world(engine, copy_)
     again = np.random.default_rng(SEED + 1)
     later = [bodies("sphere", [f"x{i}" for i in range(100)], (0.04,), again, height=1.0),
              bodies("sphere", [f"y{i}" for i in range(5)], (0.04,), again, height=1.0)]
@@ -160,6 +191,25 @@ def test_spawn_and_delete_churn_continues_and_later_edits_agree(
         lambda e: e.update(["s1"], BodyProperties(mass=0.3)), steps(100),
         lambda e: e.clear(), lambda e: e.spawn([floor()]), lambda e: pile(
             e, np.random.default_rng(SEED)), steps(300)])
+
+
+def test_a_snapshot_after_pool_edits_keeps_the_sources_state_and_sleepers(
+        engine: MujocoEngine, rng: np.random.Generator) -> None:
+    """Binding and parking edit the compiled model alone, so the snapshot recompiles it
+    first (as the restore compiles it), carrying the data over exactly."""
+    engine.spawn([floor()])
+    pile(engine, rng)
+    engine.step(1500)
+    engine.delete(["s1", "s2"])
+    pile(engine, rng, prefix="n", count=2)  # bound from the pool
+    engine.step(100)
+    before = {n: a.copy() for n, a in carried(engine._data).items()}
+    asleep = int(np.count_nonzero(engine._data.tree_asleep >= 0))
+    assert asleep and engine._pool_edited
+    engine.snapshot()
+    after = carried(engine._data)
+    assert [n for n in before if not np.array_equal(before[n], after[n], equal_nan=True)] == []
+    assert not engine._pool_edited
 
 
 def test_changed_parameters_travel_and_later_changes_agree(
