@@ -151,9 +151,11 @@ def read_states(bc: BulletClient, bodies: dict[str, Body], given: dict[str, list
     """Each body's pose and twist to make it with: a pose given since the last step as it
     was given, a held state as held, the rest as PyBullet reports it."""
     states = {}
+    # Bound once: BulletClient builds a new functools.partial on every attribute access.
+    get_pose, get_velocity = bc.getBasePositionAndOrientation, bc.getBaseVelocity
     for name, body in bodies.items():
-        position, orientation = bc.getBasePositionAndOrientation(body.uid)
-        linear, angular = bc.getBaseVelocity(body.uid)
+        position, orientation = get_pose(body.uid)
+        linear, angular = get_velocity(body.uid)
         pose, twist = held.get(name, (None, None))
         states[name] = (given.get(name) or pose or [*position, *orientation],
                         twist or [*linear, *angular])
@@ -196,13 +198,14 @@ def place(bc: BulletClient, uid: int, pose: list[float]) -> bool:
     Either way the body's twist is zero after it (resetBasePositionAndOrientation's doing)."""
     want = (tuple(pose[:3]), tuple(pose[3:]))
     quaternion = list(pose[3:])
+    reset, get = bc.resetBasePositionAndOrientation, bc.getBasePositionAndOrientation
     for _ in range(PLACE_TRIES):
-        bc.resetBasePositionAndOrientation(uid, pose[:3], quaternion)
-        got = bc.getBasePositionAndOrientation(uid)
+        reset(uid, pose[:3], quaternion)
+        got = get(uid)
         if got == want:
             return True
         quaternion = [q + (w - g) for q, w, g in zip(quaternion, want[1], got[1], strict=True)]
-    bc.resetBasePositionAndOrientation(uid, pose[:3], pose[3:])
+    reset(uid, pose[:3], pose[3:])
     return False
 
 
@@ -211,14 +214,14 @@ def settle(bc: BulletClient, bodies: dict[str, Body], states: dict[str, State],
     """Correct the poses of bodies made again from read-back states (those not in
     ``exact``); return the states of those that still do not read back bit for bit."""
     held: dict[str, Held] = {}
+    get_pose, reset_velocity = bc.getBasePositionAndOrientation, bc.resetBaseVelocity
     for name, body in bodies.items():
         pose, twist = states[name]
-        if name in exact or bc.getBasePositionAndOrientation(body.uid) == (
-                tuple(pose[:3]), tuple(pose[3:])):
+        if name in exact or get_pose(body.uid) == (tuple(pose[:3]), tuple(pose[3:])):
             continue
         if not place(bc, body.uid, pose):
             held[name] = (pose, None)
-        bc.resetBaseVelocity(body.uid, twist[:3], twist[3:])
+        reset_velocity(body.uid, twist[:3], twist[3:])
     return held
 
 
