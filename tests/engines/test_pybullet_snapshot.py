@@ -182,6 +182,32 @@ def test_spawn_delete_and_update_churn_goes_on_alike(
     assert_continues_alike(engines, source)
 
 
+MJCF = """<mujoco model="trio">
+  <worldbody>
+    <geom type="plane" size="5 5 0.1"/>
+    <body name="ball" pos="0 0 0.3"><joint type="free"/><geom type="sphere" size="0.1"/></body>
+    <body name="cube" pos="0.05 0 0.6"><joint type="free"/><geom type="box" size=".1 .1 .1"/>
+    </body>
+    <body name="stick" pos="0 0.1 0.9"><joint type="free"/>
+      <geom type="capsule" size="0.03 0.1"/></body>
+  </worldbody>
+</mujoco>"""
+
+
+def test_an_mjcf_load_partly_deleted_goes_on_alike(
+        engines: Callable[[], PybulletEngine]) -> None:
+    """Several bodies from one load, one of them deleted, one updated, all in contact."""
+    source = engines()
+    infos = source.load_model("mjcf", MJCF, None, "m/")
+    roots = [info.name for info in infos if info.shape == "model"]
+    source.step(100)
+    source.delete([roots[2]])
+    source.update([roots[3]], BodyProperties(mass=2.0, friction=0.9))
+    source.step(30)
+    data = assert_continues_alike(engines, source)
+    assert data["runs"][0]["index"] == [0, 1, 3]
+
+
 def test_parameter_changes_after_the_restore_go_on_alike(
         engines: Callable[[], PybulletEngine]) -> None:
     source = engines()
