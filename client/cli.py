@@ -177,6 +177,7 @@ from galton.client import (  # noqa: E402,F401
     cli_streams,
     cli_time,
     cli_world,
+    cli_worlds,
 )
 
 tidy_help(app)
