@@ -136,6 +136,7 @@ class MujocoEngine(Engine):
         # Bodies bound from or parked into the pool since the last compile: the compiled
         # model then differs from what its spec compiles to (see snapshot).
         self._pool_edited = False
+        self._xml: str | None = None  # the spec as MJCF, kept until the spec changes
         ms.write_options(self._spec.option, self._values)
         self._model = self._spec.compile()
         self._data = mujoco.MjData(self._model)
@@ -151,6 +152,7 @@ class MujocoEngine(Engine):
         """Compile the edited spec in place, keeping the state, with an arena for ``nbody``
         bodies and ``nv`` degrees of freedom (the model's own by default). On failure the
         model and data in use are untouched; raise with MuJoCo's words. (Reindex after.)"""
+        self._xml = None
         m = self._model
         memory = self._spec.memory
         self._spec.memory = ms.arena_bytes(m.nbody if nbody is None else nbody,
@@ -240,6 +242,7 @@ class MujocoEngine(Engine):
 
     def set_params(self, params: dict[str, Any]) -> None:
         clean = check_updates(self.name, ms.PARAMS, params)
+        self._xml = None
         self._values.update(clean)
         ms.write_options(self._spec.option, self._values)
         ms.write_options(self._model.opt, self._values)
@@ -287,6 +290,7 @@ class MujocoEngine(Engine):
         teleport.set_states(self, names, poses, twists)
 
     def update(self, names: Sequence[str], props: BodyProperties) -> None:
+        self._xml = None
         mpr.update(self, names, props)
 
     # -- Engine: time ---------------------------------------------------------------------

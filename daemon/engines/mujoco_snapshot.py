@@ -52,7 +52,7 @@ ENGINE = "mujoco"
 SIZES = ("nbody", "ngeom", "njnt", "nq", "nv", "nu", "ntree", "nmocap")
 SOURCES = ("spawn", "model", "link")
 KEYS = frozenset({"format", "engine", "engine_version", "params", "spec", "memory", "sizes",
-                  "model", "data", "entities", "loads", "pool", "joints", "targets",
+                  "model", "data", "entities", "loads", "kinds", "pool", "joints", "targets",
                   "wrenches", "balance", "looks"})
 
 
@@ -65,19 +65,21 @@ def snapshot(engine: MujocoEngine) -> dict[str, Any]:
         _recompile(engine)
     m, d = engine._model, engine._data
     loads: dict[int, int] = {}  # id(Assets) -> its place in "loads"
-    entities = [_entity(name, e, loads) for name, e in engine._entities.items()]
+    kinds: dict[tuple[Any, ...], int] = {}  # pool kind -> its place in "kinds"
+    entities = [_entity(name, e, loads, kinds) for name, e in engine._entities.items()]
+    parked = [[kinds.setdefault(key, len(kinds)), [b.name for b in bodies]]
+              for key, bodies in engine._pool._parked.items()]
     assets = {id(e.assets): e.assets for e in engine._entities.values() if e.assets}
     return {
         "format": FORMAT, "engine": ENGINE, "engine_version": mujoco.__version__,
-        "params": engine.get_params(), "spec": engine._spec.to_xml(),
+        "params": engine.get_params(), "spec": _xml(engine),
         "memory": int(engine._spec.memory), "sizes": {s: int(getattr(m, s)) for s in SIZES},
         "model": arrays.model_numbers(m), "data": arrays.data_numbers(m, d),
         "entities": entities,
         "loads": [{"assets": sorted([k, n] for k, n in assets[i].names),
                    "roots": assets[i].roots} for i in sorted(loads, key=loads.__getitem__)],
-        "pool": {"serial": engine._pool._serial,
-                 "parked": [[_key(key), [b.name for b in bodies]]
-                            for key, bodies in engine._pool._parked.items()]},
+        "kinds": [_key(key) for key in kinds],
+        "pool": {"serial": engine._pool._serial, "parked": parked},
         "joints": {root: [i.to_wire() for i in infos]
                    for root, infos in engine._joints.infos.items()},
         "targets": {n: [t.mode, t.target, t.kp, t.kd, t.max_effort]
@@ -87,6 +89,14 @@ def snapshot(engine: MujocoEngine) -> dict[str, Any]:
         "looks": {"diverged": engine._diverged, "crowded": engine._crowded,
                   "steps_since_look": engine._steps_since_look},
     }
+
+
+def _xml(engine: MujocoEngine) -> str:
+    """The spec as MJCF: 50 ms for a 500-ball board, so kept until the spec changes (a
+    compile, a parameter, an update, a static body moved; pool edits recompile first)."""
+    if engine._xml is None:
+        engine._xml = engine._spec.to_xml()
+    return engine._xml
 
 
 def _recompile(engine: MujocoEngine) -> None:
@@ -102,13 +112,15 @@ def _recompile(engine: MujocoEngine) -> None:
         engine._balance.load(engine._model, guard)
 
 
-def _entity(name: str, e: Entity, loads: dict[int, int]) -> dict[str, Any]:
+def _entity(name: str, e: Entity, loads: dict[int, int],
+            kinds: dict[tuple[Any, ...], int]) -> dict[str, Any]:
     load = None if e.assets is None else loads.setdefault(id(e.assets), len(loads))
+    kind = None if e.key is None else kinds.setdefault(e.key, len(kinds))
     return {"name": name, "body": e.body.name, "static": e.static, "source": e.source,
             "friction": e.friction, "restitution": e.restitution,
             "initial_pose": None if e.initial_pose is None else [float(v) for v in
                                                                  e.initial_pose],
-            "key": None if e.key is None else _key(e.key), "parts": list(e.parts),
+            "kind": kind, "parts": list(e.parts),
             "model": e.model, "load": load}
 
 
@@ -147,6 +159,7 @@ def restore(engine: MujocoEngine, data: Any) -> None:
         raise InvalidArgumentError(f"snapshot.spec has no frame {HOME!r}")
     engine._values, engine._spec, engine._home = values, spec, home
     engine._model, engine._data, engine._litter = model, state, []
+    engine._xml = data["spec"]  # compiles to this world as well as its own MJCF would
     _books(engine, data)
     engine._workers = 0
     engine._start_workers()
@@ -205,13 +218,14 @@ def _check_sizes(model: mujoco.MjModel, sizes: Any) -> None:
 # -- the engine's books ----------------------------------------------------------------------
 def _books(engine: MujocoEngine, data: dict[str, Any]) -> None:
     loads = [_load(i, load) for i, load in enumerate(_list(data["loads"], "loads"))]
+    kinds = [_read_key(kind) for kind in _list(data["kinds"], "kinds")]
     engine._entities = {}
     for row in _list(data["entities"], "entities"):
-        name, entity = _read_entity(engine._spec, row, loads)
+        name, entity = _read_entity(engine._spec, row, loads, kinds)
         engine._entities[name] = entity
     engine._parts = {n for n, e in engine._entities.items() if e.source == "link"}
     engine._models = sum(e.source == "model" for e in engine._entities.values())
-    _pool(engine, data["pool"])
+    _pool(engine, data["pool"], kinds)
     _joints(engine, data["joints"], data["targets"])
     _wrenches(engine, data["wrenches"])
     looks = data["looks"]
@@ -261,10 +275,11 @@ def _load(i: int, row: Any) -> Assets:
 
 
 ENTITY_KEYS = {"name", "body", "static", "source", "friction", "restitution", "initial_pose",
-               "key", "parts", "model", "load"}
+               "kind", "parts", "model", "load"}
 
 
-def _read_entity(spec: mujoco.MjSpec, row: Any, loads: list[Assets]) -> tuple[str, Entity]:
+def _read_entity(spec: mujoco.MjSpec, row: Any, loads: list[Assets],
+                 kinds: list[tuple[Any, ...]]) -> tuple[str, Entity]:
     row = _fields(row, ENTITY_KEYS, "entities[]")
     name, source = row["name"], row["source"]
     if not isinstance(name, str) or source not in SOURCES or \
@@ -274,9 +289,11 @@ def _read_entity(spec: mujoco.MjSpec, row: Any, loads: list[Assets]) -> tuple[st
     body = spec.body(row["body"]) if row["body"] == expected else None
     if body is None:
         raise InvalidArgumentError(f"snapshot.entities: {name!r} has no body in the spec")
-    load = row["load"]
-    if load is not None and (type(load) is not int or not 0 <= load < len(loads)):
-        raise InvalidArgumentError(f"snapshot.entities: {name!r} names load {brief(load)}")
+    load, kind = row["load"], row["kind"]
+    if load is not None:
+        _index(load, len(loads), f"entities[{name!r}].load")
+    if kind is not None:
+        _index(kind, len(kinds), f"entities[{name!r}].kind")
     parts = _list(row["parts"], "entities[].parts")
     if not all(isinstance(p, str) for p in parts) or not isinstance(row["model"],
                                                                     str | None):
@@ -285,8 +302,15 @@ def _read_entity(spec: mujoco.MjSpec, row: Any, loads: list[Assets]) -> tuple[st
         body, row["static"], source=source, friction=_number(row["friction"], name),
         restitution=_number(row["restitution"], name),
         initial_pose=None if row["initial_pose"] is None else _floats(row["initial_pose"], 7),
-        key=None if row["key"] is None else _read_key(row["key"]), parts=tuple(parts),
+        key=None if kind is None else kinds[kind], parts=tuple(parts),
         model=row["model"], assets=None if load is None else loads[load])
+
+
+def _index(value: Any, size: int, where: str) -> int:
+    if type(value) is not int or not 0 <= value < size:
+        raise InvalidArgumentError(f"snapshot.{where} must be an index below {size}, got "
+                                   f"{brief(value)}")
+    return value
 
 
 def _number(value: Any, name: str) -> float | None:
@@ -329,7 +353,7 @@ def _read_key(value: Any) -> tuple[Any, ...]:
     return (value[0], _tuple(value[1]), value[2], material)
 
 
-def _pool(engine: MujocoEngine, value: Any) -> None:
+def _pool(engine: MujocoEngine, value: Any, kinds: list[tuple[Any, ...]]) -> None:
     row = _fields(value, {"serial", "parked"}, "pool")
     if type(row["serial"]) is not int or row["serial"] < 0:
         raise InvalidArgumentError(f"snapshot.pool.serial is {brief(row['serial'])}")
@@ -341,7 +365,7 @@ def _pool(engine: MujocoEngine, value: Any) -> None:
                   for n in _list(pair[1], "pool.parked[]")]
         if any(b is None for b in bodies):
             raise InvalidArgumentError("snapshot.pool.parked names a body the spec lacks")
-        parked[_read_key(pair[0])] = bodies
+        parked[kinds[_index(pair[0], len(kinds), "pool.parked[].kind")]] = bodies
     engine._pool._serial, engine._pool._parked = row["serial"], parked
 
 

@@ -64,6 +64,7 @@ def set_states(engine: MujocoEngine, names: Sequence[str], poses: np.ndarray | N
 def move_static(engine: MujocoEngine, names: Sequence[str], ids: np.ndarray,
                 poses: np.ndarray) -> None:
     """Pose static bodies in the compiled model and in the spec (kept by recompiles)."""
+    engine._xml = None
     quats = mst.to_wxyz(poses[:, 3:])
     engine._model.body_pos[ids] = poses[:, :3]
     engine._model.body_quat[ids] = quats
