@@ -7,6 +7,7 @@ errors.
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import math
 from collections.abc import Callable
@@ -349,3 +350,32 @@ def test_a_malformed_snapshot_is_refused_with_a_typed_error(
     with pytest.raises(InvalidArgumentError, match=words.replace("[", r"\[").replace(
             "]", r"\]")):
         MujocoEngine().restore(bad)
+
+
+def _leaves(node: Any, path: tuple[Any, ...] = ()) -> list[tuple[Any, ...]]:
+    """Paths to every value of a snapshot that is no map or list."""
+    if isinstance(node, dict):
+        return [p for k, v in node.items() for p in _leaves(v, (*path, k))]
+    if isinstance(node, list):
+        return [p for i, v in enumerate(node) for p in _leaves(v, (*path, i))]
+    return [path]
+
+
+MANGLED = [None, -1, 2**40, 1e308, "x", b"\x00" * 3, [], {}, True]
+
+
+def test_a_mangled_snapshot_restores_or_is_refused_with_a_typed_error(
+        snapshot: dict[str, Any]) -> None:
+    """Any one value replaced by something else: a world, or InvalidArgumentError (never a
+    crash or another error); seeded."""
+    rng = np.random.default_rng(SEED)
+    leaves = _leaves(snapshot)
+    for pick in rng.choice(len(leaves), size=120, replace=False):
+        bad = copy.deepcopy(snapshot)
+        *parents, last = leaves[int(pick)]
+        node = bad
+        for key in parents:
+            node = node[key]
+        node[last] = MANGLED[int(rng.integers(len(MANGLED)))]
+        with contextlib.suppress(InvalidArgumentError):
+            MujocoEngine().restore(bad)
