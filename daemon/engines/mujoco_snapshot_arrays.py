@@ -30,6 +30,9 @@ from galton.protocol.errors import brief
 F64, F32, I32 = np.dtype("<f8"), np.dtype("<f4"), np.dtype("<i4")
 # Single-precision model arrays that come from asset files (meshes...): compiled alike.
 FILE_PREFIXES = ("mesh_", "skin_", "flex_", "hfield_")
+# Double ones from the files alone, and the bounding volumes, of which only the bodies'
+# travel (a mesh's thousands of nodes are compiled alike from its file).
+FROM_FILES = ("mesh_polynormal", "bvh_aabb")
 STAT_FIELDS = ("meaninertia", "meanmass", "meansize", "extent", "center")
 # Data arrays in MuJoCo's arena: made anew by every step (contacts, constraints, islands).
 ARENA_PREFIXES = ("efc_", "efm_", "iefc_", "island_", "map_", "contact", "iacc", "ifrc")
@@ -75,7 +78,8 @@ def _table(obj: Any, where: str) -> dict[str, Any]:
 
 def _float_arrays(struct: Any, prefixes: tuple[str, ...] = (),
                   dtype: np.dtype[Any] = F64) -> dict[str, np.ndarray]:
-    """The arrays of an MjModel or MjData of this dtype by name (but these prefixes')."""
+    """The arrays of an MjModel or MjData of this dtype by name (but those whose names
+    begin with these prefixes)."""
     out = {}
     for name in dir(struct):
         if name.startswith("_") or name.startswith(prefixes):
@@ -102,7 +106,8 @@ def _write_all(targets: dict[str, np.ndarray], obj: Any, where: str,
 
 # -- the model ---------------------------------------------------------------------------
 def model_numbers(m: mujoco.MjModel) -> dict[str, Any]:
-    return {"arrays": {n: pack(a) for n, a in _float_arrays(m).items()},
+    return {"arrays": {n: pack(a) for n, a in _float_arrays(m, FROM_FILES).items()},
+            "bvh": pack(m.bvh_aabb[_body_nodes(m)]),
             "arrays32": {n: pack(a, F32) for n, a in
                          _float_arrays(m, FILE_PREFIXES, F32).items()},
             "stat": {f: pack(np.atleast_1d(getattr(m.stat, f))) for f in STAT_FIELDS}}
@@ -113,11 +118,22 @@ def write_model_numbers(m: mujoco.MjModel, obj: Any) -> None:
     stat = _table(table.get("stat"), "snapshot.model.stat")
     values = {f: unpack(stat.get(f), f"snapshot.model.stat.{f}", F64,
                         np.atleast_1d(getattr(m.stat, f)).shape) for f in STAT_FIELDS}
-    _write_all(_float_arrays(m), table.get("arrays"), "snapshot.model.arrays")
+    nodes = _body_nodes(m)
+    bvh = unpack(table.get("bvh"), "snapshot.model.bvh", F64, (len(nodes), 6))
+    _write_all(_float_arrays(m, FROM_FILES), table.get("arrays"), "snapshot.model.arrays")
     _write_all(_float_arrays(m, FILE_PREFIXES, F32), table.get("arrays32"),
                "snapshot.model.arrays32", F32)
+    m.bvh_aabb[nodes] = bvh
     for field, value in values.items():
         setattr(m.stat, field, value if field == "center" else float(value[0]))
+
+
+def _body_nodes(m: mujoco.MjModel) -> np.ndarray:
+    """The rows of the bodies' bounding volume nodes in ``bvh_aabb``."""
+    has = m.body_bvhnum > 0
+    count, first = m.body_bvhnum[has], m.body_bvhadr[has]
+    starts = np.repeat(first - (np.cumsum(count) - count), count)
+    return np.asarray(starts + np.arange(int(count.sum())), dtype=np.int64)
 
 
 # -- the data ----------------------------------------------------------------------------
