@@ -393,8 +393,12 @@ class MujocoEngine(Engine):
         """The whole world as plain data; the promise: restore it into a fresh MuJoCo
         engine B (the same MuJoCo version), and this world A and B, given the same requests
         from then on (steps, spawns, deletes, teleports, targets, wrenches, parameters,
-        updates), give the same states, joint states and properties bit for bit. A itself
-        is untouched. Mesh files named by the loaded models must still exist at restore."""
+        updates), give the same states, joint states and properties bit for bit. A's state
+        is untouched; but when bodies were bound from or parked into the pool since the
+        last compile, A's model is first recompiled as its spec says (the data carried
+        over exactly), so A goes on as B does, which may differ in the last bits from how
+        it would have gone on without the snapshot. Mesh files named by the loaded models
+        must still exist at restore."""
         return snapshots.snapshot(self)
 
     def restore(self, data: dict[str, Any]) -> None:
