@@ -31,7 +31,7 @@ def checkpoint_path(state_dir: Path, instance: str) -> Path:
 
 def save(world: World, path: Path) -> int:
     """Write the world's snapshot atomically; returns its size in bytes."""
-    blob = encode(snapshot_of(world))
+    blob = encode(snapshot_of(world, canonical=False))
     temporary = path.with_name(path.name + ".tmp")
     temporary.write_bytes(blob)
     os.replace(temporary, path)

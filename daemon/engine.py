@@ -202,11 +202,17 @@ class Engine(ABC):
         wrench cleared (reset "state" and stop, after the roots' poses are restored)."""
 
     # -- snapshots (docs/protocol.md, "snapshot") -------------------------------------------
-    def snapshot(self) -> dict[str, Any]:
+    def snapshot(self, *, canonical: bool = True) -> dict[str, Any]:
         """The complete world (scene, parameters, dynamic state) as plain data msgpack can
         carry (never pickle: clients send snapshots back). Restoring it into a fresh engine
         and taking the same steps gives the same states bit for bit (each engine states
-        exactly what it promises in its own docstring)."""
+        exactly what it promises in its own docstring).
+
+        ``canonical``: the restored world and this one go on identically, even where that
+        means first making this world's hidden state (contact caches) canonical, which may
+        change how it goes on (PyBullet rebuilds itself). False leaves this world untouched,
+        and the restored world goes on as this one would after ``reset_dynamics``: what a
+        fork, a prediction or a checkpoint wants."""
         raise self._unsupported("snapshots")
 
     def restore(self, data: dict[str, Any]) -> None:

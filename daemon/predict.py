@@ -70,7 +70,7 @@ def predict(loop: SimLoop, call: Call, args: dict[str, Any]) -> None:
     slot = args.get("slot")
     if slot is None:
         source.verify()
-        data = snapshot_of(source)
+        data = snapshot_of(source, canonical=False)
     else:
         data = decode(loop.slots.get(check_type(slot, str, "predict.slot")).blob, loop.limits)
     copy = world_from(data, loop.engine_factory, f"{source.name}:prediction", loop.limits)

@@ -32,13 +32,14 @@ from galton.protocol.errors import brief
 FORMAT = 1
 
 
-def snapshot_of(world: World) -> dict[str, Any]:
-    """The world as plain data (the engine's part from ``Engine.snapshot``)."""
+def snapshot_of(world: World, *, canonical: bool = True) -> dict[str, Any]:
+    """The world as plain data (the engine's part from ``Engine.snapshot``; ``canonical``
+    as there: False never disturbs the world, for forks, predictions and checkpoints)."""
     names = list(world.entities)
     entities = [world.entities[n] for n in names]
     return {
         "format": FORMAT, "engine": world.engine.name,
-        "engine_state": world.engine.snapshot(),
+        "engine_state": world.engine.snapshot(canonical=canonical),
         "entities": [e.info.to_wire() for e in entities],
         "initial_poses": pack_f64(np.array([e.initial_pose for e in entities]).reshape(
             -1, POSE_WIDTH)),

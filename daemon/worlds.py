@@ -89,7 +89,8 @@ def fork_world(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any
     source_name = args.get("source")
     source = loop.world_for({} if source_name is None else {"world": source_name})
     source.require_valid()
-    loop.side[name] = world_from(snapshot_of(source), _factory(loop), name, loop.limits)
+    loop.side[name] = world_from(snapshot_of(source, canonical=False), _factory(loop), name,
+                                 loop.limits)
     loop.emit({"kind": "world", "op": "fork_world", "world": name, "source": source.name})
     return world_row(loop, loop.side[name])
 

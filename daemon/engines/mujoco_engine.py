@@ -389,8 +389,9 @@ class MujocoEngine(Engine):
         self._wrenches.apply(self._data, self._ids)
 
     # -- Engine: snapshots (mujoco_snapshot) -----------------------------------------------
-    def snapshot(self) -> dict[str, Any]:
-        """The whole world as plain data; the promise: restore it into a fresh MuJoCo
+    def snapshot(self, *, canonical: bool = True) -> dict[str, Any]:
+        """The whole world as plain data (``canonical`` makes no difference here); the
+        promise: restore it into a fresh MuJoCo
         engine B (the same MuJoCo version), and this world A and B, given the same requests
         from then on (steps, spawns, deletes, teleports, targets, wrenches, parameters,
         updates), give the same states, joint states and properties bit for bit. A's state
