@@ -221,5 +221,17 @@ class Engine(ABC):
         format (the daemon then discards this engine; the live world is untouched)."""
         raise self._unsupported("snapshots")
 
+    def clone(self) -> Engine:
+        """A new engine holding a copy of this world, in this process, for a fork or a
+        prediction: as ``restore(snapshot(canonical=False))`` into a fresh engine (this
+        world untouched). Engines override it with a faster copy where they can."""
+        fresh = type(self)()
+        try:
+            fresh.restore(self.snapshot(canonical=False))
+        except Exception:
+            fresh.close()
+            raise
+        return fresh
+
     def _unsupported(self, what: str) -> FeatureUnsupportedError:
         return FeatureUnsupportedError(f"the {self.name} engine does not support {what}")

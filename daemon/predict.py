@@ -13,7 +13,7 @@ import numpy as np
 from galton.daemon import ops, ops_joints
 from galton.daemon.calls import Call, StepJob
 from galton.daemon.world import World
-from galton.daemon.world_snapshot import decode, snapshot_of, world_from
+from galton.daemon.world_snapshot import clone_of, decode, world_from
 from galton.protocol import IncorrectStateError, InvalidArgumentError, OperationFailedError
 from galton.protocol.arrays import pack_f64
 from galton.protocol.model import check_names, check_type, finite_number
@@ -68,12 +68,13 @@ def predict(loop: SimLoop, call: Call, args: dict[str, Any]) -> None:
     horizon = finite_number(args.get("horizon"), "predict.horizon", low=0.0, low_open=True)
     source = loop.world_for(args)
     slot = args.get("slot")
+    name = f"{source.name}:prediction"
     if slot is None:
         source.verify()
-        data = snapshot_of(source, canonical=False)
+        copy = clone_of(source, name, loop.limits)
     else:
         data = decode(loop.slots.get(check_type(slot, str, "predict.slot")).blob, loop.limits)
-    copy = world_from(data, loop.engine_factory, f"{source.name}:prediction", loop.limits)
+        copy = world_from(data, loop.engine_factory, name, loop.limits)
     try:
         job = _job(loop, call, copy, horizon, args)
     except Exception:

@@ -34,12 +34,28 @@ FORMAT = 1
 
 def snapshot_of(world: World, *, canonical: bool = True) -> dict[str, Any]:
     """The world as plain data (the engine's part from ``Engine.snapshot``; ``canonical``
-    as there: False never disturbs the world, for forks, predictions and checkpoints)."""
-    names = list(world.entities)
-    entities = [world.entities[n] for n in names]
+    as there: False never disturbs the world, for checkpoints)."""
+    return {"format": FORMAT, "engine": world.engine.name,
+            "engine_state": world.engine.snapshot(canonical=canonical), **registry_of(world)}
+
+
+def clone_of(world: World, name: str, limits: Limits) -> World:
+    """A copy of the world in this process (``Engine.clone``), for forks and predictions:
+    the source is never disturbed."""
+    engine = world.engine.clone()
+    try:
+        copy = World(engine, name, limits)
+        _restore_registry(copy, registry_of(world))
+    except Exception:
+        engine.close()
+        raise
+    return copy
+
+
+def registry_of(world: World) -> dict[str, Any]:
+    """The World's own part of a snapshot: entities, joint modes, wrenches, the clock."""
+    entities = list(world.entities.values())
     return {
-        "format": FORMAT, "engine": world.engine.name,
-        "engine_state": world.engine.snapshot(canonical=canonical),
         "entities": [e.info.to_wire() for e in entities],
         "initial_poses": pack_f64(np.array([e.initial_pose for e in entities]).reshape(
             -1, POSE_WIDTH)),

@@ -15,7 +15,7 @@ from galton.daemon import time_control
 from galton.daemon.calls import Call
 from galton.daemon.snapshot_slots import Slot
 from galton.daemon.world import World
-from galton.daemon.world_snapshot import decode, encode, snapshot_of, world_from
+from galton.daemon.world_snapshot import clone_of, decode, encode, snapshot_of, world_from
 from galton.protocol import (
     InvalidArgumentError,
     NameNotUniqueError,
@@ -88,9 +88,8 @@ def fork_world(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any
     name = _new_name(loop, args, "fork_world")
     source_name = args.get("source")
     source = loop.world_for({} if source_name is None else {"world": source_name})
-    source.require_valid()
-    loop.side[name] = world_from(snapshot_of(source, canonical=False), _factory(loop), name,
-                                 loop.limits)
+    source.verify()
+    loop.side[name] = clone_of(source, name, loop.limits)
     loop.emit({"kind": "world", "op": "fork_world", "world": name, "source": source.name})
     return world_row(loop, loop.side[name])
 
