@@ -60,6 +60,7 @@ from galton.daemon.engine import (
     FEATURE_WRENCH,
     Engine,
 )
+from galton.daemon.engines import mujoco_clone as cloning
 from galton.daemon.engines import mujoco_models as models
 from galton.daemon.engines import mujoco_pool as mp
 from galton.daemon.engines import mujoco_props as mpr
@@ -404,6 +405,11 @@ class MujocoEngine(Engine):
 
     def restore(self, data: dict[str, Any]) -> None:
         snapshots.restore(self, data)
+
+    def clone(self) -> MujocoEngine:
+        """A copy of the compiled world, no MJCF and no compile (``mujoco_clone``): it goes
+        on exactly as this one, which it leaves untouched."""
+        return cloning.clone(self)
 
     def close(self) -> None:
         self._entities.clear()
