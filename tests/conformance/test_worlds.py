@@ -109,10 +109,14 @@ def test_a_fork_does_not_disturb_its_source(world: Client) -> None:
     np.testing.assert_array_equal(run(world, names), alone)
 
 
-def test_a_fork_goes_on_as_its_source(world: Client) -> None:
+def test_a_fork_goes_on_as_its_source_after_a_snapshot(world: Client) -> None:
+    """A fork goes on as its source does after a snapshot (docs/protocol.md, "snapshot"):
+    on MuJoCo the snapshot leaves the source as it was; on PyBullet it rebuilds it, and a
+    fork starts from the same fresh contact caches."""
     names = contact_scene(world)
     world.step(20)
     world.fork_world("twin")
+    world.snapshot(blob=True)
     np.testing.assert_array_equal(run(world.world("twin"), names), run(world, names))
 
 
@@ -173,6 +177,26 @@ def test_a_prediction_from_a_slot_starts_there(world: Client) -> None:
     found = world.predict(5 * dt, read=names, slot="zero")
     assert found.times[0] == 0.0 and len(found) == 6
     assert world.status().step == 30
+
+
+def test_samples_fall_every_whole_number_of_steps_from_the_present(world: Client) -> None:
+    """every rounds to whole steps; the present is the first sample, and a horizon that is
+    no multiple of every ends past the last sample."""
+    names = contact_scene(world)
+    world.step(4)
+    status = world.status()
+    dt = status.timestep
+    found = world.predict(10 * dt, every=3.2 * dt, read=names[:1])
+    assert found.steps == 10 and len(found) == 4
+    world.fork_world("twin")
+    twin = world.world("twin")
+    for k in range(1, 4):
+        reached = twin.step_and_read(3, names[:1])
+        assert found.times[k] == twin.status().sim_time
+        np.testing.assert_array_equal(found.poses[k], reached.poses)
+    assert found.times[0] == status.sim_time
+    every_step = world.predict(3 * dt, read=names[:1])
+    assert len(every_step) == 4  # default: every step
 
 
 def test_bad_predictions_are_refused_before_any_step(world: Client) -> None:
