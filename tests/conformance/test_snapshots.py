@@ -195,3 +195,23 @@ def test_snapshots_lists_what_each_slot_holds(world: Client, engine: str) -> Non
     assert (row.slot, row.world, row.engine, row.step, row.entity_count) == (
         "seven", "default", engine, 7, len(names) + 1)
     assert row.nbytes == taken.nbytes and row.blob is None
+
+
+def test_slot_bytes_past_the_limit_are_refused(world: Client, engine: str) -> None:
+    """A daemon whose max_snapshot_bytes holds three and a half snapshots of a scene keeps
+    three and refuses the fourth, keeping nothing of it."""
+    contact_scene(world)
+    size = world.snapshot(blob=True).nbytes
+    limit = int(3.5 * size)
+    with EmbeddedDaemon(engine, instance=f"test-{engine}-slots",
+                        extra_args=["--limit", f"max_snapshot_bytes={limit}"]) as daemon, \
+            Client(daemon.instance, daemon.endpoint, timeout=20.0) as sim:
+        wait_for_daemon(sim.session, daemon.instance, 60.0)
+        contact_scene(sim)
+        for i in range(3):
+            sim.snapshot(f"slot_{i}")
+        with pytest.raises(ResourceLimitError) as refused:
+            sim.snapshot("one_more")
+        assert refused.value.details["limit"] == "max_snapshot_bytes"
+        assert [s.slot for s in sim.snapshots()] == ["slot_0", "slot_1", "slot_2"]
+        assert sim.snapshot(blob=True).nbytes == size  # a blob alone is kept nowhere
