@@ -28,6 +28,7 @@ class Call:
     payload: bytes
     respond: Callable[[bytes], None]
     client: str | None = None  # the sender's id, once the request is decoded
+    world: str | None = None  # the world it names, once decoded (its reply's stamp)
 
 
 @dataclass

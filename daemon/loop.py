@@ -235,6 +235,8 @@ class SimLoop:
             op.check_arg_names(request.args)
             self.require_world(request.args)
             call.client = request.client
+            named = request.args.get("world")
+            call.world = named if isinstance(named, str) else None
             with self.work_guard() if op.mutates and not op.steps else nullcontext():
                 result = self._dispatch(op, call, request.args)
             self._keep_invariants()  # before the reply: what the client asks next sees it
@@ -316,14 +318,23 @@ class SimLoop:
 
     def _reply_ok(self, call: Call, result: dict[str, Any]) -> None:
         self.refresh_clock()
-        reply = Reply(ResultCode.OK, result=result, step=self.world.step_index,
-                      sim_time=self.world.sim_time)
+        world = self._stamping(call)
+        reply = Reply(ResultCode.OK, result=result, step=world.step_index,
+                      sim_time=world.sim_time)
         self.send(call, encode_reply(reply))
 
     def reply_error(self, call: Call, error: RemoteError) -> None:
         self.refresh_clock()
-        reply = error_reply(error, self.world.step_index, self.world.sim_time)
+        world = self._stamping(call)
+        reply = error_reply(error, world.step_index, world.sim_time)
         self.send(call, encode_reply(reply))
+
+    def _stamping(self, call: Call) -> World:
+        """The world whose step and sim time a reply carries: the one the request named
+        (the live one when it named none, or when that world is gone)."""
+        if call.world is None:
+            return self.world
+        return self.side.get(call.world, self.world)
 
     def send(self, call: Call, data: bytes) -> None:
         try:

@@ -15,7 +15,8 @@ from galton.protocol import PhysicsError, RemoteError
 if TYPE_CHECKING:
     from galton.daemon.loop import SimLoop
 
-CHUNK_WALL_S = 0.005
+# Short chunks: a live control call waits at most about this long behind a prediction.
+CHUNK_WALL_S = 0.002
 
 
 def run_chunk(loop: SimLoop, job: StepJob) -> None:

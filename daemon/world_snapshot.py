@@ -9,6 +9,7 @@ engine, so a refused blob leaves every world as it was.
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 from collections.abc import Callable
 from typing import Any
 
@@ -69,25 +70,42 @@ def registry_of(world: World) -> dict[str, Any]:
 
 
 def encode(data: dict[str, Any]) -> bytes:
-    blob: bytes = msgpack.packb(data, use_bin_type=True)
+    """The blob: the snapshot in msgpack, wrapped with its BLAKE2b digest, so that a blob
+    damaged anywhere (a flipped bit in a number included) is refused, not restored as
+    another state."""
+    body = msgpack.packb(data, use_bin_type=True)
+    blob: bytes = msgpack.packb({"galton_snapshot": FORMAT, "blake2b": _digest(body),
+                                 "body": body}, use_bin_type=True)
     return blob
+
+
+def _digest(body: bytes) -> bytes:
+    return hashlib.blake2b(body, digest_size=32).digest()
 
 
 def decode(blob: Any, limits: Limits) -> dict[str, Any]:
     """A snapshot blob's data, or InvalidArgumentError saying why it is not one."""
     if not isinstance(blob, bytes | bytearray):
         raise InvalidArgumentError(f"restore.blob must be msgpack bin, got {brief(blob)}")
+    outer = _unpack(bytes(blob), limits)
+    if not isinstance(outer, dict) or outer.get("galton_snapshot") != FORMAT:
+        raise InvalidArgumentError(f"restore.blob is not a snapshot of format {FORMAT}")
+    body = outer.get("body")
+    if not isinstance(body, bytes) or outer.get("blake2b") != _digest(body):
+        raise InvalidArgumentError("restore.blob is corrupt: its digest does not match")
+    data = _unpack(body, limits)
+    if not isinstance(data, dict) or data.get("format") != FORMAT:
+        raise InvalidArgumentError(f"restore.blob holds no snapshot of format {FORMAT}")
+    return data
+
+
+def _unpack(raw: bytes, limits: Limits) -> Any:
     try:
-        data = msgpack.unpackb(bytes(blob), raw=False, strict_map_key=True,
+        return msgpack.unpackb(raw, raw=False, strict_map_key=True,
                                max_bin_len=limits.max_request_bytes)
     except Exception as exc:  # msgpack raises several types for a corrupt blob
         raise InvalidArgumentError(f"restore.blob is not a snapshot (corrupt msgpack: "
                                    f"{type(exc).__name__})") from exc
-    if not isinstance(data, dict) or data.get("format") != FORMAT:
-        raise InvalidArgumentError(
-            f"restore.blob is not a snapshot of format {FORMAT} (format "
-            f"{brief(data.get('format') if isinstance(data, dict) else None)})")
-    return data
 
 
 def world_from(data: dict[str, Any], make_engine: Callable[[str], Engine], name: str,

@@ -5,6 +5,7 @@ daemon; bad input is refused with the world unchanged; slot limits hold."""
 
 from __future__ import annotations
 
+import hashlib
 from collections.abc import Iterator
 
 import msgpack
@@ -132,16 +133,21 @@ def test_an_unknown_slot_or_world_is_not_found(world: Client) -> None:
 
 
 def not_a_snapshot(blob: bytes) -> list[bytes]:
-    """Blobs a daemon must refuse: cut short, its header byte flipped, msgpack that is no
-    snapshot, a snapshot of another format. (A blob carries no checksum: a byte flipped
-    inside a number's bytes is a valid snapshot of another state.)"""
-    data = msgpack.unpackb(blob, raw=False)
-    flipped = bytearray(blob)
+    """Blobs a daemon must refuse: cut short, a byte flipped at its start or deep inside a
+    number (the digest catches it), msgpack that is no snapshot, another format outside or
+    inside (with a digest that matches)."""
+    outer = msgpack.unpackb(blob, raw=False)
+    flipped, deep = bytearray(blob), bytearray(blob)
     flipped[0] ^= 0xFF
-    renumbered = {**data, "format": 999} if isinstance(data, dict) else {"format": 999}
-    return [blob[: len(blob) // 2], bytes(flipped), b"\x00not msgpack",
+    deep[len(deep) * 3 // 4] ^= 0x01
+    inner = msgpack.unpackb(outer["body"], raw=False)
+    body = msgpack.packb({**inner, "format": 999}, use_bin_type=True)
+    renumbered_inside = {**outer, "body": body,
+                         "blake2b": hashlib.blake2b(body, digest_size=32).digest()}
+    return [blob[: len(blob) // 2], bytes(flipped), bytes(deep), b"\x00not msgpack",
             msgpack.packb({"engine": "nothing"}), msgpack.packb([1, 2, 3]),
-            msgpack.packb(renumbered, use_bin_type=True)]
+            msgpack.packb({**outer, "galton_snapshot": 999}, use_bin_type=True),
+            msgpack.packb(renumbered_inside, use_bin_type=True)]
 
 
 def test_a_blob_of_the_other_engine_or_a_broken_one_changes_nothing(world: Client,

@@ -58,14 +58,13 @@ def test_side_worlds_are_listed_and_move_only_when_stepped(world: Client, engine
     assert [w.name for w in world.list_worlds()] == ["default"]
 
 
-@pytest.mark.xfail(strict=True, reason="daemon/loop.py stamps every reply with the live "
-                   "world's step and sim time, whichever world the request named")
 def test_a_side_world_reply_carries_that_world_stamp(world: Client) -> None:
     world.create_world("side")
     side = world.world("side")
     side.spawn(spheres(["ball"], [[0, 0, 1]], 0.05))
     assert side.step(10).step == 10
     assert side.get_states(["ball"]).step == 10
+    assert world.status().step == 0  # the live world did not move
 
 
 def test_world_refusals(world: Client) -> None:
