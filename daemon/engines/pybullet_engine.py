@@ -398,6 +398,12 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Engine):
         InvalidArgumentError naming the field for anything malformed)."""
         self._restore(data)
 
+    @engine_call
+    def clone(self) -> PybulletEngine:
+        """As ``restore(snapshot(canonical=False))`` into a fresh engine, without the plain
+        data between them (pybullet_snapshot.py); this world is untouched."""
+        return self._clone_into(type(self)())
+
     # -- life -----------------------------------------------------------------------------
     def close(self) -> None:
         if not self._closed:
