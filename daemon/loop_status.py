@@ -61,7 +61,8 @@ def answer_status(loop: SimLoop, call: Call) -> None:
         operation(request.op).check_arg_names(request.args)
         named = request.args.get("world")
         if named is not None and named != status.world:
-            loop.submit(call)  # another world's status: the physics thread answers it
+            loop.require_world(request.args)  # an unknown world is refused here
+            loop.submit(call)  # a side world's status: the physics thread answers it
             return
         reply = Reply(ResultCode.OK, result=status.to_wire(), step=status.step,
                       sim_time=status.sim_time)
