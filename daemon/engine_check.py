@@ -24,7 +24,8 @@ effective properties, delete, clear, unknown names, refused parameters, model lo
 refused models, the timestep, free fall, a ball coming to rest on a plane, static bodies,
 determinism, the rewind to the created state, edits that keep other bodies' states,
 state_within; and for articulated models, links and joints, joint states, the target law,
-wrenches and the rewind of joints. Each check's docstring says what it guarantees
+wrenches and the rewind of joints; snapshots that go on as their source, and independent
+clones. Each check's docstring says what it guarantees
 (``Check.guarantee``).
 
 Errors, all ``GaltonError`` (the project's root error)::
@@ -50,6 +51,7 @@ from galton.daemon import engine_check_contract as contract
 from galton.daemon import engine_check_joints as joints
 from galton.daemon import engine_check_physics as physics
 from galton.daemon import engine_check_refusals as refusals
+from galton.daemon import engine_check_snapshots as snapshots
 from galton.daemon.engine_check_support import (
     CheckContext,
     CheckFailedError,
@@ -104,6 +106,8 @@ ENGINE_CHECKS: tuple[Check, ...] = (
     Check("target-law", joints.check_target_law),
     Check("wrench", joints.check_wrench),
     Check("joint-rewind", joints.check_joint_rewind),
+    Check("snapshot-continuation", snapshots.check_snapshot_continuation),
+    Check("clone-independent", snapshots.check_clone_independent),
 )
 _BY_NAME = {check.name: check for check in ENGINE_CHECKS}
 
