@@ -13,6 +13,7 @@ leaves the engine's scene as it was before the call.
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from dataclasses import dataclass
 from collections.abc import Sequence
 from typing import Any, ClassVar
 
@@ -44,12 +45,33 @@ FEATURE_TARGET_VELOCITY = "target_velocity"
 FEATURE_TARGET_EFFORT = "target_effort"
 FEATURE_WRENCH = "wrench"
 FEATURE_SNAPSHOT = "snapshot"
+FEATURE_RENDER = "render"
+FEATURE_RAYCAST = "raycast"
+FEATURE_CONTACTS = "contacts"
+IMAGE_OUTPUTS = ("rgb", "depth", "segmentation")
 # Every feature flag the protocol knows: an engine lists those it has, and no other.
 KNOWN_FEATURES = (FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDATE_MASS,
                   FEATURE_UPDATE_FRICTION, FEATURE_UPDATE_RESTITUTION, FEATURE_UPDATE_RGBA,
                   FEATURE_LOAD_MODEL, FEATURE_STATIC_POSE, FEATURE_JOINTS,
                   FEATURE_JOINT_TARGETS, FEATURE_TARGET_POSITION, FEATURE_TARGET_VELOCITY,
-                  FEATURE_TARGET_EFFORT, FEATURE_WRENCH, FEATURE_SNAPSHOT)
+                  FEATURE_TARGET_EFFORT, FEATURE_WRENCH, FEATURE_SNAPSHOT, FEATURE_RENDER,
+                  FEATURE_RAYCAST, FEATURE_CONTACTS)
+
+
+@dataclass(frozen=True)
+class CameraView:
+    """One camera of a render request, in the world frame, checked by the daemon: it looks
+    from ``eye`` at ``target`` with ``up`` up (unit, not along the view)."""
+
+    eye: np.ndarray  # (3,)
+    target: np.ndarray  # (3,)
+    up: np.ndarray  # (3,)
+    fov_deg: float  # vertical field of view
+    width: int
+    height: int
+    near: float
+    far: float
+    outputs: tuple[str, ...]  # among IMAGE_OUTPUTS
 
 
 class Engine(ABC):
@@ -220,6 +242,28 @@ class Engine(ABC):
         untrusted: InvalidArgumentError for anything malformed or from another engine or
         format (the daemon then discards this engine; the live world is untouched)."""
         raise self._unsupported("snapshots")
+
+    # -- perception (docs/protocol.md, "render", "raycast", "contacts") ---------------------
+    def render(self, cameras: Sequence[CameraView]
+               ) -> tuple[list[dict[str, np.ndarray]], list[str]]:
+        """One dict of images per camera ("rgb" (h, w, 3) uint8, top row first; "depth"
+        (h, w) float32 metres along the view axis, inf where nothing; "segmentation" (h, w)
+        int32 indices into the returned entity names, -1 where nothing), as asked."""
+        raise self._unsupported("rendering")
+
+    def raycast(self, origins: np.ndarray, directions: np.ndarray, max_length: float
+                ) -> tuple[np.ndarray, list[str], np.ndarray, np.ndarray, np.ndarray]:
+        """Per ray (unit directions, world frame): hit, entity ("" for none), point,
+        normal, distance; NaN point, normal and distance for a miss."""
+        raise self._unsupported("ray casts")
+
+    def contacts(self, names: Sequence[str] | None
+                 ) -> tuple[list[str], list[str], np.ndarray, np.ndarray, np.ndarray,
+                            np.ndarray]:
+        """The last step's contact points (involving any of ``names``; None: all): the two
+        entities, positions (n, 3), normals (n, 3) from the first to the second, normal
+        forces (n,) N, penetrations (n,) m."""
+        raise self._unsupported("contact queries")
 
     def clone(self) -> Engine:
         """A new engine holding a copy of this world, in this process, for a fork or a

@@ -436,6 +436,7 @@ class Capabilities:
     features: tuple[str, ...]
     params: dict[str, dict[str, Any]] = field(default_factory=dict)
     engines_available: tuple[str, ...] = ()
+    render_backend: str | None = None  # how it renders headless (egl, osmesa, tinyrenderer)
 
     def supports(self, feature: str) -> bool:
         return feature in self.features
