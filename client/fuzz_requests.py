@@ -253,11 +253,23 @@ def _blob(maker: RequestMaker, arg: Arg) -> Any:
                        msgpack.packb({"format": 99}), msgpack.packb([1, 2]), b""])
 
 
+def _cameras(maker: RequestMaker, arg: Arg) -> Any:
+    """Small cameras, with now and then one thing wrong."""
+    camera: dict[str, Any] = {"eye": [2.0, 0.0, 1.0], "target": [0.0, 0.0, 0.5],
+                              "width": int(maker.rng.integers(1, 24)),
+                              "height": int(maker.rng.integers(1, 24)),
+                              "outputs": maker.pick([["rgb"], ["depth", "segmentation"]])}
+    if maker.chance(0.3):
+        camera[maker.pick(["width", "fov", "eye", "near", "outputs"])] = maker.pick(
+            [0, 100000, math.nan, [1, 2], ["x"], -1.0])
+    return [camera]
+
+
 KIND_VALUES: dict[str, Callable[[RequestMaker, Arg], Any]] = {
     "number": _number, "count": _count, "string": _string, "bool": lambda m, a: m.chance(0.5),
     "names": _names, "map": _map, "groups": _groups, "poses": _rows(7), "twists": _rows(6),
     "choice": _choice, "values": _values, "wrenches": _rows(6), "points": _rows(3),
-    "blob": _blob,
+    "blob": _blob, "cameras": _cameras,
 }
 SPECIAL: dict[tuple[str, str], Callable[[RequestMaker], Any]] = {
     ("update", "properties"): _properties,

@@ -14,7 +14,15 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
-from galton.daemon import compare, ops, ops_joints, predict, time_control, worlds
+from galton.daemon import (
+    compare,
+    ops,
+    ops_joints,
+    ops_perception,
+    predict,
+    time_control,
+    worlds,
+)
 from galton.daemon.calls import Call
 from galton.protocol.operations import OPERATIONS
 
@@ -75,6 +83,12 @@ HANDLERS: dict[str, Handler] = {
     "delete_world": worlds.delete_world,
     "predict": predict.predict,
     "compare": _scene("compare", compare.compare),
+    "render": _scene("render", ops_perception.render),
+    "add_camera": _scene("add_camera", ops_perception.add_camera),
+    "remove_camera": _scene("remove_camera", ops_perception.remove_camera),
+    "cameras": _scene("cameras", ops_perception.cameras),
+    "raycast": _scene("raycast", ops_perception.raycast),
+    "contacts": _scene("contacts", ops_perception.contacts),
     "get_params": _scene("get_params", ops.get_params),
     "set_params": _scene("set_params", ops.set_params),
 }

@@ -25,6 +25,8 @@ class Limits:
     max_worlds: int = 8  # worlds one daemon holds, the live one included
     max_snapshots: int = 16  # named snapshot slots one daemon holds
     max_snapshot_bytes: int = 256 * MIB  # all slots together
+    max_pixels: int = 4096 * 4096  # pixels one render request asks for, all cameras together
+    max_rays: int = 1_000_000  # rays one raycast request casts
     max_steps: int = 1_000_000_000  # steps one step / run_until request may take
     max_position: float = 1e6  # metres from the origin beyond which a world has diverged
     max_speed: float = 1e5  # m/s (or rad/s) beyond which a world has diverged

@@ -65,6 +65,7 @@ class World:
         self.teleported = False  # a request set states since the last check
         self._time_base = (0, 0.0, engine.timestep)  # (step, sim time, dt) since dt changed
         self.joints = JointTable(engine)
+        self.cameras: dict[str, Any] = {}  # named cameras (daemon/cameras.py Camera)
         self.wrenches = WrenchSchedule()
 
     # -- lookup -------------------------------------------------------------------------

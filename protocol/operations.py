@@ -11,7 +11,8 @@ to them by a test. Each argument's ``kind`` names the value it takes on the wire
 - ``choice``: a string, one of ``choices``;
 - ``values``: one number per named joint, as a number (the same for all) or msgpack bin of
   packed float64; ``wrenches`` / ``points``: bin of packed float64 rows, 6 and 3 wide;
-- ``blob``: msgpack bin (a snapshot's bytes).
+- ``blob``: msgpack bin (a snapshot's bytes); ``cameras``: a list of camera maps
+  (docs/protocol.md, "render").
 """
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ from galton.protocol.errors import UnknownOperationError, did_you_mean
 from galton.protocol.model import TARGET_MODES, check_fields
 
 ARG_KINDS = ("number", "count", "string", "bool", "names", "map", "groups", "poses", "twists",
-             "choice", "values", "wrenches", "points", "blob")
+             "choice", "values", "wrenches", "points", "blob", "cameras")
 # Every request may name the world it is for (one world per daemon for now).
 WORLD_ARG = "world"
 
@@ -151,6 +152,15 @@ OPERATIONS: dict[str, Operation] = {op.name: op for op in (
                           Arg("sigma_position", "number"), Arg("sigma_angle", "number"),
                           Arg("sigma_speed", "number"), Arg("correct", "bool")),
               mutates=True),
+    Operation("render", (Arg("cameras", "cameras", required=True),
+                         Arg("format", "choice", choices=("raw", "png")))),
+    Operation("add_camera", (Arg("name", "string", required=True),
+                             Arg("camera", "map", required=True)), mutates=True),
+    Operation("remove_camera", (Arg("name", "string", required=True),), mutates=True),
+    Operation("cameras"),
+    Operation("raycast", (Arg("origins", "points", required=True), Arg("directions", "points"),
+                          Arg("ends", "points"), Arg("max_length", "number"))),
+    Operation("contacts", (Arg("names", "names"),)),
     Operation("get_params"),
     Operation("set_params", (Arg("params", "map", required=True),), mutates=True),
 )}
