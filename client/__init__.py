@@ -8,12 +8,16 @@ Everything a program using the SDK catches or reads is importable from here: the
 from galton.client.discovery import DaemonInfo, discover, discover_at, instances, wait_for_daemon
 from galton.client.embedded import EmbeddedDaemon
 from galton.client.sdk import Client, body_group, boxes, plane, spheres
+from galton.client.sdk_perception import camera
 from galton.client.sdk_worlds import lockstep
 from galton.client.telemetry import Subscription, TelemetryStream
 from galton.client.values import (
     Comparison,
+    Contacts,
+    Image,
     JointStates,
     Prediction,
+    RayHits,
     SnapshotInfo,
     Stamp,
     States,
@@ -55,12 +59,14 @@ __all__ = [
     "Client",
     "ClientClosedError",
     "Comparison",
+    "Contacts",
     "DaemonInfo",
     "DaemonUnreachableError",
     "EmbeddedDaemon",
     "EntityInfo",
     "FeatureUnsupportedError",
     "GaltonError",
+    "Image",
     "IncorrectStateError",
     "InvalidArgumentError",
     "JointInfo",
@@ -71,6 +77,7 @@ __all__ = [
     "OperationFailedError",
     "PhysicsError",
     "Prediction",
+    "RayHits",
     "RemoteError",
     "Reply",
     "RequestTimeoutError",
@@ -89,6 +96,7 @@ __all__ = [
     "WorldInfo",
     "body_group",
     "boxes",
+    "camera",
     "discover",
     "discover_at",
     "instances",

@@ -27,6 +27,7 @@ from numpy.typing import ArrayLike
 
 from galton.client import sdk_joints
 from galton.client.sdk_joints import SearchPath
+from galton.client.sdk_perception import PerceptionMethods
 from galton.client.sdk_worlds import WorldMethods
 from galton.client.session import (
     Declared,
@@ -62,7 +63,7 @@ __all__ = ["DEFAULT_TIMEOUT_S", "Client", "JointStates", "Stamp", "States", "bod
            "boxes", "plane", "spheres"]
 
 
-class Client(WorldMethods):
+class Client(WorldMethods, PerceptionMethods):
     """A connection to one daemon instance (the session may be shared with others).
 
     ``timeout``: seconds a quick operation waits for its reply; operations that rebuild a

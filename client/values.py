@@ -1,4 +1,5 @@
-"""What SDK calls return beyond the protocol's records: stamps, body and joint states.
+"""What SDK calls return beyond the protocol's records: stamps, body and joint states,
+images, ray hits and contacts.
 
 Each value is built from the reply that carried it, so a value never mixes one request's
 numbers with another's (a Client may be used from several threads at once).
@@ -12,9 +13,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from galton.protocol import POSE_WIDTH, TWIST_WIDTH, Reply, unpack_f64
+from galton.client.png import decode_png
+from galton.protocol import POSE_WIDTH, TWIST_WIDTH, OperationFailedError, Reply, unpack_f64
 
 FloatArray = NDArray[np.float64]
+MM = 1000.0  # depth PNGs hold millimetres
 
 
 @dataclass(frozen=True)
@@ -227,3 +230,138 @@ class Comparison:
                    None if speeds is None else _column(result, "speed_errors"),
                    float(result["score"]), bool(result["corrected"]), reply.step,
                    reply.sim_time)
+
+
+# -- perception (issue 26) ----------------------------------------------------------------
+@dataclass
+class Image:
+    """One camera's picture, rows top first: ``rgb`` (h, w, 3) uint8, ``depth`` (h, w)
+    float32 metres along the view axis (+inf: nothing within ``far``), ``segmentation``
+    (h, w) int32 indices into ``labels`` (-1: nothing); an output not asked for is None.
+    Stamped with the step it shows."""
+
+    width: int
+    height: int
+    rgb: NDArray[np.uint8] | None
+    depth: NDArray[np.float32] | None
+    segmentation: NDArray[np.int32] | None
+    labels: list[str]
+    step: int
+    sim_time: float
+
+    @classmethod
+    def from_wire(cls, image: dict[str, Any], labels: list[str], fmt: str,
+                  reply: Reply) -> Image:
+        """One entry of a ``render`` result, raw or PNG."""
+        width, height = int(image["width"]), int(image["height"])
+        shape = (height, width)
+        rgb = depth = segmentation = None
+        if "rgb" in image:
+            rgb = _rgb(image["rgb"], fmt, shape)
+        if "depth" in image:
+            depth = _depth(image["depth"], fmt, shape)
+        if "segmentation" in image:
+            segmentation = _segmentation(image["segmentation"], fmt, shape)
+        return cls(width, height, rgb, depth, segmentation, labels, reply.step,
+                   reply.sim_time)
+
+    def label_at(self, row: int, column: int) -> str | None:
+        """The entity seen at one pixel (None: nothing there)."""
+        if self.segmentation is None:
+            raise OperationFailedError("this image has no segmentation; ask for it in "
+                                       "the camera's outputs")
+        index = int(self.segmentation[row, column])
+        return None if index < 0 else self.labels[index]
+
+    def mask(self, name: str) -> NDArray[np.bool_]:
+        """The pixels showing entity ``name`` (all False when it is not seen)."""
+        if self.segmentation is None:
+            raise OperationFailedError("this image has no segmentation; ask for it in "
+                                       "the camera's outputs")
+        if name not in self.labels:
+            return np.zeros(self.segmentation.shape, dtype=bool)
+        return np.asarray(self.segmentation == self.labels.index(name))
+
+
+def _checked(pixels: np.ndarray, shape: tuple[int, ...], kind: str) -> np.ndarray:
+    if pixels.size != int(np.prod(shape)):
+        raise OperationFailedError(f"a rendered {kind} holds {pixels.size} values, expected "
+                                   f"{int(np.prod(shape))} for {shape}")
+    return pixels.reshape(shape)
+
+
+def _rgb(data: bytes, fmt: str, shape: tuple[int, int]) -> NDArray[np.uint8]:
+    pixels = decode_png(data) if fmt == "png" else np.frombuffer(data, np.uint8)
+    return np.array(_checked(pixels, (*shape, 3), "rgb"), dtype=np.uint8)
+
+
+def _depth(data: bytes, fmt: str, shape: tuple[int, int]) -> NDArray[np.float32]:
+    if fmt != "png":
+        return np.array(_checked(np.frombuffer(data, "<f4"), shape, "depth"), np.float32)
+    millimetres = _checked(decode_png(data), shape, "depth").astype(np.float32)
+    return np.where(millimetres == 0, np.float32(np.inf), millimetres / np.float32(MM))
+
+
+def _segmentation(data: bytes, fmt: str, shape: tuple[int, int]) -> NDArray[np.int32]:
+    if fmt != "png":
+        return np.array(_checked(np.frombuffer(data, "<i4"), shape, "segmentation"),
+                        np.int32)
+    return _checked(decode_png(data), shape, "segmentation").astype(np.int32) - 1
+
+
+@dataclass
+class RayHits:
+    """One entry per ray: ``hits`` (n,) bool; ``entities`` the entity hit ("" for a miss);
+    ``points`` and ``normals`` (n, 3) world frame and ``distances`` (n,) metres from the
+    origin, NaN for a miss."""
+
+    hits: NDArray[np.bool_]
+    entities: list[str]
+    points: FloatArray
+    normals: FloatArray
+    distances: FloatArray
+    step: int
+    sim_time: float
+
+    @classmethod
+    def from_reply(cls, reply: Reply) -> RayHits:
+        result = reply.result
+        return cls(np.frombuffer(result["hits"], np.uint8).astype(bool),
+                   [str(e) for e in result["entities"]], unpack_f64(result["points"], 3),
+                   unpack_f64(result["normals"], 3), _column(result, "distances"),
+                   reply.step, reply.sim_time)
+
+    def __len__(self) -> int:
+        return len(self.entities)
+
+
+@dataclass
+class Contacts:
+    """The contact points of the last step: entities ``a`` and ``b`` of each, ``positions``
+    and ``normals`` (n, 3, world frame; a normal points from a to b), ``forces`` (n,) the
+    normal force in N, ``penetrations`` (n,) in m."""
+
+    a: list[str]
+    b: list[str]
+    positions: FloatArray
+    normals: FloatArray
+    forces: FloatArray
+    penetrations: FloatArray
+    step: int
+    sim_time: float
+
+    @classmethod
+    def from_reply(cls, reply: Reply) -> Contacts:
+        result = reply.result
+        return cls([str(n) for n in result["a"]], [str(n) for n in result["b"]],
+                   unpack_f64(result["positions"], 3), unpack_f64(result["normals"], 3),
+                   _column(result, "forces"), _column(result, "penetrations"), reply.step,
+                   reply.sim_time)
+
+    def __len__(self) -> int:
+        return len(self.a)
+
+    def between(self, first: str, second: str) -> NDArray[np.bool_]:
+        """Which contacts join ``first`` and ``second`` (either way round)."""
+        return np.array([{x, y} == {first, second} for x, y in zip(self.a, self.b,
+                                                                   strict=True)], dtype=bool)

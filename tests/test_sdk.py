@@ -26,6 +26,7 @@ from galton.client import (
     RequestTimeoutError,
     Stamp,
     States,
+    camera,
     instances,
     plane,
     spheres,
@@ -254,6 +255,12 @@ CALLS: dict[str, Callable[[Client], object]] = {
     "delete_snapshot": lambda c: c.delete_snapshot("s"),
     "predict": lambda c: c.predict(0.1),
     "compare": lambda c: c.compare(["a"], np.zeros(7)),
+    "render": lambda c: c.render(camera((0, 0, 1), (0, 0, 0), up=(0, 1, 0))),
+    "add_camera": lambda c: c.add_camera("cam", camera((0, 0, 1), (0, 0, 0), up=(0, 1, 0))),
+    "remove_camera": lambda c: c.remove_camera("cam"),
+    "cameras": Client.cameras,
+    "raycast": lambda c: c.raycast([0, 0, 1], directions=[0, 0, -1]),
+    "contacts": Client.contacts,
 }
 
 
