@@ -172,6 +172,7 @@ from galton.client import (  # noqa: E402,F401
     cli_check,
     cli_fuzz,
     cli_joints,
+    cli_perception,
     cli_scene,
     cli_states,
     cli_streams,

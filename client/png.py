@@ -1,6 +1,6 @@
-"""A small PNG reader (zlib from the standard library) for the images a daemon sends with
-``format="png"``: 8-bit RGB and 16-bit greyscale, non-interlaced, every row filter, so the
-base client needs no imaging library."""
+"""A small PNG reader and writer (zlib from the standard library): images a daemon sends with
+``format="png"`` are read (8-bit RGB and 16-bit greyscale, non-interlaced, every row filter)
+and the CLI and the bench write pictures, so the base client needs no imaging library."""
 
 from __future__ import annotations
 
@@ -91,3 +91,38 @@ def _paeth(a: int, b: int, c: int) -> int:
     if pa <= pb and pa <= pc:
         return a
     return b if pb <= pc else c
+
+
+def _chunk(kind: bytes, data: bytes) -> bytes:
+    return (struct.pack(">I", len(data)) + kind + data
+            + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF))
+
+
+def encode_png(image: np.ndarray) -> bytes:
+    """(h, w, 3) uint8 as 8-bit RGB, or (h, w) uint16 as 16-bit greyscale, top row first
+    (rows unfiltered: what the CLI and the bench write to files)."""
+    if image.ndim == 3 and image.dtype == np.uint8 and image.shape[2] == 3:
+        depth, colour, rows = 8, 2, image
+    elif image.ndim == 2 and image.dtype == np.uint16:
+        depth, colour, rows = 16, 0, image.astype(">u2")
+    else:
+        raise OperationFailedError(f"cannot write a PNG of {image.dtype} {image.shape}")
+    height, width = image.shape[:2]
+    raw = np.ascontiguousarray(rows).reshape(height, -1).view(np.uint8)
+    filtered = np.hstack([np.zeros((height, 1), np.uint8), raw]).tobytes()
+    header = struct.pack(">IIBBBBB", width, height, depth, colour, 0, 0, 0)
+    return (SIGNATURE + _chunk(b"IHDR", header) + _chunk(b"IDAT", zlib.compress(filtered, 6))
+            + _chunk(b"IEND", b""))
+
+
+def depth_png(depth: np.ndarray) -> bytes:
+    """Depth in metres as a 16-bit PNG of millimetres (0: nothing, or past 65.535 m), as a
+    daemon sends it."""
+    millimetres = np.where(np.isfinite(depth), np.asarray(depth, np.float64) * 1000.0, 0.0)
+    return encode_png(np.clip(np.round(millimetres), 0, 65535).astype(np.uint16))
+
+
+def segmentation_png(segmentation: np.ndarray) -> bytes:
+    """Segmentation indices as a 16-bit PNG of index + 1 (0: nothing), as a daemon sends
+    it."""
+    return encode_png(np.clip(np.asarray(segmentation) + 1, 0, 65535).astype(np.uint16))
