@@ -63,6 +63,7 @@ def _copy_compiled(source: MujocoEngine, engine: MujocoEngine) -> None:
     engine._watch = None
     engine._warnings = engine._data.warning.number
     engine._balance = copy.deepcopy(source._balance)
+    engine._cameras = None  # its own GL context, made by its first render
 
 
 def _twins(spec: Any, twin: Any) -> dict[int, Any]:

@@ -42,10 +42,13 @@ import mujoco
 import numpy as np
 
 from galton.daemon.engine import (
+    FEATURE_CONTACTS,
     FEATURE_DELETE,
     FEATURE_JOINT_TARGETS,
     FEATURE_JOINTS,
     FEATURE_LOAD_MODEL,
+    FEATURE_RAYCAST,
+    FEATURE_RENDER,
     FEATURE_SET_STATE,
     FEATURE_SNAPSHOT,
     FEATURE_SPAWN,
@@ -58,6 +61,7 @@ from galton.daemon.engine import (
     FEATURE_UPDATE_RESTITUTION,
     FEATURE_UPDATE_RGBA,
     FEATURE_WRENCH,
+    CameraView,
     Engine,
 )
 from galton.daemon.engines import mujoco_clone as cloning
@@ -65,6 +69,8 @@ from galton.daemon.engines import mujoco_models as models
 from galton.daemon.engines import mujoco_pool as mp
 from galton.daemon.engines import mujoco_props as mpr
 from galton.daemon.engines import mujoco_removal as removal
+from galton.daemon.engines import mujoco_render as rendering
+from galton.daemon.engines import mujoco_sensing as sensing
 from galton.daemon.engines import mujoco_snapshot as snapshots
 from galton.daemon.engines import mujoco_spawn as adding
 from galton.daemon.engines import mujoco_spec as ms
@@ -92,7 +98,8 @@ FEATURES = (FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDATE_MAS
             FEATURE_UPDATE_FRICTION, FEATURE_UPDATE_RESTITUTION, FEATURE_UPDATE_RGBA,
             FEATURE_LOAD_MODEL, FEATURE_STATIC_POSE, FEATURE_JOINTS, FEATURE_JOINT_TARGETS,
             FEATURE_TARGET_POSITION, FEATURE_TARGET_VELOCITY, FEATURE_TARGET_EFFORT,
-            FEATURE_WRENCH, FEATURE_SNAPSHOT)
+            FEATURE_WRENCH, FEATURE_SNAPSHOT, FEATURE_RENDER, FEATURE_RAYCAST,
+            FEATURE_CONTACTS)
 # Contacts at which MuJoCo's worker threads start helping, and below which they stop.
 WORKERS_ON_CONTACTS = 400
 WORKERS_OFF_CONTACTS = 200
@@ -116,6 +123,7 @@ class MujocoEngine(Engine):
         self._crowded = False
         self._workers = 0
         self._steps_since_look = 0
+        self._cameras: rendering.CameraRig | None = None  # made by the first render
         self._build_empty()
 
     # -- compile & index ----------------------------------------------------------------
@@ -232,7 +240,8 @@ class MujocoEngine(Engine):
             engine=self.name, engine_version=mujoco.__version__,
             protocol_version=PROTOCOL_VERSION, body_shapes=tuple(BODY_SHAPES),
             model_formats=models.FORMATS, features=FEATURES,
-            params={n: p.describe() for n, p in ms.PARAMS.items()})
+            params={n: p.describe() for n, p in ms.PARAMS.items()},
+            render_backend=rendering.backend_name())
 
     @property
     def timestep(self) -> float:
@@ -411,5 +420,22 @@ class MujocoEngine(Engine):
         on exactly as this one, which it leaves untouched."""
         return cloning.clone(self)
 
+    # -- Engine: perception (mujoco_render, mujoco_sensing) -------------------------------
+    def render(self, cameras: Sequence[CameraView]
+               ) -> tuple[list[dict[str, np.ndarray]], list[str]]:
+        return sensing.render(self, cameras)
+
+    def raycast(self, origins: np.ndarray, directions: np.ndarray, max_length: float
+                ) -> tuple[np.ndarray, list[str], np.ndarray, np.ndarray, np.ndarray]:
+        return sensing.cast_rays(self, origins, directions, max_length)
+
+    def contacts(self, names: Sequence[str] | None
+                 ) -> tuple[list[str], list[str], np.ndarray, np.ndarray, np.ndarray,
+                            np.ndarray]:
+        return sensing.touching(self, names)
+
     def close(self) -> None:
         self._entities.clear()
+        if self._cameras is not None:
+            self._cameras.close()
+            self._cameras = None

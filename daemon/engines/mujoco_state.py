@@ -128,6 +128,20 @@ def reset_joints(m: mujoco.MjModel, d: mujoco.MjData, roots: np.ndarray) -> None
         d.qvel[vadr:vadr + _QVEL_WIDTH.get(kind, 1)] = 0.0
 
 
+def place_static(m: mujoco.MjModel, d: mujoco.MjData) -> None:
+    """Recompute the world poses of moved static bodies: with sleeping on, MuJoCo's
+    kinematics skips static bodies (a moved one stayed where it was for collisions, rays
+    and cameras); with it off for one pass, it computes every body."""
+    flag = int(mujoco.mjtEnableBit.mjENBL_SLEEP)
+    sleeping = bool(m.opt.enableflags & flag)
+    m.opt.enableflags &= ~flag
+    try:
+        mujoco.mj_kinematics(m, d)
+    finally:
+        if sleeping:
+            m.opt.enableflags |= flag
+
+
 def wake_all(m: mujoco.MjModel, d: mujoco.MjData) -> None:
     """Wake every sleeping tree, keeping the state; MuJoCo wakes none when a static body moves.
 

@@ -57,6 +57,8 @@ def set_states(engine: MujocoEngine, names: Sequence[str], poses: np.ndarray | N
                     poses[static])
     if poses is not None and fixed.any():
         mst.wake_all(engine._model, d)
+    if poses is not None and static.any():
+        mst.place_static(engine._model, d)
     if jointed.any():
         mst.reset_joints(engine._model, d, ids[jointed])
 
