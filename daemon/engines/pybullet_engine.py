@@ -29,7 +29,8 @@ contact points and their warm starts across the teleport).
 
 The engine's parts: this module (bodies, states, models), ``Parameters``
 (pybullet_params.py), ``Rebuilding`` (pybullet_rebuild.py), ``Articulated`` (joints,
-pybullet_articulated.py) and ``Snapshots`` (pybullet_snapshot.py). Plain functions do the rest:
+pybullet_articulated.py), ``Snapshots`` (pybullet_snapshot.py) and ``Perception``
+(render, raycast, contacts: pybullet_perception.py). Plain functions do the rest:
 a spawn group's values and books (pybullet_spawn.py), a body's updates and properties
 (pybullet_props.py), a model load's checks and names (pybullet_models.py).
 """
@@ -46,10 +47,13 @@ import pybullet
 from pybullet_utils.bullet_client import BulletClient
 
 from galton.daemon.engine import (
+    FEATURE_CONTACTS,
     FEATURE_DELETE,
     FEATURE_JOINT_TARGETS,
     FEATURE_JOINTS,
     FEATURE_LOAD_MODEL,
+    FEATURE_RAYCAST,
+    FEATURE_RENDER,
     FEATURE_SET_STATE,
     FEATURE_SNAPSHOT,
     FEATURE_SPAWN,
@@ -72,8 +76,10 @@ from galton.daemon.engines.pybullet_calls import engine_call
 from galton.daemon.engines.pybullet_frames import Offset, com_to_frame
 from galton.daemon.engines.pybullet_models import MODEL_FORMATS
 from galton.daemon.engines.pybullet_params import SPECS, Parameters
+from galton.daemon.engines.pybullet_perception import Perception
 from galton.daemon.engines.pybullet_rebuild import Body as _Body
 from galton.daemon.engines.pybullet_rebuild import Rebuilding
+from galton.daemon.engines.pybullet_render import RENDER_BACKEND
 from galton.daemon.engines.pybullet_robots import Robots
 from galton.daemon.engines.pybullet_shapes import BodyMaker, ShapeCache
 from galton.daemon.engines.pybullet_snapshot import Snapshots
@@ -91,7 +97,7 @@ from galton.protocol import (
 from galton.protocol.model import BODY_SHAPES, POSE_WIDTH, TWIST_WIDTH
 
 
-class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Engine):
+class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception, Engine):
     """Named rigid bodies in a headless PyBullet world."""
 
     name = "pybullet"
@@ -134,8 +140,10 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Engine):
                       FEATURE_UPDATE_FRICTION, FEATURE_UPDATE_RESTITUTION, FEATURE_UPDATE_RGBA,
                       FEATURE_LOAD_MODEL, FEATURE_STATIC_POSE, FEATURE_JOINTS,
                       FEATURE_JOINT_TARGETS, FEATURE_TARGET_POSITION, FEATURE_TARGET_VELOCITY,
-                      FEATURE_TARGET_EFFORT, FEATURE_WRENCH, FEATURE_SNAPSHOT),
+                      FEATURE_TARGET_EFFORT, FEATURE_WRENCH, FEATURE_SNAPSHOT, FEATURE_RENDER,
+                      FEATURE_RAYCAST, FEATURE_CONTACTS),
             params={name: spec.describe() for name, spec in SPECS.items()},
+            render_backend=RENDER_BACKEND,
         )
 
     @property

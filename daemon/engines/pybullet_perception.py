@@ -1,0 +1,58 @@
+"""The PyBullet engine's perception (mixed into PybulletEngine): pictures
+(pybullet_render.py), ray casts (pybullet_rays.py) and contacts (pybullet_contacts.py), all
+naming what they show by entity, through PyBullet's (body, link) codes."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+from pybullet_utils.bullet_client import BulletClient
+
+from galton.daemon.engine import CameraView
+from galton.daemon.engines import pybullet_contacts, pybullet_rays, pybullet_render
+from galton.daemon.engines.pybullet_calls import engine_call
+from galton.daemon.engines.pybullet_rayshapes import EXACT
+from galton.daemon.engines.pybullet_rebuild import Body
+from galton.daemon.engines.pybullet_robots import Robots
+from galton.protocol import NotFoundError
+from galton.protocol.errors import did_you_mean
+
+
+class Perception:
+    """render, raycast and contacts over the engine's books of bodies and models."""
+
+    _bc: BulletClient
+    _bodies: dict[str, Body]
+    _robots: Robots
+
+    def _codes(self) -> dict[int, str]:
+        return pybullet_render.entity_codes(self._bc, self._bodies, self._robots)
+
+    @engine_call
+    def render(self, cameras: Sequence[CameraView]
+               ) -> tuple[list[dict[str, np.ndarray]], list[str]]:
+        """TinyRenderer, one getCameraImage per camera (pybullet_render.py)."""
+        return pybullet_render.render(self._bc, self._codes(), cameras)
+
+    @engine_call
+    def raycast(self, origins: np.ndarray, directions: np.ndarray, max_length: float
+                ) -> pybullet_rays.Rays:
+        """rayTestBatch, hits on spawned primitives made exact (pybullet_rays.py)."""
+        primitives = {pybullet_render.code(body.uid, -1): (body.shape, body.size)
+                      for body in self._bodies.values() if body.shape in EXACT}
+        return pybullet_rays.raycast(self._bc, self._codes(), primitives, origins,
+                                     directions, max_length)
+
+    @engine_call
+    def contacts(self, names: Sequence[str] | None) -> pybullet_contacts.Contacts:
+        """getContactPoints of the last step, normals from the first entity to the second."""
+        codes = self._codes()
+        wanted = None if names is None else set(names)
+        if wanted is not None:
+            known = set(codes.values())
+            missing = sorted(wanted - known)
+            if missing:
+                raise NotFoundError(f"no entity named {missing[0]!r} in the PyBullet world"
+                                    f"{did_you_mean(missing[0], sorted(known))}")
+        return pybullet_contacts.contacts(self._bc, codes, wanted)
