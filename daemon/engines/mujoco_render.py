@@ -15,6 +15,7 @@ bodies) is moved to a geom group the scene does not show, and put back after.
 
 from __future__ import annotations
 
+import contextlib
 import importlib
 import os
 import sys
@@ -45,7 +46,7 @@ def _wanted() -> tuple[str, ...]:
 
 
 def _open_context(width: int, height: int) -> Any:
-    """A current GLContext of the first backend that works; MUJOCO_GL set to it if unset.
+    """A GLContext of the first backend that works; MUJOCO_GL set to it if unset.
 
     PyOpenGL binds its platform once per process, so a failed EGL can fall back to OSMesa
     only when it failed before PyOpenGL loaded a platform."""
@@ -57,7 +58,8 @@ def _open_context(width: int, height: int) -> Any:
         try:
             module = importlib.import_module(f"mujoco.{name}")
             context = module.GLContext(width, height)
-            context.make_current()
+            with context.as_current():
+                pass  # it can be made current
         except Exception as exc:  # any failure of a backend: try the next
             failures.append(f"{name}: {exc}")
             continue
@@ -80,10 +82,16 @@ class CameraRig:
 
     def close(self) -> None:
         if self._gl is not None:
-            self._gl.make_current()
-            self._free_context()
+            with self._gl.as_current():
+                self._free_context()
             self._gl.free()
             self._gl = None
+
+    def __del__(self) -> None:
+        """An engine dropped unclosed: its GL objects must be freed in its own context (in
+        another, they would be that context's)."""
+        with contextlib.suppress(Exception):  # nothing to be done in a finalizer
+            self.close()
 
     def _free_context(self) -> None:
         if self._con is not None:
@@ -91,9 +99,7 @@ class CameraRig:
         self._con = self._scene = self._model = None
 
     def _ready(self, model: mujoco.MjModel, width: int, height: int) -> None:
-        if self._gl is None:
-            self._gl = _open_context(width, height)
-        self._gl.make_current()
+        """The render context for this model, its buffer at least this large (current)."""
         if self._model is not model:
             self._free_context()
             self._con = mujoco.MjrContext(model, mujoco.mjtFontScale.mjFONTSCALE_100)
@@ -112,12 +118,16 @@ class CameraRig:
                ) -> list[dict[str, np.ndarray]]:
         """The images of each camera; ``shown`` marks the geoms drawn, ``geom_label`` maps
         a geom id to its segmentation label."""
+        if self._gl is None:
+            self._gl = _open_context(max(v.width for v in cameras),
+                                     max(v.height for v in cameras))
         images = []
-        for view in cameras:
-            self._ready(model, view.width, view.height)
-            self._update_scene(model, data, shown)
-            _aim(self._scene, view)
-            images.append(self._images(view, geom_label))
+        with self._gl.as_current():  # and no longer after: any thread may render next
+            for view in cameras:
+                self._ready(model, view.width, view.height)
+                self._update_scene(model, data, shown)
+                _aim(self._scene, view)
+                images.append(self._images(view, geom_label))
         return images
 
     def _update_scene(self, model: mujoco.MjModel, data: mujoco.MjData,

@@ -7,7 +7,9 @@ above the origin looks straight down with +y up, so +x is to the right.
 
 from __future__ import annotations
 
+import gc
 import math
+import threading
 from collections.abc import Sequence
 from typing import Any
 
@@ -231,3 +233,26 @@ def test_a_loaded_model_is_seen_link_by_link(engine: MujocoEngine) -> None:
     _, names, _, _, _ = engine.raycast(np.array([[0.5, 0, 3]]), np.array([[0.0, 0, -1]]),
                                        10.0)
     assert names == ["r.arm"]
+
+
+def test_engines_render_side_by_side_from_any_thread(engine: MujocoEngine) -> None:
+    scene(engine)
+    view = down(("depth",), width=64, height=48)
+    twin = engine.clone()
+    try:
+        depths = [e.render([view])[0][0]["depth"] for e in (engine, twin)]
+        dropped = engine.clone()
+        dropped.render([view])
+        del dropped  # unclosed: its GL objects go with it, not the others'
+        gc.collect()
+        depths += [e.render([view])[0][0]["depth"] for e in (engine, twin)]
+        results: list[np.ndarray] = []
+        worker = threading.Thread(target=lambda: results.append(
+            twin.render([view])[0][0]["depth"]))
+        worker.start()
+        worker.join(timeout=60)
+        for depth in [*depths, *results]:
+            assert depth[24, 32] == pytest.approx(HEIGHT - 0.4, abs=2e-3)
+        assert len(results) == 1
+    finally:
+        twin.close()
