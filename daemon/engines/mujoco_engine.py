@@ -27,6 +27,8 @@ spec are plain functions of the engine in their own modules: ``mujoco_spawn``,
 Loaded models' joints, with one actuator each holding a target, are kept by
 ``mujoco_joints``, wrenches by ``mujoco_wrench``; both books are written again into the
 compiled model after every compile.
+Cameras, rays and contacts (``mujoco_render``, ``mujoco_sensing``) see entities only, never
+parked bodies.
 
 Size: MuJoCo holds at most ``mujoco_spec.MAX_BODIES`` bodies, and its compile costs
 O(free bodies x degrees of freedom): about 1.6 s for 4,000 free spheres, four times that for

@@ -27,6 +27,8 @@ _SHOWN_ONLY = np.array([1 if g == SHOWN else 0 for g in range(6)], np.uint8)
 def render(engine: MujocoEngine, cameras: Sequence[CameraView]
            ) -> tuple[list[dict[str, np.ndarray]], list[str]]:
     """The cameras' images at the current positions; labels are the entities seen."""
+    if not cameras:
+        return [], []
     if engine._cameras is None:
         engine._cameras = CameraRig()
     m, d = engine._model, engine._data
