@@ -19,6 +19,7 @@ from galton.daemon.engine import (
 )
 from galton.daemon.engines.pybullet_engine import PybulletEngine
 from galton.daemon.engines.pybullet_rays import BATCH
+from galton.daemon.engines.pybullet_shapes import MESH_TOLERANCE
 from galton.protocol import BodyGroup, NotFoundError
 
 GRAVITY = 9.81
@@ -241,3 +242,54 @@ def test_links_by_name_in_pictures_rays_and_contacts() -> None:
         assert engine.contacts(["r_arm"])[0] == []
     finally:
         engine.close()
+
+
+def test_a_rendered_sphere_is_within_the_mesh_tolerance() -> None:
+    """The visual mesh has segments enough (pybullet_shapes.segments): over the cap a camera
+    above sees face on (normals within 30 degrees of the view), the depth is the sphere's
+    within a few times MESH_TOLERANCE, float32 and the rasteriser included."""
+    radius, size = 0.2, 120
+    engine = PybulletEngine()
+    try:
+        engine.spawn([group("sphere", (radius,), "ball", (0.0, 0.0, 0.0), BLUE, static=True)])
+        eye = np.array([0.0, 0.0, 4 * radius])
+        view = CameraView(eye=eye, target=np.zeros(3), up=np.array([0.0, 1.0, 0.0]),
+                          fov_deg=FOV, width=size, height=size, near=0.01, far=10.0,
+                          outputs=("depth",))
+        (images,), _ = engine.render([view])
+    finally:
+        engine.close()
+    focal = size / 2 / math.tan(math.radians(FOV / 2))
+    columns, rows = np.meshgrid(np.arange(size) + 0.5 - size / 2, size / 2 - np.arange(size)
+                                - 0.5)
+    rays = np.stack([columns / focal, rows / focal, -np.ones((size, size))], axis=-1)
+    rays /= np.linalg.norm(rays, axis=-1, keepdims=True)
+    b, c = rays @ eye, eye @ eye - radius**2
+    face_on = b * b - c > (radius * math.cos(math.radians(30))) ** 2
+    along = (-b - np.sqrt(np.maximum(b * b - c, 0.0))) * -rays[..., 2]
+    error = images["depth"][face_on] - along[face_on]
+    assert face_on.sum() > 500
+    assert np.abs(error).max() < 2.5 * MESH_TOLERANCE
+
+
+def test_looking_changes_nothing_that_comes_after(scene: PybulletEngine) -> None:
+    """Pictures, rays and contact queries between steps leave the simulation bit for bit as
+    it goes on without them."""
+    twin = PybulletEngine()
+    try:
+        twin.spawn([group("plane", (5.0, 5.0), "floor", (0.0, 0.0, 0.0), GREY, static=True),
+                    group("box", (HALF,) * 3, "crate", (*BOX_AT, HALF), RED, mass=BOX_MASS),
+                    group("sphere", (HALF,), "ball", (*BALL_AT, HALF), BLUE)])
+        names = ["crate", "ball"]
+        scene.set_states(names, None, np.array([[0.3, 0, 2.0, 1.0, 2.0, 0.5]] * 2))
+        twin.set_states(names, None, np.array([[0.3, 0, 2.0, 1.0, 2.0, 0.5]] * 2))
+        for _ in range(20):
+            scene.render([down_camera()])
+            scene.raycast(np.array([[0.0, 0.0, HEIGHT]]), np.array([[0, 0, -1.0]]), 10.0)
+            scene.contacts(None)
+            scene.step(5)
+            twin.step(5)
+        for mine, theirs in zip(scene.get_states(names), twin.get_states(names), strict=True):
+            np.testing.assert_array_equal(mine, theirs)
+    finally:
+        twin.close()
