@@ -8,7 +8,10 @@ cast grazes a primitive that the exact test misses, the ray goes on from where i
 sphere round that body (a little wider than it), at most ``REGRAZE_TRIES`` times; a body
 reaching into that sphere, behind the grazed one, is then missed, and a ray that only the
 exact test would graze misses: both need a ray within Bullet's tolerance of a surface
-(4e-4 m on a 0.1 m sphere).
+(4e-4 m on a 0.1 m sphere). A ray that meets a plane from behind goes on past it.
+
+A ray that starts inside a spawned primitive does not see it (Bullet's rays see a convex
+shape from outside only), where MuJoCo's see its inside and report where they leave it.
 """
 
 from __future__ import annotations
@@ -127,6 +130,11 @@ def _exact(bc: BulletClient, primitives: Mapping[int, Primitive], hit_code: np.n
 def _beyond(shape: str, o: np.ndarray, d: np.ndarray, size: np.ndarray) -> np.ndarray:
     """How far along each ray it leaves a sphere round the body, ``BOUND_SLACK`` wider than
     the body, so that Bullet's looser shape is behind it."""
+    if shape == "plane":  # seen from behind: on from just past it
+        with np.errstate(invalid="ignore", divide="ignore"):
+            crossing = np.nan_to_num(-o[:, 2] / d[:, 2], nan=0.0, posinf=0.0, neginf=0.0)
+        past: np.ndarray = np.maximum(crossing, 0.0) * (1.0 + 1e-12) + 1e-12
+        return past
     radius = (np.sum(size, axis=1) if shape == "capsule" else np.linalg.norm(size, axis=1))
     radius = radius * (1.0 + BOUND_SLACK)
     closest = -np.sum(o * d, axis=1)

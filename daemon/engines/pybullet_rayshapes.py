@@ -5,7 +5,8 @@ tolerance: a ray at a 0.1 m sphere lands 4e-4 m off the surface, with a tilted n
 engine contract wants the same answers as MuJoCo's exact ray tests, so a hit on a spawned
 primitive is computed again here from the body's pose and size: the first surface point at
 t >= 0 along the ray (from inside a body: where the ray leaves it), with the outward
-normal there. Each function takes local origins and unit directions (n, 3) and returns the
+normal there; a plane's hits are exact already, but Bullet's is seen from both sides.
+Each function takes local origins and unit directions (n, 3) and returns the
 distances (n,), inf where the ray misses, and local normals (n, 3).
 """
 
@@ -122,4 +123,16 @@ def capsule(o: np.ndarray, d: np.ndarray, size: np.ndarray) -> Hits:
     return t, normals
 
 
-EXACT = {"sphere": sphere, "box": box, "cylinder": cylinder, "capsule": capsule}
+def plane(o: np.ndarray, d: np.ndarray, size: np.ndarray) -> Hits:
+    """Infinite, and seen from its front only (z >= 0), as MuJoCo's rays see a plane:
+    Bullet's is seen from both sides."""
+    with np.errstate(invalid="ignore", divide="ignore"):
+        t = -o[:, 2] / d[:, 2]
+    t = np.where((o[:, 2] >= 0.0) & (d[:, 2] < 0.0), t, np.inf)
+    normals = np.zeros_like(o)
+    normals[:, 2] = 1.0
+    return t, normals
+
+
+EXACT = {"sphere": sphere, "box": box, "cylinder": cylinder, "capsule": capsule,
+         "plane": plane}

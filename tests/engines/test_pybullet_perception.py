@@ -164,6 +164,17 @@ def test_a_ray_bullet_grazes_goes_on_past_the_body(scene: PybulletEngine) -> Non
     np.testing.assert_allclose(points[0], [*clear[:2], 0.0], atol=1e-9)
 
 
+def test_a_plane_is_seen_from_its_front_only(scene: PybulletEngine) -> None:
+    """As MuJoCo's rays see it: from below, a ray goes through the floor to the ball."""
+    hits, names, points, normals, distances = scene.raycast(
+        np.array([[*BALL_AT, -1.0], [*BALL_AT, -1.0]]), np.array([[0, 0, 1.0], [0, 0, -1.0]]),
+        10.0)
+    assert names == ["ball", ""] and hits.tolist() == [True, False]
+    assert distances[0] == pytest.approx(1.0, abs=1e-9)
+    np.testing.assert_allclose(points[0], [*BALL_AT, 0.0], atol=1e-9)
+    np.testing.assert_allclose(normals[0], [0, 0, -1.0], atol=1e-9)
+
+
 def test_rays_stop_at_max_length(scene: PybulletEngine) -> None:
     hits, names, _, _, distances = scene.raycast(
         np.array([[*BOX_AT, HEIGHT]]), np.array([[0, 0, -1.0]]), 1.5)
