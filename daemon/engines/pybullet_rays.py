@@ -88,29 +88,42 @@ def _bullet(bc: BulletClient, origins: np.ndarray, directions: np.ndarray,
     n = len(results)
     if n != len(origins):
         raise OperationFailedError(f"PyBullet rayTestBatch answered {n} of {len(origins)} rays")
-    flat = np.fromiter(itertools.chain.from_iterable(
-        (r[0], r[1], r[2], *r[3], *r[4]) for r in results), np.float64, n * 9).reshape(n, 9)
-    uid, link = flat[:, 0].astype(np.int64), flat[:, 1].astype(np.int64)
+    if not n:
+        return np.zeros(0, np.int64), np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3))
+    uids, links, fractions, points, normals = zip(*results, strict=True)
+    flat = itertools.chain.from_iterable
+    uid, link = np.fromiter(uids, np.int64, n), np.fromiter(links, np.int64, n)
     hit_code = np.where(uid >= 0, uid + ((link + 1) << 24), -1)
-    return hit_code, flat[:, 2] * lengths, flat[:, 3:6].copy(), flat[:, 6:9].copy()
+    return (hit_code, np.fromiter(fractions, np.float64, n) * lengths,
+            np.fromiter(flat(points), np.float64, 3 * n).reshape(n, 3),
+            np.fromiter(flat(normals), np.float64, 3 * n).reshape(n, 3))
 
 
 def _exact(bc: BulletClient, primitives: Mapping[int, Primitive], hit_code: np.ndarray,
            origins: np.ndarray, directions: np.ndarray, lengths: np.ndarray,
            distance: np.ndarray, point: np.ndarray, normal: np.ndarray) -> np.ndarray:
     """Hits on primitives made exact in place; True for rays to cast again (their
-    ``distance`` set to where the grazed body's bounding sphere ends)."""
+    ``distance`` set to where the grazed body's bounding sphere ends). Each body hit is
+    looked up once, and each shape's rays are done together."""
     again = np.zeros(len(hit_code), bool)
-    on = [k for k, c in enumerate(hit_code.tolist()) if c in primitives]
-    if not on:
+    codes, which = np.unique(hit_code, return_inverse=True)
+    found = [int(c) for c in codes if int(c) in primitives]
+    if not found:
         return again
-    uids = sorted({int(hit_code[k]) for k in on})
-    place = {uid: k for k, uid in enumerate(uids)}
-    poses = np.array([[*p, *q] for p, q in map(bc.getBasePositionAndOrientation, uids)])
-    for shape in {primitives[int(hit_code[k])][0] for k in on}:
-        rows = np.array([k for k in on if primitives[int(hit_code[k])][0] == shape])
-        pose = poses[[place[int(hit_code[k])] for k in rows]]
-        size = np.array([primitives[int(hit_code[k])][1] for k in rows], float)
+    shapes = sorted({primitives[c][0] for c in found})
+    shape_of, sizes, poses = np.full(len(codes), -1), np.zeros((len(codes), 3)), np.zeros(
+        (len(codes), 7))
+    for k, c in enumerate(codes.tolist()):
+        if c in primitives:
+            kind, half_sizes = primitives[c]
+            shape_of[k], sizes[k, :len(half_sizes)] = shapes.index(kind), half_sizes
+            position, orientation = bc.getBasePositionAndOrientation(c)
+            poses[k] = (*position, *orientation)
+    ray_shape = shape_of[which.reshape(-1)]
+    for s, shape in enumerate(shapes):
+        rows = np.flatnonzero(ray_shape == s)
+        body = which.reshape(-1)[rows]
+        pose, size = poses[body], sizes[body]
         turn_back = conjugate(pose[:, 3:])
         o = rotate(turn_back, origins[rows] - pose[:, :3])
         d = rotate(turn_back, directions[rows])
@@ -124,7 +137,6 @@ def _exact(bc: BulletClient, primitives: Mapping[int, Primitive], hit_code: np.n
         again[miss_rows] = True
         distance[miss_rows] = _beyond(shape, o[~good], d[~good], size[~good])
     return again
-
 
 
 def _beyond(shape: str, o: np.ndarray, d: np.ndarray, size: np.ndarray) -> np.ndarray:
