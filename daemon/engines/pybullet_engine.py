@@ -20,7 +20,7 @@ the PyBullet module: every engine sets its own value when it starts, and the las
 Memory: removeBody keeps about 0.9 kB per body even with shared collision shapes; only
 resetSimulation frees it, which ``clear`` does, and ``delete`` does when the world empties
 or, past a count of removed bodies, by rebuilding the world (pybullet_rebuild.py). Visual
-meshes are made once per process (pybullet_shapes.shared_mesh): createVisualShape never
+meshes are made once per process (pybullet_meshes.shared_mesh): createVisualShape never
 lets go of the lists it is given.
 
 Rewinding: ``reset_dynamics`` rebuilds the world too, every body made again as it was first

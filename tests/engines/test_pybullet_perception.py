@@ -18,8 +18,8 @@ from galton.daemon.engine import (
     CameraView,
 )
 from galton.daemon.engines.pybullet_engine import PybulletEngine
+from galton.daemon.engines.pybullet_meshes import MESH_TOLERANCE
 from galton.daemon.engines.pybullet_rays import BATCH
-from galton.daemon.engines.pybullet_shapes import MESH_TOLERANCE
 from galton.protocol import BodyGroup, NotFoundError
 
 GRAVITY = 9.81
@@ -256,7 +256,7 @@ def test_links_by_name_in_pictures_rays_and_contacts() -> None:
 
 
 def test_a_rendered_sphere_is_within_the_mesh_tolerance() -> None:
-    """The visual mesh has segments enough (pybullet_shapes.segments): over the cap a camera
+    """The visual mesh has segments enough (pybullet_meshes.segments): over the cap a camera
     above sees face on (normals within 30 degrees of the view), the depth is the sphere's
     within a few times MESH_TOLERANCE, float32 and the rasteriser included."""
     radius, size = 0.2, 120
