@@ -304,3 +304,15 @@ def test_looking_changes_nothing_that_comes_after(scene: PybulletEngine) -> None
             np.testing.assert_array_equal(mine, theirs)
     finally:
         twin.close()
+
+
+def test_names_follow_rebuilds_and_deletes(scene: PybulletEngine) -> None:
+    """A rebuild gives every body a new PyBullet id; what is seen is still named right."""
+    scene.reset_dynamics()
+    scene.delete(["crate"])
+    (images,), labels = scene.render([down_camera(("segmentation",))])
+    assert sorted(labels) == ["ball", "floor"]
+    assert labels[images["segmentation"][pixel(*BALL_AT, 2 * HALF)]] == "ball"
+    _, names, _, _, _ = scene.raycast(np.array([[*BALL_AT, HEIGHT], [*BOX_AT, HEIGHT]]),
+                                      np.array([[0, 0, -1.0]] * 2), 10.0)
+    assert names == ["ball", "floor"]
