@@ -31,6 +31,8 @@ def write_outputs(results: ExperimentResults, out_dir: str | Path,
                   draws: int = stats.DEFAULT_DRAWS,
                   seed: int = stats.DEFAULT_SEED) -> dict[str, Path]:
     """Write results.json (scored), results.csv, report.md and the PNGs; return their paths.
+    The report shows the board pictures the results name (galton-client bench renders them
+    beside the report).
 
     Keys: "results_json", "results_csv", "report", and each plot's file stem.
     """

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import csv
 import json
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 from galton.analysis import stats
@@ -166,15 +166,31 @@ def _verdicts(verdicts: Sequence[Verdict]) -> list[str]:
     return lines
 
 
+def _pictures(pictures: Mapping[str, str]) -> list[str]:
+    """The board after each engine's first trial (and its replay's animation when asked):
+    ``pictures`` maps what each shows to its file, or to why there is none."""
+    if not pictures:
+        return []
+    lines = ["## What a trial looked like", "",
+             "Each engine's first trial, rendered through the bridge once it was recorded "
+             "(front glass removed); an animation is a replay of that trial.", ""]
+    for what, file in pictures.items():
+        shown = f"![{what}]({file})" if file.endswith(".png") else f"{what}: {file}"
+        lines += [shown, ""]
+    return lines[:-1]
+
+
 def render_report(results: ExperimentResults, summaries: Sequence[EngineSummary],
                   verdicts: Sequence[Verdict], plot_files: Sequence[str] = (),
                   draws: int = stats.DEFAULT_DRAWS, seed: int = stats.DEFAULT_SEED) -> str:
-    """The whole report as Markdown; ``plot_files`` are names relative to the report."""
+    """The whole report as Markdown; ``plot_files`` are names relative to the report, as
+    are the board pictures the results name (``extra["pictures"]``)."""
     if not results.trials:
         return "# Galton-board benchmark\n\nNo trials were recorded.\n"
     sections = [["# Galton-board benchmark"], _configuration(results, summaries),
                 _board_config(results), _table2(summaries), _details(summaries),
                 _calibration(summaries, draws, seed), _verdicts(verdicts),
+                _pictures(results.extra.get("pictures") or {}),
                 ["## Plots", ""] + [f"- [{name}]({name})" for name in plot_files]]
     return "\n".join(line for section in sections for line in [*section, ""]).rstrip() + "\n"
 

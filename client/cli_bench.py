@@ -27,6 +27,7 @@ from galton.client.bench.experiment import (
     ExperimentConfig,
     run_experiment,
 )
+from galton.client.bench.picture import Animation
 from galton.client.bench.trial import DEFAULT_MAX_SIM_TIME_S, TrialConfig
 from galton.client.cli import JsonOpt, app, console, run_guarded
 
@@ -80,9 +81,13 @@ def bench(
     max_sim_time: Annotated[float, typer.Option(help="Sim-time cap per trial, s.", min=0.1)
                             ] = DEFAULT_MAX_SIM_TIME_S,
     out: Annotated[Path, typer.Option(help="Output folder.")] = DEFAULT_OUT,
+    animation: Annotated[bool, typer.Option(
+        help="Also replay each engine's first trial as an animated PNG for the report.")
+    ] = False,
     as_json: JsonOpt = False,
 ) -> None:
-    """Run the paper's Galton-board experiment through the bridge and report it."""
+    """Run the paper's Galton-board experiment through the bridge and report it, with a
+    picture of the board after each engine's first trial."""
     if release is not None and release not in ("all-at-once", "stream"):
         raise typer.BadParameter(f"--release must be all-at-once or stream, got {release!r}")
     config = run_guarded(lambda: ExperimentConfig(
@@ -91,12 +96,14 @@ def bench(
         max_sim_time=max_sim_time))
     endpoints = connect.split(",") if connect else ctx.obj.connect
     names = _csv(instances, "--instances") if instances else None
-    results = run_guarded(lambda: _run(config, endpoints, names, ctx.obj.timeout, as_json))
+    results = run_guarded(lambda: _run(config, endpoints, names, ctx.obj.timeout, as_json, out,
+                                       Animation() if animation else None))
     _finish(results, out, as_json)
 
 
 def _run(config: ExperimentConfig, connect: list[str] | None, instances: list[str] | None,
-         timeout: float, quiet: bool) -> ExperimentResults:
+         timeout: float, quiet: bool, pictures: Path | None = None,
+         animation: Animation | None = None) -> ExperimentResults:
     plan = config.trials()
     with bench_clients(config.engines, connect, instances, max(timeout, 30.0)) as clients, \
             _progress(quiet) as progress:
@@ -106,7 +113,7 @@ def _run(config: ExperimentConfig, connect: list[str] | None, instances: list[st
             progress.update(task, advance=1, description=(
                 f"{trial.engine} {trial.balls} balls rep {trial.repetition + 1}: "
                 f"lost {record.lost}, RTF {record.rtf or 0:.2f}"))
-        return run_experiment(clients, config, advance)
+        return run_experiment(clients, config, advance, pictures, animation)
 
 
 def _finish(results: ExperimentResults, out: Path, as_json: bool) -> None:

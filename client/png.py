@@ -93,7 +93,7 @@ def _paeth(a: int, b: int, c: int) -> int:
     return b if pb <= pc else c
 
 
-def _chunk(kind: bytes, data: bytes) -> bytes:
+def chunk(kind: bytes, data: bytes) -> bytes:
     return (struct.pack(">I", len(data)) + kind + data
             + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF))
 
@@ -111,8 +111,8 @@ def encode_png(image: np.ndarray) -> bytes:
     raw = np.ascontiguousarray(rows).reshape(height, -1).view(np.uint8)
     filtered = np.hstack([np.zeros((height, 1), np.uint8), raw]).tobytes()
     header = struct.pack(">IIBBBBB", width, height, depth, colour, 0, 0, 0)
-    return (SIGNATURE + _chunk(b"IHDR", header) + _chunk(b"IDAT", zlib.compress(filtered, 6))
-            + _chunk(b"IEND", b""))
+    return (SIGNATURE + chunk(b"IHDR", header) + chunk(b"IDAT", zlib.compress(filtered, 6))
+            + chunk(b"IEND", b""))
 
 
 def depth_png(depth: np.ndarray) -> bytes:

@@ -24,7 +24,7 @@ from galton.client import (
     camera,
     plane,
 )
-from galton.client.png import SIGNATURE, _chunk, decode_png, encode_png
+from galton.client.png import SIGNATURE, chunk, decode_png, encode_png
 
 SEED = 26
 
@@ -137,8 +137,8 @@ def filtered_png(image: np.ndarray, filters: list[int]) -> bytes:
         previous = row
     header = np.array([image.shape[1], image.shape[0]], ">u4").tobytes() + bytes(
         [16 if grey else 8, 0 if grey else 2, 0, 0, 0])
-    return (SIGNATURE + _chunk(b"IHDR", header)
-            + _chunk(b"IDAT", zlib.compress(b"".join(lines))) + _chunk(b"IEND", b""))
+    return (SIGNATURE + chunk(b"IHDR", header)
+            + chunk(b"IDAT", zlib.compress(b"".join(lines))) + chunk(b"IEND", b""))
 
 
 def paeth(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:

@@ -9,10 +9,12 @@ import platform
 import sys
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 from galton.analysis.board import BallSpec, BoardSpec, ReleaseSpec
 from galton.analysis.records import ExperimentResults, TrialRecord
+from galton.client.bench.picture import Animation, animate_trial, first_trials, render_board
 from galton.client.bench.trial import (
     DEFAULT_CHECK_INTERVAL_S,
     DEFAULT_MAX_SIM_TIME_S,
@@ -20,7 +22,7 @@ from galton.client.bench.trial import (
     run_trial,
 )
 from galton.client.sdk import Client
-from galton.protocol import InvalidArgumentError
+from galton.protocol import GaltonError, InvalidArgumentError
 
 DEFAULT_ENGINES = ("mujoco", "pybullet")
 DEFAULT_BALLS = (100,)
@@ -68,17 +70,43 @@ class ExperimentConfig:
 
 def run_experiment(clients: dict[str, Client], config: ExperimentConfig,
                    on_trial: Callable[[TrialConfig, TrialRecord], None] | None = None,
+                   pictures: Path | None = None, animation: Animation | None = None,
                    ) -> ExperimentResults:
-    """Run every trial of the plan on the daemon serving its engine."""
-    records = []
-    for trial in config.trials():
+    """Run every trial of the plan on the daemon serving its engine. With ``pictures`` (a
+    folder), each engine's first trial is rendered there once recorded (board_ENGINE.png)
+    and, with ``animation``, replayed as an animated PNG (board_ENGINE_trial.png)."""
+    records, plan = [], config.trials()
+    firsts = first_trials(plan) if pictures is not None else {}
+    taken: dict[str, str] = {}
+    for index, trial in enumerate(plan):
         record = run_trial(clients[trial.engine], trial)
         records.append(record)
+        if index in firsts and pictures is not None:
+            taken |= take_pictures(clients[trial.engine], trial, pictures, animation)
         if on_trial is not None:
             on_trial(trial, record)
+    extra = dict(config.extra) | ({"pictures": taken} if taken else {})
     return ExperimentResults(trials=records, date=dt.datetime.now(dt.UTC).isoformat(),
                              host=host_description(), versions=versions(),
-                             command=" ".join(sys.argv), extra=dict(config.extra))
+                             command=" ".join(sys.argv), extra=extra)
+
+
+def take_pictures(sim: Client, trial: TrialConfig, folder: Path,
+                  animation: Animation | None) -> dict[str, str]:
+    """The finished trial's picture (and its replay's animation): file names by what they
+    show, or why there is none (an engine that cannot render leaves the bench going)."""
+    taken: dict[str, str] = {}
+    board, replay = f"{trial.engine}: the board after its first trial", (
+        f"{trial.engine}: its first trial, replayed")
+    try:
+        taken[board] = render_board(sim, trial.board,
+                                    folder / f"board_{trial.engine}.png").name
+        if animation is not None:
+            taken[replay] = animate_trial(
+                sim, trial, folder / f"board_{trial.engine}_trial.png", animation).name
+    except GaltonError as error:
+        taken.setdefault(board, f"no picture ({error})")
+    return taken
 
 
 def host_description() -> str:
