@@ -73,8 +73,7 @@ def parse_camera(raw: Any, where: str) -> Camera:
                                    f"{', '.join(IMAGE_OUTPUTS)}, got {brief(outputs)}")
     attach = values.get("attach")
     return Camera(
-        eye, target, up, finite_number(values["fov"], f"{where}.fov", low=0.0, high=180.0,
-                                       low_open=True),
+        eye, target, up, _fov(values["fov"], f"{where}.fov"),
         _side(values["width"], f"{where}.width"), _side(values["height"], f"{where}.height"),
         near, far, tuple(dict.fromkeys(outputs)),
         None if attach is None else check_name(attach, f"{where}.attach"))
@@ -86,6 +85,14 @@ def _vector(value: Any, where: str) -> tuple[float, float, float]:
         raise InvalidArgumentError(f"{where} must hold 3 numbers, got {brief(value)}")
     x, y, z = (finite_number(v, f"{where}[{i}]") for i, v in enumerate(items))
     return (x, y, z)
+
+
+def _fov(value: Any, where: str) -> float:
+    """A vertical field of view in degrees, strictly between 0 and 180."""
+    fov = finite_number(value, where, low=0.0, high=180.0, low_open=True)
+    if fov >= 180.0:
+        raise InvalidArgumentError(f"{where} must be below 180 degrees, got {fov:g}")
+    return fov
 
 
 def _side(value: Any, where: str) -> int:
