@@ -18,9 +18,9 @@ from rich.table import Table
 
 from galton.client.cli import JsonOpt, app, console, emit, with_client
 from galton.client.cli_values import LIST_HELP, numbers, split_list
-from galton.client.png import depth_png, encode_png, segmentation_png
 from galton.client.sdk_perception import camera
 from galton.client.values import Contacts, Image, RayHits
+from galton.protocol.png import depth_png, encode_png, segmentation_png
 
 PANEL = "Perception"
 XYZ = "x,y,z"

@@ -13,8 +13,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from galton.client.png import decode_png
 from galton.protocol import POSE_WIDTH, TWIST_WIDTH, OperationFailedError, Reply, unpack_f64
+from galton.protocol.png import decode_png
 
 FloatArray = NDArray[np.float64]
 MM = 1000.0  # depth PNGs hold millimetres

@@ -8,7 +8,6 @@ from typing import Any
 import numpy as np
 
 from galton.daemon.cameras import Camera, parse_camera, view_of
-from galton.daemon.png import encode_png
 from galton.daemon.world import World
 from galton.protocol import InvalidArgumentError, NotFoundError, ResourceLimitError, pack_f64
 from galton.protocol.errors import brief
@@ -20,12 +19,12 @@ from galton.protocol.model import (
     finite_number,
     require,
 )
+from galton.protocol.png import depth_png, encode_png, segmentation_png
 
 MAX_CAMERAS_PER_REQUEST = 16
 MAX_NAMED_CAMERAS = 32
 MAX_CAMERA_NAME = 64
 DEFAULT_MAX_LENGTH = 100.0  # m, a ray's reach when none is given
-MM = 1000.0  # depth PNGs hold millimetres in 16 bits
 
 
 def _cameras_of(world: World) -> dict[str, Camera]:
@@ -81,10 +80,9 @@ def _image(camera: Camera, image: dict[str, np.ndarray], fmt: str) -> dict[str, 
         elif kind == "rgb":
             out[kind] = encode_png(np.ascontiguousarray(pixels, dtype=np.uint8))
         elif kind == "depth":
-            millimetres = np.where(np.isfinite(pixels), pixels * MM, 0.0)
-            out[kind] = encode_png(np.clip(np.round(millimetres), 0, 65535).astype(np.uint16))
+            out[kind] = depth_png(pixels)
         else:
-            out[kind] = encode_png(np.clip(pixels + 1, 0, 65535).astype(np.uint16))
+            out[kind] = segmentation_png(pixels)
     return out
 
 

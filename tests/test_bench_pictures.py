@@ -28,7 +28,7 @@ from galton.client.bench.picture import (
 )
 from galton.client.bench.trial import TrialConfig
 from galton.client.cli import app
-from galton.client.png import decode_png
+from galton.protocol.png import decode_png
 
 runner = CliRunner()
 SEED = 26

@@ -14,7 +14,7 @@ from support_perception import known_scene
 from support_worlds import clean
 
 from galton.client import Client, EmbeddedDaemon, boxes
-from galton.client.png import decode_png
+from galton.protocol.png import decode_png
 
 TOP = ["--eye", "0,0,3", "--target", "0,0,0", "--up", "0,1,0", "--fov", "60",
        "--size", "64x48"]

@@ -24,7 +24,7 @@ from galton.client import (
     camera,
     plane,
 )
-from galton.client.png import SIGNATURE, chunk, decode_png, encode_png
+from galton.protocol.png import SIGNATURE, chunk, decode_png, encode_png
 
 SEED = 26
 

@@ -20,10 +20,10 @@ import numpy as np
 from galton.analysis.board import BoardSpec
 from galton.client.bench.build import ball_group
 from galton.client.bench.trial import TrialConfig, prepare_world
-from galton.client.png import SIGNATURE, chunk, encode_png
 from galton.client.sdk import Client
 from galton.client.sdk_perception import camera
 from galton.protocol import OperationFailedError
+from galton.protocol.png import SIGNATURE, chunk, encode_png
 
 PICTURE_SIZE = (540, 720)  # width, height: the board is taller than wide
 ANIMATION_SIZE = (270, 360)

@@ -1,6 +1,7 @@
-"""A small PNG reader and writer (zlib from the standard library): images a daemon sends with
-``format="png"`` are read (8-bit RGB and 16-bit greyscale, non-interlaced, every row filter)
-and the CLI and the bench write pictures, so the base client needs no imaging library."""
+"""The PNG images of the wire protocol (``render`` with ``format="png"``): a small reader and
+writer on zlib from the standard library (8-bit RGB and 16-bit greyscale, non-interlaced,
+every row filter on reading). The daemon writes them, the SDK reads them, and the CLI and
+the bench write pictures, so neither side needs an imaging library."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ import zlib
 
 import numpy as np
 
-from galton.protocol import OperationFailedError
+from galton.protocol.errors import OperationFailedError
 
 SIGNATURE = b"\x89PNG\r\n\x1a\n"
 # colour type -> channels: 0 greyscale, 2 RGB, 4 grey + alpha, 6 RGBA
