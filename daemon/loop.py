@@ -16,14 +16,11 @@ from collections.abc import Callable
 from contextlib import AbstractContextManager, nullcontext
 from typing import Any
 
-import numpy as np
-
-from galton.daemon import loop_status, side_jobs, time_control
+from galton.daemon import job_results, loop_status, side_jobs, time_control
 from galton.daemon.calls import Call, StepJob, Task
 from galton.daemon.handlers import HANDLERS
 from galton.daemon.limits import DEFAULT_LIMITS, Limits
 from galton.daemon.monitor import Pacer, ProcessMonitor, RtfWindow
-from galton.daemon.ops_joints import joint_states
 from galton.daemon.snapshot_slots import SnapshotSlots
 from galton.daemon.world import World
 from galton.protocol import (
@@ -40,7 +37,6 @@ from galton.protocol import (
     decode_request,
     encode_reply,
     error_reply,
-    pack_f64,
 )
 from galton.protocol.errors import brief, did_you_mean
 from galton.protocol.operations import OPERATIONS, Operation, operation
@@ -377,24 +373,16 @@ class SimLoop:
         self.refresh_clock()
         if job is not None:
             job.remaining -= count
-            if job_done or (checking and self._at_rest(job)):
+            if job_done or (checking and job_results.at_rest(self.world, job)):
                 self.job = None
                 self._finish_job(job)
-
-    def _at_rest(self, job: StepJob) -> bool:
-        """Whether every body the job reads moves slower than its rest speed."""
-        try:
-            _, twists = self.world.get_states(job.read or [])
-        except RemoteError:
-            return True  # one was deleted: finish now, the reply says which
-        return _resting(twists, job)
 
     def _finish_job(self, job: StepJob) -> None:
         """Answer a finished step request: {steps}, and the states it asked to read (after
         the last step, verified), and with until_rest whether they rest (a prediction: its
         samples). A body deleted meanwhile fails the read, not the steps."""
         try:
-            result = self._job_result(job)
+            result = job_results.job_result(job.world or self.world, job)
         except RemoteError as error:
             error.details["steps_done"] = job.done
             self.reply_error(job.call, error)
@@ -403,20 +391,6 @@ class SimLoop:
             if job.scratch and job.world is not None:
                 job.world.engine.close()
         self._reply_ok(job.call, result)
-
-    def _job_result(self, job: StepJob) -> dict[str, Any]:
-        if job.sampler is not None:
-            return job.sampler.result(job.done)
-        world = job.world or self.world
-        result: dict[str, Any] = {"steps": job.done}
-        if job.read is not None:
-            poses, twists = world.get_states(job.read)
-            result.update(names=job.read, poses=pack_f64(poses), twists=pack_f64(twists))
-            if job.rest is not None:
-                result["at_rest"] = _resting(twists, job)
-        if job.read_joints is not None:
-            result["joints"] = joint_states(world, job.read_joints, "read_joints")
-        return result
 
     def finish_job(self, job: StepJob) -> None:
         """A side world's job is done (daemon/side_jobs.py)."""
@@ -457,8 +431,3 @@ class SimLoop:
         """Answer a status request on the caller's thread (daemon/loop_status.py)."""
         loop_status.answer_status(self, call)
 
-
-def _resting(twists: np.ndarray, job: StepJob) -> bool:
-    """Every body's linear speed under the job's rest speed."""
-    assert job.rest is not None
-    return bool((np.linalg.norm(twists[:, :3], axis=1) < job.rest.speed).all())

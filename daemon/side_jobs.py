@@ -7,8 +7,7 @@ from __future__ import annotations
 import time
 from typing import TYPE_CHECKING
 
-import numpy as np
-
+from galton.daemon import job_results
 from galton.daemon.calls import StepJob
 from galton.protocol import PhysicsError, RemoteError
 
@@ -33,7 +32,8 @@ def run_chunk(loop: SimLoop, job: StepJob) -> None:
         finished = job.remaining == 0
         if job.sampler is not None and job.done % job.sampler.every == 0:
             job.sampler.take(world)
-        resting = job.rest is not None and job.done % job.rest.every == 0 and _at_rest(job)
+        checking = job.rest is not None and job.done % job.rest.every == 0
+        resting = checking and job_results.at_rest(world, job)
         if finished or resting:
             world.verify()
     except RemoteError as error:  # a diverged side world fails its job, not the daemon
@@ -42,15 +42,6 @@ def run_chunk(loop: SimLoop, job: StepJob) -> None:
     if finished or resting:
         loop.job = None
         loop.finish_job(job)
-
-
-def _at_rest(job: StepJob) -> bool:
-    assert job.world is not None and job.rest is not None
-    try:
-        _, twists = job.world.get_states(job.read or [])
-    except RemoteError:
-        return True
-    return bool((np.linalg.norm(twists[:, :3], axis=1) < job.rest.speed).all())
 
 
 def end(loop: SimLoop, job: StepJob, error: RemoteError) -> None:
