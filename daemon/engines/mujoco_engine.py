@@ -26,7 +26,8 @@ spec are plain functions of the engine in their own modules: ``mujoco_spawn``,
 (update, properties, MuJoCo's contact rules); ``mujoco_entity`` holds what they share.
 Loaded models' joints, with one actuator each holding a target, are kept by
 ``mujoco_joints``, wrenches by ``mujoco_wrench``; both books are written again into the
-compiled model after every compile.
+compiled model after every compile. The compile in place and the rows it indexes are in
+``mujoco_compile``; stepping, its periodic looks and the rewind in ``mujoco_time``.
 Cameras, rays and contacts (``mujoco_render``, ``mujoco_sensing``) see entities only, never
 parked bodies.
 
@@ -67,6 +68,7 @@ from galton.daemon.engine import (
     Engine,
 )
 from galton.daemon.engines import mujoco_clone as cloning
+from galton.daemon.engines import mujoco_compile as compiling
 from galton.daemon.engines import mujoco_models as models
 from galton.daemon.engines import mujoco_pool as mp
 from galton.daemon.engines import mujoco_props as mpr
@@ -78,10 +80,11 @@ from galton.daemon.engines import mujoco_spawn as adding
 from galton.daemon.engines import mujoco_spec as ms
 from galton.daemon.engines import mujoco_state as mst
 from galton.daemon.engines import mujoco_teleport as teleport
+from galton.daemon.engines import mujoco_time as timing
+from galton.daemon.engines import mujoco_wrench as wrench
 from galton.daemon.engines.mujoco_balance import BalanceGuard
-from galton.daemon.engines.mujoco_entity import HOME, MUJOCO_ERRORS, Entity, mujoco_error
+from galton.daemon.engines.mujoco_entity import HOME, Entity
 from galton.daemon.engines.mujoco_joints import Joints
-from galton.daemon.engines.mujoco_state import FREE
 from galton.daemon.engines.mujoco_wrench import Wrenches
 from galton.daemon.params import check_updates
 from galton.protocol import (
@@ -93,7 +96,6 @@ from galton.protocol import (
     EntityInfo,
     JointInfo,
     NotFoundError,
-    OperationFailedError,
 )
 
 FEATURES = (FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDATE_MASS,
@@ -105,10 +107,6 @@ FEATURES = (FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDATE_MAS
 # Contacts at which MuJoCo's worker threads start helping, and below which they stop.
 WORKERS_ON_CONTACTS = 400
 WORKERS_OFF_CONTACTS = 200
-# Steps of the world between two looks at the contact count and at balls asleep on a crown.
-# Counted across requests, so the looks fall on the same steps however the steps are split
-# into requests (a step(1) loop or one long run_until give the same trajectory).
-LOOK_EVERY_STEPS = 50
 
 
 class MujocoEngine(Engine):
@@ -160,22 +158,7 @@ class MujocoEngine(Engine):
         self._reindex()
 
     def _compile(self, nbody: int | None = None, nv: int | None = None) -> None:
-        """Compile the edited spec in place, keeping the state, with an arena for ``nbody``
-        bodies and ``nv`` degrees of freedom (the model's own by default). On failure the
-        model and data in use are untouched; raise with MuJoCo's words. (Reindex after.)"""
-        self._xml = None
-        m = self._model
-        memory = self._spec.memory
-        self._spec.memory = ms.arena_bytes(m.nbody if nbody is None else nbody,
-                                           m.nv if nv is None else nv)
-        try:
-            self._model, self._data = self._spec.recompile(self._model, self._data)
-        except MUJOCO_ERRORS as exc:
-            self._spec.memory = memory
-            raise mujoco_error(exc, "MuJoCo rejected the change") from exc
-        self._workers = 0  # the recompiled MjData has no thread pool
-        self._pool_edited = False
-        self._start_workers()
+        compiling.compile_in_place(self, nbody, nv)
 
     def _start_workers(self) -> None:
         """Size the current MjData's thread pool (a new MjData starts with none).
@@ -218,22 +201,11 @@ class MujocoEngine(Engine):
             raise NotFoundError(f"no body named {exc.args[0]!r} in the MuJoCo world") from exc
 
     def _geom_ids(self, names: Sequence[str]) -> np.ndarray:
-        """Every geom of these entities: a spawned body's one, a model's whole subtree."""
-        m = self._model
-        ids = self._body_ids(names)
-        spawned = np.fromiter((self._entities[n].source == "spawn" for n in names), dtype=bool,
-                              count=len(names))
-        gids = [m.body_geomadr[ids[spawned]]]
-        if not spawned.all():
-            gids.append(np.flatnonzero(np.isin(m.body_rootid[m.geom_bodyid], ids[~spawned])))
-        return np.concatenate(gids)
+        return compiling.geom_ids(self, names)
 
     def _watched(self) -> np.ndarray:
-        """qpos rows of the entities' free bodies' positions (parked ones are no entities)."""
         if self._watch is None:
-            ids = np.fromiter(self._ids.values(), dtype=np.int64, count=len(self._ids))
-            free = ids[self._index.kind[ids] == FREE]
-            self._watch = (self._index.qadr[free][:, None] + np.arange(3)).ravel()
+            self._watch = compiling.watched_rows(self)
         return self._watch
 
     # -- Engine: description & parameters ------------------------------------------------
@@ -305,59 +277,21 @@ class MujocoEngine(Engine):
         self._xml = None
         mpr.update(self, names, props)
 
-    # -- Engine: time ---------------------------------------------------------------------
+    # -- Engine: time (mujoco_time) --------------------------------------------------------
     def step(self, count: int) -> None:
-        """MuJoCo's own errors in a step (its arena overflowing) leave the data unusable:
-        the world reads as diverged until cleared."""
-        self._warnings[ms.DIVERGENCE_WARNINGS] = 0
-        while count > 0:
-            run = min(count, LOOK_EVERY_STEPS - self._steps_since_look)
-            try:
-                mujoco.mj_step(self._model, self._data, run)
-            except mujoco.FatalError as exc:
-                self._broken = True
-                raise OperationFailedError(f"MuJoCo failed in a step ({exc}); the world "
-                                           "must be reset") from exc
-            count -= run
-            self._steps_since_look += run
-            if self._steps_since_look == LOOK_EVERY_STEPS:
-                self._look()
-        self._diverged |= bool(self._warnings[ms.DIVERGENCE_WARNINGS].any())
+        timing.step(self, count)
 
     def _look(self) -> None:
-        """The periodic look: worker threads for a crowd, balls balanced on a crown. It
-        costs about 40 µs, twice a small world's step, so never once per step."""
-        self._steps_since_look = 0
-        self._track_crowding()
-        if self._balance is not None:
-            self._balance.check(self._model, self._data)
+        timing.look(self)
 
     def state_within(self, max_position: float, max_speed: float) -> bool:
-        """numpy over qpos, qvel and mocap (see mujoco_state.within); MuJoCo's own warnings
-        of a blow-up, or a world left half-changed by a failed delete, count as diverged."""
-        if self._diverged or self._broken:
-            return False
-        return mst.within(self._data, self._index, self._watched(), max_position, max_speed)
+        return timing.state_within(self, max_position, max_speed)
 
     def reset_dynamics(self) -> None:
-        """Forget warm starts; also clear what a divergence left beyond the entities' roots."""
-        m, d = self._model, self._data
-        bad = ~np.isfinite(d.qpos)
-        d.qpos[bad] = m.qpos0[bad]
-        d.qvel[~np.isfinite(d.qvel)] = 0.0
-        d.qacc_warmstart[:] = 0.0
-        d.qacc[:] = 0.0
-        mst.wake_all(m, d)
-        self._diverged = False
-        self._restart_looks()
+        timing.reset_dynamics(self)
 
     def _restart_looks(self) -> None:
-        """The periodic looks start over, with a fresh balance guard: a rewound or cleared
-        world replays its trajectory exactly."""
-        self._steps_since_look = 0
-        if self._balance is not None:
-            self._balance.release_all(self._model)
-            self._balance = self._balance_guard()
+        timing.restart_looks(self)
 
     # -- Engine: joints and wrenches (mujoco_joints, mujoco_wrench) ------------------------
     def joints(self) -> list[JointInfo]:
@@ -379,26 +313,13 @@ class MujocoEngine(Engine):
 
     def set_wrenches(self, names: Sequence[str], wrenches: np.ndarray,
                      points: np.ndarray | None) -> None:
-        """The centres of mass are computed from the current state (the data's were taken
-        before the last step's integration)."""
-        ids = self._body_ids(names)
-        if points is not None:
-            mujoco.mj_kinematics(self._model, self._data)
-        self._wrenches.hold(self._data, names, ids, wrenches, points)
-        self._wrenches.apply(self._data, self._ids)
+        wrench.set_wrenches(self, names, wrenches, points)
 
     def clear_wrenches(self, names: Sequence[str] | None) -> None:
-        if names is not None:
-            self._body_ids(names)
-        self._wrenches.drop(names)
-        self._wrenches.apply(self._data, self._ids)
+        wrench.clear_wrenches(self, names)
 
     def restore_joints(self) -> None:
-        roots = np.fromiter((self._ids[n] for n in self._joints.infos), dtype=np.int64,
-                            count=len(self._joints.infos))
-        self._joints.restore(self._model, self._data, roots)
-        self._wrenches.drop(None)
-        self._wrenches.apply(self._data, self._ids)
+        wrench.restore_joints(self)
 
     # -- Engine: snapshots (mujoco_snapshot) -----------------------------------------------
     def snapshot(self, *, canonical: bool = True) -> dict[str, Any]:

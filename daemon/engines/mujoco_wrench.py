@@ -10,9 +10,13 @@ the body ids (a compile, a delete), so a parked or removed body keeps no force.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
+
+if TYPE_CHECKING:
+    from galton.daemon.engines.mujoco_engine import MujocoEngine
 
 
 class Wrenches:
@@ -44,3 +48,32 @@ class Wrenches:
             rows = np.fromiter((ids[n] for n in self.held), dtype=np.int64,
                                count=len(self.held))
             d.xfrc_applied[rows] = np.array(list(self.held.values()))
+
+
+def set_wrenches(engine: MujocoEngine, names: Sequence[str], wrenches: np.ndarray,
+                 points: np.ndarray | None) -> None:
+    """The centres of mass are computed from the current state (the data's were taken
+    before the last step's integration)."""
+    ids = engine._body_ids(names)
+    if points is not None:
+        mujoco.mj_kinematics(engine._model, engine._data)
+    engine._wrenches.hold(engine._data, names, ids, wrenches, points)
+    engine._wrenches.apply(engine._data, engine._ids)
+
+
+def clear_wrenches(engine: MujocoEngine, names: Sequence[str] | None) -> None:
+    """Drop the named bodies' wrenches (NotFoundError for an unknown name), or all."""
+    if names is not None:
+        engine._body_ids(names)
+    engine._wrenches.drop(names)
+    engine._wrenches.apply(engine._data, engine._ids)
+
+
+def restore_joints(engine: MujocoEngine) -> None:
+    """Every loaded model's joints back as loaded, no targets held, no wrenches."""
+    joints = engine._joints
+    roots = np.fromiter((engine._ids[n] for n in joints.infos), dtype=np.int64,
+                        count=len(joints.infos))
+    joints.restore(engine._model, engine._data, roots)
+    engine._wrenches.drop(None)
+    engine._wrenches.apply(engine._data, engine._ids)
