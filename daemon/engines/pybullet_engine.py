@@ -27,11 +27,12 @@ Rewinding: ``reset_dynamics`` rebuilds the world too, every body made again as i
 made, so that a stopped world replays its first run bit for bit (Bullet would otherwise keep
 contact points and their warm starts across the teleport).
 
-The engine's parts: this module (bodies, states, models), ``Parameters``
+The engine's parts: this module (bodies, models), ``Parameters``
 (pybullet_params.py), ``Rebuilding`` (pybullet_rebuild.py), ``Articulated`` (joints,
 pybullet_articulated.py), ``Snapshots`` (pybullet_snapshot.py) and ``Perception``
 (render, raycast, contacts: pybullet_perception.py). Plain functions do the rest:
-a spawn group's values and books (pybullet_spawn.py), a body's updates and properties
+states and the divergence check (pybullet_states.py), a spawn group's values and books
+(pybullet_spawn.py), a body's updates and properties
 (pybullet_props.py), a model load's checks and names (pybullet_models.py).
 """
 
@@ -71,9 +72,10 @@ from galton.daemon.engine import (
 from galton.daemon.engines import pybullet_props as bodyprops
 from galton.daemon.engines import pybullet_rebuild as rebuild
 from galton.daemon.engines import pybullet_spawn as spawning
+from galton.daemon.engines import pybullet_states as states
 from galton.daemon.engines.pybullet_articulated import Articulated
 from galton.daemon.engines.pybullet_calls import engine_call
-from galton.daemon.engines.pybullet_frames import Offset, com_to_frame
+from galton.daemon.engines.pybullet_frames import Offset
 from galton.daemon.engines.pybullet_models import MODEL_FORMATS
 from galton.daemon.engines.pybullet_params import SPECS, Parameters
 from galton.daemon.engines.pybullet_perception import Perception
@@ -276,62 +278,22 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
         except KeyError as exc:
             raise NotFoundError(f"no entity named {exc.args[0]!r} in the PyBullet world") from None
 
-    # -- state ----------------------------------------------------------------------------
+    # -- state (pybullet_states.py) --------------------------------------------------------
     @engine_call
     def get_states(self, names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
         """Link frames, not PyBullet's centres of mass (pybullet_frames.py)."""
-        links = self._robots.links
-        if links and any(name in links for name in names):
-            return self._states_with_links(names)
-        poses, twists = self._read([b.uid for b in self._lookup(names)])
-        if self._held:  # right after a rebuild: the states as they were before it
-            rebuild.report_held(self._held, names, poses, twists)
-        if self._frames:
-            rows = [k for k, name in enumerate(names) if name in self._frames]
-            if rows:
-                some_poses, some_twists = poses[rows], twists[rows]
-                com_to_frame(some_poses, some_twists, [self._frames[names[k]] for k in rows])
-                poses[rows], twists[rows] = some_poses, some_twists
-        return poses, twists
+        return states.get_states(self, names)
 
     def _states_with_links(self, names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
-        links = self._robots.links
-        rows = [k for k, name in enumerate(names) if name in links]
-        others = [k for k, name in enumerate(names) if name not in links]
-        poses, twists = np.zeros((len(names), POSE_WIDTH)), np.zeros((len(names), TWIST_WIDTH))
-        if others:
-            poses[others], twists[others] = self.get_states([names[k] for k in others])
-        self._link_states(names, rows, poses, twists)
-        return poses, twists
+        return states.states_with_links(self, names)
 
     def _read(self, ids: list[int]) -> tuple[np.ndarray, np.ndarray]:
-        """One call per body and per quantity (PyBullet has no batch getter): the nested
-        tuples are flattened straight into numpy, the cheapest way measured."""
-        n, flat = len(ids), itertools.chain.from_iterable
-        poses = np.fromiter(flat(flat(map(self._get_pose, ids))), float, n * POSE_WIDTH)
-        twists = np.fromiter(flat(flat(map(self._get_velocity, ids))), float, n * TWIST_WIDTH)
-        return poses.reshape(n, POSE_WIDTH), twists.reshape(n, TWIST_WIDTH)
+        return states.read(self, ids)
 
     @engine_call
     def set_states(self, names: Sequence[str], poses: np.ndarray | None,
                    twists: np.ndarray | None) -> None:
-        """A pose alone keeps each body's twist, a twist alone its pose, as on every engine:
-        resetBasePositionAndOrientation zeroes the twist, so it is read first and set again."""
-        ids = [b.uid for b in self._lookup(names)]
-        if self._held:
-            rebuild.release_held(self._held, names, poses is not None, twists is not None)
-        if self._frames and any(name in self._frames for name in names):
-            poses, twists = self._to_centres(names, poses, twists)
-        if poses is not None:
-            rows = np.asarray(poses, dtype=float).tolist()
-            if twists is None:
-                twists = self._read(ids)[1]
-            for uid, pose in zip(ids, rows, strict=True):
-                self._reset_pose(uid, pose[:3], pose[3:])
-            self._given.update(zip(names, rows, strict=True))
-        if twists is not None:
-            for uid, twist in zip(ids, np.asarray(twists, dtype=float).tolist(), strict=True):
-                self._reset_velocity(uid, twist[:3], twist[3:])
+        states.set_states(self, names, poses, twists)
 
     @engine_call
     def step(self, count: int) -> None:
@@ -351,18 +313,7 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
 
     @engine_call
     def state_within(self, max_position: float, max_speed: float) -> bool:
-        """Static bodies cannot move in a step, so only the others are read: a board's
-        hundreds of pins cost nothing here. Bullet itself reports no divergence: a ball at
-        x = 4e299 is finite, and falls on there as if nothing were wrong."""
-        moving = [b.uid for b in self._bodies.values() if not b.static]
-        if not self._joints_finite():
-            return False
-        if not moving:
-            return True
-        poses, twists = self._read(moving)
-        return bool(np.isfinite(poses).all() and np.isfinite(twists).all()
-                    and np.abs(poses[:, :3]).max() <= max_position
-                    and np.abs(twists).max() <= max_speed)
+        return states.state_within(self, max_position, max_speed)
 
     @engine_call
     def properties(self, names: Sequence[str]) -> np.ndarray:
