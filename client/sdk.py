@@ -41,7 +41,6 @@ from galton.client.telemetry import Subscription, TelemetryStream, subscribe_eve
 from galton.client.values import JointStates, Stamp, States
 from galton.protocol import (
     POSE_WIDTH,
-    TWIST_WIDTH,
     BodyGroup,
     BodyProperties,
     Capabilities,
@@ -51,7 +50,6 @@ from galton.protocol import (
     Reply,
     SimStatus,
     Telemetry,
-    pack_f64,
 )
 from galton.protocol.errors import ClientClosedError
 from galton.protocol.keys import client_token_key
@@ -269,16 +267,13 @@ class Client(WorldMethods, PerceptionMethods):
     def get_states(self, names: Sequence[str] | None = None) -> States:
         """States of these bodies (all when None) in one request."""
         return States.from_reply(
-            self._ok("get_states", {} if names is None else {"names": list(names)}))
+            self._ok("get_states", sdk_joints.names_arg(names)))
 
-    def set_states(self, names: Sequence[str], poses: np.ndarray | None = None,
-                   twists: np.ndarray | None = None) -> Stamp:
-        args: dict[str, Any] = {"names": list(names)}
-        if poses is not None:
-            args["poses"] = pack_f64(np.asarray(poses, dtype=float).reshape(-1, POSE_WIDTH))
-        if twists is not None:
-            args["twists"] = pack_f64(np.asarray(twists, dtype=float).reshape(-1, TWIST_WIDTH))
-        return Stamp.of(self._ok("set_states", args))
+    def set_states(self, names: Sequence[str], poses: ArrayLike | None = None,
+                   twists: ArrayLike | None = None) -> Stamp:
+        """Poses (rows of 7) and/or twists (rows of 6); a single row is given to every body."""
+        return Stamp.of(self._ok("set_states",
+                                 sdk_joints.set_states_args(names, poses, twists)))
 
     def update(self, names: Sequence[str], **properties: Any) -> Stamp:
         """Change mass, friction, restitution, rgba or tags of these entities."""

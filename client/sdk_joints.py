@@ -18,7 +18,13 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from galton.protocol import WRENCH_WIDTH, InvalidArgumentError, pack_f64
+from galton.protocol import (
+    POSE_WIDTH,
+    TWIST_WIDTH,
+    WRENCH_WIDTH,
+    InvalidArgumentError,
+    pack_f64,
+)
 
 POINT_WIDTH = 3  # x y z, world frame
 SearchPath = str | os.PathLike[str] | Sequence[str | os.PathLike[str]]
@@ -106,6 +112,18 @@ def set_joint_targets_args(names: Sequence[str], mode: str, targets: ArrayLike |
     for key, values in given.items():
         if values is not None:
             args[key] = joint_values(values, count, key)
+    return args
+
+
+def set_states_args(names: Sequence[str], poses: ArrayLike | None,
+                    twists: ArrayLike | None) -> dict[str, Any]:
+    """A ``set_states`` request's arguments (rows of 7 and 6; one row for every body)."""
+    count = len(names)
+    args: dict[str, Any] = {"names": list(names)}
+    if poses is not None:
+        args["poses"] = body_rows(poses, count, POSE_WIDTH, "set_states.poses")
+    if twists is not None:
+        args["twists"] = body_rows(twists, count, TWIST_WIDTH, "set_states.twists")
     return args
 
 

@@ -173,14 +173,7 @@ def predict_args(horizon: float, every: float | None, read: Sequence[str] | None
 
 def set_states_args(names: Sequence[str], poses: ArrayLike | None = None,
                     twists: ArrayLike | None = None) -> dict[str, Any]:
-    """A ``set_states`` request's arguments (rows of 7 and 6; one row for every body)."""
-    count = len(names)
-    args: dict[str, Any] = {"names": list(names)}
-    if poses is not None:
-        args["poses"] = sdk_joints.body_rows(poses, count, POSE_WIDTH, "set_states.poses")
-    if twists is not None:
-        args["twists"] = sdk_joints.body_rows(twists, count, TWIST_WIDTH, "set_states.twists")
-    return args
+    return sdk_joints.set_states_args(names, poses, twists)
 
 
 def joint_targets_args(names: Sequence[str], mode: str, targets: ArrayLike | None = None,
