@@ -359,11 +359,13 @@ class SimLoop:
         return max(1, min(10_000, int(CHUNK_WALL_S / self._step_cost)))
 
     def _run_steps(self, count: int) -> None:
+        """Take ``count`` steps of the live world; they count towards a live step job only
+        (a side world's job runs its own steps, daemon/side_jobs.py)."""
         started = time.perf_counter()
         self.world.step(count)
         now = time.perf_counter()
         self._step_cost = 0.8 * self._step_cost + 0.2 * max((now - started) / count, 1e-7)
-        job = self.job
+        job = self.job if self.job is not None and self.job.world is None else None
         job_done = job is not None and job.remaining == count
         checking = job is not None and job.rest is not None and (
             (job.done + count) % job.rest.every == 0)
