@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from test_mujoco_snapshot import (
+from support_mujoco_worlds import (
     ALONG_Y,
     SEED,
     assert_same_runs,
@@ -16,7 +16,11 @@ from test_mujoco_snapshot import (
     bodies,
     floor,
     kuka,
+    kuka_under_targets,
     pile,
+    pile_requests,
+    retarget,
+    settled_pile,
     state,
     steps,
 )
@@ -50,39 +54,20 @@ def churn(engine: MujocoEngine) -> None:
 
 def test_a_pile_in_contact_and_asleep_goes_on_bit_identically(
         engine: MujocoEngine, rng: np.random.Generator) -> None:
-    engine.spawn([floor()])
-    pile(engine, rng)
-    engine.step(1500)
-    assert (engine._data.tree_asleep >= 0).any() and engine._data.ncon > 0
+    settled_pile(engine, rng)
     twin = engine.clone()
     assert_same_world(engine, twin)
     assert twin._data.ncon == engine._data.ncon
-    assert_same_runs(engine, twin, [steps(1), steps(200), lambda e: e.set_states(
-        ["s3"], np.array([[0, 0, 1.0, 0, 0, 0, 1]]), np.array([[0, 0, -1.0, 0, 0, 3]])),
-        steps(400), lambda e: e.reset_dynamics(), steps(100)])
+    assert_same_runs(engine, twin, pile_requests())
 
 
 def test_a_kuka_under_targets_and_a_wrench_goes_on_bit_identically(
         engine: MujocoEngine, rng: np.random.Generator) -> None:
-    engine.spawn([floor()])
-    joints = kuka(engine)
-    pile(engine, rng, count=10)
-    n = len(joints)
-    engine.set_joint_targets(joints, "position", np.linspace(-0.5, 0.5, n), np.full(n, 300.0),
-                             np.full(n, 20.0), np.full(n, np.inf))
-    engine.set_wrenches(["k/lbr_iiwa_link_7"], np.array([[0, 0, 5.0, 0, 0, 1.0]]),
-                        np.array([[0.0, 0.0, 1.2]]))
-    engine.step(300)
+    joints = kuka_under_targets(engine, rng)
     twin = engine.clone()
     assert_same_world(engine, twin)
     assert twin.joints() == engine.joints()
-
-    def retarget(e: MujocoEngine) -> None:
-        e.set_joint_targets(joints[:2], "velocity", np.ones(2), np.zeros(2), np.full(2, 5.0),
-                            np.full(2, 50.0))
-        e.clear_wrenches(None)
-
-    assert_same_runs(engine, twin, [steps(200), retarget, steps(200), lambda e: e.delete(
+    assert_same_runs(engine, twin, [steps(200), retarget(joints), steps(200), lambda e: e.delete(
         ["s1", "k/lbr_iiwa_link_0"]), steps(100), lambda e: e.restore_joints(), steps(50)])
 
 
