@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from galton.client.sdk_joints import float_array
 from galton.client.values import Contacts, Image, RayHits
 from galton.protocol import InvalidArgumentError, Reply, pack_f64
 
@@ -49,7 +50,7 @@ def camera(eye: ArrayLike, target: ArrayLike, *, up: ArrayLike | None = None,
 
 
 def _vector(value: ArrayLike, name: str) -> list[float]:
-    array = np.asarray(value, dtype=float).reshape(-1)
+    array = float_array(value, f"a camera's {name}").reshape(-1)
     if array.shape != (3,):
         raise InvalidArgumentError(f"a camera's {name} holds 3 numbers, got {value!r}")
     return [float(v) for v in array]
@@ -57,7 +58,7 @@ def _vector(value: ArrayLike, name: str) -> list[float]:
 
 def _rows(value: ArrayLike, name: str) -> np.ndarray:
     """Points or vectors as (n, 3) float64 (one row may be given alone)."""
-    array = np.asarray(value, dtype=np.float64)
+    array = float_array(value, f"raycast {name}")
     if array.ndim == 1:
         array = array.reshape(1, -1)
     if array.ndim != 2 or array.shape[1] != 3:
