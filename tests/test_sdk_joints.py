@@ -21,32 +21,12 @@ from galton.client import (
     spheres,
 )
 from galton.client.sdk_joints import body_rows, joint_values, search_path_arg
+from galton.daemon.engine_check_joints import RIG  # the checker's rig: base, hinge, slider, tip
 from galton.protocol import unpack_f64
 
 KUKA = Path(pybullet_data.getDataPath()) / "kuka_iiwa" / "model.urdf"
 KUKA_JOINTS = [f"lbr_iiwa_joint_{i}" for i in range(1, 8)]
 FLANGE = "lbr_iiwa_link_7"
-
-
-def link(name: str, mass: float = 1.0) -> str:
-    """A URDF link: a 0.1 m box (visual and collision) of this mass."""
-    box = '<geometry><box size="0.1 0.1 0.1"/></geometry>'
-    return (f'<link name="{name}"><inertial><mass value="{mass}"/><inertia ixx="0.01" '
-            'ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial>'
-            f'<visual>{box}</visual><collision>{box}</collision></link>')
-
-
-# A base, an arm on a hinge (about y), a slider along the arm, a tip mounted fixed on it.
-RIG = f"""<robot name="rig">
-  {link("base", 2.0)}{link("arm")}{link("carriage", 0.5)}{link("tip", 0.1)}
-  <joint name="hinge" type="revolute"><parent link="base"/><child link="arm"/>
-    <origin xyz="0 0 1"/><axis xyz="0 1 0"/>
-    <limit lower="-1.5" upper="1.5" effort="50" velocity="5"/></joint>
-  <joint name="slider" type="prismatic"><parent link="arm"/><child link="carriage"/>
-    <axis xyz="1 0 0"/><limit lower="-0.2" upper="0.4" effort="20" velocity="1"/></joint>
-  <joint name="mount" type="fixed"><parent link="carriage"/><child link="tip"/>
-    <origin xyz="0 0 -0.1"/></joint>
-</robot>"""
 
 
 def load_kuka(sim: Client, **options: object) -> list[str]:
