@@ -29,7 +29,15 @@ from typing import Any
 
 import numpy as np
 import pybullet_data
-from common import ENGINES, daemon_client, machine, percentiles_ms, timed, write_json
+from common import (
+    ENGINES,
+    daemon_client,
+    machine,
+    p50_p99,
+    percentiles_ms,
+    timed,
+    write_json,
+)
 
 from galton.analysis.board import BallSpec, BoardSpec
 from galton.analysis.board_release import release_schedule
@@ -172,8 +180,7 @@ def report(results: list[dict[str, Any]]) -> None:
           "restore p50/p99 (ms) | fork p50/p99 (ms) | 1 s predict p50/p99 (ms) |")
     print("| --- | --- | --- | --- | --- | --- | --- | --- | --- |")
     for r in results:
-        cells = [f"{r[k]['p50']:.2f} / {r[k]['p99']:.2f}"
-                 for k in ("snapshot", "restore", "fork", "predict_1s")]
+        cells = [p50_p99(r[k]) for k in ("snapshot", "restore", "fork", "predict_1s")]
         print(f"| {r['engine']} | {r['bodies']} | {r['blob_bytes']} | "
               f"{r['bytes_per_body']:.0f} | {r['bytes_per_ball']:.0f} | " + " | ".join(cells)
               + " |")

@@ -6,7 +6,7 @@ import json
 import platform
 import statistics
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -48,6 +48,11 @@ def percentiles_ms(samples: list[float]) -> dict[str, float]:
     data = np.asarray(samples) * 1e3
     return {"p50": float(np.percentile(data, 50)), "p99": float(np.percentile(data, 99)),
             "mean": float(statistics.fmean(data)), "n": len(samples)}
+
+
+def p50_p99(p: Mapping[str, float], digits: int = 2) -> str:
+    """A ``percentiles_ms`` result as the tables' "p50 / p99" cell."""
+    return f"{p['p50']:.{digits}f} / {p['p99']:.{digits}f}"
 
 
 def machine() -> str:

@@ -28,7 +28,15 @@ from typing import Any
 
 import numpy as np
 import pybullet_data
-from common import ENGINES, daemon_client, machine, percentiles_ms, timed, write_json
+from common import (
+    ENGINES,
+    daemon_client,
+    machine,
+    p50_p99,
+    percentiles_ms,
+    timed,
+    write_json,
+)
 
 from galton.client import Client
 from galton.daemon.engines import create_engine
@@ -161,7 +169,7 @@ def print_tables(results: list[dict[str, Any]], args: argparse.Namespace) -> Non
 
 
 def _pair(p: dict[str, Any]) -> str:
-    return f"{p['p50']:.3f} / {p['p99']:.3f} ms"
+    return f"{p50_p99(p, 3)} ms"
 
 
 def main() -> None:

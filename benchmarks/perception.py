@@ -24,7 +24,15 @@ import time
 from typing import Any
 
 import numpy as np
-from common import ENGINES, daemon_client, machine, percentiles_ms, timed, write_json
+from common import (
+    ENGINES,
+    daemon_client,
+    machine,
+    p50_p99,
+    percentiles_ms,
+    timed,
+    write_json,
+)
 
 from galton.analysis.board import BallSpec, BoardSpec
 from galton.analysis.board_release import release_schedule
@@ -187,7 +195,7 @@ def print_tables(results: list[dict[str, Any]], args: argparse.Namespace) -> Non
 
 
 def _pair(p: dict[str, Any]) -> str:
-    return f"{p['p50']:.2f} / {p['p99']:.2f} ms"
+    return f"{p50_p99(p, 2)} ms"
 
 
 def main() -> None:
