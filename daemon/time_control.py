@@ -101,10 +101,9 @@ def set_rtf(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
 
 def pause(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
     world = loop.world_for(args)
-    if world is not loop.world:
-        _cancel_job_on(loop, world, "paused")
-        return side_status(loop, world).to_wire()
     _cancel_job_on(loop, world, "paused")
+    if world is not loop.world:
+        return side_status(loop, world).to_wire()
     loop.set_state(SimState.PAUSED)
     return loop.status().to_wire()
 
@@ -112,14 +111,11 @@ def pause(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
 def stop(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
     """Pause and rewind: time to 0 and every entity back to the state it was created in."""
     world = loop.world_for(args)
-    if world is not loop.world:
-        _cancel_job_on(loop, world, "stopped")
-        world.reset("state")
-        world.reset("time")
-        return side_status(loop, world).to_wire()
     _cancel_job_on(loop, world, "stopped")
-    loop.world.reset("state")
-    loop.world.reset("time")
+    world.reset("state")
+    world.reset("time")
+    if world is not loop.world:
+        return side_status(loop, world).to_wire()
     _after_reset(loop)
     loop.set_state(SimState.STOPPED)
     return loop.status().to_wire()
@@ -131,8 +127,8 @@ def step(loop: SimLoop, call: Call, args: dict[str, Any]) -> None:
                                    "until_rest and read to stop once bodies rest")
     count = _check_count(args.get("count", 1), loop.limits.max_steps)
     world = loop.world_for(args)
-    _start_job(loop, call, count, _read_list(world, args, "step"),
-               read_joints=_read_joint_list(world, args, "step"), world=world)
+    _start_job(loop, call, world, count, _read_list(world, args, "step"),
+               read_joints=_read_joint_list(world, args, "step"))
 
 
 def run_until(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any] | None:
@@ -152,8 +148,8 @@ def run_until(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]
             f"run_until.sim_time {target} is not after the current sim time "
             f"{world.sim_time}")
     read = _read_list(world, args, "run_until")
-    _start_job(loop, call, count, read, _rest_check(args, read, dt),
-               _read_joint_list(world, args, "run_until"), world)
+    _start_job(loop, call, world, count, read, _rest_check(args, read, dt),
+               _read_joint_list(world, args, "run_until"))
     return None
 
 
@@ -218,15 +214,15 @@ def _read_joint_list(world: World, args: dict[str, Any], where: str) -> list[str
     return names
 
 
-def _start_job(loop: SimLoop, call: Call, count: int, read: list[str] | None = None,
-               rest: RestCheck | None = None, read_joints: list[str] | None = None,
-               world: World | None = None) -> None:
-    live = world is None or world is loop.world
+def _start_job(loop: SimLoop, call: Call, world: World, count: int,
+               read: list[str] | None = None, rest: RestCheck | None = None,
+               read_joints: list[str] | None = None) -> None:
+    live = world is loop.world
     if live and loop.state == SimState.PLAYING:
         raise IncorrectStateError("cannot step while playing: pause first")
     if loop.job is not None:
         raise IncorrectStateError("another step request is still running")
-    (loop.world if live or world is None else world).require_valid()
+    world.require_valid()
     if live and loop.state == SimState.STOPPED:
         loop.set_state(SimState.PAUSED)
     loop.job = StepJob(call, count, count, read, rest, read_joints,
@@ -256,10 +252,9 @@ def cancel_job(loop: SimLoop, reason: str) -> None:
     job, loop.job = loop.job, None
     if job.scratch and job.world is not None:
         job.world.engine.close()
-    done = job.total - job.remaining
     loop.reply_error(job.call, OperationFailedError(
-        f"step request interrupted ({reason}) after {done} of {job.total} steps",
-        {"steps_done": done}))
+        f"step request interrupted ({reason}) after {job.done} of {job.total} steps",
+        {"steps_done": job.done}))
 
 
 def _after_reset(loop: SimLoop) -> None:
