@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 import pytest
+from support_urdf import ARM_URDF
 
 from galton.daemon.engines.pybullet_engine import PybulletEngine
 from galton.protocol import (
@@ -34,21 +35,6 @@ TINY_URDF = """<robot name="crate_bot">
       <inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial>
     <collision><geometry><box size="0.2 0.2 0.2"/></geometry></collision>
   </link>
-</robot>"""
-ARM_URDF = """<robot name="arm">
-  <link name="base">
-    <inertial><mass value="2"/>
-      <inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial>
-    <collision><geometry><box size="0.2 0.2 0.2"/></geometry></collision>
-  </link>
-  <link name="arm">
-    <inertial><mass value="0.5"/>
-      <inertia ixx="0.001" iyy="0.001" izz="0.001" ixy="0" ixz="0" iyz="0"/></inertial>
-    <collision><geometry><box size="0.05 0.05 0.3"/></geometry></collision>
-  </link>
-  <joint name="hinge" type="revolute"><parent link="base"/><child link="arm"/>
-    <origin xyz="0 0 0.25"/><axis xyz="1 0 0"/>
-    <limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
 </robot>"""
 TINY_MJCF = """<mujoco model="pair">
   <worldbody>
