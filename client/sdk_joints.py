@@ -102,9 +102,9 @@ def set_joint_states_args(names: Sequence[str], positions: ArrayLike,
     return args
 
 
-def set_joint_targets_args(names: Sequence[str], mode: str, targets: ArrayLike | None,
-                           kp: ArrayLike | None, kd: ArrayLike | None,
-                           max_effort: ArrayLike | None) -> dict[str, Any]:
+def set_joint_targets_args(names: Sequence[str], mode: str, targets: ArrayLike | None = None,
+                           kp: ArrayLike | None = None, kd: ArrayLike | None = None,
+                           max_effort: ArrayLike | None = None) -> dict[str, Any]:
     """Absent gains are left to the daemon's defaults (kp, kd 0; max_effort infinite)."""
     count = len(names)
     args: dict[str, Any] = {"names": list(names), "mode": mode}
@@ -115,8 +115,8 @@ def set_joint_targets_args(names: Sequence[str], mode: str, targets: ArrayLike |
     return args
 
 
-def set_states_args(names: Sequence[str], poses: ArrayLike | None,
-                    twists: ArrayLike | None) -> dict[str, Any]:
+def set_states_args(names: Sequence[str], poses: ArrayLike | None = None,
+                    twists: ArrayLike | None = None) -> dict[str, Any]:
     """A ``set_states`` request's arguments (rows of 7 and 6; one row for every body)."""
     count = len(names)
     args: dict[str, Any] = {"names": list(names)}
@@ -127,8 +127,9 @@ def set_states_args(names: Sequence[str], poses: ArrayLike | None,
     return args
 
 
-def apply_wrench_args(names: Sequence[str], wrenches: ArrayLike, points: ArrayLike | None,
-                      duration: float | None) -> dict[str, Any]:
+def apply_wrench_args(names: Sequence[str], wrenches: ArrayLike,
+                      points: ArrayLike | None = None,
+                      duration: float | None = None) -> dict[str, Any]:
     """Wrenches are rows fx fy fz tx ty tz (N, N·m), points rows x y z: world frame."""
     count = len(names)
     args: dict[str, Any] = {"names": list(names),

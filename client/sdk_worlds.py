@@ -133,11 +133,11 @@ class WorldMethods:
         (names, wrenches, points, duration)."""
         args = predict_args(horizon, every, read, read_joints, slot)
         if set_states is not None:
-            args["set_states"] = set_states_args(**set_states)
+            args["set_states"] = sdk_joints.set_states_args(**set_states)
         if joint_targets is not None:
-            args["joint_targets"] = joint_targets_args(**joint_targets)
+            args["joint_targets"] = sdk_joints.set_joint_targets_args(**joint_targets)
         if wrenches is not None:
-            args["wrenches"] = wrench_args(**wrenches)
+            args["wrenches"] = sdk_joints.apply_wrench_args(**wrenches)
         return Prediction.from_reply(self._ok("predict", args, timeout))
 
     def compare(self, names: Sequence[str], poses: ArrayLike, twists: ArrayLike | None = None,
@@ -169,22 +169,6 @@ def predict_args(horizon: float, every: float | None, read: Sequence[str] | None
         if names is not None:
             args[key] = list(names)
     return args
-
-
-def set_states_args(names: Sequence[str], poses: ArrayLike | None = None,
-                    twists: ArrayLike | None = None) -> dict[str, Any]:
-    return sdk_joints.set_states_args(names, poses, twists)
-
-
-def joint_targets_args(names: Sequence[str], mode: str, targets: ArrayLike | None = None,
-                       kp: ArrayLike | None = None, kd: ArrayLike | None = None,
-                       max_effort: ArrayLike | None = None) -> dict[str, Any]:
-    return sdk_joints.set_joint_targets_args(names, mode, targets, kp, kd, max_effort)
-
-
-def wrench_args(names: Sequence[str], wrenches: ArrayLike, points: ArrayLike | None = None,
-                duration: float | None = None) -> dict[str, Any]:
-    return sdk_joints.apply_wrench_args(names, wrenches, points, duration)
 
 
 def lockstep(sim: Client, stamps: Iterable[float]) -> Iterator[Stamp]:
