@@ -10,7 +10,7 @@ from collections.abc import Callable, Iterator
 import numpy as np
 import pytest
 from support_models import KUKA_JOINTS, KUKA_KD, KUKA_KP
-from test_pybullet_snapshot import (
+from support_pybullet_worlds import (
     MJCF,
     SEED,
     assert_same_run,
