@@ -284,9 +284,6 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
         """Link frames, not PyBullet's centres of mass (pybullet_frames.py)."""
         return states.get_states(self, names)
 
-    def _states_with_links(self, names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
-        return states.states_with_links(self, names)
-
     def _read(self, ids: list[int]) -> tuple[np.ndarray, np.ndarray]:
         return states.read(self, ids)
 
