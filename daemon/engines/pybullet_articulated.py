@@ -185,9 +185,7 @@ class Articulated:
 
     def set_wrenches(self, names: Sequence[str], wrenches: np.ndarray,
                      points: np.ndarray | None) -> None:
-        for name in names:
-            if name not in self._bodies and name not in self._robots.links:
-                raise NotFoundError(f"no entity named {name!r} in the PyBullet world")
+        self._robots.check_entities(self._bodies, names)
         self._robots.hold_wrenches(self._bc, self._uid_of, names, np.asarray(wrenches, float),
                                    None if points is None else np.asarray(points, float))
 

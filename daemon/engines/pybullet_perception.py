@@ -15,8 +15,6 @@ from galton.daemon.engines.pybullet_calls import engine_call
 from galton.daemon.engines.pybullet_rayshapes import EXACT
 from galton.daemon.engines.pybullet_rebuild import Body
 from galton.daemon.engines.pybullet_robots import Robots
-from galton.protocol import NotFoundError
-from galton.protocol.errors import did_you_mean
 
 
 class Perception:
@@ -47,12 +45,7 @@ class Perception:
     @engine_call
     def contacts(self, names: Sequence[str] | None) -> pybullet_contacts.Contacts:
         """getContactPoints of the last step, normals from the first entity to the second."""
-        codes = self._codes()
+        if names is not None:
+            self._robots.check_entities(self._bodies, names)
         wanted = None if names is None else set(names)
-        if wanted is not None:
-            known = set(codes.values())
-            missing = sorted(wanted - known)
-            if missing:
-                raise NotFoundError(f"no entity named {missing[0]!r} in the PyBullet world"
-                                    f"{did_you_mean(missing[0], sorted(known))}")
-        return pybullet_contacts.contacts(self._bc, codes, wanted)
+        return pybullet_contacts.contacts(self._bc, self._codes(), wanted)

@@ -6,7 +6,7 @@ all by name, so that they outlive a rebuild (which gives every body a new PyBull
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Collection, Iterable, Sequence
 
 import numpy as np
 import pybullet
@@ -32,6 +32,14 @@ class Robots:
         self.wrenches: dict[str, Wrench] = {}  # by entity name: spawned, root or link
 
     # -- books ------------------------------------------------------------------------
+    def check_entities(self, bodies: Collection[str], names: Iterable[str]) -> None:
+        """NotFoundError for a name that is neither a body's (spawned or root) nor a link's."""
+        for name in names:
+            if name not in bodies and name not in self.links:
+                known = sorted([*bodies, *self.links])
+                raise NotFoundError(f"no entity named {name!r} in the PyBullet world"
+                                    f"{did_you_mean(name, known)}")
+
     def add(self, model: Articulation) -> None:
         self.models[model.root] = model
         self.links.update((name, (model.root, j)) for j, name in enumerate(model.links)
