@@ -6,6 +6,7 @@ import contextlib
 import importlib.util
 import signal
 import threading
+import time
 from pathlib import Path
 
 import numpy as np
@@ -159,12 +160,16 @@ def test_sigterm_in_the_middle_of_a_long_spawn_ends_the_daemon() -> None:
                             np.zeros(100_000)])
     with Client(daemon.instance, daemon.endpoint, timeout=120) as client:
         cpu = sum(process.cpu_times()[:2])
+
         def spawn() -> None:
             with contextlib.suppress(GaltonError):  # no reply: the daemon is gone
                 client.spawn(spheres(names, grid, 0.04, static=True), timeout=120)
         request = threading.Thread(target=spawn, daemon=True)
         request.start()
+        deadline = time.monotonic() + 60
         while sum(process.cpu_times()[:2]) - cpu < 0.3:  # the spawn is being worked on
+            assert request.is_alive() and time.monotonic() < deadline, \
+                "the spawn never got under way"
             request.join(0.01)
         daemon.process.send_signal(signal.SIGTERM)
         code = daemon.process.wait(10)
