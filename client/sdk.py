@@ -261,7 +261,7 @@ class Client(WorldMethods, PerceptionMethods):
     def list(self, name: str | None = None, tag: str | None = None,
              kind: str | None = None) -> list[EntityInfo]:
         """Entities matching a name glob, a tag and/or a kind ("static"/"dynamic")."""
-        args = {k: v for k, v in (("name", name), ("tag", tag), ("kind", kind)) if v is not None}
+        args = sdk_joints.given(name=name, tag=tag, kind=kind)
         return [EntityInfo.from_wire(e) for e in self.call("list", args)["entities"]]
 
     def get_states(self, names: Sequence[str] | None = None) -> States:

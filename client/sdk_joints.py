@@ -58,6 +58,11 @@ def body_rows(rows: ArrayLike, count: int, width: int, where: str) -> bytes:
     return pack_f64(array)
 
 
+def given(**values: Any) -> dict[str, Any]:
+    """The arguments that were given: None means "leave it to the daemon's default"."""
+    return {key: value for key, value in values.items() if value is not None}
+
+
 def search_path_arg(search_path: SearchPath) -> str:
     """Folders joined by ':' as the wire wants; a str is taken as already joined."""
     if isinstance(search_path, str):
@@ -70,21 +75,13 @@ def search_path_arg(search_path: SearchPath) -> str:
 def load_model_args(fmt: str, text: str | None, path: str | os.PathLike[str] | None,
                     prefix: str, fixed_base: bool | None,
                     search_path: SearchPath | None) -> dict[str, Any]:
-    args: dict[str, Any] = {"format": fmt, "prefix": prefix}
-    optional = {"text": text, "path": None if path is None else os.fspath(path),
-                "fixed_base": fixed_base,
-                "search_path": None if search_path is None else search_path_arg(search_path)}
-    args.update({key: value for key, value in optional.items() if value is not None})
-    return args
+    return {"format": fmt, "prefix": prefix, **given(
+        text=text, path=None if path is None else os.fspath(path), fixed_base=fixed_base,
+        search_path=None if search_path is None else search_path_arg(search_path))}
 
 
 def joints_args(model: str | None, names: Sequence[str] | None) -> dict[str, Any]:
-    args: dict[str, Any] = {}
-    if model is not None:
-        args["model"] = model
-    if names is not None:
-        args["names"] = list(names)
-    return args
+    return {**given(model=model), **names_arg(names)}
 
 
 def names_arg(names: Sequence[str] | None) -> dict[str, Any]:

@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from galton.client.sdk_joints import float_array
+from galton.client.sdk_joints import float_array, given
 from galton.client.values import Contacts, Image, RayHits
 from galton.protocol import InvalidArgumentError, Reply, pack_f64
 
@@ -40,8 +40,7 @@ def camera(eye: ArrayLike, target: ArrayLike, *, up: ArrayLike | None = None,
         found["up"] = _vector(up, "up")
     if size is not None:
         found["width"], found["height"] = int(size[0]), int(size[1])
-    optional = {"fov": fov, "near": near, "far": far}
-    found.update({key: float(value) for key, value in optional.items() if value is not None})
+    found.update({key: float(value) for key, value in given(fov=fov, near=near, far=far).items()})
     if outputs is not None:
         found["outputs"] = [outputs] if isinstance(outputs, str) else list(outputs)
     if attach is not None:

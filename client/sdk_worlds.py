@@ -152,23 +152,16 @@ class WorldMethods:
             "poses": sdk_joints.body_rows(poses, count, POSE_WIDTH, "compare.poses")}
         if twists is not None:
             args["twists"] = sdk_joints.body_rows(twists, count, TWIST_WIDTH, "compare.twists")
-        for key, value in (("sigma_position", sigma_position), ("sigma_angle", sigma_angle),
-                           ("sigma_speed", sigma_speed)):
-            if value is not None:
-                args[key] = value
+        args.update(sdk_joints.given(sigma_position=sigma_position, sigma_angle=sigma_angle,
+                                     sigma_speed=sigma_speed))
         return Comparison.from_reply(self._ok("compare", args), list(names))
 
 
 def predict_args(horizon: float, every: float | None, read: Sequence[str] | None,
                  read_joints: Sequence[str] | None, slot: str | None) -> dict[str, Any]:
-    args: dict[str, Any] = {"horizon": horizon}
-    for key, value in (("every", every), ("slot", slot)):
-        if value is not None:
-            args[key] = value
-    for key, names in (("read", read), ("read_joints", read_joints)):
-        if names is not None:
-            args[key] = list(names)
-    return args
+    return {"horizon": horizon, **sdk_joints.given(
+        every=every, slot=slot, read=None if read is None else list(read),
+        read_joints=None if read_joints is None else list(read_joints))}
 
 
 def lockstep(sim: Client, stamps: Iterable[float]) -> Iterator[Stamp]:
