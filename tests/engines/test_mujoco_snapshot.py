@@ -263,8 +263,8 @@ MANGLED = [None, -1, 2**40, 1e308, "x", b"\x00" * 3, [], {}, True]
 
 def test_a_mangled_snapshot_restores_or_is_refused_with_a_typed_error(
         snapshot: dict[str, Any]) -> None:
-    """Any one value replaced by something else: a world, or InvalidArgumentError (never a
-    crash or another error); seeded."""
+    """Any one value replaced by something else: a world that steps, or InvalidArgumentError
+    (never a crash or another error); seeded."""
     rng = np.random.default_rng(SEED)
     leaves = _leaves(snapshot)
     for pick in rng.choice(len(leaves), size=120, replace=False):
@@ -275,4 +275,6 @@ def test_a_mangled_snapshot_restores_or_is_refused_with_a_typed_error(
             node = node[key]
         node[last] = MANGLED[int(rng.integers(len(MANGLED)))]
         with contextlib.suppress(InvalidArgumentError):
-            MujocoEngine().restore(bad)
+            engine = MujocoEngine()
+            engine.restore(bad)
+            engine.step(2)  # a world it accepted also runs
