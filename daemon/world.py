@@ -31,11 +31,10 @@ from galton.protocol import (
     EntityInfo,
     InvalidArgumentError,
     NameNotUniqueError,
-    NotFoundError,
     PhysicsError,
     ResourceLimitError,
 )
-from galton.protocol.errors import brief, did_you_mean
+from galton.protocol.errors import brief, did_you_mean, unknown_names
 from galton.protocol.model import check_type
 
 ENTITY_KINDS = ("static", "dynamic")
@@ -73,12 +72,7 @@ class World:
         """Raise NotFound naming the first unknown name (with a "did you mean")."""
         missing = [n for n in names if n not in self.entities]
         if missing:
-            first = missing[0]
-            more = f" and {len(missing) - 1} more" if len(missing) > 1 else ""
-            raise NotFoundError(
-                f"no entity named {brief(first)}{more}{did_you_mean(first, self.entities)}",
-                {"missing": missing[:100], "missing_count": len(missing)},
-            )
+            raise unknown_names("entity", missing, self.entities)
 
     def require_new(self, names: Sequence[str]) -> None:
         taken = [n for n in names if n in self.entities]

@@ -24,9 +24,8 @@ from galton.protocol import (
     FeatureUnsupportedError,
     InvalidArgumentError,
     JointInfo,
-    NotFoundError,
 )
-from galton.protocol.errors import brief, did_you_mean
+from galton.protocol.errors import unknown_names
 
 MODE_FEATURES = {"position": FEATURE_TARGET_POSITION, "velocity": FEATURE_TARGET_VELOCITY,
                  "effort": FEATURE_TARGET_EFFORT}
@@ -56,11 +55,7 @@ class JointTable:
         """The joints of these names, or NotFound naming the first unknown one."""
         missing = [n for n in names if n not in self.by_name]
         if missing:
-            first = missing[0]
-            more = f" and {len(missing) - 1} more" if len(missing) > 1 else ""
-            raise NotFoundError(
-                f"no joint named {brief(first)}{more}{did_you_mean(first, self.by_name)}",
-                {"missing": missing[:100], "missing_count": len(missing)})
+            raise unknown_names("joint", missing, self.by_name)
         return [self.by_name[n] for n in names]
 
     def require_scalar(self, names: Sequence[str], where: str) -> list[JointInfo]:

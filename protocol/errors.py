@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import difflib
 import reprlib
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from typing import Any
 
 from galton.protocol.codes import ResultCode
@@ -155,3 +155,12 @@ def brief(value: Any, limit: int = QUOTE_LIMIT) -> str:
     else:
         text = _QUOTER.repr(value)
     return text if len(text) <= limit + 20 else text[:limit] + "..."
+
+
+def unknown_names(kind: str, missing: Sequence[str], known: Iterable[str]) -> NotFoundError:
+    """NotFound for names a request gave that are not ``known``: it names the first (with
+    a "did you mean"), counts the rest, and lists up to 100 in its details."""
+    first = missing[0]
+    more = f" and {len(missing) - 1} more" if len(missing) > 1 else ""
+    return NotFoundError(f"no {kind} named {brief(first)}{more}{did_you_mean(first, known)}",
+                         {"missing": list(missing[:100]), "missing_count": len(missing)})
