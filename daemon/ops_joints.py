@@ -65,9 +65,7 @@ def set_joint_states(world: World, args: dict[str, Any]) -> dict[str, Any]:
     if read is not None:
         read = check_names(read, "set_joint_states.read")
         world.require_known(read)
-    world.require_valid()
-    world.engine.set_joint_states(names, positions, velocities)
-    world.teleported = True
+    world.set_joint_states(names, positions, velocities)
     if read is None:
         return {"count": len(names)}
     poses, twists = world.get_states(read)  # the links where the joints put them

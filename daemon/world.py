@@ -202,6 +202,13 @@ class World:
         self.engine.set_states(names, poses, twists)
         self.teleported = True  # checked before anything reads or steps from it
 
+    def set_joint_states(self, names: Sequence[str], positions: np.ndarray,
+                         velocities: np.ndarray | None) -> None:
+        """Set checked 1-DOF joints' positions (and velocities) of a valid world."""
+        self.require_valid()
+        self.engine.set_joint_states(names, positions, velocities)
+        self.teleported = True  # checked before anything reads or steps from it
+
     def update(self, names: Sequence[str], props: BodyProperties) -> None:
         self.require_known(names)
         self.require_no_links(names, "update", "a model is updated as a whole")
