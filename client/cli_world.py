@@ -28,7 +28,9 @@ Assignments = Annotated[list[str] | None, typer.Argument(
     show_default=False)]
 
 
-def list_daemons(ctx: typer.Context, as_json: bool) -> None:
+@app.command(rich_help_panel=PANEL)
+def daemons(ctx: typer.Context, as_json: JsonOpt = False) -> None:
+    """List the daemons reachable through --connect, with instance, engine and state."""
     target: Target = ctx.obj
     found = run_guarded(lambda: discover_at(target.connect, target.timeout))
 
@@ -41,16 +43,7 @@ def list_daemons(ctx: typer.Context, as_json: bool) -> None:
     emit([d.to_dict() for d in found], as_json, render)
 
 
-@app.command(rich_help_panel=PANEL)
-def daemons(ctx: typer.Context, as_json: JsonOpt = False) -> None:
-    """List the daemons reachable through --connect, with instance, engine and state."""
-    list_daemons(ctx, as_json)
-
-
-@app.command("ls", hidden=True)
-def ls(ctx: typer.Context, as_json: JsonOpt = False) -> None:
-    """The old name of daemons."""
-    list_daemons(ctx, as_json)
+app.command("ls", hidden=True)(daemons)  # the old name: one command, two names
 
 
 @app.command(rich_help_panel=PANEL)

@@ -42,20 +42,13 @@ def show_worlds(found: list[WorldInfo], as_json: bool) -> None:
     emit([asdict(w) for w in found], as_json, render)
 
 
-def list_world_rows(ctx: typer.Context, as_json: bool) -> None:
-    show_worlds(with_client(ctx, lambda c: c.list_worlds()), as_json)
-
-
 @app.command(rich_help_panel=PANEL)
 def worlds(ctx: typer.Context, as_json: JsonOpt = False) -> None:
     """List the daemon's worlds: the live one first, then the side worlds."""
-    list_world_rows(ctx, as_json)
+    show_worlds(with_client(ctx, lambda c: c.list_worlds()), as_json)
 
 
-@app.command("list-worlds", hidden=True)
-def list_worlds(ctx: typer.Context, as_json: JsonOpt = False) -> None:
-    """The operation's name for worlds."""
-    list_world_rows(ctx, as_json)
+app.command("list-worlds", hidden=True)(worlds)  # the operation's name: one command, two names
 
 
 @app.command("create-world", rich_help_panel=PANEL)
