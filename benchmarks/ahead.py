@@ -67,12 +67,11 @@ def galton_world(sim: Client, engine: str) -> int:
 
 
 def snapshots(sim: Client, engine: str, repeat: int) -> dict[str, Any]:
-    empty = sim.snapshot(blob=True).nbytes
     bodies = galton_world(sim, engine)
     blob = sim.snapshot(blob=True)
     result = {"bodies": bodies, "blob_bytes": blob.nbytes,
               "bytes_per_body": blob.nbytes / bodies,
-              "bytes_per_ball": (blob.nbytes - _board_bytes(sim, engine, empty)) / BALLS,
+              "bytes_per_ball": (blob.nbytes - _board_bytes(sim, engine)) / BALLS,
               "snapshot": percentiles_ms(timed(lambda: sim.snapshot("bench"), repeat)),
               "snapshot_blob": percentiles_ms(timed(lambda: sim.snapshot(blob=True), repeat)),
               "restore": percentiles_ms(timed(lambda: sim.restore("bench"), repeat))}
@@ -87,7 +86,7 @@ def snapshots(sim: Client, engine: str, repeat: int) -> dict[str, Any]:
     return result
 
 
-def _board_bytes(sim: Client, engine: str, empty: int) -> int:
+def _board_bytes(sim: Client, engine: str) -> int:
     """The blob of the board alone (no ball), in a side world."""
     sim.create_world("board")
     try:

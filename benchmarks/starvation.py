@@ -26,7 +26,7 @@ from galton.client import Client, plane, spheres
 RTF = 1.0
 
 
-def hammer(instance: str, endpoint: str, names: list[str], seconds: float,
+def hammer(instance: str, endpoint: str, seconds: float,
            started: Any, counts: Any) -> None:
     """One client process: status and get_states back to back until the time is up."""
     with Client(instance, endpoint, timeout=30) as client:
@@ -51,23 +51,22 @@ def rtf_over(sim: Client, seconds: float) -> float:
     return (sim.status().sim_time - first) / (time.monotonic() - wall0)
 
 
-def build(sim: Client, balls: int) -> list[str]:
+def build(sim: Client, balls: int) -> None:
     side = int(np.ceil(np.sqrt(balls)))
     names = [f"ball_{i}" for i in range(balls)]
     grid = np.column_stack([np.arange(balls) % side * 0.15, np.arange(balls) // side * 0.15,
                             np.full(balls, 0.5)])
     sim.spawn(plane(), spheres(names, grid, 0.05, restitution=0.9))
-    return names
 
 
 def measure(engine: str, clients: int, seconds: float, balls: int) -> dict[str, Any]:
     ctx = mp.get_context("spawn")
     with daemon_client(engine) as (daemon, sim):
-        names = build(sim, balls)
+        build(sim, balls)
         sim.play(rtf=RTF)
         alone = rtf_over(sim, seconds)
         started, counts = ctx.Event(), ctx.Queue()
-        workers = [ctx.Process(target=hammer, args=(daemon.instance, daemon.endpoint, names,
+        workers = [ctx.Process(target=hammer, args=(daemon.instance, daemon.endpoint,
                                                     seconds + 2, started, counts))
                    for _ in range(clients)]
         for worker in workers:
