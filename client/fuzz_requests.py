@@ -67,7 +67,7 @@ class RequestMaker:
         op = self.pick(list(OPERATIONS.values()))
         args = self.args_for(op)
         if self.chance(0.3):
-            self.spoil(op, args)
+            self.spoil(args)
         body = {"v": PROTOCOL_VERSION, "op": op.name, "args": args}
         return op.name, msgpack.packb(body, use_bin_type=True)
 
@@ -101,7 +101,7 @@ class RequestMaker:
             return special(self)
         return KIND_VALUES[arg.kind](self, arg)
 
-    def spoil(self, op: Operation, args: dict[str, Any]) -> None:
+    def spoil(self, args: dict[str, Any]) -> None:
         """One thing wrong: a bad value, a missing or unknown argument, an unknown world."""
         how = self.pick(["value", "value", "drop", "unknown", "world", "long"])
         if how == "value" and args:
