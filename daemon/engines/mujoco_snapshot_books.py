@@ -132,12 +132,18 @@ def _number(value: Any, name: str) -> float | None:
     return None if value is None else float(value)
 
 
-def _floats(value: Any, count: int | None = None) -> np.ndarray:
+def _floats(value: Any, count: int | None = None, *, allow_inf: bool = False) -> np.ndarray:
+    """Numbers, never NaN (it would reach MuJoCo's model or state); infinity only where
+    it means "no bound" (a target's max_effort)."""
     if not isinstance(value, list) or (count is not None and len(value) != count) or \
             not all(isinstance(v, float | int) and not isinstance(v, bool) for v in value):
         raise InvalidArgumentError(f"snapshot: expected {count or 'some'} numbers, got "
                                    f"{brief(value)}")
-    return np.array(value, dtype=float)
+    array = np.array(value, dtype=float)
+    if not (np.isfinite(array) | (allow_inf & np.isinf(array))).all():
+        raise InvalidArgumentError(f"snapshot: expected {count or 'some'} finite numbers, got "
+                                   f"{brief(value)}")
+    return array
 
 
 def _tuple(value: Any, count: int | None = None) -> tuple[float, ...]:
@@ -196,7 +202,8 @@ def _joints(engine: MujocoEngine, infos: Any, targets: Any) -> None:
         if not isinstance(row, list) or len(row) != 5 or row[0] not in TARGET_MODES or \
                 row[0] == "none":
             raise InvalidArgumentError(f"snapshot.targets[{name!r}] is malformed")
-        joints.targets[name] = Target(row[0], *(float(v) for v in _floats(row[1:], 4)))
+        numbers = _floats(row[1:], 4, allow_inf=True)  # max_effort inf: unbounded
+        joints.targets[name] = Target(row[0], *(float(v) for v in numbers))
 
 
 def _wrenches(engine: MujocoEngine, value: Any) -> None:
