@@ -186,7 +186,7 @@ class Client(WorldMethods, PerceptionMethods):
         """Advance ``count`` steps and return these bodies' states after the last one: one
         round trip, as a control loop wants (step, then observe)."""
         return States.from_reply(
-            self._ok("step", {"count": count, "read": list(names)}, timeout))
+            self._ok("step", sdk_joints.step_args(count, names, None), timeout))
 
     def step_and_read_joints(self, count: int, joints: Sequence[str],
                              timeout: float | None = None) -> JointStates:
