@@ -84,9 +84,7 @@ class WorldMethods:
     def fork_world(self, name: str, source: str | None = None) -> WorldInfo:
         """A copy of world ``source`` (default the live one): scene, state, parameters,
         targets, wrenches and clock. The source is not disturbed."""
-        args: dict[str, Any] = {"name": name}
-        if source is not None:
-            args["source"] = source
+        args = {"name": name, **sdk_joints.given(source=source)}
         return WorldInfo.from_wire(self._ok("fork_world", args).result)
 
     def delete_world(self, name: str) -> None:
@@ -97,10 +95,7 @@ class WorldMethods:
     def snapshot(self, slot: str | None = None, blob: bool = False) -> SnapshotInfo:
         """The complete world, kept in the daemon under ``slot`` and/or returned as bytes
         (``.blob``) that any daemon with the same engine restores."""
-        args: dict[str, Any] = {"blob": blob}
-        if slot is not None:
-            args["slot"] = slot
-        reply = self._ok("snapshot", args)
+        reply = self._ok("snapshot", {"blob": blob, **sdk_joints.given(slot=slot)})
         return SnapshotInfo.from_wire(reply.result, self._world or "")
 
     def restore(self, slot: str | None = None, blob: bytes | None = None) -> WorldInfo:
