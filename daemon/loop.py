@@ -39,7 +39,7 @@ from galton.protocol import (
     error_reply,
 )
 from galton.protocol.errors import brief, did_you_mean
-from galton.protocol.operations import OPERATIONS, Operation, operation
+from galton.protocol.operations import OPERATIONS, operation
 
 log = logging.getLogger("galton.daemon")
 
@@ -229,12 +229,12 @@ class SimLoop:
             request = decode_request(call.payload, call.op, self.decode_limits)
             op = operation(request.op)
             op.check_arg_names(request.args)
-            self.require_world(request.args)
+            self.world_for(request.args)  # an unknown world is refused before anything
             call.client = request.client
             named = request.args.get("world")
             call.world = named if isinstance(named, str) else None
             with self.work_guard() if op.mutates and not op.steps else nullcontext():
-                result = self._dispatch(op, call, request.args)
+                result = HANDLERS[op.name](self, call, request.args)
             self._keep_invariants()  # before the reply: what the client asks next sees it
             if result is not None:
                 self._reply_ok(call, result)
@@ -246,9 +246,6 @@ class SimLoop:
             self._keep_invariants()
             self.reply_error(call, OperationFailedError(
                 f"{type(exc).__name__}: {brief(str(exc))}"))
-
-    def _dispatch(self, op: Operation, call: Call, args: dict[str, Any]) -> dict[str, Any] | None:
-        return HANDLERS[op.name](self, call, args)
 
     def set_state(self, state: SimState) -> None:
         """Move the state machine, announcing a change with a ``state`` event."""
@@ -294,10 +291,6 @@ class SimLoop:
             self.publish_event({"seq": self._event_seq, **event})
         except Exception:
             log.exception("could not publish an event")
-
-    def require_world(self, args: dict[str, Any]) -> None:
-        """A request's ``world`` must name one of this daemon's worlds."""
-        self.world_for(args)
 
     def world_for(self, args: dict[str, Any]) -> World:
         """The world a request is for: the one its ``world`` names, else the live one."""
@@ -377,9 +370,9 @@ class SimLoop:
             job.remaining -= count
             if job_done or (checking and job_results.at_rest(self.world, job)):
                 self.job = None
-                self._finish_job(job)
+                self.finish_job(job)
 
-    def _finish_job(self, job: StepJob) -> None:
+    def finish_job(self, job: StepJob) -> None:
         """Answer a finished step request: {steps}, and the states it asked to read (after
         the last step, verified), and with until_rest whether they rest (a prediction: its
         samples). A body deleted meanwhile fails the read, not the steps."""
@@ -393,10 +386,6 @@ class SimLoop:
             if job.scratch and job.world is not None:
                 job.world.engine.close()
         self._reply_ok(job.call, result)
-
-    def finish_job(self, job: StepJob) -> None:
-        """A side world's job is done (daemon/side_jobs.py)."""
-        self._finish_job(job)
 
     def verify_physics(self) -> bool:
         """Check the unchecked steps; on a divergence, fault and return False."""

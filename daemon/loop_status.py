@@ -61,7 +61,7 @@ def answer_status(loop: SimLoop, call: Call) -> None:
         operation(request.op).check_arg_names(request.args)
         named = request.args.get("world")
         if named is not None and named != status.world:
-            loop.require_world(request.args)  # an unknown world is refused here
+            loop.world_for(request.args)  # an unknown world is refused here
             loop.submit(call)  # a side world's status: the physics thread answers it
             return
         reply = Reply(ResultCode.OK, result=status.to_wire(), step=status.step,
