@@ -75,3 +75,9 @@ class StepJob:
         if self.sampler is not None:
             left = min(left, self.sampler.every - self.done % self.sampler.every)
         return left
+
+
+def smoothed_step_cost(cost: float, seconds: float, count: int) -> float:
+    """A running estimate of seconds per step after ``count`` steps took ``seconds``: it
+    sizes the next chunk of steps, so one slow chunk moves it only a fifth of the way."""
+    return 0.8 * cost + 0.2 * max(seconds / count, 1e-7)

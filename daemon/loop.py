@@ -17,7 +17,7 @@ from contextlib import AbstractContextManager, nullcontext
 from typing import Any
 
 from galton.daemon import job_results, loop_status, side_jobs, time_control
-from galton.daemon.calls import Call, StepJob, Task
+from galton.daemon.calls import Call, StepJob, Task, smoothed_step_cost
 from galton.daemon.handlers import HANDLERS
 from galton.daemon.limits import DEFAULT_LIMITS, Limits
 from galton.daemon.monitor import Pacer, ProcessMonitor, RtfWindow
@@ -357,7 +357,7 @@ class SimLoop:
         started = time.perf_counter()
         self.world.step(count)
         now = time.perf_counter()
-        self._step_cost = 0.8 * self._step_cost + 0.2 * max((now - started) / count, 1e-7)
+        self._step_cost = smoothed_step_cost(self._step_cost, now - started, count)
         job = self.job if self.job is not None and self.job.world is None else None
         job_done = job is not None and job.remaining == count
         checking = job is not None and job.rest is not None and (

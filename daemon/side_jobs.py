@@ -8,7 +8,7 @@ import time
 from typing import TYPE_CHECKING
 
 from galton.daemon import job_results
-from galton.daemon.calls import StepJob
+from galton.daemon.calls import StepJob, smoothed_step_cost
 from galton.protocol import PhysicsError, RemoteError
 
 if TYPE_CHECKING:
@@ -26,8 +26,8 @@ def run_chunk(loop: SimLoop, job: StepJob) -> None:
     started = time.perf_counter()
     try:
         world.step(count)
-        job.step_cost = 0.8 * job.step_cost + 0.2 * max(
-            (time.perf_counter() - started) / count, 1e-7)
+        job.step_cost = smoothed_step_cost(job.step_cost, time.perf_counter() - started,
+                                           count)
         job.remaining -= count
         finished = job.remaining == 0
         if job.sampler is not None and job.done % job.sampler.every == 0:
