@@ -279,6 +279,7 @@ class World:
         with contextlib.suppress(PhysicsError):
             self.verify()  # a divergence in unchecked steps must not be forgotten
         if scope in ("time", "all"):
+            self.wrenches.rewind(self.step_index)
             self.step_index = 0
             self.verified_step = 0
             self._rebase_clock(0.0)

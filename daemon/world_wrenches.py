@@ -43,6 +43,12 @@ class WrenchSchedule:
         for name in names:
             self.ends.pop(name, None)
 
+    def rewind(self, steps: int) -> None:
+        """The step counter went back ``steps``: each end goes back with it, so a held
+        wrench still lasts the steps it has left."""
+        self.ends = {name: None if end is None else end - steps
+                     for name, end in self.ends.items()}
+
     def steps_to_next_end(self, step_index: int) -> int | None:
         ends = [end for end in self.ends.values() if end is not None]
         return min(ends) - step_index if ends else None
