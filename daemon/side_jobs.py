@@ -4,15 +4,19 @@ work, sized from the job's own measured step cost)."""
 
 from __future__ import annotations
 
+import logging
 import time
 from typing import TYPE_CHECKING
 
 from galton.daemon import job_results
 from galton.daemon.calls import StepJob, smoothed_step_cost
-from galton.protocol import PhysicsError, RemoteError
+from galton.protocol import OperationFailedError, PhysicsError, RemoteError
+from galton.protocol.errors import brief
 
 if TYPE_CHECKING:
     from galton.daemon.loop import SimLoop
+
+log = logging.getLogger("galton.daemon")
 
 # Short chunks: a live control call waits at most about this long behind a prediction.
 CHUNK_WALL_S = 0.002
@@ -38,6 +42,11 @@ def run_chunk(loop: SimLoop, job: StepJob) -> None:
             world.verify()
     except RemoteError as error:  # a diverged side world fails its job, not the daemon
         end(loop, job, error)
+        return
+    except Exception as exc:  # nor does its engine failing pause the live world
+        log.exception("a side world's steps failed")
+        end(loop, job, OperationFailedError(f"the engine failed: {type(exc).__name__}: "
+                                            f"{brief(str(exc))}"))
         return
     if finished or resting:
         loop.job = None
