@@ -12,7 +12,7 @@ from galton.daemon.engine import IMAGE_OUTPUTS, CameraView
 from galton.daemon.world import World
 from galton.protocol import InvalidArgumentError
 from galton.protocol.errors import brief
-from galton.protocol.model import check_fields, check_name, check_type, finite_number
+from galton.protocol.model import check_fields, check_name, check_type, finite_number, integer_in
 
 CAMERA_FIELDS = ("eye", "target", "up", "fov", "width", "height", "near", "far", "outputs",
                  "attach")
@@ -96,10 +96,7 @@ def _fov(value: Any, where: str) -> float:
 
 
 def _side(value: Any, where: str) -> int:
-    if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= MAX_SIDE:
-        raise InvalidArgumentError(f"{where} must be an integer in [1, {MAX_SIDE}] pixels, "
-                                   f"got {brief(value)}")
-    return value
+    return integer_in(value, where, 1, MAX_SIDE, " pixels")
 
 
 def rotate(quaternion: np.ndarray, vector: np.ndarray) -> np.ndarray:

@@ -17,7 +17,7 @@ from galton.protocol.errors import (
     brief,
     did_you_mean,
 )
-from galton.protocol.model import finite_number
+from galton.protocol.model import finite_number, integer_in
 
 KNOWN_ENGINES = ("mujoco", "pybullet")
 
@@ -45,10 +45,7 @@ def number(low: float, high: float, *, low_open: bool = False) -> Callable[[Any,
 
 def integer(low: int, high: int) -> Callable[[Any, str], int]:
     def check(value: Any, where: str) -> int:
-        if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
-            raise InvalidArgumentError(f"{where} must be an integer in [{low}, {high}], "
-                                       f"got {brief(value)}")
-        return value
+        return integer_in(value, where, low, high)
     return check
 
 

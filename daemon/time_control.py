@@ -21,20 +21,19 @@ from galton.protocol import (
     OperationFailedError,
     SimStatus,
 )
-from galton.protocol.errors import brief
-from galton.protocol.model import SimState, check_fields, check_names, check_type, finite_number
+from galton.protocol.model import (
+    SimState,
+    check_fields,
+    check_names,
+    check_type,
+    finite_number,
+    integer_in,
+)
 
 if TYPE_CHECKING:
     from galton.daemon.loop import SimLoop
 
 MAX_RTF = 1e6
-
-
-def _check_count(value: Any, max_steps: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= max_steps:
-        raise InvalidArgumentError(f"step.count must be an integer in [1, {max_steps}], "
-                                   f"got {brief(value)}")
-    return value
 
 
 def _check_rtf(value: Any, where: str) -> float:
@@ -125,7 +124,7 @@ def step(loop: SimLoop, call: Call, args: dict[str, Any]) -> None:
     if "until_rest" in args:
         raise InvalidArgumentError("step takes no until_rest: use run_until with "
                                    "until_rest and read to stop once bodies rest")
-    count = _check_count(args.get("count", 1), loop.limits.max_steps)
+    count = integer_in(args.get("count", 1), "step.count", 1, loop.limits.max_steps)
     world = loop.world_for(args)
     _start_job(loop, call, world, count, _read_list(world, args, "step"),
                read_joints=_read_joint_list(world, args, "step"))

@@ -96,6 +96,14 @@ def finite_number(value: Any, where: str, *, low: float = -math.inf, high: float
     return number
 
 
+def integer_in(value: Any, where: str, low: int, high: int, unit: str = "") -> int:
+    """An integer (not a bool) within [low, high], else InvalidArgument."""
+    if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+        raise InvalidArgumentError(f"{where} must be an integer in [{low}, {high}]{unit}, "
+                                   f"got {brief(value)}")
+    return value
+
+
 def optional_number(args: dict[str, Any], key: str, where: str, **bounds: Any) -> float | None:
     value = args.get(key)
     return None if value is None else finite_number(value, f"{where}.{key}", **bounds)
