@@ -67,6 +67,11 @@ class StepJob:
     def done(self) -> int:
         return self.total - self.remaining
 
+    def release(self) -> None:
+        """Close a prediction's copy of its world once the job is answered or ended."""
+        if self.scratch and self.world is not None:
+            self.world.engine.close()
+
     def steps_to_next_check(self) -> int:
         """Steps until the next rest check (all remaining ones when there is none)."""
         left = self.remaining

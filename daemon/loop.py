@@ -383,8 +383,7 @@ class SimLoop:
             self.reply_error(job.call, error)
             return
         finally:
-            if job.scratch and job.world is not None:
-                job.world.engine.close()
+            job.release()
         self._reply_ok(job.call, result)
 
     def verify_physics(self) -> bool:

@@ -59,6 +59,5 @@ def end(loop: SimLoop, job: StepJob, error: RemoteError) -> None:
         loop.job = None
     if isinstance(error, PhysicsError):
         error.details["steps_done"] = job.done
-    if job.scratch and job.world is not None:
-        job.world.engine.close()
+    job.release()
     loop.reply_error(job.call, error)

@@ -249,8 +249,7 @@ def cancel_job(loop: SimLoop, reason: str) -> None:
     if loop.job is None:
         return
     job, loop.job = loop.job, None
-    if job.scratch and job.world is not None:
-        job.world.engine.close()
+    job.release()
     loop.reply_error(job.call, OperationFailedError(
         f"step request interrupted ({reason}) after {job.done} of {job.total} steps",
         {"steps_done": job.done}))
