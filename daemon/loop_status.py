@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any
 
 from galton.daemon.calls import Call
 from galton.protocol import (
+    NotFoundError,
     OperationFailedError,
     RemoteError,
     Reply,
@@ -61,7 +62,10 @@ def answer_status(loop: SimLoop, call: Call) -> None:
         operation(request.op).check_arg_names(request.args)
         named = request.args.get("world")
         if named is not None and named != status.world:
-            loop.world_for(request.args)  # an unknown world is refused here
+            # On the transport's thread only one membership test of the side worlds (the
+            # physics thread may be adding or removing one): no iteration, no race.
+            if not isinstance(named, str) or named not in loop.side:
+                raise NotFoundError(f"no world named {brief(named)}; list_worlds lists them")
             loop.submit(call)  # a side world's status: the physics thread answers it
             return
         reply = Reply(ResultCode.OK, result=status.to_wire(), step=status.step,
