@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import copy
+import math
 from collections.abc import Callable
 from typing import Any
 
@@ -234,11 +235,13 @@ def _set(path: str, value: Any) -> Callable[[dict[str, Any]], None]:
     (_set("data.arrays.qvel.dtype", "<i4"), "dtype"),
     (_sleep_cycles_broken, "tree_asleep"),
     (_set("targets", {"k/J0": ["position", 1.0, "two", 0.0, 1.0]}), "numbers"),
+    (_set("targets", {"k/lbr_iiwa_joint_1": ["position", 1.0, math.nan, 0.0, 1.0]}),
+     "finite numbers"),
     (_set("wrenches", {"nobody": None}), "nobody"),
     (lambda s: s.pop("pool"), "missing ['pool']"),
 ], ids=["other-engine", "format", "version", "truncated", "params-type", "param-value",
         "spec-type", "other-world", "entities-type", "dtype", "sleep-cycles", "target-type",
-        "wrench-name", "missing-key"])
+        "target-nan", "wrench-name", "missing-key"])
 def test_a_malformed_snapshot_is_refused_with_a_typed_error(
         snapshot: dict[str, Any], change: Callable[[dict[str, Any]], None],
         words: str) -> None:
@@ -278,3 +281,13 @@ def test_a_mangled_snapshot_restores_or_is_refused_with_a_typed_error(
             engine = MujocoEngine()
             engine.restore(bad)
             engine.step(2)  # a world it accepted also runs
+
+
+def test_a_target_without_an_effort_limit_restores(snapshot: dict[str, Any]) -> None:
+    """max_effort inf means "no limit": a snapshot holding one restores, mode kept."""
+    held = copy.deepcopy(snapshot)
+    held["targets"] = {"k/lbr_iiwa_joint_1": ["position", 0.2, 100.0, 10.0, math.inf]}
+    restored_engine = MujocoEngine()
+    restored_engine.restore(held)
+    modes = {j.name: j.mode for j in restored_engine.joints()}
+    assert modes["k/lbr_iiwa_joint_1"] == "position"
