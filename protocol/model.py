@@ -445,6 +445,8 @@ class Capabilities:
     params: dict[str, dict[str, Any]] = field(default_factory=dict)
     engines_available: tuple[str, ...] = ()
     render_backend: str | None = None  # how it renders headless (egl, osmesa, tinyrenderer)
+    # The daemon's ZeroMQ endpoints ("control" and "telemetry" lists), {} without --zmq.
+    zmq: dict[str, list[str]] = field(default_factory=dict)
 
     def supports(self, feature: str) -> bool:
         return feature in self.features
