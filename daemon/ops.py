@@ -13,6 +13,7 @@ from collections.abc import Callable
 from typing import Any
 
 from galton.daemon.engines import ENGINE_CLASSES
+from galton.daemon.host_info import host_info
 from galton.daemon.model_files import search_folders
 from galton.daemon.world import World
 from galton.protocol import (
@@ -180,6 +181,7 @@ def set_params(world: World, args: dict[str, Any]) -> dict[str, Any]:
 def capabilities(world: World, args: dict[str, Any]) -> dict[str, Any]:
     caps = world.engine.capabilities()
     caps.engines_available = tuple(ENGINE_CLASSES)
+    caps.host = host_info()
     return caps.to_wire()
 
 

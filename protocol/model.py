@@ -447,6 +447,8 @@ class Capabilities:
     render_backend: str | None = None  # how it renders headless (egl, osmesa, tinyrenderer)
     # The daemon's ZeroMQ endpoints ("control" and "telemetry" lists), {} without --zmq.
     zmq: dict[str, list[str]] = field(default_factory=dict)
+    # The daemon's machine (CPU, cores, memory, OS, versions), {} from an older daemon.
+    host: dict[str, Any] = field(default_factory=dict)
 
     def supports(self, feature: str) -> bool:
         return feature in self.features
@@ -459,5 +461,9 @@ class Capabilities:
 
     @classmethod
     def from_wire(cls, body: dict[str, Any]) -> Capabilities:
-        return cls(**{**body, **{k: tuple(body.get(k, ())) for k in (
-            "body_shapes", "model_formats", "features", "engines_available")}})
+        """Parse a reply; fields this client does not know (a newer daemon's) are left out,
+        and ``host`` may be absent (an older daemon's)."""
+        known = {f.name for f in fields(cls)}
+        return cls(**{**{k: v for k, v in body.items() if k in known}, **{
+            k: tuple(body.get(k, ())) for k in (
+                "body_shapes", "model_formats", "features", "engines_available")}})
