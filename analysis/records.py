@@ -64,6 +64,7 @@ class TrialRecord:
     chi2: float | None = None
     p_asymptotic: float | None = None
     p_monte_carlo: float | None = None
+    daemon: str = ""  # the instance that ran it ("" where not recorded: before pools)
 
     def __post_init__(self) -> None:
         self.counts = [int(c) for c in self.counts]
@@ -130,6 +131,8 @@ class ExperimentResults:
     versions: dict[str, str] = field(default_factory=dict)
     command: str = ""
     extra: dict[str, Any] = field(default_factory=dict)
+    # The machines that ran the trials, by daemon instance (capabilities' ``host``).
+    hosts: dict[str, dict[str, Any]] = field(default_factory=dict)
     schema: int = RESULTS_SCHEMA
 
     def to_dict(self) -> dict[str, Any]:
@@ -146,8 +149,8 @@ class ExperimentResults:
         if data.get("schema", RESULTS_SCHEMA) > RESULTS_SCHEMA:
             raise RecordError(
                 f"results schema {data['schema']} is newer than this reader ({RESULTS_SCHEMA})")
-        meta = {k: data[k] for k in ("date", "host", "versions", "command", "extra", "schema")
-                if k in data}
+        meta = {k: data[k] for k in ("date", "host", "versions", "command", "extra", "hosts",
+                                     "schema") if k in data}
         return cls(trials=[TrialRecord.from_dict(t) for t in data["trials"]], **meta)
 
     def to_json(self, path: str | Path) -> Path:
