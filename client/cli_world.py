@@ -35,15 +35,23 @@ def daemons(ctx: typer.Context, as_json: JsonOpt = False) -> None:
     found = run_guarded(lambda: discover_at(target.connect, target.timeout))
 
     def render() -> None:
-        table = Table("instance", "engine", "state", "sim time (s)", "entities")
+        table = Table("instance", "engine", "state", "sim time (s)", "entities", "host")
         for d in found:
             table.add_row(d.instance, d.engine, d.state, f"{d.sim_time:.3f}",
-                          str(d.entity_count))
+                          str(d.entity_count), host_line(d.host))
         console.print(table if found else "no daemon found")
     emit([d.to_dict() for d in found], as_json, render)
 
 
 app.command("ls", hidden=True)(daemons)  # the old name: one command, two names
+
+
+def host_line(host: dict[str, Any]) -> str:
+    """A daemon's machine in a few words: hostname, CPU model, logical cores."""
+    if not host:
+        return "–"
+    return f"{host.get('hostname', '?')}: {host.get('cpu_model', '?')}, " \
+           f"{host.get('logical_cores', '?')} cores"
 
 
 @app.command(rich_help_panel=PANEL)

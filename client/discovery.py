@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import threading
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from typing import Any
 
 import zenoh
@@ -26,6 +26,8 @@ from galton.protocol import (
 )
 from galton.protocol.keys import LIVELINESS_PATTERN
 
+UNREACHABLE = "unreachable"
+
 
 @dataclass
 class DaemonInfo:
@@ -37,9 +39,15 @@ class DaemonInfo:
     sim_time: float
     entity_count: int
     error: str = ""
+    host: dict[str, Any] = field(default_factory=dict)  # capabilities' host map
+    zmq: list[str] = field(default_factory=list)  # its ZeroMQ control endpoints, if any
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
+
+    @property
+    def reachable(self) -> bool:
+        return self.state != UNREACHABLE
 
 
 def instances(session: zenoh.Session, timeout: float = 2.0) -> list[str]:
@@ -55,18 +63,32 @@ def instances(session: zenoh.Session, timeout: float = 2.0) -> list[str]:
 
 
 def discover(session: zenoh.Session, timeout: float = 2.0) -> list[DaemonInfo]:
-    """Every visible daemon with its engine and state."""
-    daemons = []
-    for name in instances(session, timeout):
-        try:
-            reply = query(session, Keys(name), "status", None, timeout)
-            reply.raise_for_code()
-            status = SimStatus.from_wire(reply.result)
-            daemons.append(DaemonInfo(name, status.engine, status.state, status.sim_time,
-                                      status.entity_count))
-        except GaltonError as error:
-            daemons.append(DaemonInfo(name, "?", "unreachable", 0.0, 0, str(error)))
-    return daemons
+    """Every visible daemon with its engine, state, host and ZeroMQ endpoints."""
+    return [describe(session, name, timeout) for name in instances(session, timeout)]
+
+
+def describe(session: zenoh.Session, name: str, timeout: float) -> DaemonInfo:
+    """One daemon from its ``status`` and ``capabilities``; a daemon that answers status
+    but not capabilities (busy past the timeout) is listed without host."""
+    try:
+        status = SimStatus.from_wire(_result(session, name, "status", timeout))
+    except GaltonError as error:
+        return DaemonInfo(name, "?", UNREACHABLE, 0.0, 0, str(error))
+    info = DaemonInfo(name, status.engine, status.state, status.sim_time, status.entity_count)
+    try:
+        capabilities = _result(session, name, "capabilities", timeout)
+    except GaltonError as error:
+        info.error = f"capabilities: {error}"
+        return info
+    info.host = dict(capabilities.get("host") or {})
+    info.zmq = [str(e) for e in (capabilities.get("zmq") or {}).get("control", [])]
+    return info
+
+
+def _result(session: zenoh.Session, name: str, op: str, timeout: float) -> dict[str, Any]:
+    reply = query(session, Keys(name), op, None, timeout)
+    reply.raise_for_code()
+    return reply.result
 
 
 def discover_at(connect: str | Sequence[str] | None, timeout: float = 2.0) -> list[DaemonInfo]:
