@@ -91,8 +91,7 @@ def look(client: Client) -> WorldView:
 
 def send(client: Client, key_op: str, payload: bytes, timeout: float) -> list[bytes]:
     """Every reply the daemon sent to one raw request."""
-    replies = client.session.get(client.keys.control(key_op), payload=payload, timeout=timeout)
-    return [r.ok.payload.to_bytes() if r.ok is not None else b"" for r in replies]
+    return client.transport.send_raw(key_op, payload, timeout)
 
 
 def run_campaign(client: Client, requests: int, seed: int = 0,

@@ -29,15 +29,10 @@ from galton.client import sdk_joints
 from galton.client.sdk_joints import SearchPath
 from galton.client.sdk_perception import PerceptionMethods
 from galton.client.sdk_worlds import WorldMethods
-from galton.client.session import (
-    Declared,
-    checked_timeout,
-    close_session,
-    open_session,
-    query,
-    undeclare,
-)
+from galton.client.session import checked_timeout
 from galton.client.telemetry import Subscription, TelemetryStream, subscribe_events
+from galton.client.transport import Transport, ZenohTransport, zmq_endpoint
+from galton.client.transport_zmq import ZmqTransport
 from galton.client.values import JointStates, Stamp, States
 from galton.protocol import (
     POSE_WIDTH,
@@ -51,8 +46,7 @@ from galton.protocol import (
     SimStatus,
     Telemetry,
 )
-from galton.protocol.errors import ClientClosedError
-from galton.protocol.keys import client_token_key
+from galton.protocol.errors import ClientClosedError, InvalidArgumentError
 from galton.protocol.operations import OPERATIONS
 
 DEFAULT_TIMEOUT_S = 5.0
@@ -74,15 +68,22 @@ class Client(WorldMethods, PerceptionMethods):
                  config_file: str | None = None) -> None:
         self.keys = Keys(instance)
         self.timeout = checked_timeout(timeout)
-        self._own_session = session is None
-        self.session = session if session is not None else open_session(connect, config_file)
         self._closed = False
         self._world: str | None = None  # None: the live world (views name theirs)
         self._parent: WorldMethods | None = None
-        # This client's liveliness: a daemon ends a step request whose client has vanished.
+        # A daemon ends a step request whose client has vanished: this client's liveliness
+        # token says so over Zenoh, the connection itself over ZeroMQ.
         self.client_id = uuid.uuid4().hex
-        self._token: Declared | None = self.session.liveliness().declare_token(
-            client_token_key(self.client_id))
+        self._own_transport = True
+        self.transport = _transport(self.keys, self.client_id, connect, session, config_file)
+
+    @property
+    def session(self) -> zenoh.Session:
+        """The Zenoh session (a client connected over ZeroMQ has none)."""
+        if not isinstance(self.transport, ZenohTransport):
+            raise InvalidArgumentError(
+                f"this client speaks {self.transport.kind}, not Zenoh: it has no Zenoh session")
+        return self.transport.session
 
     @property
     def instance(self) -> str:
@@ -95,15 +96,13 @@ class Client(WorldMethods, PerceptionMethods):
         return self._closed or (isinstance(parent, Client) and parent.closed)
 
     def close(self) -> None:
-        """Withdraw this client's token and close its own session; closing twice is fine."""
+        """Withdraw this client's token and close its own connection; closing twice is
+        fine (a view leaves its parent's open)."""
         if self._closed:
             return
         self._closed = True
-        if self._token is not None:
-            undeclare(self._token)
-            self._token = None
-        if self._own_session:
-            close_session(self.session)
+        if self._own_transport:
+            self.transport.close()
 
     def __enter__(self) -> Client:
         self._check_open()
@@ -135,8 +134,7 @@ class Client(WorldMethods, PerceptionMethods):
         steps = op in OPERATIONS and OPERATIONS[op].steps
         if self._world is not None:
             args = {"world": self._world, **(args or {})}
-        return query(self.session, self.keys, op, args, wait,
-                     self.client_id if steps else None)
+        return self.transport.request(op, args, wait, self.client_id if steps else None)
 
     def call(self, op: str, args: dict[str, Any] | None = None,
              timeout: float | None = None) -> dict[str, Any]:
@@ -337,17 +335,28 @@ class Client(WorldMethods, PerceptionMethods):
     def telemetry(self, timeout: float | None = None) -> TelemetryStream:
         """An iterator of Telemetry samples (close it, or use it as a context manager)."""
         self._check_open()
-        return TelemetryStream(self.session, self.keys.telemetry,
-                               self.timeout if timeout is None else timeout)
+        return TelemetryStream(self.transport, self.timeout if timeout is None else timeout)
 
     def on_telemetry(self, callback: Callable[[Telemetry], None]) -> Subscription:
         """Call ``callback`` on Zenoh's thread for every sample; keep it short."""
         self._check_open()
-        return TelemetryStream.with_callback(self.session, self.keys.telemetry, callback)
+        return TelemetryStream.with_callback(self.transport, callback)
 
     def on_event(self, callback: Callable[[dict[str, Any]], None]) -> Subscription:
         self._check_open()
-        return subscribe_events(self.session, self.keys.events, callback)
+        return subscribe_events(self.transport, callback)
+
+
+def _transport(keys: Keys, client_id: str, connect: str | Sequence[str] | None,
+               session: zenoh.Session | None, config_file: str | None) -> Transport:
+    """ZeroMQ for a ``zmq+ipc://`` or ``zmq+tcp://`` endpoint, else Zenoh."""
+    endpoint = zmq_endpoint(connect)
+    if endpoint is None:
+        return ZenohTransport(keys, client_id, session, connect, config_file)
+    if session is not None or config_file is not None:
+        raise InvalidArgumentError(
+            "a ZeroMQ endpoint takes no Zenoh session or config file")
+    return ZmqTransport(endpoint)
 
 
 def _names(result: dict[str, Any]) -> list[str]:

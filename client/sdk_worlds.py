@@ -38,8 +38,7 @@ class WorldMethods:
     _world: str | None
     _parent: WorldMethods | None
     _closed: bool
-    _own_session: bool
-    _token: Any
+    _own_transport: bool
 
     if TYPE_CHECKING:
         def _ok(self, op: str, args: dict[str, Any] | None = None,
@@ -61,8 +60,8 @@ class WorldMethods:
         if not isinstance(name, str) or not name:
             raise InvalidArgumentError(f"a world name is a non-empty str, got {name!r}")
         view = copy.copy(self)
-        view._world, view._parent, view._token = name, self, None
-        view._own_session, view._closed = False, False
+        view._world, view._parent = name, self
+        view._own_transport, view._closed = False, False
         return view
 
     # -- worlds ---------------------------------------------------------------------------

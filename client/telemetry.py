@@ -1,4 +1,5 @@
-"""Telemetry and events as iterators or callbacks, over Zenoh subscribers."""
+"""Telemetry and events as iterators or callbacks, over a transport's subscriptions
+(Zenoh subscribers, or ZeroMQ SUB sockets)."""
 
 from __future__ import annotations
 
@@ -8,9 +9,9 @@ from collections.abc import Callable, Iterator
 from typing import Any
 
 import msgpack
-import zenoh
 
 from galton.client.session import Declared, checked_timeout, undeclare
+from galton.client.transport import Transport
 from galton.protocol import RequestTimeoutError, Telemetry
 
 log = logging.getLogger("galton.client")
@@ -35,24 +36,24 @@ class Subscription:
         self.close()
 
 
-def _decode_telemetry(sample: zenoh.Sample) -> Telemetry | None:
+def _decode_telemetry(data: bytes) -> Telemetry | None:
     try:
-        return Telemetry.from_wire(msgpack.unpackb(sample.payload.to_bytes()))
+        return Telemetry.from_wire(msgpack.unpackb(data))
     except Exception:
-        log.warning("ignored an unreadable telemetry sample on %s", sample.key_expr)
+        log.warning("ignored an unreadable telemetry sample")
         return None
 
 
 class TelemetryStream(Subscription):
     """Iterate Telemetry samples; each ``next`` waits at most ``timeout`` seconds."""
 
-    def __init__(self, session: zenoh.Session, key: str, timeout: float) -> None:
+    def __init__(self, transport: Transport, timeout: float) -> None:
         self._queue: queue.SimpleQueue[Telemetry] = queue.SimpleQueue()
         self.timeout = checked_timeout(timeout)
-        super().__init__(session.declare_subscriber(key, self._on_sample))
+        super().__init__(transport.subscribe("telemetry", self._on_sample))
 
-    def _on_sample(self, sample: zenoh.Sample) -> None:
-        telemetry = _decode_telemetry(sample)
+    def _on_sample(self, data: bytes) -> None:
+        telemetry = _decode_telemetry(data)
         if telemetry is not None:
             self._queue.put(telemetry)
 
@@ -76,20 +77,20 @@ class TelemetryStream(Subscription):
         return self
 
     @staticmethod
-    def with_callback(session: zenoh.Session, key: str,
+    def with_callback(transport: Transport,
                       callback: Callable[[Telemetry], None]) -> Subscription:
-        def on_sample(sample: zenoh.Sample) -> None:
-            telemetry = _decode_telemetry(sample)
+        def on_sample(data: bytes) -> None:
+            telemetry = _decode_telemetry(data)
             if telemetry is not None:
                 callback(telemetry)
-        return Subscription(session.declare_subscriber(key, on_sample))
+        return Subscription(transport.subscribe("telemetry", on_sample))
 
 
-def subscribe_events(session: zenoh.Session, key: str,
+def subscribe_events(transport: Transport,
                      callback: Callable[[dict[str, Any]], None]) -> Subscription:
-    def on_sample(sample: zenoh.Sample) -> None:
+    def on_sample(data: bytes) -> None:
         try:
-            callback(msgpack.unpackb(sample.payload.to_bytes()))
+            callback(msgpack.unpackb(data))
         except Exception:
             log.exception("event callback failed")
-    return Subscription(session.declare_subscriber(key, on_sample))
+    return Subscription(transport.subscribe("events", on_sample))

@@ -29,6 +29,9 @@ class Call:
     respond: Callable[[bytes], None]
     client: str | None = None  # the sender's id, once the request is decoded
     world: str | None = None  # the world it names, once decoded (its reply's stamp)
+    # The connection it came on, when the transport has connections (ZeroMQ): a step job
+    # is tied to it as to a Zenoh client's token. ``op`` is "" until decoded there.
+    peer: str | None = None
 
 
 @dataclass

@@ -47,6 +47,10 @@ def serve(
     zenoh_config: Annotated[Path | None, typer.Option(
         help="A Zenoh JSON5 config file; --listen/--connect still override it.",
         exists=True, dir_okay=False)] = None,
+    zmq: Annotated[list[str] | None, typer.Option(
+        help="Also serve over ZeroMQ at this endpoint (repeatable): ipc:///path, "
+             "tcp://HOST:PORT, or a port (loopback). Telemetry and events are published "
+             "at ipc:///path.pub or the next port.")] = None,
     multicast: Annotated[bool, typer.Option(
         help="Enable Zenoh multicast scouting (off by default).")] = False,
     telemetry_rate: Annotated[float, typer.Option(
@@ -72,7 +76,7 @@ def serve(
             connect=connect or [], zenoh_config=zenoh_config, multicast=multicast,
             telemetry_rate_hz=telemetry_rate, params=_parse_params(params),
             limits=_parse_limits(limit or []), state_dir=state_dir,
-            checkpoint_period_s=checkpoint_every)
+            checkpoint_period_s=checkpoint_every, zmq=zmq or [])
         code = run_daemon(options, announce=lambda line: print(line, flush=True))
     except GaltonError as error:
         typer.echo(f"galton-daemon: {error}", err=True)

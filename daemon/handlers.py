@@ -49,9 +49,14 @@ def _scene(name: str, apply: ops.SceneOp) -> Handler:
     return handle
 
 
+def _capabilities(loop: SimLoop, call: Call, args: dict[str, Any]) -> Result:
+    """The engine's capabilities, with what the daemon adds (its ZeroMQ endpoints)."""
+    return {**ops.capabilities(loop.world_for(args), args), **loop.advertised}
+
+
 HANDLERS: dict[str, Handler] = {
     "status": time_control.status,
-    "capabilities": _scene("capabilities", ops.capabilities),
+    "capabilities": _capabilities,
     "play": time_control.play,
     "set_rtf": time_control.set_rtf,
     "pause": time_control.pause,

@@ -14,7 +14,7 @@ import sys
 import time
 from collections.abc import Callable
 from contextlib import AbstractContextManager, nullcontext
-from typing import Any
+from typing import Any, Protocol
 
 from galton.daemon import job_results, loop_status, side_jobs, time_control
 from galton.daemon.calls import Call, StepJob, Task, smoothed_step_cost
@@ -42,6 +42,17 @@ from galton.protocol.errors import brief, did_you_mean
 from galton.protocol.operations import OPERATIONS, operation
 
 log = logging.getLogger("galton.daemon")
+
+
+class Inbox(Protocol):
+    """Where requests wait for the physics thread: a queue.SimpleQueue, or with ZeroMQ a
+    daemon/zmq_front.PolledInbox that also polls the sockets."""
+
+    def put(self, item: Call | Task | None) -> None: ...
+
+    def get(self, block: bool = True, timeout: float | None = None) -> Call | Task | None: ...
+
+    def get_nowait(self) -> Call | Task | None: ...
 
 CHUNK_WALL_S = 0.005  # physics work between two looks at the inbox
 # Python's switch interval while the engine holds the GIL as it steps (PyBullet): short, so
@@ -76,7 +87,9 @@ class SimLoop:
             max_string=limits.max_string_bytes,
             long_text_keys=frozenset(a.name for op in OPERATIONS.values() for a in op.args
                                      if a.long_text))
-        self.inbox: queue.SimpleQueue[Call | Task | None] = queue.SimpleQueue()
+        queued: queue.SimpleQueue[Call | Task | None] = queue.SimpleQueue()
+        self.inbox: Inbox = queued  # galton-daemon --zmq: a PolledInbox
+        self.advertised: dict[str, Any] = {}  # what capabilities adds (ZeroMQ endpoints)
         self.state = SimState.STOPPED
         self.target_rtf = 1.0
         self.job: StepJob | None = None
@@ -226,11 +239,12 @@ class SimLoop:
         """Answer one call (or start its step job); never raises. A rejected request has
         changed nothing: every check runs before anything is applied."""
         try:
-            request = decode_request(call.payload, call.op, self.decode_limits)
+            request = decode_request(call.payload, call.op or None, self.decode_limits)
+            call.op = request.op
             op = operation(request.op)
             op.check_arg_names(request.args)
             self.world_for(request.args)  # an unknown world is refused before anything
-            call.client = request.client
+            call.client = call.peer if call.peer is not None else request.client
             named = request.args.get("world")
             call.world = named if isinstance(named, str) else None
             with self.work_guard() if op.mutates and not op.steps else nullcontext():

@@ -23,6 +23,7 @@ from galton.daemon.engines import ENGINE_CLASSES, create_engine
 from galton.daemon.limits import DEFAULT_LIMITS, Limits
 from galton.daemon.loop import SimLoop
 from galton.daemon.world import World
+from galton.daemon.zmq_front import PolledInbox, ZmqFront, parse_endpoint
 from galton.protocol import DEFAULT_PORT, Keys, Telemetry
 from galton.protocol.keys import CLIENTS_PATTERN, client_from_token_key, op_from_control_key
 from galton.protocol.operations import OPERATIONS
@@ -50,6 +51,7 @@ class DaemonOptions:
     limits: Limits = DEFAULT_LIMITS
     state_dir: Path | None = None  # checkpoints of the live world (daemon/checkpoint.py)
     checkpoint_period_s: float = checkpoint.DEFAULT_PERIOD_S
+    zmq: list[str] = field(default_factory=list)  # ZeroMQ endpoints (daemon/zmq_front.py)
 
 
 def zenoh_config(options: DaemonOptions) -> zenoh.Config:
@@ -82,6 +84,7 @@ class Daemon:
         self.loop = SimLoop(self._first_world(engine), options.instance,
                             self._publish_telemetry, self._publish_event,
                             options.telemetry_rate_hz, create_engine, options.limits)
+        self.front = _zmq_front(options, self.loop)
         self._thread: threading.Thread | None = None
         self._queryable: Any = None
         self._token: Any = None
@@ -148,6 +151,8 @@ class Daemon:
         if self._clients is not None:
             self._clients.undeclare()
         self.loop.world.engine.close()
+        if self.front is not None:
+            self.front.close()
         self.session.close()
 
     def _on_query(self, query: zenoh.Query) -> None:
@@ -161,10 +166,27 @@ class Daemon:
             self.loop.submit(call)
 
     def _publish_telemetry(self, sample: Telemetry) -> None:
-        self._telemetry_pub.put(msgpack.packb(sample.to_wire()))
+        data = msgpack.packb(sample.to_wire())
+        self._telemetry_pub.put(data)
+        if self.front is not None:
+            self.front.publish("telemetry", data)
 
     def _publish_event(self, event: dict[str, Any]) -> None:
-        self._events_pub.put(msgpack.packb({"instance": self.options.instance, **event}))
+        data = msgpack.packb({"instance": self.options.instance, **event})
+        self._events_pub.put(data)
+        if self.front is not None:
+            self.front.publish("events", data)
+
+
+def _zmq_front(options: DaemonOptions, loop: SimLoop) -> ZmqFront | None:
+    """With --zmq: the ZeroMQ sockets, polled by the physics thread through its inbox, and
+    advertised by ``capabilities``."""
+    if not options.zmq:
+        return None
+    front = ZmqFront([parse_endpoint(endpoint) for endpoint in options.zmq], options.instance)
+    loop.inbox = PolledInbox(front, lambda peer: Task(lambda: loop.client_gone(peer)))
+    loop.advertised = {"zmq": front.advertised()}
+    return front
 
 
 def _responder(query: zenoh.Query) -> Callable[[bytes], None]:
@@ -226,8 +248,9 @@ def run_daemon(options: DaemonOptions, announce: Callable[[str], None] = print) 
                         "exiting without it", SHUTDOWN_GRACE_S)
             os._exit(0)
     threading.Thread(target=stop_on_signal, name="signals", daemon=True).start()
+    zmq = f" zmq={','.join(daemon.front.control)}" if daemon.front is not None else ""
     announce(f"galton-daemon ready: instance={options.instance} engine={options.engine} "
-             f"listen={','.join(options.listen)} engines={','.join(ENGINE_CLASSES)}")
+             f"listen={','.join(options.listen)}{zmq} engines={','.join(ENGINE_CLASSES)}")
     try:
         daemon.loop.run()
         daemon.save_checkpoint()  # on SIGTERM or SIGINT, after the last request

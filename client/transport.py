@@ -1,0 +1,87 @@
+"""How a Client reaches its daemon: Zenoh (any host, discovery, many daemons) or ZeroMQ
+(one daemon's own endpoint, the same-host fast path). Both carry the same envelope and
+replies; ``transport_for`` picks one from the endpoint a user gives.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from typing import Any, Protocol
+
+import zenoh
+
+from galton.client.session import (
+    Declared,
+    close_session,
+    open_session,
+    query,
+    undeclare,
+)
+from galton.protocol import Keys, Reply
+from galton.protocol.keys import client_token_key
+
+ZMQ_SCHEME = "zmq+"
+Topic = str  # "telemetry" or "events"
+
+
+class Transport(Protocol):
+    """What the SDK needs of a transport."""
+
+    kind: str
+
+    def request(self, op: str, args: dict[str, Any] | None, timeout: float,
+                client: str | None) -> Reply: ...
+
+    def send_raw(self, op: str, payload: bytes, timeout: float) -> list[bytes]:
+        """Every reply to a request sent as these exact bytes (tests and the fuzzer)."""
+        ...
+
+    def subscribe(self, topic: Topic, callback: Callable[[bytes], None]) -> Declared: ...
+
+    def close(self) -> None: ...
+
+
+def zmq_endpoint(connect: str | Sequence[str] | None) -> str | None:
+    """The ZeroMQ endpoint named by ``zmq+ipc://...`` or ``zmq+tcp://...``, else None."""
+    if isinstance(connect, str) and connect.strip().startswith(ZMQ_SCHEME):
+        return connect.strip()[len(ZMQ_SCHEME):]
+    return None
+
+
+class ZenohTransport:
+    """Requests as Zenoh gets on the instance's control keys; this client's liveliness
+    token lets the daemon end a step job whose client has gone."""
+
+    kind = "zenoh"
+
+    def __init__(self, keys: Keys, client_id: str, session: zenoh.Session | None = None,
+                 connect: str | Sequence[str] | None = None,
+                 config_file: str | None = None) -> None:
+        self.keys = keys
+        self.own_session = session is None
+        self.session = session if session is not None else open_session(connect, config_file)
+        self._token: Declared | None = self.session.liveliness().declare_token(
+            client_token_key(client_id))
+
+    def request(self, op: str, args: dict[str, Any] | None, timeout: float,
+                client: str | None) -> Reply:
+        return query(self.session, self.keys, op, args, timeout, client)
+
+    def send_raw(self, op: str, payload: bytes, timeout: float) -> list[bytes]:
+        replies = self.session.get(self.keys.control(op), payload=payload, timeout=timeout)
+        return [r.ok.payload.to_bytes() if r.ok is not None else b"" for r in replies]
+
+    def subscribe(self, topic: Topic, callback: Callable[[bytes], None]) -> Declared:
+        key = self.keys.telemetry if topic == "telemetry" else self.keys.events
+
+        def on_sample(sample: zenoh.Sample) -> None:
+            callback(sample.payload.to_bytes())
+        subscriber: Declared = self.session.declare_subscriber(key, on_sample)
+        return subscriber
+
+    def close(self) -> None:
+        if self._token is not None:
+            undeclare(self._token)
+            self._token = None
+        if self.own_session:
+            close_session(self.session)

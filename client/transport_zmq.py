@@ -1,0 +1,178 @@
+"""The SDK over ZeroMQ: a DEALER socket per calling thread to one daemon's ROUTER, and a
+SUB socket per subscription (docs/protocol.md, "ZeroMQ").
+
+Each request carries a tag frame that its reply echoes, so a late reply to a request that
+timed out is recognised and dropped. ``ZMQ_IMMEDIATE`` keeps a socket unwritable until its
+connection is complete: whether the daemon is reachable is read off the socket itself, with
+no liveliness token (ZeroMQ has none) -- a connection that is up means "busy", one that is
+down means "unreachable".
+"""
+
+from __future__ import annotations
+
+import itertools
+import logging
+import os
+import threading
+import time
+from collections.abc import Callable
+from typing import Any
+
+import zmq
+
+from galton.client.transport import Topic
+from galton.protocol import (
+    DaemonUnreachableError,
+    InvalidArgumentError,
+    Reply,
+    RequestTimeoutError,
+    decode_reply,
+    encode_request,
+)
+from galton.protocol.errors import brief
+
+log = logging.getLogger("galton.client")
+
+CONNECT_TIMEOUT_S = 1.0  # how long a new socket may take to connect before "unreachable"
+SUBSCRIBER_POLL_MS = 100
+
+
+def check_endpoint(endpoint: str) -> str:
+    if endpoint.startswith(("ipc://", "tcp://")) and len(endpoint) > len("tcp://"):
+        return endpoint
+    raise InvalidArgumentError(
+        f"{brief(endpoint)} is not a ZeroMQ endpoint: give zmq+ipc:///path/to/socket or "
+        "zmq+tcp://HOST:PORT")
+
+
+class ZmqTransport:
+    """Requests to one daemon's ZeroMQ control endpoint."""
+
+    kind = "zmq"
+
+    def __init__(self, endpoint: str, connect_timeout: float = CONNECT_TIMEOUT_S) -> None:
+        self.endpoint = check_endpoint(endpoint)
+        path = endpoint[len("ipc://"):]
+        if endpoint.startswith("ipc://") and not os.path.exists(path):
+            raise DaemonUnreachableError(
+                f"no galton-daemon serves {endpoint}: there is no socket file at {path} "
+                f"(start one with `galton-daemon --zmq {endpoint}`)")
+        self.connect_timeout = connect_timeout
+        self.context = zmq.Context()
+        self._local = threading.local()
+        self._tags = itertools.count(1)
+        self._lock = threading.Lock()
+        self._sockets: list[zmq.Socket[bytes]] = []
+        self._telemetry_endpoint: str | None = None
+        try:
+            self._socket()  # fail now, as a Zenoh client does, if nothing answers there
+        except DaemonUnreachableError:
+            self.close()
+            raise
+
+    def _socket(self) -> zmq.Socket[bytes]:
+        """This thread's DEALER, connected (or DaemonUnreachableError)."""
+        socket: zmq.Socket[bytes] | None = getattr(self._local, "socket", None)
+        if socket is None:
+            socket = self.context.socket(zmq.DEALER)
+            socket.setsockopt(zmq.IMMEDIATE, 1)
+            socket.setsockopt(zmq.LINGER, 0)
+            socket.connect(self.endpoint)
+            with self._lock:
+                self._sockets.append(socket)
+            self._local.socket = socket
+        if not socket.poll(int(self.connect_timeout * 1000), zmq.POLLOUT):
+            raise DaemonUnreachableError(
+                f"no galton-daemon answers at {self.endpoint} (start one with "
+                f"`galton-daemon --zmq {self.endpoint}`)")
+        return socket
+
+    def exchange(self, what: str, payload: bytes, timeout: float) -> bytes:
+        """Send one request and wait for its reply's bytes."""
+        socket = self._socket()
+        tag = next(self._tags).to_bytes(8, "little")
+        socket.send_multipart([tag, payload])
+        deadline = time.monotonic() + timeout
+        while (remaining := deadline - time.monotonic()) > 0:
+            if socket.poll(max(1, int(remaining * 1000 + 0.5))):
+                frames = socket.recv_multipart()
+                if len(frames) == 2 and frames[0] == tag:
+                    return frames[1]
+        if socket.poll(0, zmq.POLLOUT):
+            raise RequestTimeoutError(
+                f"{what}: the daemon at {self.endpoint} is connected but sent no reply within "
+                f"{timeout:g} s (busy with a long request, or the operation needs longer: "
+                "pass a longer timeout)")
+        raise DaemonUnreachableError(
+            f"{what}: the daemon at {self.endpoint} went away (no connection)")
+
+    def request(self, op: str, args: dict[str, Any] | None, timeout: float,
+                client: str | None) -> Reply:
+        return decode_reply(self.exchange(op, encode_request(op, args, client), timeout))
+
+    def send_raw(self, op: str, payload: bytes, timeout: float) -> list[bytes]:
+        try:
+            return [self.exchange(op, payload, timeout)]
+        except RequestTimeoutError:
+            return []
+
+    def telemetry_endpoint(self) -> str:
+        """The PUB endpoint beside our control endpoint, as ``capabilities`` names it."""
+        if self._telemetry_endpoint is None:
+            reply = self.request("capabilities", None, 10.0, None)
+            reply.raise_for_code()
+            advertised = reply.result.get("zmq") or {}
+            control, telemetry = advertised.get("control", []), advertised.get("telemetry", [])
+            if not telemetry:
+                raise DaemonUnreachableError(
+                    f"the daemon at {self.endpoint} advertises no telemetry endpoint")
+            index = control.index(self.endpoint) if self.endpoint in control else 0
+            self._telemetry_endpoint = str(telemetry[min(index, len(telemetry) - 1)])
+        return self._telemetry_endpoint
+
+    def subscribe(self, topic: Topic, callback: Callable[[bytes], None]) -> ZmqSubscription:
+        return ZmqSubscription(self.context, self.telemetry_endpoint(), topic, callback)
+
+    def close(self) -> None:
+        """Close every socket of every thread; the context with them."""
+        self.context.destroy(linger=0)
+
+
+class ZmqSubscription:
+    """A SUB socket read by a thread of its own, which calls ``callback`` per message of
+    the topic (``galton/<instance>/<topic>``); ``undeclare`` stops it."""
+
+    def __init__(self, context: zmq.Context[zmq.Socket[bytes]], endpoint: str, topic: Topic,
+                 callback: Callable[[bytes], None]) -> None:
+        self._suffix = b"/" + topic.encode()
+        self._callback = callback
+        self._stop = threading.Event()
+        self._socket = context.socket(zmq.SUB)
+        self._socket.setsockopt(zmq.LINGER, 0)
+        self._socket.connect(endpoint)
+        self._socket.subscribe(b"galton/")
+        self._thread = threading.Thread(target=self._run, name="galton-zmq-sub", daemon=True)
+        self._thread.start()
+
+    def _run(self) -> None:
+        socket = self._socket
+        try:
+            while not self._stop.is_set():
+                if not socket.poll(SUBSCRIBER_POLL_MS):
+                    continue
+                frames = socket.recv_multipart()
+                if len(frames) == 2 and frames[0].endswith(self._suffix):
+                    try:
+                        self._callback(frames[1])
+                    except Exception:
+                        log.exception("a subscription callback failed")
+        except zmq.ContextTerminated:
+            return
+        finally:
+            socket.close(linger=0)
+
+    def undeclare(self) -> None:
+        """Stop the thread (within one poll period) and close its socket."""
+        self._stop.set()
+        if threading.current_thread() is not self._thread:
+            self._thread.join(SUBSCRIBER_POLL_MS / 1000 * 5)

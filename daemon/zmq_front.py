@@ -1,0 +1,246 @@
+"""The daemon's ZeroMQ front: ROUTER sockets for requests and one PUB socket for telemetry
+and events, beside Zenoh, on the same host or a trusted link (docs/protocol.md, "ZeroMQ").
+
+No thread of its own and no hand-off: the physics thread polls the sockets between steps
+(``PolledInbox``), reads a request, answers it, and sends the reply itself. ZeroMQ sockets
+are not thread-safe, so every socket here is used on the physics thread only; requests that
+come over Zenoh are queued as before and wake the poll through a pipe.
+
+A long step is tied to the connection it came on: a socket monitor reports each closed
+connection by its file descriptor, which the first request on it mapped to the peer.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import errno
+import os
+import queue
+import select
+import time
+from collections import deque
+from collections.abc import Callable
+from typing import Any
+
+import zmq
+from zmq.utils.monitor import parse_monitor_message
+
+from galton.daemon.calls import Call, Task
+from galton.protocol import InvalidArgumentError
+from galton.protocol.errors import brief
+
+# A message is routing frames (echoed in the reply, as ZeroMQ's REQ/DEALER envelopes are),
+# then one frame holding the request: at most this many frames in all, ROUTER's included.
+MAX_FRAMES = 8
+MAX_ROUTING_FRAME_BYTES = 256
+LOOPBACK = "127.0.0.1"
+
+
+def parse_endpoint(text: str) -> str:
+    """A ``--zmq`` value as a ZeroMQ endpoint: ``ipc://PATH``, ``tcp://HOST:PORT`` (PORT may
+    be ``*``: any free port), or a bare port, which means loopback (``tcp://127.0.0.1:PORT``)."""
+    text = text.strip()
+    if text.isdigit():
+        text = f"tcp://{LOOPBACK}:{text}"
+    if text.startswith("ipc://") and len(text) > len("ipc://"):
+        return text
+    if text.startswith("tcp://"):
+        host, _, port = text[len("tcp://"):].rpartition(":")
+        if host and (port == "*" or (port.isdigit() and 0 <= int(port) <= 65535)):
+            return text
+    raise InvalidArgumentError(
+        f"--zmq {brief(text)} is not an endpoint: give ipc:///path/to/socket, "
+        "tcp://HOST:PORT (PORT may be '*') or a port number (loopback)")
+
+
+def telemetry_endpoint(control: str) -> str:
+    """Where the PUB socket of a control endpoint is bound: ``ipc://PATH.pub``, or the next
+    TCP port (a ``*`` port gives any free port: the bound one is advertised)."""
+    if control.startswith("ipc://"):
+        return control + ".pub"
+    host, _, port = control[len("tcp://"):].rpartition(":")
+    return f"tcp://{host}:*" if port == "*" else f"tcp://{host}:{int(port) + 1}"
+
+
+class ZmqFront:
+    """The bound sockets, the monitor of each ROUTER and the pipe that wakes the poll."""
+
+    def __init__(self, endpoints: list[str], instance: str) -> None:
+        self.context = zmq.Context()
+        self.routers: list[zmq.Socket[bytes]] = []
+        self.monitors: list[zmq.Socket[bytes]] = []
+        # Per ROUTER: the peer identity each connection's file descriptor carries.
+        self.peers: list[dict[int, bytes]] = []
+        self.control: list[str] = []
+        self.telemetry: list[str] = []
+        self.prefix = f"galton/{instance}/".encode()
+        try:
+            self.pub = self.context.socket(zmq.PUB)
+            self.pub.setsockopt(zmq.LINGER, 0)
+            for endpoint in endpoints:
+                self._bind(endpoint)
+        except zmq.ZMQError as error:
+            self.close()
+            raise InvalidArgumentError(f"ZeroMQ could not bind: {error}") from error
+        self._wake_read, self._wake_write = os.pipe()
+        os.set_blocking(self._wake_read, False)
+        os.set_blocking(self._wake_write, False)
+        self._fds: list[int] = [int(socket.getsockopt(zmq.FD)) for socket in (
+            *self.routers, *self.monitors)] + [self._wake_read]
+
+    def _bind(self, endpoint: str) -> None:
+        router = self.context.socket(zmq.ROUTER)
+        router.setsockopt(zmq.LINGER, 0)
+        router.bind(endpoint)
+        self.routers.append(router)
+        self.monitors.append(router.get_monitor_socket(zmq.EVENT_DISCONNECTED))
+        self.peers.append({})
+        bound = router.getsockopt_string(zmq.LAST_ENDPOINT)
+        self.control.append(bound)
+        self.pub.bind(telemetry_endpoint(bound))
+        self.telemetry.append(self.pub.getsockopt_string(zmq.LAST_ENDPOINT))
+
+    def advertised(self) -> dict[str, list[str]]:
+        """The endpoints as ``capabilities`` names them."""
+        return {"control": list(self.control), "telemetry": list(self.telemetry)}
+
+    def wake(self) -> None:
+        """Called from any thread: make a waiting ``wait`` return."""
+        with contextlib.suppress(BlockingIOError):  # a full pipe wakes the poll anyway
+            os.write(self._wake_write, b"\0")
+
+    def readable(self) -> bool:
+        """Whether a socket has something to read. Reading ZMQ_EVENTS also re-arms the
+        edge-triggered ZMQ_FD, so this runs before every wait."""
+        return any(int(socket.getsockopt(zmq.EVENTS)) & zmq.POLLIN
+                   for socket in (*self.monitors, *self.routers))
+
+    def wait(self, timeout: float | None) -> None:
+        """Wait until a socket may be readable, the pipe is woken, or ``timeout`` seconds
+        (select(): microsecond resolution, unlike zmq_poll's milliseconds)."""
+        if self.readable():
+            return
+        try:
+            ready, _, _ = select.select(self._fds, [], [], timeout)
+        except InterruptedError:
+            return
+        if self._wake_read in ready:
+            with contextlib.suppress(BlockingIOError):
+                os.read(self._wake_read, 4096)
+
+    def receive(self, gone: Callable[[str], Task]) -> list[Call | Task]:
+        """Everything readable now, without blocking: closed connections first (as Tasks
+        made by ``gone``), then requests as Calls answered on this thread."""
+        items: list[Call | Task] = []
+        for index, monitor in enumerate(self.monitors):
+            items.extend(gone(peer) for peer in self._closed(index, monitor))
+        for index, router in enumerate(self.routers):
+            while True:
+                try:
+                    frames = router.recv_multipart(zmq.NOBLOCK, copy=False)
+                except zmq.Again:
+                    break
+                call = self._call(index, router, frames)
+                if call is not None:
+                    items.append(call)
+        return items
+
+    def _closed(self, index: int, monitor: zmq.Socket[bytes]) -> list[str]:
+        peers: list[str] = []
+        while True:
+            try:
+                event = parse_monitor_message(monitor.recv_multipart(zmq.NOBLOCK))
+            except zmq.Again:
+                return peers
+            identity = self.peers[index].pop(int(event["value"]), None)
+            if identity is not None:
+                peers.append(peer_name(index, identity))
+
+    def _call(self, index: int, router: zmq.Socket[bytes], frames: list[Any]) -> Call | None:
+        """A Call for one message; a message that is no request is dropped, as ZeroMQ
+        cannot address an answer to a malformed envelope."""
+        routing = [bytes(frame) for frame in frames[:-1]]
+        if len(frames) < 2 or len(frames) > MAX_FRAMES or any(
+                len(part) > MAX_ROUTING_FRAME_BYTES for part in routing[1:]):
+            return None
+        self.peers[index].setdefault(frames[-1].get(zmq.SRCFD), routing[0])
+
+        def respond(data: bytes) -> None:
+            # A peer whose queue is full, or which has gone, loses it (as ROUTER would).
+            with contextlib.suppress(zmq.Again):
+                router.send_multipart([*routing, data], zmq.NOBLOCK)
+        return Call("", bytes(frames[-1].buffer), respond, peer=peer_name(index, routing[0]))
+
+    def publish(self, topic: str, data: bytes) -> None:
+        """Publish on ``galton/<instance>/<topic>`` (the Zenoh key, as the topic frame)."""
+        with contextlib.suppress(zmq.Again):
+            self.pub.send_multipart([self.prefix + topic.encode(), data], zmq.NOBLOCK)
+
+    def close(self) -> None:
+        """Close every socket (after the physics thread has stopped using them)."""
+        for router in self.routers:
+            router.disable_monitor()
+        for socket in (*self.monitors, *self.routers):
+            socket.close(linger=0)
+        if hasattr(self, "pub"):
+            self.pub.close(linger=0)
+        for endpoint in self.control + self.telemetry:
+            _remove_socket_file(endpoint)
+        for fd in (getattr(self, "_wake_read", None), getattr(self, "_wake_write", None)):
+            if fd is not None:
+                os.close(fd)
+        self.context.term()
+
+
+def peer_name(index: int, identity: bytes) -> str:
+    """The name a connection goes by in the loop (a step job's client)."""
+    return f"zmq:{index}:{identity.hex()}"
+
+
+def _remove_socket_file(endpoint: str) -> None:
+    if endpoint.startswith("ipc://"):
+        try:
+            os.unlink(endpoint[len("ipc://"):])
+        except OSError as error:
+            if error.errno != errno.ENOENT:
+                raise
+
+
+class PolledInbox:
+    """The physics loop's inbox when ZeroMQ is on: Zenoh's calls in a queue that wakes the
+    poll, ZeroMQ's read straight from the sockets. Same interface as ``queue.SimpleQueue``."""
+
+    def __init__(self, front: ZmqFront, gone: Callable[[str], Task]) -> None:
+        self.front = front
+        self.gone = gone
+        self.queue: queue.SimpleQueue[Call | Task | None] = queue.SimpleQueue()
+        self.pending: deque[Call | Task] = deque()
+
+    def put(self, item: Call | Task | None) -> None:
+        self.queue.put(item)
+        self.front.wake()
+
+    def get_nowait(self) -> Call | Task | None:
+        try:
+            return self.queue.get_nowait()
+        except queue.Empty:
+            pass
+        if not self.pending:
+            self.pending.extend(self.front.receive(self.gone))
+        if self.pending:
+            return self.pending.popleft()
+        raise queue.Empty
+
+    def get(self, block: bool = True, timeout: float | None = None) -> Call | Task | None:
+        if not block:
+            return self.get_nowait()
+        deadline = None if timeout is None else time.monotonic() + timeout
+        while True:
+            try:
+                return self.get_nowait()
+            except queue.Empty:
+                pass
+            remaining = None if deadline is None else deadline - time.monotonic()
+            if remaining is not None and remaining <= 0:
+                raise queue.Empty
+            self.front.wait(remaining)
