@@ -173,6 +173,7 @@ from galton.client import (  # noqa: E402,F401
     cli_fuzz,
     cli_joints,
     cli_perception,
+    cli_router,
     cli_scene,
     cli_states,
     cli_streams,

@@ -19,7 +19,7 @@ from galton.analysis.board import BoardSpec
 from galton.analysis.errors import AnalysisError
 from galton.analysis.published import PUBLISHED_LABEL, PUBLISHED_TABLE2
 from galton.analysis.records import ExperimentResults, TrialRecord
-from galton.client.bench.daemons import bench_clients
+from galton.client.bench.daemons import bench_clients, default_pool_size, pool_clients
 from galton.client.bench.experiment import (
     DEFAULT_BALLS,
     DEFAULT_ENGINES,
@@ -28,6 +28,7 @@ from galton.client.bench.experiment import (
     run_experiment,
 )
 from galton.client.bench.picture import Animation
+from galton.client.bench.pool import Failover, PoolHooks, run_pool
 from galton.client.bench.trial import DEFAULT_MAX_SIM_TIME_S, TrialConfig
 from galton.client.cli import JsonOpt, app, console, run_guarded
 
@@ -84,6 +85,13 @@ def bench(
     animation: Annotated[bool, typer.Option(
         help="Also replay each engine's first trial as an animated PNG for the report.")
     ] = False,
+    pool: Annotated[bool, typer.Option(
+        help="Spread the trials over every daemon found at --connect (or --instances), a "
+             "dead daemon's trial re-run on the others; with no --connect and none running, "
+             "start --pool-size daemons here.")] = False,
+    pool_size: Annotated[int, typer.Option(
+        help="Embedded daemons for --pool when none runs (default: cores, at most 4).",
+        min=1)] = default_pool_size(),
     as_json: JsonOpt = False,
 ) -> None:
     """Run the paper's Galton-board experiment through the bridge and report it, with a
@@ -96,8 +104,13 @@ def bench(
         max_sim_time=max_sim_time))
     endpoints = connect.split(",") if connect else ctx.obj.connect
     names = _csv(instances, "--instances") if instances else None
-    results = run_guarded(lambda: _run(config, endpoints, names, ctx.obj.timeout, as_json, out,
-                                       Animation() if animation else None))
+    shown = Animation() if animation else None
+    if pool:
+        results = run_guarded(lambda: _run_pool(config, endpoints, names, ctx.obj.timeout,
+                                                pool_size, as_json, out, shown))
+    else:
+        results = run_guarded(lambda: _run(config, endpoints, names, ctx.obj.timeout, as_json,
+                                           out, shown))
     _finish(results, out, as_json)
 
 
@@ -114,6 +127,31 @@ def _run(config: ExperimentConfig, connect: list[str] | None, instances: list[st
                 f"{trial.engine} {trial.balls} balls rep {trial.repetition + 1}: "
                 f"lost {record.lost}, RTF {record.rtf or 0:.2f}"))
         return run_experiment(clients, config, advance, pictures, animation)
+
+
+def _run_pool(config: ExperimentConfig, connect: list[str] | None,
+              instances: list[str] | None, timeout: float, size: int, quiet: bool,
+              pictures: Path, animation: Animation | None) -> ExperimentResults:
+    """The plan over a pool of daemons: a progress row per daemon and one for the whole."""
+    with pool_clients(connect, instances, max(timeout, 30.0), size, config.engines[0]) as \
+            daemons, _progress(quiet) as progress:
+        overall = progress.add_task(f"Galton trials on {len(daemons.clients)} daemons",
+                                    total=len(config.trials()))
+        rows = {name: progress.add_task(f"{name}: starting", total=None)
+                for name in daemons.clients}
+
+        def advance(name: str, trial: TrialConfig, record: TrialRecord) -> None:
+            progress.update(rows[name], advance=1, description=(
+                f"{name}: {trial.engine} {trial.balls} balls rep {trial.repetition + 1}: "
+                f"lost {record.lost}, RTF {record.rtf or 0:.2f}"))
+            progress.update(overall, advance=1)
+
+        def dropped(failover: Failover) -> None:
+            progress.update(rows[failover.daemon], description=(
+                f"{failover.daemon}: dropped, trial {failover.trial + 1} re-queued "
+                f"({failover.error})"))
+        hooks = PoolHooks(on_trial=advance, on_drop=dropped)
+        return run_pool(daemons.clients, config, daemons.hosts, hooks, pictures, animation)
 
 
 def _finish(results: ExperimentResults, out: Path, as_json: bool) -> None:

@@ -1,17 +1,25 @@
-"""Which daemons a benchmark runs on: remote ones if reachable, else embedded ones."""
+"""Which daemons a benchmark runs on: remote ones if reachable, else embedded ones; for
+``--pool``, every daemon found (or a few embedded ones) with the host each runs on."""
 
 from __future__ import annotations
 
+import os
 from collections.abc import Iterator, Sequence
 from contextlib import ExitStack, contextmanager
+from dataclasses import dataclass
+from typing import Any
 
-from galton.client.discovery import discover, wait_for_daemon
+import zenoh
+
+from galton.client.discovery import DaemonInfo, discover, wait_for_daemon
 from galton.client.embedded import EmbeddedDaemon
 from galton.client.sdk import Client
-from galton.client.session import open_session
+from galton.client.session import close_session, open_session
 from galton.protocol import DaemonUnreachableError
 
 START_TIMEOUT_S = 60.0
+MAX_DEFAULT_POOL = 4
+DISCOVERY_TIMEOUT_S = 5.0
 
 
 @contextmanager
@@ -57,3 +65,73 @@ def _embedded(engines: Sequence[str], timeout: float) -> Iterator[dict[str, Clie
         for daemon in daemons:
             wait_for_daemon(session, daemon.instance, START_TIMEOUT_S)
         yield {d.engine: Client(d.instance, session=session, timeout=timeout) for d in daemons}
+
+
+@dataclass
+class PoolDaemons:
+    """The daemons of a pool: a Client each (one shared session), and their hosts."""
+
+    clients: dict[str, Client]
+    hosts: dict[str, dict[str, Any]]
+
+
+def default_pool_size() -> int:
+    """Embedded daemons for ``--pool`` with nothing running: one per core, at most 4."""
+    return max(1, min(os.cpu_count() or 1, MAX_DEFAULT_POOL))
+
+
+@contextmanager
+def pool_clients(connect: str | list[str] | None, instances: Sequence[str] | None,
+                 timeout: float, size: int, engine: str) -> Iterator[PoolDaemons]:
+    """Every daemon found at ``connect`` (or the named ``instances``), or, when no endpoint
+    was given and none answers on the default one, ``size`` embedded daemons (started with
+    ``engine``: any daemon serves any engine), stopped on exit."""
+    with ExitStack() as stack:
+        try:
+            session = open_session(connect)
+        except DaemonUnreachableError:
+            if connect is not None:
+                raise
+            names = [f"pool-{i + 1}" for i in range(size)]
+            session = stack.enter_context(_embedded_pool(names, engine))
+        stack.callback(close_session, session)
+        found = _pool_members(session, instances, timeout)
+        yield PoolDaemons({d.instance: Client(d.instance, session=session, timeout=timeout)
+                           for d in found}, {d.instance: d.host for d in found})
+
+
+def _pool_members(session: zenoh.Session, instances: Sequence[str] | None,
+                  timeout: float) -> list[DaemonInfo]:
+    """The reachable daemons (the named ones, each of which must be there)."""
+    found = [d for d in discover(session, min(timeout, DISCOVERY_TIMEOUT_S)) if d.reachable]
+    if instances:
+        missing = sorted(set(instances) - {d.instance for d in found})
+        if missing:
+            raise DaemonUnreachableError(
+                f"--instances {', '.join(missing)}: no such daemon answers; found "
+                f"{', '.join(d.instance for d in found) or 'none'}")
+        found = [d for d in found if d.instance in instances]
+    if not found:
+        raise DaemonUnreachableError(
+            "a Zenoh peer answered but no galton daemon is there to pool (start some with "
+            "`galton-daemon --connect ENDPOINT`, or leave out --connect to start them here)")
+    return found
+
+
+@contextmanager
+def _embedded_pool(names: Sequence[str], engine: str) -> Iterator[zenoh.Session]:
+    """Daemons on free loopback ports, meshed through the first; a session to them."""
+    with ExitStack() as stack:
+        daemons: list[EmbeddedDaemon] = []
+        for name in names:
+            extra = ["--connect", daemons[0].endpoint] if daemons else []
+            daemons.append(stack.enter_context(
+                EmbeddedDaemon(engine, instance=name, extra_args=extra)))
+        session = open_session(daemons[0].endpoint)
+        try:
+            for daemon in daemons:
+                wait_for_daemon(session, daemon.instance, START_TIMEOUT_S)
+        except BaseException:
+            close_session(session)
+            raise
+        yield session

@@ -85,10 +85,18 @@ def run_experiment(clients: dict[str, Client], config: ExperimentConfig,
             taken |= take_pictures(clients[trial.engine], trial, pictures, animation)
         if on_trial is not None:
             on_trial(trial, record)
-    extra = dict(config.extra) | ({"pictures": taken} if taken else {})
+    return experiment_results(records, config, {"pictures": taken} if taken else {})
+
+
+def experiment_results(records: list[TrialRecord], config: ExperimentConfig,
+                       extra: dict[str, Any] | None = None,
+                       hosts: dict[str, dict[str, Any]] | None = None) -> ExperimentResults:
+    """The records with what is needed to trust and re-run them: date, this host, versions,
+    the command line, the config's extra (and ``extra``), the daemons' hosts."""
     return ExperimentResults(trials=records, date=dt.datetime.now(dt.UTC).isoformat(),
                              host=host_description(), versions=versions(),
-                             command=" ".join(sys.argv), extra=extra)
+                             command=" ".join(sys.argv),
+                             extra=dict(config.extra) | (extra or {}), hosts=hosts or {})
 
 
 def take_pictures(sim: Client, trial: TrialConfig, folder: Path,

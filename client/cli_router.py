@@ -1,0 +1,70 @@
+"""``galton-client router``: a Zenoh router, so daemons and clients on several machines meet.
+
+Daemons on each computer ``--connect`` to it, and so do clients; it routes their queries,
+telemetry and liveliness tokens. zenoh-python opens a session in router mode itself, so no
+separate ``zenohd`` (nor any home-made broker) is needed.
+"""
+
+from __future__ import annotations
+
+import json
+import signal
+import threading
+from types import FrameType
+from typing import Annotated
+
+import typer
+import zenoh
+
+from galton.client.cli import app
+from galton.client.session import close_session
+
+DEFAULT_ROUTER_LISTEN = "tcp/127.0.0.1:7447"
+READY_PREFIX = "galton-client router ready:"
+
+
+def router_config(listen: list[str], connect: list[str], multicast: bool) -> zenoh.Config:
+    """A router listening on ``listen``, joined to other routers at ``connect``."""
+    config = zenoh.Config()
+    config.insert_json5("mode", json.dumps("router"))
+    config.insert_json5("listen/endpoints", json.dumps(listen))
+    config.insert_json5("connect/endpoints", json.dumps(connect))
+    config.insert_json5("scouting/multicast/enabled", json.dumps(multicast))
+    return config
+
+
+def wait_for_stop() -> None:
+    """Block until SIGINT or SIGTERM."""
+    stop = threading.Event()
+
+    def on_signal(signum: int, frame: FrameType | None) -> None:
+        stop.set()
+    for number in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(number, on_signal)
+    stop.wait()
+
+
+@app.command(rich_help_panel="Network")
+def router(
+    listen: Annotated[list[str] | None, typer.Option(
+        help="Endpoint to listen on (repeatable); e.g. tcp/0.0.0.0:7447 for other machines. "
+             f"Default {DEFAULT_ROUTER_LISTEN}.")] = None,
+    connect: Annotated[list[str] | None, typer.Option(
+        help="Another router to join (repeatable).")] = None,
+    multicast: Annotated[bool, typer.Option(
+        help="Let Zenoh's multicast scouting find peers on the LAN.")] = False,
+) -> None:
+    """Run a Zenoh router until Ctrl-C or SIGTERM: start daemons with `galton-daemon
+    --connect tcp/HOST:7447`, and point clients at the same endpoint."""
+    endpoints = listen or [DEFAULT_ROUTER_LISTEN]
+    try:
+        session = zenoh.open(router_config(endpoints, connect or [], multicast))
+    except zenoh.ZError as error:
+        typer.echo(f"galton-client: the router could not start on {', '.join(endpoints)}: "
+                   f"{error}", err=True)
+        raise typer.Exit(1) from error
+    try:
+        typer.echo(f"{READY_PREFIX} listen={','.join(endpoints)} zid={session.zid()}")
+        wait_for_stop()
+    finally:
+        close_session(session)
