@@ -11,6 +11,7 @@ import signal
 import socket
 import subprocess
 import sys
+import tempfile
 import threading
 from pathlib import Path
 from typing import IO
@@ -44,11 +45,15 @@ class EmbeddedDaemon:
 
     def __init__(self, engine: str = "mujoco", instance: str | None = None,
                  port: int | None = None, telemetry_rate: float = 10.0,
-                 extra_args: list[str] | None = None) -> None:
+                 extra_args: list[str] | None = None, zmq: bool = False) -> None:
         self.engine = engine
         self.instance = instance or f"embedded-{engine}"
         self.port = port or free_loopback_port()
         self.endpoint = f"tcp/127.0.0.1:{self.port}"
+        # With ``zmq``: a ZeroMQ ipc socket too, in a folder of its own (removed at stop).
+        self._socket_dir = tempfile.mkdtemp(prefix="galton-") if zmq else None
+        self.zmq_endpoint = (f"zmq+ipc://{self._socket_dir}/{self.instance}.sock"
+                             if self._socket_dir else None)
         self.telemetry_rate = telemetry_rate
         self.extra_args = extra_args or []
         self.process: subprocess.Popen[str] | None = None
@@ -61,6 +66,8 @@ class EmbeddedDaemon:
         command = [*daemon_command(), "--engine", self.engine, "--instance", self.instance,
                    "--listen", self.endpoint, "--telemetry-rate", str(self.telemetry_rate),
                    *self.extra_args]
+        if self.zmq_endpoint is not None:
+            command += ["--zmq", self.zmq_endpoint.removeprefix("zmq+")]
         self.process = subprocess.Popen(command, stdout=subprocess.PIPE,
                                         stderr=subprocess.STDOUT, text=True, bufsize=1)
         self._watcher = threading.Thread(target=self._watch, args=(self.process.stdout,),
@@ -95,6 +102,8 @@ class EmbeddedDaemon:
                 self.process.kill()
                 self.process.wait(timeout)
         self._close_output()
+        if self._socket_dir is not None:
+            shutil.rmtree(self._socket_dir, ignore_errors=True)
         return self.process.returncode
 
     def _close_output(self) -> None:

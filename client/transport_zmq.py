@@ -29,7 +29,7 @@ from galton.protocol import (
     decode_reply,
     encode_request,
 )
-from galton.protocol.errors import brief
+from galton.protocol.errors import ClientClosedError, brief
 
 log = logging.getLogger("galton.client")
 
@@ -88,7 +88,17 @@ class ZmqTransport:
         return socket
 
     def exchange(self, what: str, payload: bytes, timeout: float) -> bytes:
-        """Send one request and wait for its reply's bytes."""
+        """Send one request and wait for its reply's bytes; a client closed meanwhile (by
+        another thread) raises ClientClosedError."""
+        try:
+            return self._exchange(what, payload, timeout)
+        except zmq.ZMQError as error:
+            if self.context.closed or error.errno in (zmq.ETERM, zmq.ENOTSOCK):
+                raise ClientClosedError(
+                    f"{what}: the client was closed while its request waited") from None
+            raise DaemonUnreachableError(f"{what}: ZeroMQ failed: {error}") from error
+
+    def _exchange(self, what: str, payload: bytes, timeout: float) -> bytes:
         socket = self._socket()
         tag = next(self._tags).to_bytes(8, "little")
         socket.send_multipart([tag, payload])

@@ -244,7 +244,7 @@ class SimLoop:
             op = operation(request.op)
             op.check_arg_names(request.args)
             self.world_for(request.args)  # an unknown world is refused before anything
-            call.client = call.peer if call.peer is not None else request.client
+            call.client = request.client
             named = request.args.get("world")
             call.world = named if isinstance(named, str) else None
             with self.work_guard() if op.mutates and not op.steps else nullcontext():

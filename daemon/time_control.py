@@ -229,13 +229,15 @@ def _start_job(loop: SimLoop, call: Call, world: World, count: int,
 
 
 def client_gone(loop: SimLoop, client: str) -> None:
-    """A client's liveliness token vanished: the step request it is waiting for ends
-    now (its reply has nowhere to go), the world stays paused where it got to."""
+    """A client's liveliness token vanished, or its ZeroMQ connection closed: the step
+    request it is waiting for ends now (its reply has nowhere to go), the world stays paused
+    where it got to. The event names the client by its id, else by its connection."""
     job = loop.job
-    if job is None or job.call.client != client:
+    if job is None or client not in (job.call.client, job.call.peer):
         return
     cancel_job(loop, "its client disappeared")
-    loop.emit({"kind": "job_abandoned", "client": client, "steps_done": job.done,
+    loop.emit({"kind": "job_abandoned", "client": job.call.client or client,
+               "steps_done": job.done,
                "steps_asked": job.total, "step": loop.world.step_index})
 
 

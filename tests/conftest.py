@@ -1,8 +1,10 @@
 """Shared fixtures: real galton-daemon processes on free loopback ports, one per engine.
 
-Each daemon is started once per test session by its console command; a fixture waits for
-its readiness line and its liveliness token, never for a fixed time. Before each test the
-world is replaced by a fresh one (``load_world``), so tests do not see each other's scene.
+Each daemon is started once per test session by its console command, serving Zenoh and a
+ZeroMQ ipc socket; a fixture waits for its readiness line and its liveliness token, never
+for a fixed time. The conformance suite runs over both transports (tests/conformance/
+conftest.py). Before each test the world is replaced by a fresh one (``load_world``), so
+tests do not see each other's scene.
 """
 
 from __future__ import annotations
@@ -10,11 +12,9 @@ from __future__ import annotations
 from collections.abc import Iterator
 
 import pytest
+from support_daemons import ENGINES, start_daemon
 
-from galton.client import Client, EmbeddedDaemon, wait_for_daemon
-
-ENGINES = ("mujoco", "pybullet")
-START_TIMEOUT_S = 60.0
+from galton.client import Client, EmbeddedDaemon
 
 
 @pytest.fixture(scope="session")
@@ -24,15 +24,6 @@ def daemons() -> Iterator[dict[str, EmbeddedDaemon]]:
     yield started
     for daemon in started.values():
         daemon.stop()
-
-
-def start_daemon(daemons: dict[str, EmbeddedDaemon], engine: str) -> EmbeddedDaemon:
-    if engine not in daemons:
-        daemon = EmbeddedDaemon(engine, instance=f"test-{engine}", telemetry_rate=20.0)
-        daemons[engine] = daemon.start(START_TIMEOUT_S)
-        with Client(daemon.instance, daemon.endpoint) as client:
-            wait_for_daemon(client.session, daemon.instance, START_TIMEOUT_S)
-    return daemons[engine]
 
 
 @pytest.fixture(params=ENGINES)

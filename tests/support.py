@@ -57,3 +57,16 @@ def tilted_law(w: float) -> np.ndarray:
     direction = (np.arange(12) - 5.5) ** 2 - np.sum(p * (np.arange(12) - 5.5) ** 2)
     direction = direction * p  # sums to 0: the law stays a law
     return p + w * direction / np.sqrt(np.sum(direction**2 / p))
+
+
+def companion(sim: Client, timeout: float = 10.0) -> Client:
+    """A second client of the same daemon over the same transport (a Zenoh client shares
+    the session; a ZeroMQ one opens its own connection)."""
+    if sim.transport.kind == "zmq":
+        return Client(sim.instance, f"zmq+{sim.transport.endpoint}", timeout=timeout)  # type: ignore[attr-defined]
+    return Client(sim.instance, session=sim.session, timeout=timeout)
+
+
+def raw_replies(sim: Client, op: str, payload: bytes, timeout: float = 10.0) -> list[bytes]:
+    """Every reply to a request sent as these exact bytes, over the client's transport."""
+    return sim.transport.send_raw(op, payload, timeout)

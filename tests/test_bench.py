@@ -54,7 +54,7 @@ def test_trials_are_reproducible(sim: Client, engine: str) -> None:
 
 def test_bench_cli_writes_every_output(daemons: dict[str, EmbeddedDaemon],
                                        tmp_path: Path) -> None:
-    from conftest import start_daemon
+    from support_daemons import start_daemon
 
     daemon = start_daemon(daemons, "mujoco")
     out = tmp_path / "run"

@@ -9,7 +9,7 @@ import struct
 from pathlib import Path
 
 import numpy as np
-from conftest import start_daemon
+from support_daemons import start_daemon
 from synthetic_runs import law_trials
 from typer.testing import CliRunner
 

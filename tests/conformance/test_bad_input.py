@@ -7,7 +7,7 @@ import math
 import msgpack
 import numpy as np
 import pytest
-from support import ball_row, snapshot
+from support import ball_row, raw_replies, snapshot
 
 from galton.client import Client, spheres
 from galton.protocol import (
@@ -26,9 +26,9 @@ from galton.protocol import (
 
 def raw_call(sim: Client, op: str, payload: bytes) -> int:
     """Send raw bytes to an operation's key; return the reply's code."""
-    replies = list(sim.session.get(sim.keys.control(op), payload=payload, timeout=10))
-    assert len(replies) == 1 and replies[0].ok is not None
-    return decode_reply(replies[0].ok.payload.to_bytes()).code
+    replies = raw_replies(sim, op, payload)
+    assert len(replies) == 1
+    return decode_reply(replies[0]).code
 
 
 def good_group_wire() -> dict:
@@ -96,7 +96,9 @@ BAD_REQUESTS = {
 
 @pytest.mark.parametrize("op, payload, code", BAD_REQUESTS.values(), ids=BAD_REQUESTS.keys())
 def test_bad_request_gets_its_code_and_changes_nothing(sim: Client, op: str, payload: bytes,
-                                                        code: ResultCode) -> None:
+                                                        code: ResultCode, transport: str) -> None:
+    if transport == "zmq" and payload == BAD_REQUESTS["op-mismatch"][1]:
+        pytest.skip("a ZeroMQ request has no key: the envelope's op is the only one")
     sim.spawn(ball_row(2)[1])
     sim.step(3)
     before = snapshot(sim)

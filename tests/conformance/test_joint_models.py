@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import start_daemon
+from support_daemons import start_daemon
 from support_models import (
     KUKA_JOINTS,
     ROBOTS,

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 import pytest
-from conftest import start_daemon
+from support_daemons import start_daemon
 from support_perception import (
     BALL_CENTRE,
     BALL_RADIUS,

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from support import ball_row, ground_and_balls
+from support import ball_row, companion, ground_and_balls
 
 from galton.client import Client, plane, spheres
 from galton.protocol import (
@@ -197,12 +197,11 @@ def test_a_long_step_is_interrupted_by_pause(sim: Client) -> None:
 def _step_and_pause(sim: Client) -> None:
     import threading
 
-    from galton.client import Client as Other
 
     started = threading.Event()
 
     def pause_when_running() -> None:
-        with Other(sim.instance, session=sim.session) as other, other.telemetry() as stream:
+        with companion(sim) as other, other.telemetry() as stream:
             started.set()
             _wait_for(stream, lambda t: t.step > 0)
             other.pause()
