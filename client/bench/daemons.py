@@ -89,12 +89,12 @@ def pool_clients(connect: str | list[str] | None, instances: Sequence[str] | Non
     with ExitStack() as stack:
         try:
             session = open_session(connect)
+            stack.callback(close_session, session)
         except DaemonUnreachableError:
             if connect is not None:
                 raise
             names = [f"pool-{i + 1}" for i in range(size)]
-            session = stack.enter_context(_embedded_pool(names, engine))
-        stack.callback(close_session, session)
+            session = stack.enter_context(embedded_pool(names, engine))
         found = _pool_members(session, instances, timeout)
         yield PoolDaemons({d.instance: Client(d.instance, session=session, timeout=timeout)
                            for d in found}, {d.instance: d.host for d in found})
@@ -119,8 +119,9 @@ def _pool_members(session: zenoh.Session, instances: Sequence[str] | None,
 
 
 @contextmanager
-def _embedded_pool(names: Sequence[str], engine: str) -> Iterator[zenoh.Session]:
-    """Daemons on free loopback ports, meshed through the first; a session to them."""
+def embedded_pool(names: Sequence[str], engine: str) -> Iterator[zenoh.Session]:
+    """Daemons of these instance names on free loopback ports, meshed through the first, and
+    a session that sees them all; the session is closed and the daemons stopped on exit."""
     with ExitStack() as stack:
         daemons: list[EmbeddedDaemon] = []
         for name in names:
@@ -128,10 +129,7 @@ def _embedded_pool(names: Sequence[str], engine: str) -> Iterator[zenoh.Session]
             daemons.append(stack.enter_context(
                 EmbeddedDaemon(engine, instance=name, extra_args=extra)))
         session = open_session(daemons[0].endpoint)
-        try:
-            for daemon in daemons:
-                wait_for_daemon(session, daemon.instance, START_TIMEOUT_S)
-        except BaseException:
-            close_session(session)
-            raise
+        stack.callback(close_session, session)
+        for daemon in daemons:
+            wait_for_daemon(session, daemon.instance, START_TIMEOUT_S)
         yield session
