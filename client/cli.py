@@ -69,7 +69,8 @@ def print_version(wanted: bool) -> None:
 def main_options(
     ctx: typer.Context,
     connect: Annotated[list[str] | None, typer.Option(
-        help="Zenoh endpoint(s) of daemons, comma-separated; default tcp/127.0.0.1:7460.")
+        help="Zenoh endpoint(s) of daemons, comma-separated (default tcp/127.0.0.1:7460), "
+             "or one daemon's ZeroMQ endpoint: zmq+ipc:///path or zmq+tcp://HOST:PORT.")
     ] = None,
     instance: Annotated[str, typer.Option(help="Daemon instance to control.")] = "galton",
     timeout: Annotated[float, typer.Option(

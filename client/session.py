@@ -81,6 +81,11 @@ def open_session(connect: str | Sequence[str] | None = None,
     non-listening peer, since a Zenoh client connects to the first endpoint only.
     """
     endpoints = split_endpoints(connect)
+    zmq = [endpoint for endpoint in endpoints if endpoint.startswith("zmq+")]
+    if zmq:
+        raise InvalidArgumentError(
+            f"{zmq[0]} is a ZeroMQ endpoint, which reaches one daemon's requests only: "
+            "finding daemons and sharing a session need Zenoh (tcp/HOST:PORT)")
     config = zenoh.Config.from_file(config_file) if config_file else zenoh.Config()
     if config_file is None:
         config.insert_json5("mode", json.dumps("client" if len(endpoints) == 1 else "peer"))

@@ -15,9 +15,11 @@ from galton.client.session import (
     close_session,
     open_session,
     query,
+    split_endpoints,
     undeclare,
 )
-from galton.protocol import Keys, Reply
+from galton.protocol import InvalidArgumentError, Keys, Reply
+from galton.protocol.errors import brief
 from galton.protocol.keys import client_token_key
 
 ZMQ_SCHEME = "zmq+"
@@ -42,10 +44,16 @@ class Transport(Protocol):
 
 
 def zmq_endpoint(connect: str | Sequence[str] | None) -> str | None:
-    """The ZeroMQ endpoint named by ``zmq+ipc://...`` or ``zmq+tcp://...``, else None."""
-    if isinstance(connect, str) and connect.strip().startswith(ZMQ_SCHEME):
-        return connect.strip()[len(ZMQ_SCHEME):]
-    return None
+    """The ZeroMQ endpoint named by ``zmq+ipc://...`` or ``zmq+tcp://...`` (alone, or as
+    the one item of a list), else None: a Zenoh endpoint list."""
+    items = split_endpoints(connect) if connect is not None else []
+    wanted = [item for item in items if item.startswith(ZMQ_SCHEME)]
+    if not wanted:
+        return None
+    if len(items) > 1:
+        raise InvalidArgumentError(
+            f"a ZeroMQ endpoint names one daemon: give it alone, not with {brief(items)}")
+    return wanted[0][len(ZMQ_SCHEME):]
 
 
 class ZenohTransport:
