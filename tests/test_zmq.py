@@ -1,0 +1,174 @@
+"""The ZeroMQ front as a client written from docs/protocol.md sees it: raw pyzmq sockets
+against real daemons (the conformance suite runs every operation over it through the SDK)."""
+
+from __future__ import annotations
+
+import importlib.util
+import os
+import queue
+import signal
+import subprocess
+from pathlib import Path
+
+import msgpack
+import pytest
+import zmq
+from support_daemons import start_daemon
+
+from galton.client import Client, EmbeddedDaemon, discover_at
+from galton.client.embedded import daemon_command, free_loopback_port
+from galton.protocol import DaemonUnreachableError, InvalidArgumentError
+
+ROOT = Path(__file__).resolve().parents[1]
+REPLY_WAIT_MS = 20_000
+
+
+def envelope(op: str, args: dict | None = None) -> bytes:
+    return msgpack.packb({"v": 1, "op": op, "args": args or {}}, use_bin_type=True)
+
+
+@pytest.fixture
+def zmq_daemon(daemons: dict[str, EmbeddedDaemon]) -> EmbeddedDaemon:
+    """The session's MuJoCo daemon on a fresh world."""
+    daemon = start_daemon(daemons, "mujoco")
+    with Client(daemon.instance, daemon.endpoint) as sim:
+        sim.load_world("mujoco")
+    return daemon
+
+
+@pytest.fixture
+def dealer(zmq_daemon: EmbeddedDaemon) -> zmq.Socket:
+    context = zmq.Context()
+    socket = context.socket(zmq.DEALER)
+    assert zmq_daemon.zmq_endpoint is not None
+    socket.connect(zmq_daemon.zmq_endpoint.removeprefix("zmq+"))
+    yield socket
+    context.destroy(linger=0)
+
+
+def receive(socket: zmq.Socket) -> list[bytes]:
+    assert socket.poll(REPLY_WAIT_MS), "no reply"
+    return socket.recv_multipart()
+
+
+def test_a_raw_pyzmq_msgpack_client_works(zmq_daemon: EmbeddedDaemon) -> None:
+    spec = importlib.util.spec_from_file_location("raw_zmq", ROOT / "examples" /
+                                                  "raw_zmq_client.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    assert zmq_daemon.zmq_endpoint is not None
+    heights, sample = module.main(zmq_daemon.zmq_endpoint.removeprefix("zmq+"))
+    assert len(heights) == 100 and max(heights) < 2.0
+    assert sample["instance"] == zmq_daemon.instance and sample["step"] >= 500
+
+
+def test_a_req_socket_sends_the_envelope_alone(zmq_daemon: EmbeddedDaemon) -> None:
+    context = zmq.Context()
+    try:
+        socket = context.socket(zmq.REQ)
+        socket.connect(zmq_daemon.zmq_endpoint.removeprefix("zmq+"))  # type: ignore[union-attr]
+        socket.send(envelope("status"))
+        reply = msgpack.unpackb(receive(socket)[0])
+        assert reply["code"] == 0 and reply["result"]["instance"] == zmq_daemon.instance
+    finally:
+        context.destroy(linger=0)
+
+
+def test_replies_come_as_requests_finish_each_with_its_tag(dealer: zmq.Socket) -> None:
+    """A long step sent first answers after a status sent second; the tags tell them
+    apart, and a pause ends the step."""
+    dealer.send_multipart([b"step", envelope("step", {"count": 10**9})])
+    dealer.send_multipart([b"status", envelope("status")])
+    tag, reply = receive(dealer)
+    assert tag == b"status" and msgpack.unpackb(reply)["code"] == 0
+    dealer.send_multipart([b"pause", envelope("pause")])
+    answered = dict(receive(dealer) for _ in range(2))
+    assert msgpack.unpackb(answered[b"pause"])["code"] == 0
+    step = msgpack.unpackb(answered[b"step"])
+    assert step["code_name"] == "OPERATION_FAILED" and "interrupted" in step["message"]
+
+
+@pytest.mark.parametrize("frames", [
+    [b"x"] * 8 + [envelope("status")],  # more than 8 frames with the ROUTER's
+    [b"x" * 257, envelope("status")],  # a routing frame past 256 bytes
+], ids=["too-many-frames", "long-routing-frame"])
+def test_a_message_with_no_address_is_dropped_and_serving_goes_on(
+        dealer: zmq.Socket, frames: list[bytes]) -> None:
+    dealer.send_multipart(frames)
+    dealer.send_multipart([b"after", envelope("status")])
+    tag, reply = receive(dealer)  # the first reply is the second request's: none came before
+    assert tag == b"after" and msgpack.unpackb(reply)["code"] == 0
+
+
+@pytest.mark.parametrize("payload, code", [
+    (b"\xc1", "MALFORMED_REQUEST"),
+    (msgpack.packb({"v": 1, "args": {}}), "MALFORMED_REQUEST"),  # no op: no key to say it
+    (msgpack.packb({"v": 2, "op": "status"}), "UNSUPPORTED_VERSION"),
+    (envelope("no_such_op"), "UNKNOWN_OPERATION"),
+], ids=["not-msgpack", "no-op", "version-2", "unknown-op"])
+def test_a_bad_envelope_gets_its_code(dealer: zmq.Socket, payload: bytes, code: str) -> None:
+    dealer.send_multipart([b"t", payload])
+    tag, reply = receive(dealer)
+    assert tag == b"t" and msgpack.unpackb(reply)["code_name"] == code
+
+
+def test_capabilities_and_discovery_name_the_endpoints(zmq_daemon: EmbeddedDaemon) -> None:
+    endpoint = zmq_daemon.zmq_endpoint.removeprefix("zmq+")  # type: ignore[union-attr]
+    with Client(zmq_daemon.instance, zmq_daemon.endpoint) as sim:
+        advertised = sim.capabilities().zmq
+    assert advertised == {"control": [endpoint], "telemetry": [endpoint + ".pub"]}
+    found = {d.instance: d for d in discover_at(zmq_daemon.endpoint)}
+    assert found[zmq_daemon.instance].zmq == [endpoint]
+
+
+def test_events_reach_an_sdk_client_over_zmq(zmq_daemon: EmbeddedDaemon) -> None:
+    seen: queue.Queue[dict] = queue.Queue()
+    with Client(connect=zmq_daemon.zmq_endpoint) as sim, sim.on_event(seen.put):
+        with sim.telemetry(timeout=10) as stream:
+            next(stream)  # the subscription is connected: what follows is not missed
+        sim.play()
+        sim.pause()
+        kinds = [seen.get(timeout=10)["state"] for _ in range(2)]
+    assert kinds == ["playing", "paused"]
+
+
+def test_bad_zmq_endpoints_are_refused_at_start() -> None:
+    for value in ("ftp://host:1", "tcp://nohost", "ipc://"):
+        done = subprocess.run([*daemon_command(), "--zmq", value, "--listen",
+                               f"tcp/127.0.0.1:{free_loopback_port()}"],
+                              capture_output=True, text=True, timeout=60)
+        assert done.returncode == 2 and "is not an endpoint" in done.stderr, done.stderr
+
+
+def test_a_tcp_daemon_on_any_port_then_killed(tmp_path: Path) -> None:
+    """``tcp://127.0.0.1:*`` binds free ports that capabilities names; an ipc socket file
+    goes when the daemon stops; a client of a killed daemon hears "unreachable"."""
+    socket_file = tmp_path / "d.sock"
+    daemon = EmbeddedDaemon("mujoco", instance="zmq-any-port", extra_args=[
+        "--zmq", "tcp://127.0.0.1:*", "--zmq", f"ipc://{socket_file}"]).start()
+    try:
+        with Client(daemon.instance, daemon.endpoint) as sim:
+            control, telemetry = sim.capabilities().zmq.values()
+        assert control[0].startswith("tcp://127.0.0.1:") and control[1] == f"ipc://{socket_file}"
+        assert telemetry[1] == f"ipc://{socket_file}.pub" and socket_file.exists()
+        with Client(connect=f"zmq+{control[0]}") as sim:
+            assert sim.status().instance == daemon.instance
+            os.kill(daemon.process.pid, signal.SIGKILL)  # type: ignore[union-attr]
+            daemon.process.wait(30)  # type: ignore[union-attr]
+            with pytest.raises(DaemonUnreachableError):
+                sim.status()
+    finally:
+        daemon.stop()
+    daemon = EmbeddedDaemon("mujoco", instance="zmq-any-port", extra_args=[
+        "--zmq", f"ipc://{socket_file}"]).start()  # a stale socket file is bound over
+    assert daemon.stop() == 0 and not socket_file.exists()
+
+
+def test_sdk_endpoints_that_reach_nothing_are_unreachable(tmp_path: Path) -> None:
+    with pytest.raises(DaemonUnreachableError, match="no socket file"):
+        Client(connect=f"zmq+ipc://{tmp_path}/none.sock")
+    with pytest.raises(DaemonUnreachableError, match="no galton-daemon answers"):
+        Client(connect=f"zmq+tcp://127.0.0.1:{free_loopback_port()}")
+    with pytest.raises(InvalidArgumentError, match="not a ZeroMQ endpoint"):
+        Client(connect="zmq+udp://127.0.0.1:1")
