@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 import signal
 import threading
+from pathlib import Path
 from types import FrameType
 from typing import Annotated
 
@@ -23,12 +24,16 @@ DEFAULT_ROUTER_LISTEN = "tcp/127.0.0.1:7447"
 READY_PREFIX = "galton-client router ready:"
 
 
-def router_config(listen: list[str], connect: list[str], multicast: bool) -> zenoh.Config:
-    """A router listening on ``listen``, joined to other routers at ``connect``."""
-    config = zenoh.Config()
+def router_config(listen: list[str], connect: list[str], multicast: bool,
+                  config_file: Path | None = None) -> zenoh.Config:
+    """A router listening on ``listen``, joined to other routers at ``connect``; a Zenoh
+    config file (TLS, access control) may set the rest."""
+    config = zenoh.Config.from_file(str(config_file)) if config_file else zenoh.Config()
     config.insert_json5("mode", json.dumps("router"))
-    config.insert_json5("listen/endpoints", json.dumps(listen))
-    config.insert_json5("connect/endpoints", json.dumps(connect))
+    if listen:
+        config.insert_json5("listen/endpoints", json.dumps(listen))
+    if connect:
+        config.insert_json5("connect/endpoints", json.dumps(connect))
     config.insert_json5("scouting/multicast/enabled", json.dumps(multicast))
     return config
 
@@ -53,18 +58,22 @@ def router(
         help="Another router to join (repeatable).")] = None,
     multicast: Annotated[bool, typer.Option(
         help="Let Zenoh's multicast scouting find peers on the LAN.")] = False,
+    zenoh_config: Annotated[Path | None, typer.Option(
+        help="A Zenoh JSON5 config file (e.g. TLS endpoints, access control); the options "
+             "above still override it.", exists=True, dir_okay=False)] = None,
 ) -> None:
     """Run a Zenoh router until Ctrl-C or SIGTERM: start daemons with `galton-daemon
     --connect tcp/HOST:7447`, and point clients at the same endpoint."""
-    endpoints = listen or [DEFAULT_ROUTER_LISTEN]
+    endpoints = listen or ([] if zenoh_config else [DEFAULT_ROUTER_LISTEN])
     try:
-        session = zenoh.open(router_config(endpoints, connect or [], multicast))
+        session = zenoh.open(router_config(endpoints, connect or [], multicast, zenoh_config))
     except zenoh.ZError as error:
-        typer.echo(f"galton-client: the router could not start on {', '.join(endpoints)}: "
-                   f"{error}", err=True)
+        typer.echo(f"galton-client: the router could not start on "
+                   f"{', '.join(endpoints) or zenoh_config}: {error}", err=True)
         raise typer.Exit(1) from error
     try:
-        typer.echo(f"{READY_PREFIX} listen={','.join(endpoints)} zid={session.zid()}")
+        typer.echo(f"{READY_PREFIX} listen={','.join(endpoints) or 'from the config'} "
+                   f"zid={session.zid()}")
         wait_for_stop()
     finally:
         close_session(session)

@@ -5,13 +5,14 @@ spreads a bench over them, and loses no trial when one is killed mid-trial."""
 from __future__ import annotations
 
 import json
+import subprocess
 import threading
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import pytest
-from cli_support import NOWHERE, flat, invoke, run
+from cli_support import CONSOLE_COMMAND, NOWHERE, flat, invoke, run
 from support_pool import RouterProcess
 
 from galton.analysis.board import BoardSpec
@@ -174,3 +175,11 @@ def test_with_nothing_running_the_pool_starts_its_own_daemons() -> None:
         results = run_pool(daemons.clients, config, daemons.hosts)
     assert len(results.trials) == 2 and {t.daemon for t in results.trials} <= {
         "pool-1", "pool-2"}
+
+
+def test_a_router_on_a_port_in_use_fails_with_one_line(router: RouterProcess) -> None:
+    taken = subprocess.run([CONSOLE_COMMAND, "router", "--listen", router.endpoint],
+                           capture_output=True, text=True, timeout=TIMEOUT_S, check=False)
+    assert taken.returncode == 1 and taken.stdout == ""
+    assert taken.stderr.startswith(f"galton-client: the router could not start on "
+                                   f"{router.endpoint}")
