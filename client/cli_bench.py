@@ -140,6 +140,10 @@ def _run_pool(config: ExperimentConfig, connect: list[str] | None,
         rows = {name: progress.add_task(f"{name}: starting", total=None)
                 for name in daemons.clients}
 
+        def start(name: str, trial: TrialConfig) -> None:
+            progress.update(rows[name], description=(
+                f"{name}: {trial.engine} {trial.balls} balls rep {trial.repetition + 1}"))
+
         def advance(name: str, trial: TrialConfig, record: TrialRecord) -> None:
             progress.update(rows[name], advance=1, description=(
                 f"{name}: {trial.engine} {trial.balls} balls rep {trial.repetition + 1}: "
@@ -150,7 +154,7 @@ def _run_pool(config: ExperimentConfig, connect: list[str] | None,
             progress.update(rows[failover.daemon], description=(
                 f"{failover.daemon}: dropped, trial {failover.trial + 1} re-queued "
                 f"({failover.error})"))
-        hooks = PoolHooks(on_trial=advance, on_drop=dropped)
+        hooks = PoolHooks(on_start=start, on_trial=advance, on_drop=dropped)
         return run_pool(daemons.clients, config, daemons.hosts, hooks, pictures, animation)
 
 

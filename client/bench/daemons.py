@@ -96,8 +96,11 @@ def pool_clients(connect: str | list[str] | None, instances: Sequence[str] | Non
             names = [f"pool-{i + 1}" for i in range(size)]
             session = stack.enter_context(embedded_pool(names, engine))
         found = _pool_members(session, instances, timeout)
-        yield PoolDaemons({d.instance: Client(d.instance, session=session, timeout=timeout)
-                           for d in found}, {d.instance: d.host for d in found})
+        clients = {d.instance: Client(d.instance, session=session, timeout=timeout)
+                   for d in found}
+        for client in clients.values():
+            stack.callback(client.close)
+        yield PoolDaemons(clients, {d.instance: d.host for d in found})
 
 
 def _pool_members(session: zenoh.Session, instances: Sequence[str] | None,
