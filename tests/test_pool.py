@@ -183,3 +183,22 @@ def test_a_router_on_a_port_in_use_fails_with_one_line(router: RouterProcess) ->
     assert taken.returncode == 1 and taken.stdout == ""
     assert taken.stderr.startswith(f"galton-client: the router could not start on "
                                    f"{router.endpoint}")
+
+
+def test_a_pool_whose_only_daemon_dies_says_what_was_not_run(router: RouterProcess) -> None:
+    lone = joined(router, "pool-test-lone")
+
+    def kill_at_first_spawn(event: dict[str, Any]) -> None:
+        if event.get("op") == "spawn" and lone.process:
+            lone.process.kill()
+    try:
+        with Client(lone.instance, router.endpoint) as watcher, \
+                watcher.on_event(kill_at_first_spawn), \
+                pool_clients(router.endpoint, [lone.instance], TIMEOUT_S, 1, "mujoco") as \
+                daemons, pytest.raises(DaemonUnreachableError) as failed:
+            run_pool(daemons.clients, small_config(), daemons.hosts)
+    finally:
+        lone.stop()
+    message = str(failed.value)
+    assert message.startswith("every daemon of the pool failed (pool-test-lone: ")
+    assert message.endswith("6 of 6 trials did not run")
