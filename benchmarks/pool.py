@@ -20,7 +20,7 @@ from common import machine, write_json
 
 from galton.analysis.board import BoardSpec
 from galton.client import Client
-from galton.client.bench.daemons import embedded_pool
+from galton.client.bench.daemons import embedded_mesh
 from galton.client.bench.experiment import ExperimentConfig
 from galton.client.bench.pool import run_pool
 
@@ -31,7 +31,7 @@ TIMEOUT_S = 120.0
 def trials_per_minute(size: int, config: ExperimentConfig) -> dict[str, float]:
     """Run the plan on ``size`` fresh daemons; the trials' wall time and their rate."""
     names = [f"pool-bench-{size}-{i + 1}" for i in range(size)]
-    with embedded_pool(names, config.engines[0]) as session:
+    with embedded_mesh(dict.fromkeys(names, config.engines[0])) as session:
         clients = {name: Client(name, session=session, timeout=TIMEOUT_S) for name in names}
         try:
             started = time.perf_counter()

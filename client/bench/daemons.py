@@ -4,7 +4,7 @@
 from __future__ import annotations
 
 import os
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from contextlib import ExitStack, contextmanager
 from dataclasses import dataclass
 from typing import Any
@@ -42,9 +42,9 @@ def bench_clients(engines: Sequence[str], connect: str | list[str] | None,
                for i, engine in enumerate(engines)}
 
 
-def _matching(session: object, engines: Sequence[str], timeout: float) -> list[str]:
+def _matching(session: zenoh.Session, engines: Sequence[str], timeout: float) -> list[str]:
     """Instances to use, in engine order: one running that engine if any, else any."""
-    found = discover(session, timeout)  # type: ignore[arg-type]
+    found = discover(session, timeout)
     if not found:
         raise DaemonUnreachableError("a Zenoh peer answered but no galton daemon is there")
     by_engine = {d.engine: d.instance for d in found}
@@ -54,17 +54,9 @@ def _matching(session: object, engines: Sequence[str], timeout: float) -> list[s
 @contextmanager
 def _embedded(engines: Sequence[str], timeout: float) -> Iterator[dict[str, Client]]:
     """One daemon per engine on free loopback ports, meshed, reached through the first."""
-    with ExitStack() as stack:
-        daemons: list[EmbeddedDaemon] = []
-        for engine in engines:
-            extra = ["--connect", daemons[0].endpoint] if daemons else []
-            daemon = EmbeddedDaemon(engine, instance=f"bench-{engine}", extra_args=extra)
-            daemons.append(stack.enter_context(daemon))
-        session = open_session(daemons[0].endpoint)
-        stack.callback(session.close)
-        for daemon in daemons:
-            wait_for_daemon(session, daemon.instance, START_TIMEOUT_S)
-        yield {d.engine: Client(d.instance, session=session, timeout=timeout) for d in daemons}
+    with embedded_mesh({f"bench-{engine}": engine for engine in engines}) as session:
+        yield {engine: Client(f"bench-{engine}", session=session, timeout=timeout)
+               for engine in engines}
 
 
 @dataclass
@@ -93,8 +85,8 @@ def pool_clients(connect: str | list[str] | None, instances: Sequence[str] | Non
         except DaemonUnreachableError:
             if connect is not None:
                 raise
-            names = [f"pool-{i + 1}" for i in range(size)]
-            session = stack.enter_context(embedded_pool(names, engine))
+            session = stack.enter_context(
+                embedded_mesh({f"pool-{i + 1}": engine for i in range(size)}))
         found = _pool_members(session, instances, timeout)
         clients = {d.instance: Client(d.instance, session=session, timeout=timeout)
                    for d in found}
@@ -122,12 +114,12 @@ def _pool_members(session: zenoh.Session, instances: Sequence[str] | None,
 
 
 @contextmanager
-def embedded_pool(names: Sequence[str], engine: str) -> Iterator[zenoh.Session]:
-    """Daemons of these instance names on free loopback ports, meshed through the first, and
-    a session that sees them all; the session is closed and the daemons stopped on exit."""
+def embedded_mesh(members: Mapping[str, str]) -> Iterator[zenoh.Session]:
+    """Daemons (instance name -> engine) on free loopback ports, meshed through the first,
+    and a session that sees them all; the session is closed and the daemons stopped on exit."""
     with ExitStack() as stack:
         daemons: list[EmbeddedDaemon] = []
-        for name in names:
+        for name, engine in members.items():
             extra = ["--connect", daemons[0].endpoint] if daemons else []
             daemons.append(stack.enter_context(
                 EmbeddedDaemon(engine, instance=name, extra_args=extra)))
