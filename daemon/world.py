@@ -60,6 +60,7 @@ class World:
         self.entities: dict[str, Entity] = {}
         self.step_index = 0
         self.faulted = False
+        self.fault_cause = ""
         self.verified_step = 0  # the last step whose state was checked finite
         self.teleported = False  # a request set states since the last check
         self._time_base = (0, 0.0, engine.timestep)  # (step, sim time, dt) since dt changed
@@ -225,10 +226,12 @@ class World:
                     setattr(info, field, value)
 
     def require_valid(self) -> None:
+        """Refuse to serve a faulted world, saying how it diverged (whoever noticed first:
+        a request, or the telemetry's check between requests)."""
         if self.faulted:
             raise PhysicsError(
-                "the simulation diverged (NaN or infinite state) at step "
-                f"{self.step_index}; reset it (scope 'state' or 'all') before reading states")
+                f"{self.fault_cause or 'the simulation diverged'}; reset it (scope 'state' "
+                "or 'all') before reading states")
 
     # -- time ---------------------------------------------------------------------------
     @property
@@ -267,10 +270,11 @@ class World:
             self.faulted = True
             when = (f"within steps {self.verified_step + 1}..{self.step_index}"
                     if self.verified_step < self.step_index else "by the states a request set")
-            raise PhysicsError(
+            self.fault_cause = (
                 f"the simulation diverged (NaN, infinite, or beyond "
-                f"{self.limits.max_position:g} m or {self.limits.max_speed:g} m/s) {when}; "
-                "the world is paused and its states will not be served until a reset")
+                f"{self.limits.max_position:g} m or {self.limits.max_speed:g} m/s) {when}")
+            raise PhysicsError(f"{self.fault_cause}; the world is paused and its states will "
+                               "not be served until a reset")
         self.verified_step = self.step_index
         self.teleported = False
 

@@ -8,6 +8,7 @@ per step.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import mujoco
@@ -228,8 +229,19 @@ def first_geoms(m: mujoco.MjModel, ids: np.ndarray, spawned: np.ndarray) -> np.n
 
 # -- divergence ----------------------------------------------------------------------------
 def _beyond(values: np.ndarray, limit: float) -> bool:
-    """Whether any value's magnitude passes the limit (NaN counts as past it)."""
-    return not bool((np.abs(values) <= limit).all())
+    """Whether any value's magnitude passes the limit (NaN counts as past it: a NaN max
+    compares false)."""
+    return not bool(np.abs(values).max(initial=0.0) <= limit)
+
+
+def _finite(*arrays: np.ndarray) -> bool:
+    """Whether every value is finite, in one dot product per array: NaN and infinity carry
+    through it (a finite value past 1e154 overflows it, and is past every limit anyway)."""
+    total = 0.0
+    for values in arrays:
+        flat = values.ravel()
+        total += float(flat @ flat)
+    return math.isfinite(total)
 
 
 def within(d: mujoco.MjData, index: StateIndex, positions: np.ndarray, max_position: float,
@@ -241,7 +253,7 @@ def within(d: mujoco.MjData, index: StateIndex, positions: np.ndarray, max_posit
     A free joint's angular velocity is kept in the body frame; no world component can pass
     its norm, so only the few rows whose norm passes the limit are rotated.
     """
-    if not all(np.isfinite(a).all() for a in (d.qpos, d.qvel, d.mocap_pos, d.mocap_quat)):
+    if not _finite(d.qpos, d.qvel, d.mocap_pos, d.mocap_quat):
         return False
     if _beyond(d.qpos[positions], max_position) or \
             _beyond(d.xpos[index.jointed], max_position) or \
