@@ -10,7 +10,7 @@ from __future__ import annotations
 import json
 import math
 import numbers
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from typing import Any, Protocol
 
 import zenoh
@@ -115,6 +115,12 @@ def query(session: zenoh.Session, keys: Keys, op: str, args: dict[str, Any] | No
     wait = checked_timeout(timeout)
     replies = session.get(keys.control(op), payload=encode_request(op, args, client),
                           timeout=wait)
+    return first_reply(replies, session, keys, op, wait)
+
+
+def first_reply(replies: Iterable[zenoh.Reply], session: zenoh.Session, keys: Keys, op: str,
+                wait: float) -> Reply:
+    """The first reply of a get, or the error its silence means (see the module's doc)."""
     for answer in replies:
         if answer.ok is not None:
             return decode_reply(answer.ok.payload.to_bytes())

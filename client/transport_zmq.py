@@ -71,7 +71,7 @@ class ZmqTransport:
             raise
 
     def _socket(self) -> zmq.Socket[bytes]:
-        """This thread's DEALER, connected (or DaemonUnreachableError)."""
+        """This thread's DEALER (connecting it the first time)."""
         socket: zmq.Socket[bytes] | None = getattr(self._local, "socket", None)
         if socket is None:
             socket = self.context.socket(zmq.DEALER)
@@ -81,17 +81,33 @@ class ZmqTransport:
             with self._lock:
                 self._sockets.append(socket)
             self._local.socket = socket
+            self._wait_connected(socket)
+        return socket
+
+    def _wait_connected(self, socket: zmq.Socket[bytes]) -> None:
+        """Wait up to the connect timeout for a connection (or DaemonUnreachableError)."""
         if not socket.poll(int(self.connect_timeout * 1000), zmq.POLLOUT):
             raise DaemonUnreachableError(
                 f"no galton-daemon answers at {self.endpoint} (start one with "
                 f"`galton-daemon --zmq {self.endpoint}`)")
-        return socket
+
+    def _send(self, socket: zmq.Socket[bytes], frames: list[bytes]) -> None:
+        """Send at once while connected; else wait for a connection first (ZMQ_IMMEDIATE
+        makes a send with no connection fail rather than queue)."""
+        try:
+            socket.send_multipart(frames, zmq.NOBLOCK)
+        except zmq.Again:
+            self._wait_connected(socket)
+            socket.send_multipart(frames, zmq.NOBLOCK)
 
     def exchange(self, what: str, payload: bytes, timeout: float) -> bytes:
         """Send one request and wait for its reply's bytes; a client closed meanwhile (by
         another thread) raises ClientClosedError."""
         try:
             return self._exchange(what, payload, timeout)
+        except zmq.Again:  # connected a moment ago, gone before the send
+            raise DaemonUnreachableError(f"{what}: the daemon at {self.endpoint} went away "
+                                         "(no connection)") from None
         except zmq.ZMQError as error:
             if self.context.closed or error.errno in (zmq.ETERM, zmq.ENOTSOCK):
                 raise ClientClosedError(
@@ -101,7 +117,7 @@ class ZmqTransport:
     def _exchange(self, what: str, payload: bytes, timeout: float) -> bytes:
         socket = self._socket()
         tag = next(self._tags).to_bytes(8, "little")
-        socket.send_multipart([tag, payload])
+        self._send(socket, [tag, payload])
         deadline = time.monotonic() + timeout
         while (remaining := deadline - time.monotonic()) > 0:
             if socket.poll(max(1, int(remaining * 1000 + 0.5))):
