@@ -18,3 +18,4 @@ class ResultCode(IntEnum):
     UNSUPPORTED_VERSION = 9
     PHYSICS_ERROR = 10
     RESOURCE_LIMIT = 11
+    CONTROL_HELD = 12

@@ -14,7 +14,8 @@
     │   ├── NameNotUniqueError       NAME_NOT_UNIQUE: an entity of that name exists
     │   ├── UnsupportedVersionError  UNSUPPORTED_VERSION: protocol version mismatch
     │   ├── PhysicsError             PHYSICS_ERROR: the state diverged (NaN, infinite, absurd)
-    │   └── ResourceLimitError       RESOURCE_LIMIT: the request is over one of the daemon's limits
+    │   ├── ResourceLimitError       RESOURCE_LIMIT: the request is over one of the daemon's limits
+    │   └── ControlHeldError         CONTROL_HELD: another client holds control (take_control)
     ├── DaemonUnreachableError       no daemon answered (client side only)
     ├── RequestTimeoutError          a daemon exists but did not answer in time (client side)
     ├── ClientClosedError            the SDK Client was closed before this call (client side)
@@ -92,6 +93,13 @@ class ResourceLimitError(RemoteError):
     code = ResultCode.RESOURCE_LIMIT
 
 
+class ControlHeldError(RemoteError):
+    """Another client holds the daemon's control lease (``details["controller"]``): only
+    its holder may change the world until it releases control or disappears."""
+
+    code = ResultCode.CONTROL_HELD
+
+
 class DaemonUnreachableError(GaltonError):
     """No daemon answered at the address or instance asked for."""
 
@@ -118,6 +126,7 @@ _BY_CODE: dict[ResultCode, type[RemoteError]] = {
         UnsupportedVersionError,
         PhysicsError,
         ResourceLimitError,
+        ControlHeldError,
     )
 }
 
