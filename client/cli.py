@@ -171,6 +171,7 @@ from galton.client import (  # noqa: E402,F401
     cli_bench,
     cli_call,
     cli_check,
+    cli_control,
     cli_fuzz,
     cli_joints,
     cli_perception,

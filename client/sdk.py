@@ -26,6 +26,7 @@ import zenoh
 from numpy.typing import ArrayLike
 
 from galton.client import sdk_joints
+from galton.client.sdk_control import ControlMethods
 from galton.client.sdk_joints import SearchPath
 from galton.client.sdk_perception import PerceptionMethods
 from galton.client.sdk_worlds import WorldMethods
@@ -55,7 +56,7 @@ __all__ = ["DEFAULT_TIMEOUT_S", "Client", "JointStates", "Stamp", "States", "bod
            "boxes", "plane", "spheres"]
 
 
-class Client(WorldMethods, PerceptionMethods):
+class Client(WorldMethods, PerceptionMethods, ControlMethods):
     """A connection to one daemon instance (the session may be shared with others).
 
     ``timeout``: seconds a quick operation waits for its reply; operations that rebuild a
@@ -131,10 +132,10 @@ class Client(WorldMethods, PerceptionMethods):
         the step and sim time the request took effect at."""
         self._check_open()
         wait = self.timeout_for(op, timeout)
-        steps = op in OPERATIONS and OPERATIONS[op].steps
         if self._world is not None:
             args = {"world": self._world, **(args or {})}
-        return self.transport.request(op, args, wait, self.client_id if steps else None)
+        # Every request names its client: a long step is tied to it, and so is control.
+        return self.transport.request(op, args, wait, self.client_id)
 
     def call(self, op: str, args: dict[str, Any] | None = None,
              timeout: float | None = None) -> dict[str, Any]:

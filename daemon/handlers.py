@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any
 
 from galton.daemon import (
     compare,
+    lease,
     ops,
     ops_joints,
     ops_perception,
@@ -96,6 +97,8 @@ HANDLERS: dict[str, Handler] = {
     "contacts": _scene("contacts", ops_perception.contacts),
     "get_params": _scene("get_params", ops.get_params),
     "set_params": _scene("set_params", ops.set_params),
+    "take_control": lease.take_control,
+    "release_control": lease.release_control,
 }
 
 

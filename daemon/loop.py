@@ -16,7 +16,7 @@ from collections.abc import Callable
 from contextlib import AbstractContextManager, nullcontext
 from typing import Any, Protocol
 
-from galton.daemon import job_results, loop_status, side_jobs, time_control
+from galton.daemon import job_results, lease, loop_status, side_jobs, time_control
 from galton.daemon.calls import Call, StepJob, Task, smoothed_step_cost
 from galton.daemon.handlers import HANDLERS
 from galton.daemon.limits import DEFAULT_LIMITS, Limits
@@ -93,6 +93,7 @@ class SimLoop:
         self.state = SimState.STOPPED
         self.target_rtf = 1.0
         self.job: StepJob | None = None
+        self.lease = lease.Lease()  # who holds control (daemon/lease.py)
         self.pacer = Pacer()
         self.rtf_window = RtfWindow()
         self.monitor = ProcessMonitor()
@@ -247,6 +248,7 @@ class SimLoop:
             call.client = request.client
             named = request.args.get("world")
             call.world = named if isinstance(named, str) else None
+            lease.check(self, call, op)  # while another client holds control: refused
             with self.work_guard() if op.mutates and not op.steps else nullcontext():
                 result = HANDLERS[op.name](self, call, request.args)
             self._keep_invariants()  # before the reply: what the client asks next sees it

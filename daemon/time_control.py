@@ -13,6 +13,7 @@ import math
 import time
 from typing import TYPE_CHECKING, Any
 
+from galton.daemon import lease
 from galton.daemon.calls import Call, RestCheck, StepJob
 from galton.daemon.world import World, check_scope
 from galton.protocol import (
@@ -70,7 +71,8 @@ def side_status(loop: SimLoop, world: World) -> SimStatus:
         state=SimState.STOPPED if world.step_index == 0 else SimState.PAUSED,
         step=world.step_index, sim_time=world.sim_time, timestep=world.engine.timestep,
         target_rtf=0.0, rtf=0.0, entity_count=len(world.entities), engine=world.engine.name,
-        instance=loop.instance, world=world.name, faulted=world.faulted)
+        instance=loop.instance, world=world.name, faulted=world.faulted,
+        controller=loop.lease.controller)
 
 
 def _live_only(loop: SimLoop, args: dict[str, Any], op: str) -> None:
@@ -231,14 +233,15 @@ def _start_job(loop: SimLoop, call: Call, world: World, count: int,
 def client_gone(loop: SimLoop, client: str) -> None:
     """A client's liveliness token vanished, or its ZeroMQ connection closed: the step
     request it is waiting for ends now (its reply has nowhere to go), the world stays paused
-    where it got to. The event names the client by its id, else by its connection."""
+    where it got to, and control it held is released (daemon/lease.py). The event names the
+    client by its id, else by its connection."""
     job = loop.job
-    if job is None or client not in (job.call.client, job.call.peer):
-        return
-    cancel_job(loop, "its client disappeared")
-    loop.emit({"kind": "job_abandoned", "client": job.call.client or client,
-               "steps_done": job.done,
-               "steps_asked": job.total, "step": loop.world.step_index})
+    if job is not None and client in (job.call.client, job.call.peer):
+        cancel_job(loop, "its client disappeared")
+        loop.emit({"kind": "job_abandoned", "client": job.call.client or client,
+                   "steps_done": job.done,
+                   "steps_asked": job.total, "step": loop.world.step_index})
+    lease.client_gone(loop, client)
 
 
 def _cancel_job_on(loop: SimLoop, world: World, reason: str) -> None:

@@ -395,6 +395,7 @@ class SimStatus:
     instance: str
     world: str = "default"
     faulted: bool = False
+    controller: str | None = None  # who holds control (take_control); absent from old daemons
 
     def to_wire(self) -> dict[str, Any]:
         return shallow_dict(self)

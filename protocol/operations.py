@@ -163,6 +163,9 @@ OPERATIONS: dict[str, Operation] = {op.name: op for op in (
     Operation("contacts", (Arg("names", "names"),)),
     Operation("get_params"),
     Operation("set_params", (Arg("params", "map", required=True),), mutates=True),
+    # The control lease (daemon/lease.py): they change who may mutate, not the world.
+    Operation("take_control"),
+    Operation("release_control"),
 )}
 
 
