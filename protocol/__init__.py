@@ -19,6 +19,7 @@ from galton.protocol.envelope import (
 )
 from galton.protocol.errors import (
     ClientClosedError,
+    ControlHeldError,
     DaemonUnreachableError,
     FeatureUnsupportedError,
     GaltonError,
@@ -80,6 +81,7 @@ __all__ = [
     "BodyProperties",
     "Capabilities",
     "ClientClosedError",
+    "ControlHeldError",
     "DaemonUnreachableError",
     "DecodeLimits",
     "EntityInfo",
