@@ -262,6 +262,9 @@ CALLS: dict[str, Callable[[Client], object]] = {
     "cameras": Client.cameras,
     "raycast": lambda c: c.raycast([0, 0, 1], directions=[0, 0, -1]),
     "contacts": Client.contacts,
+    "take_control": Client.take_control,
+    "release_control": Client.release_control,
+    "control": lambda c: c.control().__enter__(),
 }
 
 
