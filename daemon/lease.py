@@ -23,8 +23,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from galton.daemon.calls import Call
-from galton.protocol import InvalidArgumentError
-from galton.protocol.errors import ControlHeldError
+from galton.protocol import ControlHeldError, InvalidArgumentError
 from galton.protocol.operations import Operation
 
 if TYPE_CHECKING:

@@ -20,8 +20,7 @@ import pytest
 from support import ball_row, companion, ground_and_balls, raw_replies, snapshot
 
 from galton.client import Client, EmbeddedDaemon, spheres
-from galton.protocol import ResultCode, decode_reply
-from galton.protocol.errors import ControlHeldError
+from galton.protocol import ControlHeldError, ResultCode, decode_reply
 
 WAIT_S = 20.0
 LONG = 10**9
