@@ -5,6 +5,7 @@ Everything a program using the SDK catches or reads is importable from here: the
 (all rooted at ``GaltonError``).
 """
 
+from galton.client.credentials import Credentials
 from galton.client.discovery import DaemonInfo, discover, discover_at, instances, wait_for_daemon
 from galton.client.embedded import EmbeddedDaemon
 from galton.client.sdk import Client, body_group, boxes, plane, spheres
@@ -24,6 +25,7 @@ from galton.client.values import (
     WorldInfo,
 )
 from galton.protocol import (
+    AccessDeniedError,
     BodyGroup,
     BodyProperties,
     Capabilities,
@@ -54,6 +56,7 @@ from galton.protocol import (
 )
 
 __all__ = [
+    "AccessDeniedError",
     "BodyGroup",
     "BodyProperties",
     "Capabilities",
@@ -62,6 +65,7 @@ __all__ = [
     "Comparison",
     "Contacts",
     "ControlHeldError",
+    "Credentials",
     "DaemonInfo",
     "DaemonUnreachableError",
     "EmbeddedDaemon",

@@ -26,6 +26,7 @@ import zenoh
 from numpy.typing import ArrayLike
 
 from galton.client import sdk_joints
+from galton.client.credentials import Credentials
 from galton.client.sdk_control import ControlMethods
 from galton.client.sdk_joints import SearchPath
 from galton.client.sdk_perception import PerceptionMethods
@@ -66,7 +67,8 @@ class Client(WorldMethods, PerceptionMethods, ControlMethods):
 
     def __init__(self, instance: str = "galton", connect: str | Sequence[str] | None = None,
                  *, timeout: float = DEFAULT_TIMEOUT_S, session: zenoh.Session | None = None,
-                 config_file: str | None = None) -> None:
+                 config_file: str | None = None,
+                 credentials: Credentials | None = None) -> None:
         self.keys = Keys(instance)
         self.timeout = checked_timeout(timeout)
         self._closed = False
@@ -76,7 +78,8 @@ class Client(WorldMethods, PerceptionMethods, ControlMethods):
         # token says so over Zenoh, the connection itself over ZeroMQ.
         self.client_id = uuid.uuid4().hex
         self._own_transport = True
-        self.transport = _transport(self.keys, self.client_id, connect, session, config_file)
+        self.transport = _transport(self.keys, self.client_id, connect, session, config_file,
+                                    credentials)
 
     @property
     def session(self) -> zenoh.Session:
@@ -349,11 +352,12 @@ class Client(WorldMethods, PerceptionMethods, ControlMethods):
 
 
 def _transport(keys: Keys, client_id: str, connect: str | Sequence[str] | None,
-               session: zenoh.Session | None, config_file: str | None) -> Transport:
+               session: zenoh.Session | None, config_file: str | None,
+               credentials: Credentials | None = None) -> Transport:
     """ZeroMQ for a ``zmq+ipc://`` or ``zmq+tcp://`` endpoint, else Zenoh."""
     endpoint = zmq_endpoint(connect)
     if endpoint is None:
-        return ZenohTransport(keys, client_id, session, connect, config_file)
+        return ZenohTransport(keys, client_id, session, connect, config_file, credentials)
     if session is not None or config_file is not None:
         raise InvalidArgumentError(
             "a ZeroMQ endpoint takes no Zenoh session or config file")

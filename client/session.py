@@ -2,7 +2,8 @@
 
 A get that brings no reply is never an empty answer: the daemon's liveliness token decides
 what it was. A token there means the daemon is alive but did not answer in time (busy:
-RequestTimeoutError); no token means no daemon serves that instance (DaemonUnreachableError).
+RequestTimeoutError), or refused at once (access control: AccessDeniedError); no token
+means no daemon serves that instance (DaemonUnreachableError).
 """
 
 from __future__ import annotations
@@ -10,11 +11,14 @@ from __future__ import annotations
 import json
 import math
 import numbers
+import time
 from collections.abc import Iterable, Sequence
 from typing import Any, Protocol
 
 import zenoh
 
+from galton.client.access import access_denied, refused_at_once, session_refused
+from galton.client.credentials import Credentials
 from galton.protocol import (
     DEFAULT_PORT,
     DaemonUnreachableError,
@@ -74,11 +78,13 @@ def split_endpoints(connect: str | Sequence[str] | None) -> list[str]:
 
 
 def open_session(connect: str | Sequence[str] | None = None,
-                 config_file: str | None = None) -> zenoh.Session:
-    """A session to the given endpoints, multicast scouting off.
+                 config_file: str | None = None,
+                 credentials: Credentials | None = None) -> zenoh.Session:
+    """A session to the given endpoints, multicast scouting off, with these credentials.
 
     One endpoint: a Zenoh client (it reaches every daemon meshed with that one). Several: a
-    non-listening peer, since a Zenoh client connects to the first endpoint only.
+    non-listening peer, since a Zenoh client connects to the first endpoint only. A daemon
+    that refuses the session raises AccessDeniedError (client/access.py).
     """
     endpoints = split_endpoints(connect)
     zmq = [endpoint for endpoint in endpoints if endpoint.startswith("zmq+")]
@@ -93,12 +99,12 @@ def open_session(connect: str | Sequence[str] | None = None,
         if len(endpoints) > 1:
             config.insert_json5("listen/endpoints", "[]")
     config.insert_json5("connect/endpoints", json.dumps(endpoints))
+    for key, value in (credentials.zenoh_settings() if credentials else {}).items():
+        config.insert_json5(key, json.dumps(value))
     try:
         return zenoh.open(config)
     except zenoh.ZError as error:
-        raise DaemonUnreachableError(
-            f"no Zenoh peer answers at {', '.join(endpoints)}: is galton-daemon running there? "
-            f"(start one with `galton-daemon --listen {endpoints[0]}`) [{error}]") from error
+        raise session_refused(endpoints, credentials, error) from error
 
 
 def daemon_alive(session: zenoh.Session, keys: Keys,
@@ -121,10 +127,13 @@ def query(session: zenoh.Session, keys: Keys, op: str, args: dict[str, Any] | No
 def first_reply(replies: Iterable[zenoh.Reply], session: zenoh.Session, keys: Keys, op: str,
                 wait: float) -> Reply:
     """The first reply of a get, or the error its silence means (see the module's doc)."""
+    started = time.monotonic()
     for answer in replies:
         if answer.ok is not None:
             return decode_reply(answer.ok.payload.to_bytes())
     if daemon_alive(session, keys):
+        if refused_at_once(time.monotonic() - started, wait):
+            raise access_denied(op, keys.instance)
         raise RequestTimeoutError(
             f"{op}: daemon {keys.instance!r} is alive but sent no reply within {wait:g} s "
             "(busy with a long request, or the operation needs longer: pass a longer "

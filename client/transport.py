@@ -11,6 +11,7 @@ from typing import Any, Protocol
 
 import zenoh
 
+from galton.client.credentials import Credentials
 from galton.client.session import (
     Declared,
     checked_timeout,
@@ -67,10 +68,12 @@ class ZenohTransport:
 
     def __init__(self, keys: Keys, client_id: str, session: zenoh.Session | None = None,
                  connect: str | Sequence[str] | None = None,
-                 config_file: str | None = None) -> None:
+                 config_file: str | None = None,
+                 credentials: Credentials | None = None) -> None:
         self.keys = keys
         self.own_session = session is None
-        self.session = session if session is not None else open_session(connect, config_file)
+        self.session = (session if session is not None else
+                        open_session(connect, config_file, credentials))
         self._token: Declared | None = self.session.liveliness().declare_token(
             client_token_key(client_id))
         self._queriers: dict[tuple[str, float], zenoh.Querier] = {}

@@ -11,8 +11,11 @@ import typer
 import zenoh
 
 from galton.daemon.limits import Limits, describe_limits, parse_limits
-from galton.daemon.server import DEFAULT_LISTEN, DaemonOptions, run_daemon
-from galton.protocol import GaltonError, validate_instance_name
+from galton.daemon.server import DaemonOptions, run_daemon
+from galton.daemon.users import load_users
+from galton.daemon.zenoh_merge import DEFAULT_LISTEN, DEFAULT_TLS_LISTEN
+from galton.daemon.zenoh_security import TlsFiles
+from galton.protocol import GaltonError, InvalidArgumentError, validate_instance_name
 
 app = typer.Typer(add_completion=False, help=__doc__)
 
@@ -36,17 +39,44 @@ def _parse_limits(items: list[str]) -> Limits:
         raise typer.BadParameter(str(exc)) from exc
 
 
+def _tls_files(cert: Path | None, key: Path | None, ca: Path | None) -> TlsFiles | None:
+    """--tls-cert and --tls-key go together; --tls-ca (mutual TLS) needs them."""
+    if cert is None and key is None:
+        if ca is not None:
+            raise InvalidArgumentError("--tls-ca needs --tls-cert and --tls-key (the daemon's "
+                                       "own certificate and key)")
+        return None
+    if cert is None or key is None:
+        raise InvalidArgumentError("--tls-cert and --tls-key go together: give both")
+    return TlsFiles(cert, key, ca)
+
+
 @app.command()
 def serve(
     engine: Annotated[str, typer.Option(help="Physics engine: mujoco or pybullet.")] = "mujoco",
     instance: Annotated[str, typer.Option(help="Instance name, one key chunk.")] = "galton",
     listen: Annotated[list[str] | None, typer.Option(
-        help=f"Zenoh endpoint to listen on (repeatable). Default {DEFAULT_LISTEN}.")] = None,
+        help=f"Zenoh endpoint to listen on (repeatable). Default: the --zenoh-config "
+             f"file's, else {DEFAULT_LISTEN}.")] = None,
     connect: Annotated[list[str] | None, typer.Option(
         help="Zenoh endpoint of a peer or router to join (repeatable).")] = None,
     zenoh_config: Annotated[Path | None, typer.Option(
-        help="A Zenoh JSON5 config file; --listen/--connect still override it.",
+        help="A Zenoh JSON5 config file: its mode, endpoints and scouting are honoured; "
+             "--listen/--connect/--multicast given here override it.",
         exists=True, dir_okay=False)] = None,
+    users: Annotated[Path | None, typer.Option(
+        help="A TOML users file (docs/SECURITY.md): turns on Zenoh authentication and "
+             "access control by role (operator, viewer), default deny.",
+        dir_okay=False)] = None,
+    tls_cert: Annotated[Path | None, typer.Option(
+        help=f"The daemon's TLS certificate (PEM): serve TLS too, on the tls/ --listen "
+             f"endpoint, else {DEFAULT_TLS_LISTEN}.", dir_okay=False)] = None,
+    tls_key: Annotated[Path | None, typer.Option(
+        help="The private key (PEM) of --tls-cert.", dir_okay=False)] = None,
+    tls_ca: Annotated[Path | None, typer.Option(
+        help="A CA certificate (PEM): mutual TLS, clients must show a certificate it signed; "
+             "with --users, a user's tls_name gives that certificate its role.",
+        dir_okay=False)] = None,
     zmq: Annotated[list[str] | None, typer.Option(
         help="Also serve over ZeroMQ at this endpoint (repeatable): ipc:///path, "
              "tcp://HOST:PORT, or a port (loopback). Telemetry and events are published "
@@ -72,11 +102,13 @@ def serve(
     try:
         validate_instance_name(instance)
         options = DaemonOptions(
-            engine=engine, instance=instance, listen=listen or [DEFAULT_LISTEN],
+            engine=engine, instance=instance, listen=listen or [],
             connect=connect or [], zenoh_config=zenoh_config, multicast=multicast,
             telemetry_rate_hz=telemetry_rate, params=_parse_params(params),
             limits=_parse_limits(limit or []), state_dir=state_dir,
-            checkpoint_period_s=checkpoint_every, zmq=zmq or [])
+            checkpoint_period_s=checkpoint_every, zmq=zmq or [],
+            users=load_users(users) if users is not None else None,
+            tls=_tls_files(tls_cert, tls_key, tls_ca))
         code = run_daemon(options, announce=lambda line: print(line, flush=True))
     except GaltonError as error:
         typer.echo(f"galton-daemon: {error}", err=True)

@@ -7,7 +7,7 @@ import logging
 import os
 import signal
 import threading
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -22,15 +22,17 @@ from galton.daemon.engine import Engine
 from galton.daemon.engines import ENGINE_CLASSES, create_engine
 from galton.daemon.limits import DEFAULT_LIMITS, Limits
 from galton.daemon.loop import SimLoop
+from galton.daemon.users import User
 from galton.daemon.world import World
+from galton.daemon.zenoh_merge import file_says, listen_endpoints, merge
+from galton.daemon.zenoh_security import TlsFiles, security_settings, tls_settings
 from galton.daemon.zmq_front import PolledInbox, ZmqFront, parse_endpoint
-from galton.protocol import DEFAULT_PORT, Keys, Telemetry
+from galton.protocol import Keys, Telemetry
 from galton.protocol.keys import CLIENTS_PATTERN, client_from_token_key, op_from_control_key
 from galton.protocol.operations import OPERATIONS
 
 log = logging.getLogger("galton.daemon")
 
-DEFAULT_LISTEN = f"tcp/127.0.0.1:{DEFAULT_PORT}"
 # After SIGTERM the daemon answers what is pending and closes; if a request still holds the
 # physics thread this long after the signal, the process exits without waiting for it.
 SHUTDOWN_GRACE_S = 1.5
@@ -42,7 +44,8 @@ class DaemonOptions:
 
     engine: str = "mujoco"
     instance: str = "galton"
-    listen: list[str] = field(default_factory=lambda: [DEFAULT_LISTEN])
+    # Empty: the --zenoh-config file's endpoints, else DEFAULT_LISTEN (daemon/zenoh_merge.py)
+    listen: list[str] = field(default_factory=list)
     connect: list[str] = field(default_factory=list)
     zenoh_config: Path | None = None
     multicast: bool = False
@@ -52,19 +55,30 @@ class DaemonOptions:
     state_dir: Path | None = None  # checkpoints of the live world (daemon/checkpoint.py)
     checkpoint_period_s: float = checkpoint.DEFAULT_PERIOD_S
     zmq: list[str] = field(default_factory=list)  # ZeroMQ endpoints (daemon/zmq_front.py)
+    users: Mapping[str, User] | None = None  # --users: authentication and roles (SECURITY.md)
+    tls: TlsFiles | None = None  # --tls-cert/--tls-key/--tls-ca
 
 
 def zenoh_config(options: DaemonOptions) -> zenoh.Config:
-    """Loopback-only peer with multicast scouting off, unless a config file says otherwise."""
-    config = zenoh.Config.from_file(str(options.zenoh_config)) if options.zenoh_config else (
-        zenoh.Config())
-    if options.zenoh_config is None:
-        config.insert_json5("mode", json.dumps("peer"))
-        config.insert_json5("scouting/multicast/enabled", json.dumps(options.multicast))
-    if options.listen:
-        config.insert_json5("listen/endpoints", json.dumps(options.listen))
-    if options.connect:
-        config.insert_json5("connect/endpoints", json.dumps(options.connect))
+    """The --zenoh-config file (or Zenoh's defaults) merged with the options by the rules of
+    daemon/zenoh_merge.py, with --users and --tls-* security (daemon/zenoh_security.py)."""
+    return _merged_config(options, security_settings(options.users, options.tls,
+                                                     options.instance))
+
+
+def listening_on(options: DaemonOptions) -> list[str]:
+    """The endpoints the daemon's Zenoh configuration listens on (its readiness line)."""
+    tls = tls_settings(options.tls) if options.tls is not None else {}
+    return listen_endpoints(_merged_config(options, tls))
+
+
+def _merged_config(options: DaemonOptions, security: dict[str, Any]) -> zenoh.Config:
+    path = options.zenoh_config
+    config = zenoh.Config.from_file(str(path)) if path is not None else zenoh.Config()
+    inserts = merge(file_says(config), options.listen, options.connect, options.multicast,
+                    security)
+    for key, value in inserts.items():
+        config.insert_json5(key, json.dumps(value))
     return config
 
 
@@ -250,7 +264,7 @@ def run_daemon(options: DaemonOptions, announce: Callable[[str], None] = print) 
     threading.Thread(target=stop_on_signal, name="signals", daemon=True).start()
     zmq = f" zmq={','.join(daemon.front.control)}" if daemon.front is not None else ""
     announce(f"galton-daemon ready: instance={options.instance} engine={options.engine} "
-             f"listen={','.join(options.listen)}{zmq} engines={','.join(ENGINE_CLASSES)}")
+             f"listen={','.join(listening_on(options))}{zmq} engines={','.join(ENGINE_CLASSES)}")
     try:
         daemon.loop.run()
         daemon.save_checkpoint()  # on SIGTERM or SIGINT, after the last request

@@ -18,6 +18,7 @@ from galton.protocol.envelope import (
     error_reply,
 )
 from galton.protocol.errors import (
+    AccessDeniedError,
     ClientClosedError,
     ControlHeldError,
     DaemonUnreachableError,
@@ -77,6 +78,7 @@ __all__ = [
     "TARGET_MODES",
     "TWIST_WIDTH",
     "WRENCH_WIDTH",
+    "AccessDeniedError",
     "BodyGroup",
     "BodyProperties",
     "Capabilities",

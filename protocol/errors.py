@@ -18,6 +18,8 @@
     │   └── ControlHeldError         CONTROL_HELD: another client holds control (take_control)
     ├── DaemonUnreachableError       no daemon answered (client side only)
     ├── RequestTimeoutError          a daemon exists but did not answer in time (client side)
+    ├── AccessDeniedError            a daemon is there but refuses this client: no or wrong
+    │                                credentials, or a role without that right (client side)
     ├── ClientClosedError            the SDK Client was closed before this call (client side)
     └── EngineCheckError             an engine breaks the engine contract
                                      (galton.daemon.engine_check; CheckFailedError and
@@ -106,6 +108,13 @@ class DaemonUnreachableError(GaltonError):
 
 class RequestTimeoutError(GaltonError):
     """A daemon is there but did not answer within the caller's timeout."""
+
+
+class AccessDeniedError(GaltonError):
+    """A daemon is there but refuses this client: its session was refused (no, wrong or
+    unknown credentials; a certificate of another CA), or its role may not ask this
+    operation. Zenoh drops such requests without a word, so this is decided on the client
+    side (docs/SECURITY.md)."""
 
 
 class ClientClosedError(GaltonError):
