@@ -11,10 +11,12 @@ from __future__ import annotations
 import inspect
 import json
 import math
+import os
 import re
 from collections.abc import Callable
 from dataclasses import asdict
 from importlib.metadata import PackageNotFoundError, version
+from pathlib import Path
 from typing import Annotated, Any, TypeVar
 
 import typer
@@ -22,8 +24,10 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
+from galton.client.credentials import Credentials, resolve_credentials
 from galton.client.sdk import Client, Stamp
 from galton.protocol import (
+    AccessDeniedError,
     DaemonUnreachableError,
     GaltonError,
     RemoteError,
@@ -40,15 +44,18 @@ JsonOpt = Annotated[bool, typer.Option("--json", help="Print JSON for scripts.")
 
 
 class Target:
-    """Where the global options point: endpoints, instance, timeout."""
+    """Where the global options point: endpoints, instance, timeout, credentials."""
 
-    def __init__(self, connect: list[str] | None, instance: str, timeout: float) -> None:
+    def __init__(self, connect: list[str] | None, instance: str, timeout: float,
+                 credentials: Credentials | None = None) -> None:
         self.connect = connect
         self.instance = instance
         self.timeout = timeout
+        self.credentials = credentials
 
     def client(self) -> Client:
-        return Client(self.instance, self.connect, timeout=self.timeout)
+        return Client(self.instance, self.connect, timeout=self.timeout,
+                      credentials=self.credentials)
 
 
 def package_version() -> str:
@@ -75,13 +82,36 @@ def main_options(
     instance: Annotated[str, typer.Option(help="Daemon instance to control.")] = "galton",
     timeout: Annotated[float, typer.Option(
         help="Seconds to wait for a reply (steps and rebuilds wait longer).")] = 5.0,
+    user: Annotated[str | None, typer.Option(
+        help="User name for a daemon started with --users (else GALTON_USER).",
+        rich_help_panel="Credentials (docs/SECURITY.md)")] = None,
+    password_file: Annotated[Path | None, typer.Option(
+        help="A file whose first line is the user's password (else GALTON_PASSWORD; a "
+             "GALTON_CREDENTIALS file may hold every credential).", dir_okay=False,
+        rich_help_panel="Credentials (docs/SECURITY.md)")] = None,
+    tls_ca: Annotated[Path | None, typer.Option(
+        help="CA certificate (PEM) that signed the daemon's TLS certificate.",
+        dir_okay=False, rich_help_panel="Credentials (docs/SECURITY.md)")] = None,
+    tls_cert: Annotated[Path | None, typer.Option(
+        help="This client's TLS certificate (PEM), for mutual TLS.", dir_okay=False,
+        rich_help_panel="Credentials (docs/SECURITY.md)")] = None,
+    tls_key: Annotated[Path | None, typer.Option(
+        help="The private key (PEM) of --tls-cert.", dir_okay=False,
+        rich_help_panel="Credentials (docs/SECURITY.md)")] = None,
     show_version: Annotated[bool, typer.Option(
         "--version", is_eager=True, callback=print_version,
         help="Print the version and exit.")] = False,
 ) -> None:
     if not math.isfinite(timeout) or timeout <= 0:
         raise typer.BadParameter(f"--timeout must be a number of seconds above 0, got {timeout}")
-    ctx.obj = Target(connect, instance, timeout)
+    credentials = None
+    if ctx.invoked_subcommand != "hash-password":
+        try:
+            credentials = resolve_credentials(user, password_file, tls_ca, tls_cert, tls_key,
+                                              os.environ)
+        except GaltonError as error:
+            raise typer.BadParameter(str(error)) from error
+    ctx.obj = Target(connect, instance, timeout, credentials)
 
 
 def error_line(error: GaltonError) -> str:
@@ -92,6 +122,8 @@ def error_line(error: GaltonError) -> str:
         return f"unreachable (client side): {error}"
     if isinstance(error, RequestTimeoutError):
         return f"timed out (client side): {error}"
+    if isinstance(error, AccessDeniedError):
+        return f"access denied (client side): {error}"
     return f"{type(error).__name__}: {error}"
 
 
@@ -168,6 +200,7 @@ def main() -> None:
 
 # Registering every command on ``app`` (each module adds its own):
 from galton.client import (  # noqa: E402,F401
+    cli_auth,
     cli_bench,
     cli_call,
     cli_check,
