@@ -77,10 +77,13 @@ def _refusal_hint(credentials: Credentials | None) -> str:
     hints = []
     if credentials.user is not None:
         hints.append("a wrong password, or a user its users file does not name")
-    if credentials.uses_tls or credentials.user is None:
-        hints.append("a certificate its CA did not sign, or a daemon certificate that "
-                     "--tls-ca did not sign")
-    return "; or ".join(hints)
+    if credentials.tls_cert is not None:
+        hints.append("a client certificate signed by a CA it does not trust")
+    elif credentials.tls_ca is not None:
+        hints.append("it may ask for a client certificate (--tls-cert and --tls-key)")
+    if credentials.tls_ca is not None:
+        hints.append("a daemon certificate that --tls-ca did not sign")
+    return "; or ".join(hints) or "it needs other credentials"
 
 
 def _scrubbed(text: str, credentials: Credentials | None) -> str:

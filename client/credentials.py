@@ -102,6 +102,7 @@ class Credentials:
         if self.tls_cert is not None and self.tls_key is not None:
             settings[TLS + "connect_certificate"] = str(Path(self.tls_cert).resolve())
             settings[TLS + "connect_private_key"] = str(Path(self.tls_key).resolve())
+            settings[TLS + "enable_mtls"] = True  # else Zenoh shows no certificate
         return settings
 
     def describe(self) -> str:

@@ -11,9 +11,11 @@ role       allowed
 =========  ===========================================================================
 operator   in: query ``@ctl/*``, subscribe telemetry and events, discovery
            (liveliness get and subscribe on ``galton/*/alive``), its own client token
-           ``galton/_clients/*``. out: replies, telemetry, events, daemon tokens
+           ``galton/_clients/*``. out: replies, telemetry, events, daemon tokens, the
+           daemon's control queryable (a querier asks only where one is declared)
 viewer     in: query ``@ctl/status`` and ``@ctl/capabilities``, subscribe telemetry and
-           events, discovery. out: those replies, telemetry, events, daemon tokens
+           events, discovery. out: those replies, telemetry, events, daemon tokens, the
+           daemon's control queryable
 =========  ===========================================================================
 
 Nobody may put, delete, reply or declare a queryable inbound on any key.
@@ -92,6 +94,8 @@ def acl_rules(instance: str) -> list[dict[str, Any]]:
         _rule("client-token", "ingress", ["liveliness_token"], [CLIENTS_PATTERN]),
         _rule("publish", "egress", ["put"], watched),
         _rule("announce", "egress", ["liveliness_token"], [LIVELINESS_PATTERN]),
+        # A querier (the SDK's) sends nothing once it believes no queryable matches.
+        _rule("route-control", "egress", ["declare_queryable"], [keys.control_all]),
         _rule("answer-readonly", "egress", ["reply"], readonly),
         _rule("answer-control", "egress", ["reply"], [keys.control_all]),
     ]
@@ -99,8 +103,9 @@ def acl_rules(instance: str) -> list[dict[str, Any]]:
 
 ROLE_RULES = {
     OPERATOR: ["watch", "discover", "ask-control", "client-token", "publish", "announce",
-               "answer-control"],
-    VIEWER: ["watch", "discover", "ask-readonly", "publish", "announce", "answer-readonly"],
+               "route-control", "answer-control"],
+    VIEWER: ["watch", "discover", "ask-readonly", "publish", "announce", "route-control",
+             "answer-readonly"],
 }
 
 
