@@ -19,17 +19,22 @@ import pytest
 import zenoh
 from support_certs import Certificates, make_certificates
 from support_daemons import start_daemon
+from typer.testing import CliRunner
 
 from galton.client import (
     AccessDeniedError,
     Client,
     Credentials,
+    DaemonUnreachableError,
     EmbeddedDaemon,
     spheres,
     wait_for_daemon,
 )
+from galton.client.cli import app as cli_app
+from galton.client.embedded import free_loopback_port
 from galton.client.session import close_session, daemon_alive, open_session
 from galton.protocol import Keys, Reply, ResultCode, encode_reply
+from galton.protocol.auth import wire_password
 
 INSTANCE = "secured"
 WAIT_S = 20.0
@@ -50,7 +55,6 @@ FORGED = b"forged by the viewer"
 
 
 def users_file(folder: Path) -> Path:
-    from galton.protocol.auth import wire_password
     path = folder / "users.toml"
     path.write_text(USERS.format(bob_hash=wire_password("bob", "bob-secret-2")))
     return path
@@ -94,8 +98,6 @@ def test_a_session_without_valid_credentials_is_refused(
 
 
 def test_a_refused_session_is_told_apart_from_no_daemon(secured: EmbeddedDaemon) -> None:
-    from galton.client import DaemonUnreachableError
-    from galton.client.embedded import free_loopback_port
     with pytest.raises(DaemonUnreachableError, match="no Zenoh peer answers"):
         open_session(f"tcp/127.0.0.1:{free_loopback_port()}", credentials=ALICE)
 
@@ -238,7 +240,6 @@ def certificates(tmp_path_factory: pytest.TempPathFactory) -> Certificates:
 def tls_daemon(certificates: Certificates,
                tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[EmbeddedDaemon, str]]:
     """A daemon with mutual TLS whose users are known by certificate name only."""
-    from galton.client.embedded import free_loopback_port
     folder = tmp_path_factory.mktemp("tls-users")
     users = folder / "users.toml"
     users.write_text('[users.alice]\nrole = "operator"\ntls_name = "alice.robot"\n'
@@ -305,3 +306,34 @@ def test_plain_tcp_beside_tls_gives_a_stranger_nothing(
         assert [r for r in replies if r.ok is not None] == []
     finally:
         close_session(session)
+
+
+# -- the command line ---------------------------------------------------------------------
+def _cli(daemon: EmbeddedDaemon, args: list[str],
+         env: dict[str, str] | None = None) -> tuple[int, str]:
+    result = CliRunner().invoke(cli_app, ["--connect", daemon.endpoint, "--instance", INSTANCE,
+                                          *args], env=env)
+    return result.exit_code, result.output
+
+
+def test_the_cli_takes_a_password_file_and_the_environment(secured: EmbeddedDaemon,
+                                                           tmp_path: Path) -> None:
+    (tmp_path / "alice.pw").write_text("alice-secret-1\n")
+    code, output = _cli(secured, ["--user", "alice", "--password-file",
+                                  str(tmp_path / "alice.pw"), "status", "--json"])
+    assert code == 0, output
+    assert "alice-secret-1" not in output
+    code, output = _cli(secured, ["pause"],
+                        env={"GALTON_USER": "bob", "GALTON_PASSWORD": "bob-secret-2"})
+    assert code == 1
+    assert "access denied (client side): pause: daemon 'secured' is there" in output
+    assert "bob-secret-2" not in output
+
+
+def test_the_cli_says_access_denied_without_echoing_the_password(
+        secured: EmbeddedDaemon) -> None:
+    code, output = _cli(secured, ["status"],
+                        env={"GALTON_USER": "alice", "GALTON_PASSWORD": "guess-1234"})
+    assert code == 1
+    assert "access denied (client side): a daemon listens at" in output
+    assert "guess-1234" not in output and wire_password("alice", "guess-1234") not in output
