@@ -76,7 +76,8 @@ def _refusal_hint(credentials: Credentials | None) -> str:
                 "GALTON_PASSWORD), or TLS files")
     hints = []
     if credentials.user is not None:
-        hints.append("a wrong password, or a user its users file does not name")
+        hints.append("a wrong password, a user its users file does not name, or a daemon "
+                     "without --users (it refuses any user: connect without one)")
     if credentials.tls_cert is not None:
         hints.append("a client certificate signed by a CA it does not trust")
     elif credentials.tls_ca is not None:

@@ -102,6 +102,14 @@ def test_a_refused_session_is_told_apart_from_no_daemon(secured: EmbeddedDaemon)
         open_session(f"tcp/127.0.0.1:{free_loopback_port()}", credentials=ALICE)
 
 
+def test_a_user_is_refused_by_a_daemon_without_users(
+        daemons: dict[str, EmbeddedDaemon]) -> None:
+    """Zenoh refuses a password that a daemon does not ask for: the message says so."""
+    daemon = start_daemon(daemons, "mujoco")
+    with pytest.raises(AccessDeniedError, match="a daemon without --users"):
+        open_session(daemon.endpoint, credentials=ALICE)
+
+
 # -- viewer -------------------------------------------------------------------------------
 def test_a_viewer_receives_telemetry_and_reads_status(viewer: Client) -> None:
     with viewer.telemetry(timeout=WAIT_S) as stream:
