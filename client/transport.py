@@ -5,7 +5,6 @@ replies; ``transport_for`` picks one from the endpoint a user gives.
 
 from __future__ import annotations
 
-import threading
 from collections.abc import Callable, Sequence
 from typing import Any, Protocol
 
@@ -14,19 +13,17 @@ import zenoh
 from galton.client.credentials import Credentials
 from galton.client.session import (
     Declared,
-    checked_timeout,
     close_session,
-    first_reply,
     open_session,
+    query,
     split_endpoints,
     undeclare,
 )
-from galton.protocol import InvalidArgumentError, Keys, Reply, encode_request
+from galton.protocol import InvalidArgumentError, Keys, Reply
 from galton.protocol.errors import brief
 from galton.protocol.keys import client_token_key
 
 ZMQ_SCHEME = "zmq+"
-MAX_QUERIERS = 64
 Topic = str  # "telemetry" or "events"
 
 
@@ -76,35 +73,13 @@ class ZenohTransport:
                         open_session(connect, config_file, credentials))
         self._token: Declared | None = self.session.liveliness().declare_token(
             client_token_key(client_id))
-        self._queriers: dict[tuple[str, float], zenoh.Querier] = {}
-        self._lock = threading.Lock()
 
     def request(self, op: str, args: dict[str, Any] | None, timeout: float,
                 client: str | None) -> Reply:
-        """A get through a querier declared once per operation and timeout: it skips the
-        key-expression work a plain session.get does on every call."""
-        wait = checked_timeout(timeout)
-        payload = encode_request(op, args, client)
-        querier = self._queriers.get((op, wait)) or self._declare_querier(op, wait)
-        replies = (querier.get(payload=payload) if querier is not None else
-                   self.session.get(self.keys.control(op), payload=payload, timeout=wait))
-        return first_reply(replies, self.session, self.keys, op, wait)
-
-    def _declare_querier(self, op: str, wait: float) -> zenoh.Querier | None:
-        """A querier for this operation and timeout, kept for the session's life; None past
-        MAX_QUERIERS (a caller passing ever-new timeouts gets plain gets)."""
-        with self._lock:
-            querier = self._queriers.get((op, wait))
-            if querier is None and len(self._queriers) < MAX_QUERIERS:
-                querier = self.session.declare_querier(self.keys.control(op), timeout=wait)
-                self._queriers[(op, wait)] = querier
-            return querier
-
-    def _undeclare_queriers(self) -> None:
-        with self._lock:
-            for querier in self._queriers.values():
-                undeclare(querier)
-            self._queriers.clear()
+        # A querier declared once per operation took about 1 % off a status round trip
+        # (docs/PERFORMANCE.md) and ended gets in flight when a client sharing the session
+        # closed: plain gets it is.
+        return query(self.session, self.keys, op, args, timeout, client)
 
     def send_raw(self, op: str, payload: bytes, timeout: float) -> list[bytes]:
         replies = self.session.get(self.keys.control(op), payload=payload, timeout=timeout)
@@ -119,7 +94,6 @@ class ZenohTransport:
         return subscriber
 
     def close(self) -> None:
-        self._undeclare_queriers()
         if self._token is not None:
             undeclare(self._token)
             self._token = None

@@ -23,12 +23,21 @@ from collections.abc import Callable
 from typing import Any
 
 import zmq
+from zmq.backend.cython._zmq import Socket as BaseSocket
 from zmq.utils.monitor import parse_monitor_message
 
 from galton.daemon.calls import Call, Task
 from galton.protocol import InvalidArgumentError
 from galton.protocol.errors import brief
 
+# pyzmq's flag enums cost more than the calls they flag (about 1 µs per operation): ints.
+_EVENTS, _POLLIN, _RCVMORE = int(zmq.EVENTS), int(zmq.POLLIN), int(zmq.RCVMORE)
+_NOBLOCK, _MORE, _SRCFD = int(zmq.NOBLOCK), int(zmq.SNDMORE | zmq.NOBLOCK), int(zmq.SRCFD)
+# The base class's send and recv: pyzmq's wrappers add about 1 µs per frame.
+_send: Callable[..., Any] = BaseSocket.send
+_recv: Callable[..., Any] = BaseSocket.recv
+_get: Callable[..., Any] = BaseSocket.get
+MONITOR_PERIOD_S = 0.05  # closed connections are looked for at least this often
 # A message is routing frames (echoed in the reply, as ZeroMQ's REQ/DEALER envelopes are),
 # then one frame holding the request: at most this many frames in all, ROUTER's included.
 MAX_FRAMES = 8
@@ -69,8 +78,9 @@ class ZmqFront:
         self.context = zmq.Context()
         self.routers: list[zmq.Socket[bytes]] = []
         self.monitors: list[zmq.Socket[bytes]] = []
-        # Per ROUTER: the peer identity each connection's file descriptor carries.
+        # Per ROUTER: the peer identity each connection's file descriptor carries, and back.
         self.peers: list[dict[int, bytes]] = []
+        self.known: list[dict[bytes, int]] = []
         self.control: list[str] = []
         self.telemetry: list[str] = []
         self.prefix = f"galton/{instance}/".encode()
@@ -87,6 +97,7 @@ class ZmqFront:
         os.set_blocking(self._wake_write, False)
         self._fds: list[int] = [int(socket.getsockopt(zmq.FD)) for socket in (
             *self.routers, *self.monitors)] + [self._wake_read]
+        self._next_monitor_check = 0.0
 
     def _bind(self, endpoint: str) -> None:
         router = self.context.socket(zmq.ROUTER)
@@ -95,6 +106,7 @@ class ZmqFront:
         self.routers.append(router)
         self.monitors.append(router.get_monitor_socket(zmq.EVENT_DISCONNECTED))
         self.peers.append({})
+        self.known.append({})
         bound = router.getsockopt_string(zmq.LAST_ENDPOINT)
         self.control.append(bound)
         self.pub.bind(telemetry_endpoint(bound))
@@ -110,13 +122,16 @@ class ZmqFront:
             os.write(self._wake_write, b"\0")
 
     def readable(self) -> bool:
-        """Whether a socket has something to read. Reading ZMQ_EVENTS also re-arms the
-        edge-triggered ZMQ_FD, so this runs before every wait."""
-        return any(_has_input(socket) for socket in (*self.monitors, *self.routers))
+        """Whether a request waits. Reading ZMQ_EVENTS also re-arms the edge-triggered
+        ZMQ_FD, so ``wait`` looks at every socket before it sleeps."""
+        return any(_has_input(router) for router in self.routers)
 
     def wait(self, timeout: float | None) -> None:
         """Wait until a socket may be readable, the pipe is woken, or ``timeout`` seconds
         (select(): microsecond resolution, unlike zmq_poll's milliseconds)."""
+        if any(_has_input(monitor) for monitor in self.monitors):
+            self._next_monitor_check = 0.0  # a connection closed: receive() looks now
+            return
         if self.readable():
             return
         try:
@@ -131,33 +146,47 @@ class ZmqFront:
         """Everything readable now, without blocking: closed connections first (as Tasks
         made by ``gone``), then requests as Calls answered on this thread."""
         items: list[Call | Task] = []
-        for index, monitor in enumerate(self.monitors):
-            while _has_input(monitor):  # no recv that fails: a zmq.Again costs about 3 µs
-                event = parse_monitor_message(monitor.recv_multipart())
-                identity = self.peers[index].pop(int(event["value"]), None)
-                if identity is not None:
-                    items.append(gone(peer_name(index, identity)))
+        now = time.monotonic()
+        if now >= self._next_monitor_check:  # off the hot path: closes are not urgent
+            self._next_monitor_check = now + MONITOR_PERIOD_S
+            for index, monitor in enumerate(self.monitors):
+                while _has_input(monitor):  # no recv that fails: a zmq.Again costs ~3 µs
+                    event = parse_monitor_message(monitor.recv_multipart())
+                    identity = self.peers[index].pop(int(event["value"]), None)
+                    if identity is not None:
+                        self.known[index].pop(identity, None)
+                        items.append(gone(peer_name(index, identity)))
         for index, router in enumerate(self.routers):
             while _has_input(router):
-                call = self._call(index, router, router.recv_multipart(copy=False))
+                call = self._call(index, router)
                 if call is not None:
                     items.append(call)
         return items
 
-    def _call(self, index: int, router: zmq.Socket[bytes], frames: list[Any]) -> Call | None:
-        """A Call for one message; a message that is no request is dropped, as ZeroMQ
-        cannot address an answer to a malformed envelope."""
-        routing = [bytes(frame) for frame in frames[:-1]]
+    def _call(self, index: int, router: zmq.Socket[bytes]) -> Call | None:
+        """A Call for the message waiting on ``router``; a message that is no request is
+        dropped, as ZeroMQ cannot address an answer to a malformed envelope."""
+        first = _recv(router, 0, False)  # the peer's identity, as a Frame: it knows its fd
+        frames: list[bytes] = [first.bytes]
+        while _get(router, _RCVMORE):
+            frames.append(_recv(router, 0, True))
+        routing, payload = frames[:-1], frames[-1]
         if len(frames) < 2 or len(frames) > MAX_FRAMES or any(
                 len(part) > MAX_ROUTING_FRAME_BYTES for part in routing[1:]):
             return None
-        self.peers[index].setdefault(frames[-1].get(zmq.SRCFD), routing[0])
+        if routing[0] not in self.known[index]:
+            fd = int(first.get(_SRCFD))
+            self.peers[index][fd] = routing[0]
+            self.known[index][routing[0]] = fd
 
         def respond(data: bytes) -> None:
-            # A peer whose queue is full, or which has gone, loses it (as ROUTER would).
+            # A peer whose queue is full, or which has gone, loses it (as ROUTER would):
+            # ROUTER takes or drops a whole message at its first frame.
             with contextlib.suppress(zmq.Again):
-                router.send_multipart([*routing, data], zmq.NOBLOCK)
-        return Call("", bytes(frames[-1].buffer), respond, peer=peer_name(index, routing[0]))
+                for part in routing:
+                    _send(router, part, _MORE)
+                _send(router, data, _NOBLOCK)
+        return Call("", payload, respond, peer=peer_name(index, routing[0]))
 
     def publish(self, topic: str, data: bytes) -> None:
         """Publish on ``galton/<instance>/<topic>`` (the Zenoh key, as the topic frame)."""
@@ -182,7 +211,7 @@ class ZmqFront:
 
 def _has_input(socket: zmq.Socket[bytes]) -> bool:
     """Whether a whole message waits (reading ZMQ_EVENTS also re-arms ZMQ_FD)."""
-    return bool(int(socket.getsockopt(zmq.EVENTS)) & zmq.POLLIN)
+    return bool(_get(socket, _EVENTS) & _POLLIN)
 
 
 def peer_name(index: int, identity: bytes) -> str:
