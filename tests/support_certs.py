@@ -13,8 +13,6 @@ import zlib
 from dataclasses import dataclass
 from pathlib import Path
 
-import pytest
-
 OPENSSL = shutil.which("openssl")
 DAYS = "2"
 CURVE = ["-newkey", "ec", "-pkeyopt", "ec_paramgen_curve:prime256v1", "-nodes"]
@@ -69,8 +67,10 @@ def _client(folder: Path, name: str, authority: Pair, common_name: str) -> Pair:
 
 
 def make_certificates(folder: Path) -> Certificates:
-    """Every certificate the tests use, in ``folder``; skips the test without openssl."""
+    """Every certificate the tests use, in ``folder``; skips the test without openssl
+    (benchmarks/secure_latency.py uses it too, hence pytest imported only here)."""
     if OPENSSL is None:
+        import pytest
         pytest.skip("the openssl command is not installed (nor is the cryptography package)")
     ca, other = _authority(folder, "ca"), _authority(folder, "other-ca")
     daemon = _leaf(folder, "daemon", ca, "localhost",
