@@ -31,7 +31,7 @@ from galton.protocol import InvalidArgumentError
 from galton.protocol.errors import brief
 
 # pyzmq's flag enums cost more than the calls they flag (about 1 µs per operation): ints.
-_EVENTS, _POLLIN, _RCVMORE = int(zmq.EVENTS), int(zmq.POLLIN), int(zmq.RCVMORE)
+_EVENTS, _POLLIN = int(zmq.EVENTS), int(zmq.POLLIN)
 _NOBLOCK, _MORE, _SRCFD = int(zmq.NOBLOCK), int(zmq.SNDMORE | zmq.NOBLOCK), int(zmq.SRCFD)
 # The base class's send and recv: pyzmq's wrappers add about 1 µs per frame.
 _send: Callable[..., Any] = BaseSocket.send
@@ -97,6 +97,7 @@ class ZmqFront:
         os.set_blocking(self._wake_write, False)
         self._fds: list[int] = [int(socket.getsockopt(zmq.FD)) for socket in (
             *self.routers, *self.monitors)] + [self._wake_read]
+        self._monitor_fds = self._fds[len(self.routers):-1]
         self._next_monitor_check = 0.0
 
     def _bind(self, endpoint: str) -> None:
@@ -121,19 +122,12 @@ class ZmqFront:
         with contextlib.suppress(BlockingIOError):  # a full pipe wakes the poll anyway
             os.write(self._wake_write, b"\0")
 
-    def readable(self) -> bool:
-        """Whether a request waits. Reading ZMQ_EVENTS also re-arms the edge-triggered
-        ZMQ_FD, so ``wait`` looks at every socket before it sleeps."""
-        return any(_has_input(router) for router in self.routers)
-
     def wait(self, timeout: float | None) -> None:
         """Wait until a socket may be readable, the pipe is woken, or ``timeout`` seconds
-        (select(): microsecond resolution, unlike zmq_poll's milliseconds)."""
-        if any(_has_input(monitor) for monitor in self.monitors):
-            self._next_monitor_check = 0.0  # a connection closed: receive() looks now
-            return
-        if self.readable():
-            return
+        (select(): microsecond resolution, unlike zmq_poll's milliseconds).
+
+        Call it right after ``receive`` found nothing, with no send on a ROUTER between:
+        ZMQ_FD is edge-triggered, and ``receive``'s last look at ZMQ_EVENTS re-armed it."""
         try:
             ready, _, _ = select.select(self._fds, [], [], timeout)
         except InterruptedError:
@@ -141,6 +135,9 @@ class ZmqFront:
         if self._wake_read in ready:
             with contextlib.suppress(BlockingIOError):
                 os.read(self._wake_read, 4096)
+        if any(fd in ready for fd in self._monitor_fds):
+            self._monitor_fds = self._fds[len(self.routers):-1]
+        self._next_monitor_check = 0.0  # a connection closed: receive() looks now
 
     def receive(self, gone: Callable[[str], Task]) -> list[Call | Task]:
         """Everything readable now, without blocking: closed connections first (as Tasks
@@ -166,10 +163,11 @@ class ZmqFront:
     def _call(self, index: int, router: zmq.Socket[bytes]) -> Call | None:
         """A Call for the message waiting on ``router``; a message that is no request is
         dropped, as ZeroMQ cannot address an answer to a malformed envelope."""
-        first = _recv(router, 0, False)  # the peer's identity, as a Frame: it knows its fd
+        first = frame = _recv(router, 0, False)  # the peer's identity: it knows its fd
         frames: list[bytes] = [first.bytes]
-        while _get(router, _RCVMORE):
-            frames.append(_recv(router, 0, True))
+        while frame.more:
+            frame = _recv(router, 0, False)
+            frames.append(frame.bytes)
         routing, payload = frames[:-1], frames[-1]
         if len(frames) < 2 or len(frames) > MAX_FRAMES or any(
                 len(part) > MAX_ROUTING_FRAME_BYTES for part in routing[1:]):
@@ -228,6 +226,9 @@ def _remove_socket_file(endpoint: str) -> None:
                 raise
 
 
+NOTHING = object()
+
+
 class PolledInbox:
     """The physics loop's inbox when ZeroMQ is on: Zenoh's calls in a queue that wakes the
     poll, ZeroMQ's read straight from the sockets. Same interface as ``queue.SimpleQueue``."""
@@ -242,24 +243,27 @@ class PolledInbox:
         self.queue.put(item)
         self.front.wake()
 
-    def get_nowait(self) -> Call | Task | None:
-        if not self.queue.empty():  # only this thread takes from it: no race
+    def _take(self) -> object:  # a Call, a Task, None (stop) or NOTHING
+        """The next item, or NOTHING; Zenoh's queue first (only this thread takes from it)."""
+        if not self.queue.empty():
             return self.queue.get_nowait()
         if not self.pending:
             self.pending.extend(self.front.receive(self.gone))
-        if self.pending:
-            return self.pending.popleft()
-        raise queue.Empty
+        return self.pending.popleft() if self.pending else NOTHING
+
+    def get_nowait(self) -> Call | Task | None:
+        item = self._take()
+        if item is NOTHING:
+            raise queue.Empty
+        return item  # type: ignore[return-value]
 
     def get(self, block: bool = True, timeout: float | None = None) -> Call | Task | None:
         if not block:
             return self.get_nowait()
         deadline = None if timeout is None else time.monotonic() + timeout
-        while True:
-            if not self.queue.empty() or self.pending or self.front.readable():
-                with contextlib.suppress(queue.Empty):
-                    return self.get_nowait()
+        while (item := self._take()) is NOTHING:
             remaining = None if deadline is None else deadline - time.monotonic()
             if remaining is not None and remaining <= 0:
                 raise queue.Empty
-            self.front.wait(remaining)
+            self.front.wait(remaining)  # receive() has just looked: see ZmqFront.wait
+        return item  # type: ignore[return-value]
