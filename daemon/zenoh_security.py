@@ -94,7 +94,7 @@ def acl_rules(instance: str) -> list[dict[str, Any]]:
         _rule("client-token", "ingress", ["liveliness_token"], [CLIENTS_PATTERN]),
         _rule("publish", "egress", ["put"], watched),
         _rule("announce", "egress", ["liveliness_token"], [LIVELINESS_PATTERN]),
-        # A querier (the SDK's) sends nothing once it believes no queryable matches.
+        # A Zenoh querier sends nothing once it believes no queryable matches its key.
         _rule("route-control", "egress", ["declare_queryable"], [keys.control_all]),
         _rule("answer-readonly", "egress", ["reply"], readonly),
         _rule("answer-control", "egress", ["reply"], [keys.control_all]),

@@ -24,6 +24,7 @@ from typer.testing import CliRunner
 from galton.client import (
     AccessDeniedError,
     Client,
+    ControlHeldError,
     Credentials,
     DaemonUnreachableError,
     EmbeddedDaemon,
@@ -229,6 +230,26 @@ def test_an_operator_can_do_everything(operator: Client) -> None:
         assert operator.reset().step == 0
         assert next(stream).instance == INSTANCE
     assert operator.load_world("mujoco").entity_count == 0
+
+
+def test_the_control_lease_holds_and_ends_with_its_holder_under_users(
+        secured: EmbeddedDaemon, operator: Client, viewer: Client) -> None:
+    """Access control lets the lease see its holder's liveliness token go."""
+    with pytest.raises(AccessDeniedError):
+        viewer.take_control()
+    events: queue.SimpleQueue[dict[str, object]] = queue.SimpleQueue()
+    holder = Client(INSTANCE, secured.endpoint, timeout=WAIT_S, credentials=ALICE)
+    try:
+        assert holder.take_control()
+        with operator.on_event(events.put):
+            with pytest.raises(ControlHeldError):
+                operator.step(1)
+            holder.close()
+            while events.get(timeout=WAIT_S).get("change") != "lost":
+                pass
+        assert operator.step(1).step == 1
+    finally:
+        holder.close()
 
 
 def test_credentials_never_show_their_password() -> None:
