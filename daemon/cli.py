@@ -12,7 +12,7 @@ import zenoh
 
 from galton.daemon.limits import Limits, describe_limits, parse_limits
 from galton.daemon.server import DaemonOptions, run_daemon
-from galton.daemon.users import load_users
+from galton.daemon.users import User, load_users, readable_by_others
 from galton.daemon.zenoh_merge import DEFAULT_LISTEN, DEFAULT_TLS_LISTEN
 from galton.daemon.zenoh_security import TlsFiles
 from galton.protocol import GaltonError, InvalidArgumentError, validate_instance_name
@@ -51,6 +51,17 @@ def _tls_files(cert: Path | None, key: Path | None, ca: Path | None) -> TlsFiles
     return TlsFiles(cert, key, ca)
 
 
+def _users(path: Path | None) -> dict[str, User] | None:
+    """The users of --users; a file other accounts can read gets a warning line."""
+    if path is None:
+        return None
+    found = load_users(path)
+    if readable_by_others(path):
+        typer.echo(f"galton-daemon: warning: other accounts can read {path}; its password "
+                   f"hashes are password-equivalent: chmod 600 {path}", err=True)
+    return found
+
+
 @app.command()
 def serve(
     engine: Annotated[str, typer.Option(help="Physics engine: mujoco or pybullet.")] = "mujoco",
@@ -81,6 +92,11 @@ def serve(
         help="Also serve over ZeroMQ at this endpoint (repeatable): ipc:///path, "
              "tcp://HOST:PORT, or a port (loopback). Telemetry and events are published "
              "at ipc:///path.pub or the next port.")] = None,
+    zmq_key: Annotated[Path | None, typer.Option(
+        help="The daemon's ZeroMQ CURVE key pair (a .key_secret file; `galton-client "
+             "zmq-keys DIR` makes one): ZeroMQ encrypted and, with --users, authenticated "
+             "by each user's zmq_public_key. Required for --zmq with --users.",
+        dir_okay=False)] = None,
     multicast: Annotated[bool, typer.Option(
         help="Enable Zenoh multicast scouting (off by default).")] = False,
     telemetry_rate: Annotated[float, typer.Option(
@@ -107,7 +123,7 @@ def serve(
             telemetry_rate_hz=telemetry_rate, params=_parse_params(params),
             limits=_parse_limits(limit or []), state_dir=state_dir,
             checkpoint_period_s=checkpoint_every, zmq=zmq or [],
-            users=load_users(users) if users is not None else None,
+            users=_users(users), zmq_key=zmq_key,
             tls=_tls_files(tls_cert, tls_key, tls_ca))
         code = run_daemon(options, announce=lambda line: print(line, flush=True))
     except GaltonError as error:

@@ -177,6 +177,12 @@ def _check_unique(users: dict[str, User], attribute: str, source: str) -> None:
         seen[value] = user.name
 
 
+def readable_by_others(path: Path | str) -> bool:
+    """Whether accounts other than the owner may read the file: its password hashes are
+    password-equivalent for Zenoh, so the daemon warns (docs/SECURITY.md)."""
+    return bool(Path(path).stat().st_mode & 0o077)
+
+
 def by_role(users: Mapping[str, User], role: str) -> list[User]:
     """The users of one role, by name."""
     return sorted((u for u in users.values() if u.role == role), key=lambda u: u.name)

@@ -58,6 +58,7 @@ FORGED = b"forged by the viewer"
 def users_file(folder: Path) -> Path:
     path = folder / "users.toml"
     path.write_text(USERS.format(bob_hash=wire_password("bob", "bob-secret-2")))
+    path.chmod(0o600)
     return path
 
 
@@ -273,6 +274,7 @@ def tls_daemon(certificates: Certificates,
     users = folder / "users.toml"
     users.write_text('[users.alice]\nrole = "operator"\ntls_name = "alice.robot"\n'
                      '[users.bob]\nrole = "viewer"\ntls_name = "bob.view"\n')
+    users.chmod(0o600)
     endpoint = f"tls/127.0.0.1:{free_loopback_port()}"
     certs = certificates
     args = ["--users", str(users), "--listen", endpoint, "--tls-cert", str(certs.daemon.cert),

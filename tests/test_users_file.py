@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from galton.daemon.users import ROLES, load_users, parse_users
+from galton.daemon.users import ROLES, load_users, parse_users, readable_by_others
 from galton.daemon.zenoh_security import (
     ROLE_RULES,
     TlsFiles,
@@ -170,3 +170,11 @@ def test_the_private_file_is_removed_when_the_process_exits() -> None:
 def test_tls_files_must_exist(tmp_path: Path) -> None:
     with pytest.raises(InvalidArgumentError, match=r"--tls-cert .* is not a readable file"):
         TlsFiles(tmp_path / "no.pem", tmp_path / "no.key")
+
+
+def test_a_users_file_others_can_read_is_noticed(tmp_path: Path) -> None:
+    path = users_from(tmp_path, GOOD)
+    path.chmod(0o600)
+    assert not readable_by_others(path)
+    path.chmod(0o644)
+    assert readable_by_others(path)
