@@ -38,6 +38,7 @@ def users_file(folder: Path) -> Path:
     path = folder / "users.toml"
     path.write_text(f'[users.bench]\nrole = "operator"\npassword = "{PASSWORD}"\n'
                     'tls_name = "alice.robot"\n')
+    path.chmod(0o600)
     return path
 
 
