@@ -159,7 +159,10 @@ def _forged_telemetry_reaches_operator(endpoint: str, instance: str,
                                        intruder: Credentials | None,
                                        listener: Credentials | None) -> bool:
     """Whether a sample the intruder puts on the telemetry key reaches a subscriber of
-    another client before three of the daemon's own samples that follow it."""
+    another client. The intruder's liveliness round trip after its put means the daemon
+    has handled it (one link keeps its order), so a copy it forwarded is already on its
+    way to the listener, sub-millisecond on loopback: three more of the daemon's samples
+    (at least 40 ms at 50 Hz) close the watch. On an open daemon the copy does arrive."""
     keys = Keys(instance)
     received: queue.SimpleQueue[bytes] = queue.SimpleQueue()
     listening = open_session(endpoint, credentials=listener)
@@ -169,12 +172,12 @@ def _forged_telemetry_reaches_operator(endpoint: str, instance: str,
             keys.telemetry, lambda sample: received.put(sample.payload.to_bytes()))
         received.get(timeout=WAIT_S)  # the subscription is in place
         publisher = intruding.declare_publisher(keys.telemetry)
-        received.get(timeout=WAIT_S)  # one more daemon sample: the declaration has arrived
+        assert daemon_alive(intruding, keys, WAIT_S)  # the declaration has arrived
         publisher.put(FORGED)
+        assert daemon_alive(intruding, keys, WAIT_S)  # ... and the put
         genuine = 0
         while genuine < 3:
-            data = received.get(timeout=WAIT_S)
-            if data == FORGED:
+            if received.get(timeout=WAIT_S) == FORGED:
                 return True
             genuine += 1
         subscriber.undeclare()
