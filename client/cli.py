@@ -26,6 +26,8 @@ from rich.table import Table
 
 from galton.client.credentials import Credentials, resolve_credentials
 from galton.client.sdk import Client, Stamp
+from galton.client.transport import zmq_endpoint
+from galton.client.zmq_keys import ZmqKeys
 from galton.protocol import (
     AccessDeniedError,
     DaemonUnreachableError,
@@ -47,15 +49,19 @@ class Target:
     """Where the global options point: endpoints, instance, timeout, credentials."""
 
     def __init__(self, connect: list[str] | None, instance: str, timeout: float,
-                 credentials: Credentials | None = None) -> None:
+                 credentials: Credentials | None = None,
+                 zmq_keys: ZmqKeys | None = None) -> None:
         self.connect = connect
         self.instance = instance
         self.timeout = timeout
         self.credentials = credentials
+        self.zmq_keys = zmq_keys
 
     def client(self) -> Client:
+        over_zmq = zmq_endpoint(self.connect) is not None
         return Client(self.instance, self.connect, timeout=self.timeout,
-                      credentials=self.credentials)
+                      credentials=None if over_zmq else self.credentials,
+                      zmq_keys=self.zmq_keys if over_zmq else None)
 
 
 def package_version() -> str:
@@ -98,6 +104,14 @@ def main_options(
     tls_key: Annotated[Path | None, typer.Option(
         help="The private key (PEM) of --tls-cert.", dir_okay=False,
         rich_help_panel="Credentials (docs/SECURITY.md)")] = None,
+    zmq_key: Annotated[Path | None, typer.Option(
+        help="This client's CURVE key pair (.key_secret) for a daemon's encrypted ZeroMQ "
+             "front (else GALTON_ZMQ_KEY).", dir_okay=False,
+        rich_help_panel="Credentials (docs/SECURITY.md)")] = None,
+    zmq_server_key: Annotated[str | None, typer.Option(
+        help="The daemon's CURVE public key: its .key file or the Z85 text (else "
+             "GALTON_ZMQ_SERVER_KEY).", rich_help_panel="Credentials (docs/SECURITY.md)")
+    ] = None,
     show_version: Annotated[bool, typer.Option(
         "--version", is_eager=True, callback=print_version,
         help="Print the version and exit.")] = False,
@@ -111,7 +125,19 @@ def main_options(
                                               os.environ)
         except GaltonError as error:
             raise typer.BadParameter(str(error)) from error
-    ctx.obj = Target(connect, instance, timeout, credentials)
+    ctx.obj = Target(connect, instance, timeout, credentials, _zmq_keys(zmq_key, zmq_server_key))
+
+
+def _zmq_keys(key: Path | None, server_key: str | None) -> ZmqKeys | None:
+    """The options' CURVE keys (both or neither), else the environment's."""
+    if key is None and server_key is None:
+        return None
+    if key is None or server_key is None:
+        raise typer.BadParameter("--zmq-key and --zmq-server-key go together")
+    try:
+        return ZmqKeys.load(key, server_key)
+    except GaltonError as error:
+        raise typer.BadParameter(str(error)) from error
 
 
 def error_line(error: GaltonError) -> str:
@@ -215,6 +241,7 @@ from galton.client import (  # noqa: E402,F401
     cli_time,
     cli_world,
     cli_worlds,
+    cli_zmq_keys,
 )
 
 tidy_help(app)

@@ -36,6 +36,7 @@ from galton.client.telemetry import Subscription, TelemetryStream, subscribe_eve
 from galton.client.transport import Transport, ZenohTransport, zmq_endpoint
 from galton.client.transport_zmq import ZmqTransport
 from galton.client.values import JointStates, Stamp, States
+from galton.client.zmq_keys import ZmqKeys
 from galton.protocol import (
     POSE_WIDTH,
     BodyGroup,
@@ -68,7 +69,8 @@ class Client(WorldMethods, PerceptionMethods, ControlMethods):
     def __init__(self, instance: str = "galton", connect: str | Sequence[str] | None = None,
                  *, timeout: float = DEFAULT_TIMEOUT_S, session: zenoh.Session | None = None,
                  config_file: str | None = None,
-                 credentials: Credentials | None = None) -> None:
+                 credentials: Credentials | None = None,
+                 zmq_keys: ZmqKeys | None = None) -> None:
         self.keys = Keys(instance)
         self.timeout = checked_timeout(timeout)
         self._closed = False
@@ -79,7 +81,7 @@ class Client(WorldMethods, PerceptionMethods, ControlMethods):
         self.client_id = uuid.uuid4().hex
         self._own_transport = True
         self.transport = _transport(self.keys, self.client_id, connect, session, config_file,
-                                    credentials)
+                                    credentials, zmq_keys)
 
     @property
     def session(self) -> zenoh.Session:
@@ -353,15 +355,20 @@ class Client(WorldMethods, PerceptionMethods, ControlMethods):
 
 def _transport(keys: Keys, client_id: str, connect: str | Sequence[str] | None,
                session: zenoh.Session | None, config_file: str | None,
-               credentials: Credentials | None = None) -> Transport:
-    """ZeroMQ for a ``zmq+ipc://`` or ``zmq+tcp://`` endpoint, else Zenoh."""
+               credentials: Credentials | None = None,
+               zmq_keys: ZmqKeys | None = None) -> Transport:
+    """ZeroMQ for a ``zmq+ipc://`` or ``zmq+tcp://`` endpoint (CURVE keys from ``zmq_keys``,
+    else GALTON_ZMQ_KEY and GALTON_ZMQ_SERVER_KEY), else Zenoh."""
     endpoint = zmq_endpoint(connect)
     if endpoint is None:
+        if zmq_keys is not None:
+            raise InvalidArgumentError("ZeroMQ keys are for a zmq+ endpoint, not Zenoh")
         return ZenohTransport(keys, client_id, session, connect, config_file, credentials)
-    if session is not None or config_file is not None:
+    if session is not None or config_file is not None or credentials is not None:
         raise InvalidArgumentError(
-            "a ZeroMQ endpoint takes no Zenoh session or config file")
-    return ZmqTransport(endpoint)
+            "a ZeroMQ endpoint takes no Zenoh session, config file or credentials: its "
+            "security is CURVE keys (zmq_keys)")
+    return ZmqTransport(endpoint, keys=zmq_keys or ZmqKeys.from_env())
 
 
 def _names(result: dict[str, Any]) -> list[str]:

@@ -21,7 +21,9 @@ from typing import Any
 import zmq
 
 from galton.client.transport import Topic
+from galton.client.zmq_keys import HANDSHAKE_EVENTS, ZmqKeys, wait_for_handshake
 from galton.protocol import (
+    AccessDeniedError,
     DaemonUnreachableError,
     InvalidArgumentError,
     Reply,
@@ -50,8 +52,10 @@ class ZmqTransport:
 
     kind = "zmq"
 
-    def __init__(self, endpoint: str, connect_timeout: float = CONNECT_TIMEOUT_S) -> None:
+    def __init__(self, endpoint: str, connect_timeout: float = CONNECT_TIMEOUT_S,
+                 keys: ZmqKeys | None = None) -> None:
         self.endpoint = check_endpoint(endpoint)
+        self.keys = keys
         path = endpoint[len("ipc://"):]
         if endpoint.startswith("ipc://") and not os.path.exists(path):
             raise DaemonUnreachableError(
@@ -66,7 +70,7 @@ class ZmqTransport:
         self._telemetry_endpoint: str | None = None
         try:
             self._socket()  # fail now, as a Zenoh client does, if nothing answers there
-        except DaemonUnreachableError:
+        except (DaemonUnreachableError, AccessDeniedError):
             self.close()
             raise
 
@@ -77,11 +81,18 @@ class ZmqTransport:
             socket = self.context.socket(zmq.DEALER)
             socket.setsockopt(zmq.IMMEDIATE, 1)
             socket.setsockopt(zmq.LINGER, 0)
+            if self.keys is not None:
+                self.keys.apply(socket)
+            monitor = socket.get_monitor_socket(HANDSHAKE_EVENTS)
             socket.connect(self.endpoint)
             with self._lock:
                 self._sockets.append(socket)
             self._local.socket = socket
-            self._wait_connected(socket)
+            try:
+                wait_for_handshake(socket, monitor, self.endpoint, self.connect_timeout)
+            finally:
+                socket.disable_monitor()
+                monitor.close(linger=0)
         return socket
 
     def _wait_connected(self, socket: zmq.Socket[bytes]) -> None:
@@ -157,7 +168,8 @@ class ZmqTransport:
         return self._telemetry_endpoint
 
     def subscribe(self, topic: Topic, callback: Callable[[bytes], None]) -> ZmqSubscription:
-        return ZmqSubscription(self.context, self.telemetry_endpoint(), topic, callback)
+        return ZmqSubscription(self.context, self.telemetry_endpoint(), topic, callback,
+                               self.keys)
 
     def close(self) -> None:
         """Close every socket of every thread; the context with them."""
@@ -169,12 +181,14 @@ class ZmqSubscription:
     the topic (``galton/<instance>/<topic>``); ``undeclare`` stops it."""
 
     def __init__(self, context: zmq.Context[zmq.Socket[bytes]], endpoint: str, topic: Topic,
-                 callback: Callable[[bytes], None]) -> None:
+                 callback: Callable[[bytes], None], keys: ZmqKeys | None = None) -> None:
         self._suffix = b"/" + topic.encode()
         self._callback = callback
         self._stop = threading.Event()
         self._socket = context.socket(zmq.SUB)
         self._socket.setsockopt(zmq.LINGER, 0)
+        if keys is not None:
+            keys.apply(self._socket)
         self._socket.connect(endpoint)
         self._socket.subscribe(b"galton/")
         self._thread = threading.Thread(target=self._run, name="galton-zmq-sub", daemon=True)

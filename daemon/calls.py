@@ -32,6 +32,7 @@ class Call:
     # The connection it came on, when the transport has connections (ZeroMQ): a step job
     # is tied to it as to a Zenoh client's token. ``op`` is "" until decoded there.
     peer: str | None = None
+    role: str | None = None  # the sender's role where the transport knows it (ZeroMQ)
 
 
 @dataclass

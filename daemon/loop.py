@@ -23,6 +23,7 @@ from galton.daemon.limits import DEFAULT_LIMITS, Limits
 from galton.daemon.monitor import Pacer, ProcessMonitor, RtfWindow
 from galton.daemon.snapshot_slots import SnapshotSlots
 from galton.daemon.world import World
+from galton.daemon.zmq_auth import refuse_by_role
 from galton.protocol import (
     DecodeLimits,
     NotFoundError,
@@ -243,6 +244,7 @@ class SimLoop:
             request = decode_request(call.payload, call.op or None, self.decode_limits)
             call.op = request.op
             op = operation(request.op)
+            refuse_by_role(call.role, op.name)
             op.check_arg_names(request.args)
             self.world_for(request.args)  # an unknown world is refused before anything
             call.client = request.client

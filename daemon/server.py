@@ -26,8 +26,9 @@ from galton.daemon.users import User
 from galton.daemon.world import World
 from galton.daemon.zenoh_merge import file_says, listen_endpoints, merge
 from galton.daemon.zenoh_security import TlsFiles, security_settings, tls_settings
+from galton.daemon.zmq_auth import ZmqSecurity
 from galton.daemon.zmq_front import PolledInbox, ZmqFront, parse_endpoint
-from galton.protocol import Keys, Telemetry
+from galton.protocol import InvalidArgumentError, Keys, Telemetry
 from galton.protocol.keys import CLIENTS_PATTERN, client_from_token_key, op_from_control_key
 from galton.protocol.operations import OPERATIONS
 
@@ -56,6 +57,7 @@ class DaemonOptions:
     checkpoint_period_s: float = checkpoint.DEFAULT_PERIOD_S
     zmq: list[str] = field(default_factory=list)  # ZeroMQ endpoints (daemon/zmq_front.py)
     users: Mapping[str, User] | None = None  # --users: authentication and roles (SECURITY.md)
+    zmq_key: Path | None = None  # --zmq-key: the ZeroMQ front's CURVE key pair
     tls: TlsFiles | None = None  # --tls-cert/--tls-key/--tls-ca
 
 
@@ -197,7 +199,15 @@ def _zmq_front(options: DaemonOptions, loop: SimLoop) -> ZmqFront | None:
     advertised by ``capabilities``."""
     if not options.zmq:
         return None
-    front = ZmqFront([parse_endpoint(endpoint) for endpoint in options.zmq], options.instance)
+    if options.users is not None and options.zmq_key is None:
+        raise InvalidArgumentError(
+            "--users with --zmq needs --zmq-key: an unauthenticated ZeroMQ front would let "
+            "anyone on it past the users file (make a key pair with `galton-client zmq-keys "
+            "DIR`)")
+    security = (ZmqSecurity.load(options.zmq_key, options.users)
+                if options.zmq_key is not None else None)
+    front = ZmqFront([parse_endpoint(endpoint) for endpoint in options.zmq], options.instance,
+                     security)
     loop.inbox = PolledInbox(front, lambda peer: Task(lambda: loop.client_gone(peer)))
     loop.advertised = {"zmq": front.advertised()}
     return front

@@ -19,7 +19,7 @@ import queue
 import select
 import time
 from collections import deque
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from typing import Any
 
 import zmq
@@ -27,6 +27,7 @@ from zmq.backend.cython._zmq import Socket as BaseSocket
 from zmq.utils.monitor import parse_monitor_message
 
 from galton.daemon.calls import Call, Task
+from galton.daemon.zmq_auth import ZmqSecurity, start_authenticator
 from galton.protocol import InvalidArgumentError
 from galton.protocol.errors import brief
 
@@ -74,8 +75,12 @@ def telemetry_endpoint(control: str) -> str:
 class ZmqFront:
     """The bound sockets, the monitor of each ROUTER and the pipe that wakes the poll."""
 
-    def __init__(self, endpoints: list[str], instance: str) -> None:
+    def __init__(self, endpoints: list[str], instance: str,
+                 security: ZmqSecurity | None = None) -> None:
         self.context = zmq.Context()
+        self.security = security
+        self.authenticator = (start_authenticator(self.context, security)
+                              if security is not None else None)
         self.routers: list[zmq.Socket[bytes]] = []
         self.monitors: list[zmq.Socket[bytes]] = []
         # Per ROUTER: the peer identity each connection's file descriptor carries, and back.
@@ -87,6 +92,8 @@ class ZmqFront:
         try:
             self.pub = self.context.socket(zmq.PUB)
             self.pub.setsockopt(zmq.LINGER, 0)
+            if security is not None:
+                security.secure(self.pub)
             for endpoint in endpoints:
                 self._bind(endpoint)
         except zmq.ZMQError as error:
@@ -103,19 +110,28 @@ class ZmqFront:
     def _bind(self, endpoint: str) -> None:
         router = self.context.socket(zmq.ROUTER)
         router.setsockopt(zmq.LINGER, 0)
-        router.bind(endpoint)
+        if self.security is not None:
+            self.security.secure(router)
+        with _private_files():
+            router.bind(endpoint)
         self.routers.append(router)
         self.monitors.append(router.get_monitor_socket(zmq.EVENT_DISCONNECTED))
         self.peers.append({})
         self.known.append({})
         bound = router.getsockopt_string(zmq.LAST_ENDPOINT)
         self.control.append(bound)
-        self.pub.bind(telemetry_endpoint(bound))
+        with _private_files():
+            self.pub.bind(telemetry_endpoint(bound))
         self.telemetry.append(self.pub.getsockopt_string(zmq.LAST_ENDPOINT))
 
-    def advertised(self) -> dict[str, list[str]]:
-        """The endpoints as ``capabilities`` names them."""
-        return {"control": list(self.control), "telemetry": list(self.telemetry)}
+    def advertised(self) -> dict[str, Any]:
+        """The endpoints as ``capabilities`` names them, with the CURVE public key (Z85) a
+        client needs when the front is encrypted."""
+        found: dict[str, Any] = {"control": list(self.control),
+                                 "telemetry": list(self.telemetry)}
+        if self.security is not None:
+            found["server_key"] = self.security.public_key.decode()
+        return found
 
     def wake(self) -> None:
         """Called from any thread: make a waiting ``wait`` return."""
@@ -184,7 +200,9 @@ class ZmqFront:
                 for part in routing:
                     _send(router, part, _MORE)
                 _send(router, data, _NOBLOCK)
-        return Call("", payload, respond, peer=peer_name(index, routing[0]))
+        role = (self.security.role_of(first.get("User-Id"))
+                if self.security is not None else None)
+        return Call("", payload, respond, peer=peer_name(index, routing[0]), role=role)
 
     def publish(self, topic: str, data: bytes) -> None:
         """Publish on ``galton/<instance>/<topic>`` (the Zenoh key, as the topic frame)."""
@@ -199,12 +217,25 @@ class ZmqFront:
             socket.close(linger=0)
         if hasattr(self, "pub"):
             self.pub.close(linger=0)
+        if self.authenticator is not None:
+            self.authenticator.stop()
         for endpoint in self.control + self.telemetry:
             _remove_socket_file(endpoint)
         for fd in (getattr(self, "_wake_read", None), getattr(self, "_wake_write", None)):
             if fd is not None:
                 os.close(fd)
         self.context.term()
+
+
+@contextlib.contextmanager
+def _private_files() -> Iterator[None]:
+    """An ipc socket file that neither other users can write (connect to) nor read: only the
+    daemon's user and group (at start, on the physics thread: no other file is made then)."""
+    previous = os.umask(0o007)
+    try:
+        yield
+    finally:
+        os.umask(previous)
 
 
 def _has_input(socket: zmq.Socket[bytes]) -> bool:

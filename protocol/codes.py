@@ -19,3 +19,4 @@ class ResultCode(IntEnum):
     PHYSICS_ERROR = 10
     RESOURCE_LIMIT = 11
     CONTROL_HELD = 12
+    ACCESS_DENIED = 13

@@ -15,7 +15,9 @@
     │   ├── UnsupportedVersionError  UNSUPPORTED_VERSION: protocol version mismatch
     │   ├── PhysicsError             PHYSICS_ERROR: the state diverged (NaN, infinite, absurd)
     │   ├── ResourceLimitError       RESOURCE_LIMIT: the request is over one of the daemon's limits
-    │   └── ControlHeldError         CONTROL_HELD: another client holds control (take_control)
+    │   ├── ControlHeldError         CONTROL_HELD: another client holds control (take_control)
+    │   └── RoleDeniedError          ACCESS_DENIED: this client's role may not ask that (the
+    │                                ZeroMQ front answers it; also an AccessDeniedError)
     ├── DaemonUnreachableError       no daemon answered (client side only)
     ├── RequestTimeoutError          a daemon exists but did not answer in time (client side)
     ├── AccessDeniedError            a daemon is there but refuses this client: no or wrong
@@ -117,6 +119,14 @@ class AccessDeniedError(GaltonError):
     side (docs/SECURITY.md)."""
 
 
+class RoleDeniedError(RemoteError, AccessDeniedError):
+    """The daemon refused a request its sender's role may not ask (a viewer's spawn over
+    ZeroMQ): a reply with ACCESS_DENIED. Over Zenoh such a request never reaches the daemon,
+    and the client decides AccessDeniedError itself."""
+
+    code = ResultCode.ACCESS_DENIED
+
+
 class ClientClosedError(GaltonError):
     """A call on an SDK Client after its ``close()``: open a new Client."""
 
@@ -136,6 +146,7 @@ _BY_CODE: dict[ResultCode, type[RemoteError]] = {
         PhysicsError,
         ResourceLimitError,
         ControlHeldError,
+        RoleDeniedError,
     )
 }
 

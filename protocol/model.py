@@ -446,8 +446,9 @@ class Capabilities:
     params: dict[str, dict[str, Any]] = field(default_factory=dict)
     engines_available: tuple[str, ...] = ()
     render_backend: str | None = None  # how it renders headless (egl, osmesa, tinyrenderer)
-    # The daemon's ZeroMQ endpoints ("control" and "telemetry" lists), {} without --zmq.
-    zmq: dict[str, list[str]] = field(default_factory=dict)
+    # The daemon's ZeroMQ endpoints ("control" and "telemetry" lists, "server_key" when
+    # encrypted), {} without --zmq.
+    zmq: dict[str, Any] = field(default_factory=dict)
     # The daemon's machine (CPU, cores, memory, OS, versions), {} from an older daemon.
     host: dict[str, Any] = field(default_factory=dict)
 
