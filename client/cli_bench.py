@@ -31,6 +31,7 @@ from galton.client.bench.picture import Animation
 from galton.client.bench.pool import Failover, PoolHooks, run_pool
 from galton.client.bench.trial import DEFAULT_MAX_SIM_TIME_S, TrialConfig
 from galton.client.cli import JsonOpt, app, console, run_guarded
+from galton.client.credentials import Credentials
 
 if TYPE_CHECKING:
     from galton.analysis.summary import EngineSummary
@@ -107,18 +108,21 @@ def bench(
     shown = Animation() if animation else None
     if pool:
         results = run_guarded(lambda: _run_pool(config, endpoints, names, ctx.obj.timeout,
-                                                pool_size, as_json, out, shown))
+                                                pool_size, as_json, out, shown,
+                                                ctx.obj.credentials))
     else:
         results = run_guarded(lambda: _run(config, endpoints, names, ctx.obj.timeout, as_json,
-                                           out, shown))
+                                           out, shown, ctx.obj.credentials))
     _finish(results, out, as_json)
 
 
 def _run(config: ExperimentConfig, connect: list[str] | None, instances: list[str] | None,
          timeout: float, quiet: bool, pictures: Path | None = None,
-         animation: Animation | None = None) -> ExperimentResults:
+         animation: Animation | None = None,
+         credentials: Credentials | None = None) -> ExperimentResults:
     plan = config.trials()
-    with bench_clients(config.engines, connect, instances, max(timeout, 30.0)) as clients, \
+    with bench_clients(config.engines, connect, instances, max(timeout, 30.0),
+                       credentials) as clients, \
             _progress(quiet) as progress:
         task = progress.add_task("Galton trials", total=len(plan))
 
@@ -131,9 +135,11 @@ def _run(config: ExperimentConfig, connect: list[str] | None, instances: list[st
 
 def _run_pool(config: ExperimentConfig, connect: list[str] | None,
               instances: list[str] | None, timeout: float, size: int, quiet: bool,
-              pictures: Path, animation: Animation | None) -> ExperimentResults:
+              pictures: Path, animation: Animation | None,
+              credentials: Credentials | None = None) -> ExperimentResults:
     """The plan over a pool of daemons: a progress row per daemon and one for the whole."""
-    with pool_clients(connect, instances, max(timeout, 30.0), size, config.engines[0]) as \
+    with pool_clients(connect, instances, max(timeout, 30.0), size, config.engines[0],
+                      credentials) as \
             daemons, _progress(quiet) as progress:
         overall = progress.add_task(f"Galton trials on {len(daemons.clients)} daemons",
                                     total=len(config.trials()))
@@ -259,7 +265,8 @@ def sweep(
     total = len(config.trials()) * len(list(itertools.product(*(a.values for a in axes))))
 
     def go() -> ExperimentResults:
-        with bench_clients(config.engines, endpoints, names, max(ctx.obj.timeout, 30.0)) as \
+        with bench_clients(config.engines, endpoints, names, max(ctx.obj.timeout, 30.0),
+                           ctx.obj.credentials) as \
                 clients, _progress(as_json) as progress:
             task = progress.add_task("sweep", total=total)
             return run_sweep(clients, config, axes,

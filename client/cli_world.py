@@ -32,7 +32,8 @@ Assignments = Annotated[list[str] | None, typer.Argument(
 def daemons(ctx: typer.Context, as_json: JsonOpt = False) -> None:
     """List the daemons reachable through --connect, with instance, engine and state."""
     target: Target = ctx.obj
-    found = run_guarded(lambda: discover_at(target.connect, target.timeout))
+    found = run_guarded(lambda: discover_at(target.connect, target.timeout,
+                                            target.credentials))
 
     def render() -> None:
         table = Table("instance", "engine", "state", "sim time (s)", "entities", "host")

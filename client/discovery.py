@@ -9,6 +9,7 @@ from typing import Any
 
 import zenoh
 
+from galton.client.credentials import Credentials
 from galton.client.session import (
     checked_timeout,
     close_session,
@@ -91,9 +92,10 @@ def _result(session: zenoh.Session, name: str, op: str, timeout: float) -> dict[
     return reply.result
 
 
-def discover_at(connect: str | Sequence[str] | None, timeout: float = 2.0) -> list[DaemonInfo]:
-    """Open a session to ``connect``, discover, close."""
-    session = open_session(connect)
+def discover_at(connect: str | Sequence[str] | None, timeout: float = 2.0,
+                credentials: Credentials | None = None) -> list[DaemonInfo]:
+    """Open a session to ``connect`` (with these credentials), discover, close."""
+    session = open_session(connect, credentials=credentials)
     try:
         return discover(session, timeout)
     finally:

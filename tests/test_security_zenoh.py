@@ -371,3 +371,14 @@ def test_the_cli_says_access_denied_without_echoing_the_password(
     assert code == 1
     assert "access denied (client side): a daemon listens at" in output
     assert "guess-1234" not in output and wire_password("alice", "guess-1234") not in output
+
+
+def test_discovery_takes_credentials(secured: EmbeddedDaemon) -> None:
+    """A viewer finds the daemon (status and capabilities are a viewer's); with no
+    credentials the session itself is refused."""
+    from galton.client import discover_at
+
+    found = {d.instance: d for d in discover_at(secured.endpoint, 5.0, BOB)}
+    assert found[INSTANCE].engine == "mujoco" and found[INSTANCE].host
+    with pytest.raises(AccessDeniedError):
+        discover_at(secured.endpoint, 5.0)

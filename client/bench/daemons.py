@@ -11,6 +11,7 @@ from typing import Any
 
 import zenoh
 
+from galton.client.credentials import Credentials
 from galton.client.discovery import DaemonInfo, discover, wait_for_daemon
 from galton.client.embedded import EmbeddedDaemon
 from galton.client.sdk import Client
@@ -24,13 +25,15 @@ DISCOVERY_TIMEOUT_S = 5.0
 
 @contextmanager
 def bench_clients(engines: Sequence[str], connect: str | list[str] | None,
-                  instances: Sequence[str] | None, timeout: float) -> Iterator[dict[str, Client]]:
-    """A client per engine: named instances, daemons found at ``connect``, or, when no
-    endpoint was given and none answers on the default one, embedded daemons (one per
-    engine, stopped on exit). Any daemon can serve any engine: a trial loads its world."""
+                  instances: Sequence[str] | None, timeout: float,
+                  credentials: Credentials | None = None) -> Iterator[dict[str, Client]]:
+    """A client per engine: named instances, daemons found at ``connect`` (with these
+    credentials), or, when no endpoint was given and none answers on the default one,
+    embedded daemons (one per engine, stopped on exit). Any daemon can serve any engine: a
+    trial loads its world."""
     with ExitStack() as stack:
         try:
-            session = open_session(connect)
+            session = open_session(connect, credentials=credentials)
         except DaemonUnreachableError:
             if connect is not None:
                 raise
@@ -74,13 +77,14 @@ def default_pool_size() -> int:
 
 @contextmanager
 def pool_clients(connect: str | list[str] | None, instances: Sequence[str] | None,
-                 timeout: float, size: int, engine: str) -> Iterator[PoolDaemons]:
+                 timeout: float, size: int, engine: str,
+                 credentials: Credentials | None = None) -> Iterator[PoolDaemons]:
     """Every daemon found at ``connect`` (or the named ``instances``), or, when no endpoint
     was given and none answers on the default one, ``size`` embedded daemons (started with
     ``engine``: any daemon serves any engine), stopped on exit."""
     with ExitStack() as stack:
         try:
-            session = open_session(connect)
+            session = open_session(connect, credentials=credentials)
             stack.callback(close_session, session)
         except DaemonUnreachableError:
             if connect is not None:
