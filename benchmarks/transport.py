@@ -1,8 +1,10 @@
 """Control-call latency over ZeroMQ and over Zenoh, each against its raw floor, in one run.
 
-Usage: python benchmarks/transport.py [--calls 2000] [--json FILE]
+Usage: python benchmarks/transport.py [--calls 2000] [--only zmq|zenoh] [--back-to-back]
+       [--json FILE]
 
-For each engine, once per round in a shuffled order (noise falls on all alike): a raw pyzmq
+For each engine, once per round in a shuffled order (noise falls on all alike; or each
+call many times in a row with --back-to-back, as a tight control loop calls): a raw pyzmq
 DEALER round trip to a do-nothing ROUTER in another process over ipc (the ZeroMQ floor), a
 raw zenoh get to a do-nothing queryable in another process (the Zenoh floor), and the SDK's
 ``status()`` and ``step(1)`` over ZeroMQ ipc and over Zenoh, on one daemon with a paused
@@ -60,7 +62,22 @@ def raw_zmq(socket: zmq.Socket[bytes]) -> Callable[[], None]:
     return call
 
 
-def measure(engine: str, null_get: str, null_router: str, calls: int) -> dict:
+ZMQ_ACTIONS = ("raw_zmq", "status_zmq", "step1_zmq")
+ZENOH_ACTIONS = ("raw_get", "status_zenoh", "step1_zenoh", "engine_step")
+
+
+def in_blocks(actions: dict[str, Callable[[], object]], calls: int) -> dict[str, list[float]]:
+    """Each action ``calls`` times in a row (back to back: the processes it wakes are still
+    awake, as in a tight control loop), after a warm-up of its own."""
+    samples: dict[str, list[float]] = {}
+    for name, action in actions.items():
+        interleaved({name: action}, WARM_UP_ROUNDS)
+        samples |= interleaved({name: action}, calls)
+    return samples
+
+
+def measure(engine: str, null_get: str, null_router: str, calls: int,
+            only: str | None = None, back_to_back: bool = False) -> dict:
     null_session = open_session(null_get)
     context = zmq.Context()
     dealer = context.socket(zmq.DEALER)
@@ -80,21 +97,34 @@ def measure(engine: str, null_get: str, null_router: str, calls: int) -> dict:
                 "step1_zenoh": lambda: sim.step(1),
                 "engine_step": lambda: local.step(1),
             }
-            interleaved(actions, WARM_UP_ROUNDS)
-            samples = interleaved(actions, calls)
+            if only is not None:  # one transport alone: no other's threads beside it
+                kept = ZMQ_ACTIONS if only == "zmq" else ZENOH_ACTIONS
+                actions = {name: actions[name] for name in kept}
+            if back_to_back:
+                samples = in_blocks(actions, calls)
+            else:
+                interleaved(actions, WARM_UP_ROUNDS)
+                samples = interleaved(actions, calls)
     finally:
         local.close()
         context.destroy(linger=0)
         null_session.close()
     result: dict = {name: percentiles_ms(values) for name, values in samples.items()}
     p50 = {name: values["p50"] for name, values in result.items()}
-    result.update(engine=engine, zmq_step_ratio=p50["step1_zmq"] / p50["raw_zmq"],
-                  zenoh_status_ratio=p50["status_zenoh"] / p50["raw_get"],
-                  zenoh_step_budget=p50["raw_get"] + p50["engine_step"])
+    result["engine"] = engine
+    if "raw_zmq" in p50:
+        result["zmq_step_ratio"] = p50["step1_zmq"] / p50["raw_zmq"]
+    if "raw_get" in p50:
+        result.update(zenoh_status_ratio=p50["status_zenoh"] / p50["raw_get"],
+                      zenoh_step_budget=p50["raw_get"] + p50["engine_step"])
     return result
 
 
-def cell(result: dict, name: str) -> str:
+def cell(result: dict, name: str, digits: int = 3) -> str:
+    if name not in result:
+        return "-"
+    if not isinstance(result[name], dict):
+        return f"{result[name]:.2f}" if digits == 2 else f"{result[name]:.3f}"
     return f"{result[name]['p50']:.3f} / {result[name]['p99']:.3f}"
 
 
@@ -102,26 +132,33 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--calls", type=int, default=2000)
     parser.add_argument("--json")
+    parser.add_argument("--only", choices=("zmq", "zenoh"),
+                        help="measure one transport alone (the other's threads stay idle)")
+    parser.add_argument("--back-to-back", action="store_true",
+                        help="each call many times in a row rather than shuffled rounds")
     args = parser.parse_args()
     null_get, get_endpoint = start_null_queryable()
     with tempfile.TemporaryDirectory(prefix="galton-bench-") as folder:
         null_router, router_endpoint = start_null_router(folder)
         try:
-            results = [measure(engine, get_endpoint, router_endpoint, args.calls)
-                       for engine in ENGINES]
+            results = [measure(engine, get_endpoint, router_endpoint, args.calls, args.only,
+                               args.back_to_back) for engine in ENGINES]
         finally:
             null_get.communicate("", timeout=10)
             null_router.communicate("", timeout=10)
+    alone = (f", {args.only} alone" if args.only else "") + (
+        ", back to back" if args.back_to_back else ", shuffled rounds")
     print(f"# control-call latency by transport on {machine()}, {args.calls} calls each, "
-          f"{time.strftime('%Y-%m-%d')} (ms, p50 / p99)")
+          f"{time.strftime('%Y-%m-%d')}{alone} (ms, p50 / p99)")
     print("| engine | raw pyzmq | ZeroMQ status | ZeroMQ step(1) | step / raw | raw zenoh get | "
           "Zenoh status | status / raw | Zenoh step(1) | raw get + engine step |")
     print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
     for r in results:
         print(f"| {r['engine']} | {cell(r, 'raw_zmq')} | {cell(r, 'status_zmq')} | "
-              f"{cell(r, 'step1_zmq')} | {r['zmq_step_ratio']:.2f} | {cell(r, 'raw_get')} | "
-              f"{cell(r, 'status_zenoh')} | {r['zenoh_status_ratio']:.2f} | "
-              f"{cell(r, 'step1_zenoh')} | {r['zenoh_step_budget']:.3f} |")
+              f"{cell(r, 'step1_zmq')} | {cell(r, 'zmq_step_ratio', 2)} | "
+              f"{cell(r, 'raw_get')} | {cell(r, 'status_zenoh')} | "
+              f"{cell(r, 'zenoh_status_ratio', 2)} | {cell(r, 'step1_zenoh')} | "
+              f"{cell(r, 'zenoh_step_budget')} |")
     write_json(args.json, results)
 
 
