@@ -37,6 +37,7 @@ log = logging.getLogger("galton.client")
 
 CONNECT_TIMEOUT_S = 1.0  # how long a new socket may take to connect before "unreachable"
 SUBSCRIBER_POLL_MS = 100
+HELLO_TIMEOUT_S = 10.0  # a subscription waits this long for the daemon's greeting
 
 
 def check_endpoint(endpoint: str) -> str:
@@ -178,7 +179,8 @@ class ZmqTransport:
 
 class ZmqSubscription:
     """A SUB socket read by a thread of its own, which calls ``callback`` per message of
-    the topic (``galton/<instance>/<topic>``); ``undeclare`` stops it."""
+    the topic (``galton/<instance>/<topic>``); ``undeclare`` stops it. It is returned once
+    the daemon's "hello" has arrived: from then on nothing published is missed."""
 
     def __init__(self, context: zmq.Context[zmq.Socket[bytes]], endpoint: str, topic: Topic,
                  callback: Callable[[bytes], None], keys: ZmqKeys | None = None) -> None:
@@ -191,8 +193,14 @@ class ZmqSubscription:
             keys.apply(self._socket)
         self._socket.connect(endpoint)
         self._socket.subscribe(b"galton/")
+        self._ready = threading.Event()
         self._thread = threading.Thread(target=self._run, name="galton-zmq-sub", daemon=True)
         self._thread.start()
+        if not self._ready.wait(HELLO_TIMEOUT_S):
+            self.undeclare()
+            raise DaemonUnreachableError(
+                f"the daemon's telemetry endpoint {endpoint} did not greet this subscription "
+                f"within {HELLO_TIMEOUT_S:g} s")
 
     def _run(self) -> None:
         socket = self._socket
@@ -201,7 +209,9 @@ class ZmqSubscription:
                 if not socket.poll(SUBSCRIBER_POLL_MS):
                     continue
                 frames = socket.recv_multipart()
-                if len(frames) == 2 and frames[0].endswith(self._suffix):
+                if len(frames) == 2 and frames[0].endswith(b"/hello"):
+                    self._ready.set()
+                elif len(frames) == 2 and frames[0].endswith(self._suffix):
                     try:
                         self._callback(frames[1])
                     except Exception:

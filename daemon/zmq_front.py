@@ -38,7 +38,7 @@ _NOBLOCK, _MORE, _SRCFD = int(zmq.NOBLOCK), int(zmq.SNDMORE | zmq.NOBLOCK), int(
 _send: Callable[..., Any] = BaseSocket.send
 _recv: Callable[..., Any] = BaseSocket.recv
 _get: Callable[..., Any] = BaseSocket.get
-MONITOR_PERIOD_S = 0.05  # closed connections are looked for at least this often
+MONITOR_PERIOD_S = 0.05  # closed connections and subscribers are looked for this often
 # A message is routing frames (echoed in the reply, as ZeroMQ's REQ/DEALER envelopes are),
 # then one frame holding the request: at most this many frames in all, ROUTER's included.
 MAX_FRAMES = 8
@@ -90,8 +90,11 @@ class ZmqFront:
         self.telemetry: list[str] = []
         self.prefix = f"galton/{instance}/".encode()
         try:
-            self.pub = self.context.socket(zmq.PUB)
+            # An XPUB: it reads each new subscription, and answers it with a "hello" the
+            # subscriber waits for, so that nothing published after that is missed.
+            self.pub = self.context.socket(zmq.XPUB)
             self.pub.setsockopt(zmq.LINGER, 0)
+            self.pub.setsockopt(zmq.XPUB_VERBOSE, 1)
             if security is not None:
                 security.secure(self.pub)
             for endpoint in endpoints:
@@ -103,9 +106,9 @@ class ZmqFront:
         os.set_blocking(self._wake_read, False)
         os.set_blocking(self._wake_write, False)
         self._fds: list[int] = [int(socket.getsockopt(zmq.FD)) for socket in (
-            *self.routers, *self.monitors)] + [self._wake_read]
-        self._monitor_fds = self._fds[len(self.routers):-1]
-        self._next_monitor_check = 0.0
+            *self.routers, *self.monitors, self.pub)] + [self._wake_read]
+        self._side_fds = self._fds[len(self.routers):-1]  # the monitors' and the XPUB's
+        self._next_side_check = 0.0
 
     def _bind(self, endpoint: str) -> None:
         router = self.context.socket(zmq.ROUTER)
@@ -151,17 +154,17 @@ class ZmqFront:
         if self._wake_read in ready:
             with contextlib.suppress(BlockingIOError):
                 os.read(self._wake_read, 4096)
-        if any(fd in ready for fd in self._monitor_fds):
-            self._monitor_fds = self._fds[len(self.routers):-1]
-        self._next_monitor_check = 0.0  # a connection closed: receive() looks now
+        if any(fd in ready for fd in self._side_fds):
+            self._next_side_check = 0.0  # a connection closed or a subscriber came: look now
 
     def receive(self, gone: Callable[[str], Task]) -> list[Call | Task]:
         """Everything readable now, without blocking: closed connections first (as Tasks
         made by ``gone``), then requests as Calls answered on this thread."""
         items: list[Call | Task] = []
         now = time.monotonic()
-        if now >= self._next_monitor_check:  # off the hot path: closes are not urgent
-            self._next_monitor_check = now + MONITOR_PERIOD_S
+        if now >= self._next_side_check:  # off the hot path: neither is urgent
+            self._next_side_check = now + MONITOR_PERIOD_S
+            self._welcome_subscribers()
             for index, monitor in enumerate(self.monitors):
                 while _has_input(monitor):  # no recv that fails: a zmq.Again costs ~3 µs
                     event = parse_monitor_message(monitor.recv_multipart())
@@ -203,6 +206,15 @@ class ZmqFront:
         role = (self.security.role_of(first.get("User-Id"))
                 if self.security is not None else None)
         return Call("", payload, respond, peer=peer_name(index, routing[0]), role=role)
+
+    def _welcome_subscribers(self) -> None:
+        """Publish one "hello" after any new subscription the XPUB has read: a subscriber
+        that receives it knows its subscription is in place (ZeroMQ's slow joiner)."""
+        subscribed = False
+        while _has_input(self.pub):
+            subscribed |= self.pub.recv()[:1] == b"\x01"
+        if subscribed:
+            self.publish("hello", b"")
 
     def publish(self, topic: str, data: bytes) -> None:
         """Publish on ``galton/<instance>/<topic>`` (the Zenoh key, as the topic frame)."""
