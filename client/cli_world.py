@@ -30,16 +30,20 @@ Assignments = Annotated[list[str] | None, typer.Argument(
 
 @app.command(rich_help_panel=PANEL)
 def daemons(ctx: typer.Context, as_json: JsonOpt = False) -> None:
-    """List the daemons reachable through --connect, with instance, engine and state."""
+    """List the daemons reachable through --connect, with instance, engine, state, host
+    and ZeroMQ endpoints."""
     target: Target = ctx.obj
     found = run_guarded(lambda: discover_at(target.connect, target.timeout,
                                             target.credentials))
 
     def render() -> None:
-        table = Table("instance", "engine", "state", "sim time (s)", "entities", "host")
+        zmq = any(d.zmq for d in found)  # a ZeroMQ column only where a daemon serves one
+        table = Table("instance", "engine", "state", "sim time (s)", "entities", "host",
+                      *(["ZeroMQ"] if zmq else []))
         for d in found:
             table.add_row(d.instance, d.engine, d.state, f"{d.sim_time:.3f}",
-                          str(d.entity_count), host_line(d.host))
+                          str(d.entity_count), host_line(d.host),
+                          *([", ".join(d.zmq) or "–"] if zmq else []))
         console.print(table if found else "no daemon found")
     emit([d.to_dict() for d in found], as_json, render)
 

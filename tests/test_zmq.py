@@ -4,6 +4,7 @@ against real daemons (the conformance suite runs every operation over it through
 from __future__ import annotations
 
 import importlib.util
+import json
 import os
 import queue
 import signal
@@ -172,3 +173,15 @@ def test_sdk_endpoints_that_reach_nothing_are_unreachable(tmp_path: Path) -> Non
         Client(connect=f"zmq+tcp://127.0.0.1:{free_loopback_port()}")
     with pytest.raises(InvalidArgumentError, match="not a ZeroMQ endpoint"):
         Client(connect="zmq+udp://127.0.0.1:1")
+
+
+def test_galton_client_daemons_shows_the_zmq_endpoints(zmq_daemon: EmbeddedDaemon) -> None:
+    from cli_support import run
+
+    result = run(["--connect", zmq_daemon.endpoint, "daemons"])
+    assert result.exit_code == 0, result.output
+    assert "ZeroMQ" in result.stdout and ".sock" in result.stdout
+    found = {d["instance"]: d for d in json.loads(
+        run(["--connect", zmq_daemon.endpoint, "daemons", "--json"]).stdout)}
+    assert found[zmq_daemon.instance]["zmq"] == [
+        zmq_daemon.zmq_endpoint.removeprefix("zmq+")]  # type: ignore[union-attr]
