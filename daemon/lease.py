@@ -85,6 +85,12 @@ def take_control(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, A
     client holds it."""
     if call.client is None and call.peer is None:
         raise InvalidArgumentError(NO_IDENTITY)
+    if call.peer is None and loop.client_alive is not None and call.client is not None \
+            and not loop.client_alive(call.client):
+        # A made-up id would hold control for ever: nothing would ever say it has gone.
+        raise InvalidArgumentError(
+            f"client {call.client!r} holds no liveliness token galton/_clients/"
+            f"{call.client}: control is tied to that token (the SDK declares it)")
     holder = loop.lease.holder
     if holder is not None:
         if holder.sent(call):

@@ -91,6 +91,9 @@ class SimLoop:
         queued: queue.SimpleQueue[Call | Task | None] = queue.SimpleQueue()
         self.inbox: Inbox = queued  # galton-daemon --zmq: a PolledInbox
         self.advertised: dict[str, Any] = {}  # what capabilities adds (ZeroMQ endpoints)
+        # Whether a Zenoh client's liveliness token is there (the daemon asks Zenoh; None
+        # when embedded without a session): take_control ties the lease to that token.
+        self.client_alive: Callable[[str], bool] | None = None
         self.state = SimState.STOPPED
         self.target_rtf = 1.0
         self.job: StepJob | None = None

@@ -217,3 +217,19 @@ def test_a_killed_holder_loses_control_and_its_step(sim: Client, daemon: Embedde
     assert status.controller is None and status.state == "paused"
     sim.step(1)  # the world is free again, and no step job runs
     assert sim.status().step == status.step + 1
+
+
+def test_a_made_up_client_id_cannot_take_control(sim: Client, transport: str) -> None:
+    """Over Zenoh the lease is tied to the client's liveliness token: an id with no token
+    would hold control for ever, so it is refused (over ZeroMQ the connection names the
+    taker, whatever id it gives)."""
+    payload = msgpack.packb({"v": 1, "op": "take_control", "args": {},
+                             "client": "made-up-client-id"}, use_bin_type=True)
+    reply = decode_reply(raw_replies(sim, "take_control", payload)[0])
+    if transport == "zenoh":
+        assert reply.code == ResultCode.INVALID_ARGUMENT and "liveliness" in reply.message
+        assert sim.status().controller is None
+    else:
+        assert reply.ok and sim.status().controller == "made-up-client-id"
+        sim.release_control()  # the same connection: the holder's
+        assert sim.status().controller is None
