@@ -343,7 +343,7 @@ class EntityInfo:
 
     @classmethod
     def from_wire(cls, body: dict[str, Any]) -> EntityInfo:
-        return cls(**{**body, "size": tuple(body.get("size", ())),
+        return cls(**{**known_fields(cls, body), "size": tuple(body.get("size", ())),
                       "tags": tuple(body.get("tags", ()))})
 
 
@@ -377,7 +377,15 @@ class JointInfo:
     @classmethod
     def from_wire(cls, body: dict[str, Any]) -> JointInfo:
         axis = body.get("axis", (0.0, 0.0, 0.0))
-        return cls(**{**body, "axis": (float(axis[0]), float(axis[1]), float(axis[2]))})
+        return cls(**{**known_fields(cls, body),
+                      "axis": (float(axis[0]), float(axis[1]), float(axis[2]))})
+
+
+def known_fields(cls: type, body: dict[str, Any]) -> dict[str, Any]:
+    """The fields of ``body`` the dataclass knows: a newer daemon's extra fields (a reply
+    that grew, as ``status`` grew ``controller``) are left out, not an error."""
+    names = {f.name for f in fields(cls)}
+    return {key: value for key, value in body.items() if key in names}
 
 
 @dataclass
@@ -402,7 +410,7 @@ class SimStatus:
 
     @classmethod
     def from_wire(cls, body: dict[str, Any]) -> SimStatus:
-        return cls(**{**body, "state": SimState(body["state"])})
+        return cls(**{**known_fields(cls, body), "state": SimState(body["state"])})
 
 
 @dataclass
@@ -430,7 +438,7 @@ class Telemetry:
 
     @classmethod
     def from_wire(cls, body: dict[str, Any]) -> Telemetry:
-        return cls(**{**body, "state": SimState(body["state"])})
+        return cls(**{**known_fields(cls, body), "state": SimState(body["state"])})
 
 
 @dataclass
@@ -465,7 +473,6 @@ class Capabilities:
     def from_wire(cls, body: dict[str, Any]) -> Capabilities:
         """Parse a reply; fields this client does not know (a newer daemon's) are left out,
         and ``host`` may be absent (an older daemon's)."""
-        known = {f.name for f in fields(cls)}
-        return cls(**{**{k: v for k, v in body.items() if k in known}, **{
+        return cls(**{**known_fields(cls, body), **{
             k: tuple(body.get(k, ())) for k in (
                 "body_shapes", "model_formats", "features", "engines_available")}})

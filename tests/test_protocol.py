@@ -114,3 +114,20 @@ def test_keys_put_control_under_an_at_chunk() -> None:
 def test_did_you_mean() -> None:
     assert "'spawn'" in did_you_mean("spwan", ["spawn", "delete"])
     assert did_you_mean("zzz", ["spawn"]) == ""
+
+
+def test_replies_of_a_newer_daemon_with_extra_fields_still_parse() -> None:
+    """A daemon that grew a field (as status grew controller) is read by an older client."""
+    from galton.protocol import Capabilities, SimStatus, Telemetry
+
+    status = {"state": "paused", "step": 3, "sim_time": 0.03, "timestep": 0.01,
+              "target_rtf": 1.0, "rtf": 0.0, "entity_count": 0, "engine": "mujoco",
+              "instance": "i", "world": "default", "faulted": False, "from_the_future": 1}
+    assert SimStatus.from_wire(status).step == 3
+    sample = {**{k: v for k, v in status.items() if k not in ("faulted", "controller")},
+              "seq": 1, "wall_time": 0.0, "cpu_percent": 0.0, "rss_bytes": 1,
+              "peak_rss_bytes": 1}
+    assert Telemetry.from_wire(sample).seq == 1
+    caps = {"engine": "mujoco", "engine_version": "x", "protocol_version": 1,
+            "body_shapes": [], "model_formats": [], "features": [], "new_thing": {}}
+    assert Capabilities.from_wire(caps).engine == "mujoco"
