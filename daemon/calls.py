@@ -90,3 +90,14 @@ def smoothed_step_cost(cost: float, seconds: float, count: int) -> float:
     """A running estimate of seconds per step after ``count`` steps took ``seconds``: it
     sizes the next chunk of steps, so one slow chunk moves it only a fifth of the way."""
     return 0.8 * cost + 0.2 * max(seconds / count, 1e-7)
+
+
+class Inbox(Protocol):
+    """Where requests wait for the physics thread: a queue.SimpleQueue, or with ZeroMQ a
+    daemon/zmq_front.PolledInbox that also polls the sockets."""
+
+    def put(self, item: Call | Task | None) -> None: ...
+
+    def get(self, block: bool = True, timeout: float | None = None) -> Call | Task | None: ...
+
+    def get_nowait(self) -> Call | Task | None: ...

@@ -3,14 +3,18 @@ for the live world's jobs and for side worlds' and predictions' (daemon/side_job
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from galton.daemon.calls import StepJob
 from galton.daemon.ops_joints import joint_states
 from galton.daemon.world import World
-from galton.protocol import RemoteError, pack_f64
+from galton.protocol import NotFoundError, RemoteError, pack_f64
+from galton.protocol.errors import brief
+
+if TYPE_CHECKING:
+    from galton.daemon.loop import SimLoop
 
 
 def resting(twists: np.ndarray, job: StepJob) -> bool:
@@ -43,3 +47,20 @@ def job_result(world: World, job: StepJob) -> dict[str, Any]:
     if job.read_joints is not None:
         result["joints"] = joint_states(world, job.read_joints, "read_joints")
     return result
+
+
+def answer_if_reads_gone(loop: SimLoop) -> None:
+    """A step job whose read entities (or joints) were deleted is answered now with
+    NOT_FOUND, not after its steps (a prediction's scratch world cannot lose them)."""
+    job = loop.job
+    if job is None or job.scratch:
+        return
+    world = job.world or loop.world
+    gone = [name for name in job.read or () if name not in world.entities]
+    gone += [name for name in job.read_joints or () if name not in world.joints.by_name]
+    if gone:
+        loop.job = None
+        loop.reply_error(job.call, NotFoundError(
+            f"{brief(gone[0])}, which this step request reads, was deleted after "
+            f"{job.done} of {job.total} steps", {"missing": gone[:100],
+                                                 "steps_done": job.done}))

@@ -14,10 +14,10 @@ import sys
 import time
 from collections.abc import Callable
 from contextlib import AbstractContextManager, nullcontext
-from typing import Any, Protocol
+from typing import Any
 
 from galton.daemon import job_results, lease, loop_status, side_jobs, time_control
-from galton.daemon.calls import Call, StepJob, Task, smoothed_step_cost
+from galton.daemon.calls import Call, Inbox, StepJob, Task, smoothed_step_cost
 from galton.daemon.handlers import HANDLERS
 from galton.daemon.limits import DEFAULT_LIMITS, Limits
 from galton.daemon.monitor import Pacer, ProcessMonitor, RtfWindow
@@ -43,17 +43,6 @@ from galton.protocol.errors import brief, did_you_mean
 from galton.protocol.operations import OPERATIONS, operation
 
 log = logging.getLogger("galton.daemon")
-
-
-class Inbox(Protocol):
-    """Where requests wait for the physics thread: a queue.SimpleQueue, or with ZeroMQ a
-    daemon/zmq_front.PolledInbox that also polls the sockets."""
-
-    def put(self, item: Call | Task | None) -> None: ...
-
-    def get(self, block: bool = True, timeout: float | None = None) -> Call | Task | None: ...
-
-    def get_nowait(self) -> Call | Task | None: ...
 
 CHUNK_WALL_S = 0.005  # physics work between two looks at the inbox
 # Python's switch interval while the engine holds the GIL as it steps (PyBullet): short, so
@@ -283,18 +272,7 @@ class SimLoop:
 
     def check_job_reads(self) -> None:
         """A step job whose read entities are gone is answered now, not after its steps."""
-        job = self.job
-        if job is None or job.scratch:
-            return
-        world = job.world or self.world
-        gone = [name for name in job.read or () if name not in world.entities]
-        gone += [name for name in job.read_joints or () if name not in world.joints.by_name]
-        if gone:
-            self.job = None
-            self.reply_error(job.call, NotFoundError(
-                f"{brief(gone[0])}, which this step request reads, was deleted after "
-                f"{job.done} of {job.total} steps", {"missing": gone[:100],
-                                                     "steps_done": job.done}))
+        job_results.answer_if_reads_gone(self)
 
     def _keep_invariants(self) -> None:
         """A diverged world never plays or steps, whoever noticed the divergence."""
