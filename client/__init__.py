@@ -24,6 +24,7 @@ from galton.client.values import (
     States,
     WorldInfo,
 )
+from galton.client.zmq_keys import ZmqKeys
 from galton.protocol import (
     AccessDeniedError,
     BodyGroup,
@@ -102,6 +103,7 @@ __all__ = [
     "UnknownOperationError",
     "UnsupportedVersionError",
     "WorldInfo",
+    "ZmqKeys",
     "body_group",
     "boxes",
     "camera",
