@@ -19,6 +19,7 @@ holder's long step ends with it in daemon/time_control.py). Every change is anno
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -33,6 +34,10 @@ NO_IDENTITY = (
     "take_control needs to know who asks: send the envelope's 'client' (the id of your "
     "liveliness token galton/_clients/<id>, which the SDK sends with every request), or "
     "ask over ZeroMQ, where the connection names you")
+# A client id that names one liveliness token: one key chunk, no wildcard ('*', '$') and
+# nothing Zenoh refuses in a key ('?', '#'). "*" would find any client's token alive, and
+# no token's going would ever name it: control held for ever.
+TOKEN_ID = re.compile(r"[^/*$?#]+")
 
 
 @dataclass(frozen=True)
@@ -85,6 +90,11 @@ def take_control(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, A
     client holds it."""
     if call.client is None and call.peer is None:
         raise InvalidArgumentError(NO_IDENTITY)
+    if call.peer is None and call.client is not None \
+            and not TOKEN_ID.fullmatch(call.client):
+        raise InvalidArgumentError(
+            f"client {call.client!r} names no single liveliness token galton/_clients/<id>: "
+            "control is tied to that token, so the id may hold no '/', '*', '$', '?' or '#'")
     if call.peer is None and loop.client_alive is not None and call.client is not None \
             and not loop.client_alive(call.client):
         # A made-up id would hold control for ever: nothing would ever say it has gone.
