@@ -71,7 +71,7 @@ class ZmqTransport:
         self._telemetry_endpoint: str | None = None
         try:
             self._socket()  # fail now, as a Zenoh client does, if nothing answers there
-        except (DaemonUnreachableError, AccessDeniedError):
+        except (DaemonUnreachableError, AccessDeniedError, InvalidArgumentError):
             self.close()
             raise
 
@@ -85,7 +85,15 @@ class ZmqTransport:
             if self.keys is not None:
                 self.keys.apply(socket)
             monitor = socket.get_monitor_socket(HANDSHAKE_EVENTS)
-            socket.connect(self.endpoint)
+            try:
+                socket.connect(self.endpoint)
+            except zmq.ZMQError as error:  # e.g. tcp://nohost: no port, or not a number
+                socket.close(linger=0)
+                monitor.close(linger=0)
+                raise InvalidArgumentError(
+                    f"{brief(self.endpoint)} is not a ZeroMQ endpoint ZeroMQ can connect to "
+                    f"({error}): give zmq+ipc:///path/to/socket or zmq+tcp://HOST:PORT"
+                ) from None
             with self._lock:
                 self._sockets.append(socket)
             self._local.socket = socket

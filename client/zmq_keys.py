@@ -17,6 +17,7 @@ from pathlib import Path
 
 import zmq
 import zmq.auth
+import zmq.utils.z85
 from zmq.utils.monitor import parse_monitor_message
 
 from galton.protocol import AccessDeniedError, DaemonUnreachableError, InvalidArgumentError
@@ -47,7 +48,7 @@ class ZmqKeys:
                 ".key_secret file")
         text = str(server_key)
         if len(text) == Z85_KEY_LENGTH and not Path(text).exists():
-            return cls(public, secret, text.encode())
+            return cls(public, secret, _z85_key(text))
         server_public, _ = _read_pair(Path(text), "the daemon's key")
         return cls(public, secret, server_public)
 
@@ -66,6 +67,18 @@ class ZmqKeys:
         socket.curve_publickey = self.public_key
         socket.curve_secretkey = self.secret_key
         socket.curve_serverkey = self.server_key
+
+
+def _z85_key(text: str) -> bytes:
+    """A daemon's public key given as Z85 text, checked (libzmq says only "Invalid
+    argument" when the socket is given it)."""
+    try:
+        zmq.utils.z85.decode(text.encode())
+    except (KeyError, ValueError):
+        raise InvalidArgumentError(
+            f"the daemon's key {text!r} is not a Z85 CURVE public key: give the 40 characters "
+            "capabilities shows as zmq.server_key, or the daemon's .key file") from None
+    return text.encode()
 
 
 def _read_pair(path: Path, what: str) -> tuple[bytes, bytes | None]:

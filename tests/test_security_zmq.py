@@ -19,6 +19,7 @@ from galton.client import (
     AccessDeniedError,
     Client,
     EmbeddedDaemon,
+    InvalidArgumentError,
     RoleDeniedError,
     spheres,
 )
@@ -90,6 +91,13 @@ def test_no_key_a_stranger_s_key_or_a_wrong_daemon_key_is_refused(
         Client(connect=secured[0], zmq_keys=keys.client("stranger"))
     with pytest.raises(AccessDeniedError):
         Client(connect=secured[0], zmq_keys=keys.client("alice", server="stranger"))
+
+
+def test_a_server_key_that_is_no_z85_key_is_a_typed_error(keys: Keys) -> None:
+    """40 characters that are no Z85 key used to reach libzmq, which said only "Invalid
+    argument" (a bare ZMQError) when the socket was made."""
+    with pytest.raises(InvalidArgumentError, match="not a Z85 CURVE public key"):
+        ZmqKeys.load(keys.secret_file("alice"), '"' * 40)
 
 
 def test_a_viewer_reads_status_and_telemetry_but_cannot_change_the_world(

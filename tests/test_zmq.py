@@ -175,6 +175,13 @@ def test_sdk_endpoints_that_reach_nothing_are_unreachable(tmp_path: Path) -> Non
         Client(connect="zmq+udp://127.0.0.1:1")
 
 
+@pytest.mark.parametrize("endpoint", ["zmq+tcp://nohost", "zmq+tcp://127.0.0.1:port"])
+def test_an_endpoint_zeromq_cannot_parse_is_a_typed_error(endpoint: str) -> None:
+    """libzmq's own "Invalid argument" used to escape as a bare ZMQError."""
+    with pytest.raises(InvalidArgumentError, match="not a ZeroMQ endpoint"):
+        Client(connect=endpoint)
+
+
 def test_galton_client_daemons_shows_the_zmq_endpoints(zmq_daemon: EmbeddedDaemon) -> None:
     from cli_support import run
 
