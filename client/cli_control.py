@@ -30,6 +30,10 @@ def take_control(ctx: typer.Context,
     requests that change or step the world are refused (CONTROL_HELD) until it ends.
 
     With --json, one line {"instance", "controller"} is printed once control is taken."""
+    if hold is not None and not 0.0 <= hold <= threading.TIMEOUT_MAX:  # inf, nan, 1e300
+        raise typer.BadParameter(
+            f"{hold:g} is no number of seconds to wait (at most {threading.TIMEOUT_MAX:.3g}); "
+            "leave --hold out to hold control until Ctrl-C", param_hint="'--hold'")
 
     def hold_control(client: Client) -> None:
         client.take_control()

@@ -5,7 +5,7 @@ control exits 1 with one line naming CONTROL_HELD and the holder."""
 from __future__ import annotations
 
 import pytest
-from cli_support import invoke, run, target_of
+from cli_support import flat, invoke, run, target_of
 
 from galton.client import Client, EmbeddedDaemon
 
@@ -40,3 +40,15 @@ def test_commands_are_refused_while_another_client_holds_control(target: list[st
             assert "CONTROL_HELD (12)" in result.stderr and mujoco_sim.client_id in result.stderr
         status = invoke([*target, "status", "--json"])
         assert status["controller"] == mujoco_sim.client_id and status["step"] == 0
+
+
+@pytest.mark.parametrize("hold", ["inf", "1e300", "nan"])
+def test_a_hold_that_is_no_number_of_seconds_is_a_usage_error(target: list[str],
+                                                              mujoco_sim: Client,
+                                                              hold: str) -> None:
+    """An endless or undefined --hold is refused before control is taken (leaving it out
+    holds until Ctrl-C), not a traceback after."""
+    result = run([*target, "take-control", "--hold", hold])
+    assert result.exit_code == 2, (result.output, result.exception)
+    assert "Invalid value for '--hold'" in flat(result.output)
+    assert mujoco_sim.status().controller is None
