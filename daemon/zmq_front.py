@@ -65,11 +65,12 @@ def parse_endpoint(text: str) -> str:
 
 def telemetry_endpoint(control: str) -> str:
     """Where the PUB socket of a control endpoint is bound: ``ipc://PATH.pub``, or the next
-    TCP port (a ``*`` port gives any free port: the bound one is advertised)."""
+    TCP port (a ``*`` or ``0`` port gives any free port: the bound one is advertised)."""
     if control.startswith("ipc://"):
         return control + ".pub"
     host, _, port = control[len("tcp://"):].rpartition(":")
-    return f"tcp://{host}:*" if port == "*" else f"tcp://{host}:{int(port) + 1}"
+    return (f"tcp://{host}:*" if port == "*" or int(port) == 0
+            else f"tcp://{host}:{int(port) + 1}")
 
 
 class ZmqFront:
@@ -123,8 +124,11 @@ class ZmqFront:
         self.known.append({})
         bound = router.getsockopt_string(zmq.LAST_ENDPOINT)
         self.control.append(bound)
+        # From the endpoint asked for: a '*' port's bound one is a number, and its next port
+        # is no free port (another process may hold it).
+        telemetry = telemetry_endpoint(bound if bound.startswith("ipc://") else endpoint)
         with _private_files():
-            self.pub.bind(telemetry_endpoint(bound))
+            self.pub.bind(telemetry)
         self.telemetry.append(self.pub.getsockopt_string(zmq.LAST_ENDPOINT))
 
     def advertised(self) -> dict[str, Any]:

@@ -18,6 +18,7 @@ from support_daemons import start_daemon
 
 from galton.client import Client, EmbeddedDaemon, discover_at
 from galton.client.embedded import daemon_command, free_loopback_port
+from galton.daemon.zmq_front import telemetry_endpoint
 from galton.protocol import DaemonUnreachableError, InvalidArgumentError
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -152,6 +153,9 @@ def test_a_tcp_daemon_on_any_port_then_killed(tmp_path: Path) -> None:
         with Client(daemon.instance, daemon.endpoint) as sim:
             control, telemetry = sim.capabilities().zmq.values()
         assert control[0].startswith("tcp://127.0.0.1:") and control[1] == f"ipc://{socket_file}"
+        # Its own free port, not the next one (which another process may hold): Linux gives
+        # bind(0) ports of one parity, so two free ports are never neighbours.
+        assert port(telemetry[0]) != port(control[0]) + 1, (control, telemetry)
         assert telemetry[1] == f"ipc://{socket_file}.pub" and socket_file.exists()
         with Client(connect=f"zmq+{control[0]}") as sim:
             assert sim.status().instance == daemon.instance
@@ -164,6 +168,20 @@ def test_a_tcp_daemon_on_any_port_then_killed(tmp_path: Path) -> None:
     daemon = EmbeddedDaemon("mujoco", instance="zmq-any-port", extra_args=[
         "--zmq", f"ipc://{socket_file}"]).start()  # a stale socket file is bound over
     assert daemon.stop() == 0 and not socket_file.exists()
+
+
+def port(endpoint: str) -> int:
+    return int(endpoint.rpartition(":")[2])
+
+
+@pytest.mark.parametrize("control, telemetry", [
+    ("tcp://127.0.0.1:5555", "tcp://127.0.0.1:5556"),
+    ("tcp://127.0.0.1:*", "tcp://127.0.0.1:*"),
+    ("tcp://127.0.0.1:0", "tcp://127.0.0.1:*"),  # ZeroMQ's other "any port", not port 1
+    ("ipc:///run/g.sock", "ipc:///run/g.sock.pub"),
+])
+def test_the_telemetry_endpoint_beside_a_control_one(control: str, telemetry: str) -> None:
+    assert telemetry_endpoint(control) == telemetry
 
 
 def test_sdk_endpoints_that_reach_nothing_are_unreachable(tmp_path: Path) -> None:
