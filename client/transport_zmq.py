@@ -68,6 +68,7 @@ class ZmqTransport:
         self._tags = itertools.count(1)
         self._lock = threading.Lock()
         self._sockets: list[zmq.Socket[bytes]] = []
+        self._subscriptions: list[ZmqSubscription] = []
         self._telemetry_endpoint: str | None = None
         try:
             self._socket()  # fail now, as a Zenoh client does, if nothing answers there
@@ -177,11 +178,20 @@ class ZmqTransport:
         return self._telemetry_endpoint
 
     def subscribe(self, topic: Topic, callback: Callable[[bytes], None]) -> ZmqSubscription:
-        return ZmqSubscription(self.context, self.telemetry_endpoint(), topic, callback,
-                               self.keys)
+        subscription = ZmqSubscription(self.context, self.telemetry_endpoint(), topic,
+                                       callback, self.keys)
+        with self._lock:
+            self._subscriptions.append(subscription)
+        return subscription
 
     def close(self) -> None:
-        """Close every socket of every thread; the context with them."""
+        """Stop the subscriptions' threads (each closes its own socket: closing it under
+        its thread's poll crashed that thread), then close every other socket and the
+        context."""
+        with self._lock:
+            subscriptions, self._subscriptions = self._subscriptions, []
+        for subscription in subscriptions:
+            subscription.undeclare()
         self.context.destroy(linger=0)
 
 

@@ -9,6 +9,7 @@ import os
 import queue
 import signal
 import subprocess
+import threading
 from pathlib import Path
 
 import msgpack
@@ -133,6 +134,23 @@ def test_events_reach_an_sdk_client_over_zmq(zmq_daemon: EmbeddedDaemon) -> None
         sim.pause()
         kinds = [seen.get(timeout=10)["state"] for _ in range(2)]
     assert kinds == ["playing", "paused"]
+
+
+def test_closing_a_client_ends_its_live_subscriptions_cleanly(
+        zmq_daemon: EmbeddedDaemon, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A subscription left open when its client closes ends with it, as over Zenoh: its
+    socket was closed under its thread's poll, which died with a ZMQError."""
+    failures: list[BaseException | None] = []
+    monkeypatch.setattr(threading, "excepthook", lambda args: failures.append(args.exc_value))
+    sim = Client(connect=zmq_daemon.zmq_endpoint)
+    arrived = threading.Event()
+    sim.on_telemetry(lambda sample: arrived.set())  # never closed by the test
+    assert arrived.wait(10)
+    threads = [t for t in threading.enumerate() if t.name == "galton-zmq-sub"]
+    sim.close()
+    for thread in threads:
+        thread.join(10)
+    assert not failures and not any(thread.is_alive() for thread in threads)
 
 
 def test_bad_zmq_endpoints_are_refused_at_start() -> None:
