@@ -18,13 +18,14 @@ from galton.protocol.errors import InvalidArgumentError, brief
 WIRE_SALT = "galton"
 HEX_DIGEST_LENGTH = 64  # sha256 in hex
 # One Zenoh dictionary line is ``user:password``, split at the first ':'.
+# fullmatch, not match: ``$`` would let a trailing line break through (a broken line).
 _USER_RE = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.@-]{0,63}$")
 _HEX_RE = re.compile(r"^[0-9a-fA-F]{64}$")
 
 
 def validate_user_name(name: object) -> str:
     """A user name: 1-64 letters, digits, '_', '.', '@' or '-' (not first), no ':'."""
-    if not isinstance(name, str) or not _USER_RE.match(name):
+    if not isinstance(name, str) or not _USER_RE.fullmatch(name):
         raise InvalidArgumentError(
             f"user name {brief(name)} is not valid: use 1-64 letters, digits, '_', '.', '@' "
             "or '-', not starting with '.', '@' or '-'")
@@ -41,4 +42,4 @@ def wire_password(user: str, password: str) -> str:
 
 def is_wire_hash(text: object) -> bool:
     """Whether ``text`` has the form of a wire password: 64 hex digits."""
-    return isinstance(text, str) and bool(_HEX_RE.match(text))
+    return isinstance(text, str) and bool(_HEX_RE.fullmatch(text))

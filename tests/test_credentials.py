@@ -35,6 +35,8 @@ def test_the_wire_password_is_the_salted_hash() -> None:
     ({"user": "al:ice", "password": SECRET}, "user name 'al:ice' is not valid"),
     ({"user": "alice", "password": SECRET, "password_sha256": "a" * 64}, "not both"),
     ({"user": "alice", "password_sha256": SECRET}, "must be 64 hex digits"),
+    ({"user": "alice\n", "password": SECRET}, r"user name 'alice\\n' is not valid"),
+    ({"user": "alice", "password_sha256": "a" * 64 + "\n"}, "must be 64 hex digits"),
     ({"tls_cert": Path("/nowhere.pem")}, "go together"),
     ({"tls_ca": Path("/nowhere.pem")}, "tls_ca '/nowhere.pem' is not a readable file"),
 ])

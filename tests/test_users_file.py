@@ -109,6 +109,18 @@ def test_a_bad_file_is_refused(tmp_path: Path, text: str, expected: str) -> None
         load_users(users_from(tmp_path, text))
 
 
+@pytest.mark.parametrize(("entry", "expected"), [
+    ({"alice\n": {"role": "viewer", "password": "x"}}, r"user name 'alice\\n' is not valid"),
+    ({"alice": {"role": "viewer", "password_sha256": "ab" * 32 + "\n"}},
+     r"user 'alice': password_sha256 must be 64 hex digits"),
+])
+def test_a_trailing_line_break_is_refused(entry: dict[str, object], expected: str) -> None:
+    """A name or hash ending in a line break used to pass (``$`` matches before it): the
+    name split Zenoh's dictionary line and the daemon failed with Zenoh's own message."""
+    with pytest.raises(InvalidArgumentError, match=expected):
+        parse_users({"users": entry})
+
+
 def test_a_missing_file_is_refused_by_path(tmp_path: Path) -> None:
     with pytest.raises(InvalidArgumentError, match=r"cannot read the users file .*nowhere"):
         load_users(tmp_path / "nowhere.toml")

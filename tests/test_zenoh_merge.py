@@ -101,12 +101,16 @@ def test_a_daemon_config_listens_where_the_file_says(tmp_path: Path) -> None:
     (["--users", "{bad}"], "user 'carol': role 'boss' is not one of operator, viewer"),
     (["--tls-ca", "{bad}"], "--tls-ca needs --tls-cert and --tls-key"),
     (["--tls-cert", "{bad}"], "--tls-cert and --tls-key go together"),
+    (["--users", "{newline}"], "user name 'alice\\n' is not valid"),
 ])
 def test_the_daemon_refuses_bad_security_options_in_one_line(
         tmp_path: Path, args: list[str], expected: str) -> None:
     bad = tmp_path / "bad.toml"
     bad.write_text('[users.carol]\nrole = "boss"\npassword = "hunter2"\n')
-    paths = {"missing": str(tmp_path / "missing.toml"), "bad": str(bad)}
+    newline = tmp_path / "newline.toml"  # once split Zenoh's dictionary line: Zenoh's error
+    newline.write_text('[users."alice\\n"]\nrole = "viewer"\npassword = "hunter2"\n')
+    paths = {"missing": str(tmp_path / "missing.toml"), "bad": str(bad),
+             "newline": str(newline)}
     result = CliRunner().invoke(daemon_app, [arg.format(**paths) for arg in args])
     assert result.exit_code == 2, result.output
     assert expected in result.output and "hunter2" not in result.output
