@@ -4,7 +4,7 @@ A TOML file with one table per user::
 
     [users.alice]
     role = "operator"              # "operator": every operation; "viewer": watch only
-    password_sha256 = "<64 hex>"   # `galton-client hash-password --user alice` prints it
+    password_sha256 = "<64 hex>"   # `galton-client hash-password alice` prints it
     # password = "clear text"      # instead of password_sha256, for tests and demos
     tls_name = "alice.robot"       # optional: the common name of alice's TLS certificate
     zmq_public_key = "<40 chars>"  # optional: alice's ZeroMQ CURVE public key (Z85)
