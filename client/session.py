@@ -83,8 +83,9 @@ def open_session(connect: str | Sequence[str] | None = None,
     """A session to the given endpoints, multicast scouting off, with these credentials.
 
     One endpoint: a Zenoh client (it reaches every daemon meshed with that one). Several: a
-    non-listening peer, since a Zenoh client connects to the first endpoint only. A daemon
-    that refuses the session raises AccessDeniedError (client/access.py).
+    non-listening peer, since a Zenoh client connects to the first endpoint only. With one
+    endpoint, a daemon that refuses the session raises AccessDeniedError (client/access.py);
+    a peer session opens whatever its endpoints do, and a refusing daemon is never seen.
     """
     endpoints = split_endpoints(connect)
     zmq = [endpoint for endpoint in endpoints if endpoint.startswith("zmq+")]

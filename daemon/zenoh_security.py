@@ -164,7 +164,8 @@ def dictionary_text(users: Mapping[str, User]) -> str:
 
 def write_private_file(text: str, prefix: str = "galton-usrpwd-") -> Path:
     """``text`` in a new file only this user can read (0600), removed when the process
-    exits normally (a SIGKILL leaves it in the temp folder)."""
+    exits normally (a SIGKILL, or a SIGTERM the daemon lets end it at once, leaves it in
+    the temp folder: Zenoh reads it only when the session opens)."""
     handle, name = tempfile.mkstemp(prefix=prefix, suffix=".txt")
     path = Path(name)
     os.fchmod(handle, 0o600)
