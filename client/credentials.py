@@ -33,6 +33,7 @@ FILE_ENV = "GALTON_CREDENTIALS"
 FILE_FIELDS = ("user", "password", "password_file", "password_sha256", "tls_ca", "tls_cert",
                "tls_key")
 TLS = "transport/link/tls/"
+PEM_MARK = b"-----BEGIN "
 
 
 @dataclass(frozen=True)
@@ -54,8 +55,8 @@ class Credentials:
                                        "give both tls_cert and tls_key")
         for what, path in (("tls_ca", self.tls_ca), ("tls_cert", self.tls_cert),
                            ("tls_key", self.tls_key)):
-            if path is not None and not Path(path).is_file():
-                raise InvalidArgumentError(f"{what} {str(path)!r} is not a readable file")
+            if path is not None:
+                _check_pem(what, Path(path))
 
     def _check_password(self) -> None:
         has_password = self.password is not None or self.password_sha256 is not None
@@ -122,6 +123,22 @@ class Credentials:
         """Credentials from ``GALTON_CREDENTIALS``, then ``GALTON_USER`` and
         ``GALTON_PASSWORD``; None when none of them is set."""
         return resolve_credentials(environ=environ)
+
+
+def _check_pem(what: str, path: Path) -> None:
+    """Zenoh reads PEM only, and a TLS file it cannot parse fails ``zenoh.open`` just as a
+    refused handshake does: without this check the SDK blamed the daemon."""
+    try:
+        data = path.read_bytes() if path.is_file() else None
+    except OSError:
+        data = None
+    if data is None:
+        raise InvalidArgumentError(f"{what} {str(path)!r} is not a readable file")
+    if PEM_MARK not in data:
+        raise InvalidArgumentError(
+            f"{what} {str(path)!r} is not a PEM file (no {PEM_MARK.decode()!r} line): Zenoh "
+            "takes certificates and keys in PEM (`openssl x509 -inform der -in X -out "
+            "X.pem` converts a certificate)")
 
 
 def read_password_file(path: Path | str) -> str:

@@ -47,9 +47,21 @@ def test_bad_credentials_are_refused_without_their_password(
     assert SECRET not in str(caught.value)
 
 
+@pytest.mark.parametrize("field", ["tls_ca", "tls_cert", "tls_key"])
+def test_a_tls_file_that_is_not_pem_is_refused(tmp_path: Path, field: str) -> None:
+    """Zenoh takes PEM only, and a file it cannot parse made ``zenoh.open`` fail like a
+    refused handshake: the SDK said the daemon refused the session."""
+    pem = tmp_path / "good.pem"
+    pem.write_text("-----BEGIN CERTIFICATE-----\nMIIB\n-----END CERTIFICATE-----\n")
+    (tmp_path / "cert.der").write_bytes(bytes([0x30, 0x82, 0x01, 0x0A]))
+    files = {"tls_ca": pem, "tls_cert": pem, "tls_key": pem, field: tmp_path / "cert.der"}
+    with pytest.raises(InvalidArgumentError, match=f"{field} '.*cert.der' is not a PEM file"):
+        Credentials(**files)
+
+
 def test_later_sources_win_field_by_field(tmp_path: Path) -> None:
     (tmp_path / "pw").write_text("from-file\n")
-    (tmp_path / "ca.pem").write_text("not read here")
+    (tmp_path / "ca.pem").write_text("-----BEGIN CERTIFICATE-----\nnot read here\n")
     (tmp_path / "creds.toml").write_text(
         'user = "alice"\npassword_file = "pw"\ntls_ca = "ca.pem"\n')
     environ = {"GALTON_CREDENTIALS": str(tmp_path / "creds.toml")}
