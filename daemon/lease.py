@@ -58,8 +58,10 @@ class Holder:
                 or (self.peer is not None and call.peer == self.peer))
 
     def gone_with(self, who: str) -> bool:
-        """Whether the vanished client id or closed connection ``who`` was the holder."""
-        return who in (self.client, self.peer)
+        """Whether the vanished client id or closed connection ``who`` was the holder: the
+        connection control was taken on over ZeroMQ (a Zenoh token named like its id, which
+        anyone may declare, is not it), else the client's token."""
+        return who == (self.peer if self.peer is not None else self.client)
 
 
 class Lease:

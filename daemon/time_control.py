@@ -236,7 +236,9 @@ def client_gone(loop: SimLoop, client: str) -> None:
     where it got to, and control it held is released (daemon/lease.py). The event names the
     client by its id, else by its connection."""
     job = loop.job
-    if job is not None and client in (job.call.client, job.call.peer):
+    # Over ZeroMQ the step is tied to its connection alone, not to a token named like its id.
+    if job is not None and client == (job.call.peer if job.call.peer is not None
+                                      else job.call.client):
         cancel_job(loop, "its client disappeared")
         loop.emit({"kind": "job_abandoned", "client": job.call.client or client,
                    "steps_done": job.done,

@@ -11,6 +11,7 @@ import queue
 import signal
 import subprocess
 import sys
+import threading
 import time
 from collections.abc import Callable, Iterator
 from typing import Any
@@ -20,7 +21,8 @@ import pytest
 from support import ball_row, companion, ground_and_balls, raw_replies, snapshot
 
 from galton.client import Client, EmbeddedDaemon, spheres
-from galton.protocol import ControlHeldError, ResultCode, decode_reply
+from galton.protocol import ControlHeldError, OperationFailedError, ResultCode, decode_reply
+from galton.protocol.keys import client_token_key
 
 WAIT_S = 20.0
 LONG = 10**9
@@ -249,3 +251,37 @@ def test_a_client_id_that_is_no_single_token_name_cannot_take_control(
     assert reply.code == ResultCode.INVALID_ARGUMENT, (reply.code, reply.message)
     assert repr(client_id) in reply.message
     assert sim.status().controller is None
+
+
+def test_over_zeromq_a_zenoh_token_named_like_the_holder_ends_nothing(
+        sim: Client, daemon: EmbeddedDaemon, transport: str) -> None:
+    """Over ZeroMQ control and a long step are tied to their connection, not to a Zenoh
+    token: a token named after the holder's id (anyone on Zenoh may declare one, a viewer
+    too, and status shows the id) that comes and goes ends neither."""
+    if transport != "zmq":
+        pytest.skip("over Zenoh the holder's own token is what ties control")
+    sim.spawn(ball_row(1)[1])
+    outcome: list[BaseException | None] = []
+
+    def step_long() -> None:
+        try:
+            sim.step(LONG, timeout=600)
+            outcome.append(None)
+        except BaseException as error:  # the pause below ends it
+            outcome.append(error)
+    with sim.control():
+        stepper = threading.Thread(target=step_long, daemon=True)
+        stepper.start()
+        wait_for(lambda: sim.status().step > 0)
+        with Client(daemon.instance, daemon.endpoint, timeout=20.0) as spoofer:
+            token = spoofer.session.liveliness().declare_token(client_token_key(sim.client_id))
+            spoofer.capabilities()  # the daemon has seen the token (same link, in order)
+            token.undeclare()
+            spoofer.capabilities()  # ... and its going
+        status = sim.status()
+        assert status.controller == sim.client_id
+        assert stepper.is_alive() and not outcome
+        wait_for(lambda: sim.status().step > status.step)  # the step still runs
+        sim.pause()
+        stepper.join(WAIT_S)
+    assert isinstance(outcome[0], OperationFailedError) and "pause" in str(outcome[0])
