@@ -10,9 +10,10 @@ publish forged telemetry through the daemon, and one allowing ``declare_queryabl
 role       allowed
 =========  ===========================================================================
 operator   in: query ``@ctl/*``, subscribe telemetry and events, discovery
-           (liveliness get and subscribe on ``galton/*/alive``), its own client token
-           ``galton/_clients/*``. out: replies, telemetry, events, daemon tokens, the
-           daemon's control queryable (a querier asks only where one is declared)
+           (liveliness get and subscribe on ``galton/*/alive``), a client token under
+           ``galton/_clients/*`` (any id: the lease trusts operators). out: replies,
+           telemetry, events, daemon tokens, the daemon's control queryable (a querier
+           asks only where one is declared)
 viewer     in: query ``@ctl/status`` and ``@ctl/capabilities``, subscribe telemetry and
            events, discovery. out: those replies, telemetry, events, daemon tokens, the
            daemon's control queryable
