@@ -113,6 +113,14 @@ class ZmqFront:
 
     def _bind(self, endpoint: str) -> None:
         router = self.context.socket(zmq.ROUTER)
+        try:
+            self._bind_router(router, endpoint)
+        except BaseException:
+            if router not in self.routers:  # close() would not close it, and the context's
+                router.close(linger=0)  # term() would wait for it for ever
+            raise
+
+    def _bind_router(self, router: zmq.Socket[bytes], endpoint: str) -> None:
         router.setsockopt(zmq.LINGER, 0)
         if self.security is not None:
             self.security.secure(router)

@@ -161,6 +161,22 @@ def test_bad_zmq_endpoints_are_refused_at_start() -> None:
         assert done.returncode == 2 and "is not an endpoint" in done.stderr, done.stderr
 
 
+def test_a_port_in_use_is_refused_at_start() -> None:
+    """The daemon used to hang for ever here: the ROUTER that failed to bind was never
+    closed, and closing the ZeroMQ context waits for every socket."""
+    context = zmq.Context()
+    try:
+        taken = context.socket(zmq.ROUTER)
+        taken.bind("tcp://127.0.0.1:*")
+        endpoint = taken.getsockopt_string(zmq.LAST_ENDPOINT)
+        done = subprocess.run([*daemon_command(), "--zmq", endpoint, "--listen",
+                               f"tcp/127.0.0.1:{free_loopback_port()}"],
+                              capture_output=True, text=True, timeout=60)
+        assert done.returncode == 2 and "could not bind" in done.stderr, done.stderr
+    finally:
+        context.destroy(linger=0)
+
+
 def test_a_tcp_daemon_on_any_port_then_killed(tmp_path: Path) -> None:
     """``tcp://127.0.0.1:*`` binds free ports that capabilities names; an ipc socket file
     goes when the daemon stops; a client of a killed daemon hears "unreachable"."""
