@@ -17,6 +17,7 @@ import errno
 import os
 import queue
 import select
+import socket as sockets
 import time
 from collections import deque
 from collections.abc import Callable, Iterator
@@ -89,6 +90,7 @@ class ZmqFront:
         self.known: list[dict[bytes, int]] = []
         self.control: list[str] = []
         self.telemetry: list[str] = []
+        self.files: dict[str, tuple[int, int]] = {}  # our ipc socket files: (device, inode)
         self.prefix = f"galton/{instance}/".encode()
         try:
             # An XPUB: it reads each new subscription, and answers it with a "hello" the
@@ -103,6 +105,9 @@ class ZmqFront:
         except zmq.ZMQError as error:
             self.close()
             raise InvalidArgumentError(f"ZeroMQ could not bind: {error}") from error
+        except InvalidArgumentError:
+            self.close()
+            raise
         self._wake_read, self._wake_write = os.pipe()
         os.set_blocking(self._wake_read, False)
         os.set_blocking(self._wake_write, False)
@@ -124,6 +129,7 @@ class ZmqFront:
         router.setsockopt(zmq.LINGER, 0)
         if self.security is not None:
             self.security.secure(router)
+        _refuse_if_served(endpoint)
         with _private_files():
             router.bind(endpoint)
         self.routers.append(router)
@@ -132,12 +138,22 @@ class ZmqFront:
         self.known.append({})
         bound = router.getsockopt_string(zmq.LAST_ENDPOINT)
         self.control.append(bound)
+        self._own(bound)
         # From the endpoint asked for: a '*' port's bound one is a number, and its next port
         # is no free port (another process may hold it).
         telemetry = telemetry_endpoint(bound if bound.startswith("ipc://") else endpoint)
+        _refuse_if_served(telemetry)
         with _private_files():
             self.pub.bind(telemetry)
         self.telemetry.append(self.pub.getsockopt_string(zmq.LAST_ENDPOINT))
+        self._own(self.telemetry[-1])
+
+    def _own(self, bound: str) -> None:
+        """Remember which file an ipc endpoint is, so that ``close`` removes only ours."""
+        if bound.startswith("ipc://"):
+            with contextlib.suppress(OSError):  # an abstract socket (ipc://@name): no file
+                found = os.stat(bound[len("ipc://"):])
+                self.files[bound] = (found.st_dev, found.st_ino)
 
     def advertised(self) -> dict[str, Any]:
         """The endpoints as ``capabilities`` names them, with the CURVE public key (Z85) a
@@ -243,8 +259,8 @@ class ZmqFront:
             self.pub.close(linger=0)
         if self.authenticator is not None:
             self.authenticator.stop()
-        for endpoint in self.control + self.telemetry:
-            _remove_socket_file(endpoint)
+        for endpoint, identity in self.files.items():
+            _remove_socket_file(endpoint, identity)
         for fd in (getattr(self, "_wake_read", None), getattr(self, "_wake_write", None)):
             if fd is not None:
                 os.close(fd)
@@ -272,13 +288,37 @@ def peer_name(index: int, identity: bytes) -> str:
     return f"zmq:{index}:{identity.hex()}"
 
 
-def _remove_socket_file(endpoint: str) -> None:
-    if endpoint.startswith("ipc://"):
-        try:
-            os.unlink(endpoint[len("ipc://"):])
-        except OSError as error:
-            if error.errno != errno.ENOENT:
-                raise
+def _remove_socket_file(endpoint: str, identity: tuple[int, int]) -> None:
+    """Remove an ipc socket file if it is still ours: a process that bound the path since
+    (docs/SECURITY.md) keeps its own."""
+    path = endpoint[len("ipc://"):]
+    try:
+        found = os.stat(path)
+        if (found.st_dev, found.st_ino) == identity:
+            os.unlink(path)
+    except OSError as error:
+        if error.errno != errno.ENOENT:
+            raise
+
+
+def _refuse_if_served(endpoint: str) -> None:
+    """ZeroMQ binds an ipc path over an existing socket file: one that a running process
+    still serves would be taken from it, its new clients sent here. Refused, as TCP refuses
+    a port in use; a stale file (nobody listening) is bound over."""
+    if not endpoint.startswith("ipc://") or endpoint == "ipc://*":
+        return
+    path = endpoint[len("ipc://"):]
+    probe = sockets.socket(sockets.AF_UNIX, sockets.SOCK_STREAM)
+    try:
+        probe.settimeout(1.0)
+        probe.connect(path)
+    except OSError:
+        return  # no such file, or nobody listens on it
+    finally:
+        probe.close()
+    raise InvalidArgumentError(
+        f"--zmq {endpoint}: a running process serves that socket already (another "
+        "galton-daemon?): stop it, or give another path")
 
 
 NOTHING = object()

@@ -218,6 +218,30 @@ def test_the_telemetry_endpoint_beside_a_control_one(control: str, telemetry: st
     assert telemetry_endpoint(control) == telemetry
 
 
+def test_an_ipc_path_a_running_daemon_serves_is_not_taken_from_it(tmp_path: Path) -> None:
+    """A second daemon on the same ipc path is refused at start (ZeroMQ would bind over the
+    file and leave the first one unreachable); a process that binds the path anyway keeps
+    its file when the daemon stops (the daemon used to remove it)."""
+    socket_file = tmp_path / "shared.sock"
+    daemon = EmbeddedDaemon("mujoco", instance="zmq-shared-path", extra_args=[
+        "--zmq", f"ipc://{socket_file}"]).start()
+    context = zmq.Context()
+    try:
+        done = subprocess.run([*daemon_command(), "--zmq", f"ipc://{socket_file}", "--listen",
+                               f"tcp/127.0.0.1:{free_loopback_port()}"],
+                              capture_output=True, text=True, timeout=60)
+        assert done.returncode == 2 and "serves that socket already" in done.stderr, done.stderr
+        with Client(connect=f"zmq+ipc://{socket_file}") as sim:
+            assert sim.status().instance == daemon.instance
+        intruder = context.socket(zmq.ROUTER)
+        intruder.bind(f"ipc://{socket_file}")  # what docs/SECURITY.md warns of
+        assert daemon.stop() == 0
+        assert socket_file.exists()  # the intruder's file, not the daemon's
+    finally:
+        daemon.stop()
+        context.destroy(linger=0)
+
+
 def test_sdk_endpoints_that_reach_nothing_are_unreachable(tmp_path: Path) -> None:
     with pytest.raises(DaemonUnreachableError, match="no socket file"):
         Client(connect=f"zmq+ipc://{tmp_path}/none.sock")
