@@ -149,6 +149,12 @@ def test_a_viewer_cannot_inject_telemetry(secured: EmbeddedDaemon, operator: Cli
     assert _forged_telemetry_reaches_operator(secured.endpoint, INSTANCE, BOB, ALICE) is False
 
 
+def test_an_operator_cannot_inject_telemetry_either(secured: EmbeddedDaemon,
+                                                   operator: Client) -> None:
+    """Nobody but the daemon publishes on its keys: an operator's put is dropped too."""
+    assert _forged_telemetry_reaches_operator(secured.endpoint, INSTANCE, ALICE, ALICE) is False
+
+
 def test_without_users_the_same_injection_works(daemons: dict[str, EmbeddedDaemon]) -> None:
     """The injection test can see an injection: on an open daemon it arrives."""
     daemon = start_daemon(daemons, "mujoco")
@@ -171,10 +177,12 @@ def _forged_telemetry_reaches_operator(endpoint: str, instance: str,
         subscriber = listening.declare_subscriber(
             keys.telemetry, lambda sample: received.put(sample.payload.to_bytes()))
         received.get(timeout=WAIT_S)  # the subscription is in place
-        publisher = intruding.declare_publisher(keys.telemetry)
-        assert daemon_alive(intruding, keys, WAIT_S)  # the declaration has arrived
-        publisher.put(FORGED)
-        assert daemon_alive(intruding, keys, WAIT_S)  # ... and the put
+        # Not a declared publisher: it sends only once told of a matching subscriber, which
+        # access control never tells a client, so this test passed with `put` allowed
+        # inbound. A session's put, with no publisher on the key, is sent regardless.
+        assert daemon_alive(intruding, keys, WAIT_S)  # the session reaches the daemon
+        intruding.put(keys.telemetry, FORGED)
+        assert daemon_alive(intruding, keys, WAIT_S)  # ... and the put has arrived
         genuine = 0
         while genuine < 3:
             if received.get(timeout=WAIT_S) == FORGED:
