@@ -26,12 +26,14 @@ READY_PREFIX = "galton-client router ready:"
 
 def router_config(listen: list[str], connect: list[str], multicast: bool,
                   config_file: Path | None = None) -> zenoh.Config:
-    """A router listening on ``listen``, joined to other routers at ``connect``; a Zenoh
-    config file (TLS, access control) may set the rest."""
+    """A router listening on ``listen``, else on the config file's endpoints, else on
+    DEFAULT_ROUTER_LISTEN (never Zenoh's own default: every interface), joined to other
+    routers at ``connect``; a Zenoh config file (TLS, access control) may set the rest."""
     config = zenoh.Config.from_file(str(config_file)) if config_file else zenoh.Config()
+    silent = config.get_json("listen/endpoints") == zenoh.Config().get_json("listen/endpoints")
     config.insert_json5("mode", json.dumps("router"))
-    if listen:
-        config.insert_json5("listen/endpoints", json.dumps(listen))
+    if listen or silent:
+        config.insert_json5("listen/endpoints", json.dumps(listen or [DEFAULT_ROUTER_LISTEN]))
     if connect:
         config.insert_json5("connect/endpoints", json.dumps(connect))
     config.insert_json5("scouting/multicast/enabled", json.dumps(multicast))
@@ -64,9 +66,11 @@ def router(
 ) -> None:
     """Run a Zenoh router until Ctrl-C or SIGTERM: start daemons with `galton-daemon
     --connect tcp/HOST:7447`, and point clients at the same endpoint."""
-    endpoints = listen or ([] if zenoh_config else [DEFAULT_ROUTER_LISTEN])
+    endpoints = listen or []
     try:
-        session = zenoh.open(router_config(endpoints, connect or [], multicast, zenoh_config))
+        config = router_config(endpoints, connect or [], multicast, zenoh_config)
+        endpoints = endpoints or _listed(config)
+        session = zenoh.open(config)
     except zenoh.ZError as error:
         typer.echo(f"galton-client: the router could not start on "
                    f"{', '.join(endpoints) or zenoh_config}: {error}", err=True)
@@ -77,3 +81,9 @@ def router(
         wait_for_stop()
     finally:
         close_session(session)
+
+
+def _listed(config: zenoh.Config) -> list[str]:
+    """The endpoints the router will listen on, when the config names them as a list."""
+    endpoints = json.loads(config.get_json("listen/endpoints"))
+    return [str(e) for e in endpoints] if isinstance(endpoints, list) else []

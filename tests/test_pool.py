@@ -22,6 +22,7 @@ from galton.client.bench.daemons import pool_clients
 from galton.client.bench.experiment import ExperimentConfig
 from galton.client.bench.pool import PoolHooks, TrialQueue, run_pool
 from galton.client.bench.trial import run_trial
+from galton.client.cli_router import DEFAULT_ROUTER_LISTEN, router_config
 from galton.client.discovery import discover_at
 from galton.client.session import close_session, open_session
 from galton.protocol import DaemonUnreachableError
@@ -202,3 +203,20 @@ def test_a_pool_whose_only_daemon_dies_says_what_was_not_run(router: RouterProce
     message = str(failed.value)
     assert message.startswith("every daemon of the pool failed (pool-test-lone: ")
     assert message.endswith("6 of 6 trials did not run")
+
+
+def test_a_router_config_file_silent_on_listen_keeps_the_loopback_default(
+        tmp_path: Path) -> None:
+    """Zenoh's own router default listens on every interface: a --zenoh-config file that
+    names no listen endpoint (TLS settings alone, say) keeps the documented loopback default;
+    a file that names some is honoured, and --listen wins over both."""
+    silent, listening = tmp_path / "silent.json5", tmp_path / "listening.json5"
+    silent.write_text('{transport: {link: {tx: {lease: 10000}}}}')
+    listening.write_text('{listen: {endpoints: ["tcp/127.0.0.1:7999"]}}')
+
+    def listens(listen: list[str], config_file: Path) -> Any:
+        return json.loads(router_config(listen, [], False, config_file).get_json(
+            "listen/endpoints"))
+    assert listens([], silent) == [DEFAULT_ROUTER_LISTEN]
+    assert listens([], listening) == ["tcp/127.0.0.1:7999"]
+    assert listens(["tcp/127.0.0.1:7998"], listening) == ["tcp/127.0.0.1:7998"]
