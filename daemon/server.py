@@ -25,7 +25,12 @@ from galton.daemon.loop import SimLoop
 from galton.daemon.users import User
 from galton.daemon.world import World
 from galton.daemon.zenoh_merge import file_says, listen_endpoints, merge
-from galton.daemon.zenoh_security import TlsFiles, security_settings, tls_settings
+from galton.daemon.zenoh_security import (
+    TlsFiles,
+    remove_private_files,
+    security_settings,
+    tls_settings,
+)
 from galton.daemon.zmq_auth import ZmqSecurity
 from galton.daemon.zmq_front import PolledInbox, ZmqFront, parse_endpoint
 from galton.protocol import InvalidArgumentError, Keys, Telemetry
@@ -99,7 +104,10 @@ class Daemon:
         engine = create_engine(options.engine)
         if options.params:
             engine.set_params(options.params)
-        self.session = zenoh.open(zenoh_config(options))
+        try:
+            self.session = zenoh.open(zenoh_config(options))
+        finally:
+            remove_private_files()  # the usrpwd dictionary: Zenoh has read it
         self._telemetry_pub = self.session.declare_publisher(
             self.keys.telemetry, congestion_control=zenoh.CongestionControl.DROP)
         self._events_pub = self.session.declare_publisher(self.keys.events)

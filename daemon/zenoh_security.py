@@ -164,16 +164,27 @@ def dictionary_text(users: Mapping[str, User]) -> str:
 
 
 def write_private_file(text: str, prefix: str = "galton-usrpwd-") -> Path:
-    """``text`` in a new file only this user can read (0600), removed when the process
-    exits normally (a SIGKILL, or a SIGTERM the daemon lets end it at once, leaves it in
-    the temp folder: Zenoh reads it only when the session opens)."""
+    """``text`` in a new file only this user can read (0600). The daemon removes it as soon
+    as its session is open (``remove_private_files``: Zenoh reads it only then), and at
+    exit in any case."""
     handle, name = tempfile.mkstemp(prefix=prefix, suffix=".txt")
     path = Path(name)
     os.fchmod(handle, 0o600)
     with os.fdopen(handle, "w", encoding="utf-8") as stream:
         stream.write(text)
     atexit.register(_remove, path)
+    _PRIVATE_FILES.append(path)
     return path
+
+
+_PRIVATE_FILES: list[Path] = []
+
+
+def remove_private_files() -> None:
+    """Remove every private file written so far: once its session is open, Zenoh has read
+    the dictionary and needs it no more, so nothing is left for a SIGKILL to strand."""
+    while _PRIVATE_FILES:
+        _remove(_PRIVATE_FILES.pop())
 
 
 def _remove(path: Path) -> None:

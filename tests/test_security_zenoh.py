@@ -390,3 +390,25 @@ def test_discovery_takes_credentials(secured: EmbeddedDaemon) -> None:
     assert found[INSTANCE].engine == "mujoco" and found[INSTANCE].host
     with pytest.raises(AccessDeniedError):
         discover_at(secured.endpoint, 5.0)
+
+
+def test_the_password_dictionary_is_gone_once_the_daemon_serves(tmp_path: Path) -> None:
+    """Zenoh reads the usrpwd dictionary when the session opens; the daemon removes it
+    then, so a SIGKILL afterwards strands no file of password hashes."""
+    import signal
+    import tempfile
+
+    def dictionaries() -> set[Path]:
+        return set(Path(tempfile.gettempdir()).glob("galton-usrpwd-*"))
+
+    before = dictionaries()
+    daemon = EmbeddedDaemon("mujoco", instance="dictionary-gone",
+                            extra_args=["--users", str(users_file(tmp_path))]).start()
+    try:
+        assert dictionaries() - before == set()
+        assert daemon.process is not None
+        daemon.process.send_signal(signal.SIGKILL)
+        daemon.process.wait(30)
+        assert dictionaries() - before == set()
+    finally:
+        daemon.stop()
