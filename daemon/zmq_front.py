@@ -193,21 +193,28 @@ class ZmqFront:
         if now >= self._next_side_check:  # off the hot path: neither is urgent
             self._next_side_check = now + MONITOR_PERIOD_S
             self._welcome_subscribers()
-            for index, monitor in enumerate(self.monitors):
-                while _has_input(monitor):  # no recv that fails: a zmq.Again costs ~3 µs
-                    event = parse_monitor_message(monitor.recv_multipart())
-                    identity = self.peers[index].pop(int(event["value"]), None)
-                    if identity is not None:
-                        self.known[index].pop(identity, None)
-                        items.append(gone(peer_name(index, identity)))
+            for index in range(len(self.monitors)):
+                self._take_closed(index, gone, items)
         for index, router in enumerate(self.routers):
             while _has_input(router):
-                call = self._call(index, router)
+                call = self._call(index, router, gone, items)
                 if call is not None:
                     items.append(call)
         return items
 
-    def _call(self, index: int, router: zmq.Socket[bytes]) -> Call | None:
+    def _take_closed(self, index: int, gone: Callable[[str], Task],
+                     items: list[Call | Task]) -> None:
+        """The connections of ROUTER ``index`` closed since the last look, as Tasks."""
+        monitor = self.monitors[index]
+        while _has_input(monitor):  # no recv that fails: a zmq.Again costs ~3 µs
+            event = parse_monitor_message(monitor.recv_multipart())
+            identity = self.peers[index].pop(int(event["value"]), None)
+            if identity is not None:
+                self.known[index].pop(identity, None)
+                items.append(gone(peer_name(index, identity)))
+
+    def _call(self, index: int, router: zmq.Socket[bytes], gone: Callable[[str], Task],
+              items: list[Call | Task]) -> Call | None:
         """A Call for the message waiting on ``router``; a message that is no request is
         dropped, as ZeroMQ cannot address an answer to a malformed envelope."""
         first = frame = _recv(router, 0, False)  # the peer's identity: it knows its fd
@@ -220,6 +227,9 @@ class ZmqFront:
                 len(part) > MAX_ROUTING_FRAME_BYTES for part in routing[1:]):
             return None
         if routing[0] not in self.known[index]:
+            # A new connection may have the fd of one closed since the monitors were last
+            # read: that one's close is taken first, or it would be blamed on this one.
+            self._take_closed(index, gone, items)
             fd = int(first.get(_SRCFD))
             self.peers[index][fd] = routing[0]
             self.known[index][routing[0]] = fd

@@ -92,6 +92,38 @@ def test_replies_come_as_requests_finish_each_with_its_tag(dealer: zmq.Socket) -
     assert step["code_name"] == "OPERATION_FAILED" and "interrupted" in step["message"]
 
 
+def test_a_closed_holder_loses_control_when_a_new_connection_takes_its_fd(
+        zmq_daemon: EmbeddedDaemon, dealer: zmq.Socket) -> None:
+    """A connection that closes while the physics thread is busy, followed at once by a new
+    one (which gets the same file descriptor), used to have its closing blamed on the new
+    one: the lease of the closed holder was never lost, and the new connection's was."""
+    endpoint = zmq_daemon.zmq_endpoint.removeprefix("zmq+")  # type: ignore[union-attr]
+    dealer.send_multipart([b"step", envelope("step", {"count": 10**9})])  # keeps it busy
+    events: queue.Queue[dict] = queue.Queue()
+    context = zmq.Context()
+    try:
+        with Client(zmq_daemon.instance, zmq_daemon.endpoint) as watcher, \
+                watcher.on_event(events.put):
+            for _ in range(5):
+                holder = context.socket(zmq.DEALER)
+                holder.connect(endpoint)
+                holder.send_multipart([b"take", envelope("take_control")])
+                assert msgpack.unpackb(receive(holder)[1])["result"]["taken"]
+                holder.close(linger=0)
+                newcomer = context.socket(zmq.DEALER)
+                newcomer.connect(endpoint)
+                newcomer.send_multipart([b"status", envelope("status")])
+                receive(newcomer)
+                while (event := events.get(timeout=10))["kind"] != "control" or \
+                        event["change"] != "lost":
+                    pass  # the "taken" event, state changes
+                newcomer.close(linger=0)
+    finally:
+        context.destroy(linger=0)
+        dealer.send_multipart([b"pause", envelope("pause")])
+        receive(dealer)
+
+
 @pytest.mark.parametrize("frames", [
     [b"x"] * 8 + [envelope("status")],  # more than 8 frames with the ROUTER's
     [b"x" * 257, envelope("status")],  # a routing frame past 256 bytes
