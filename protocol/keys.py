@@ -38,7 +38,7 @@ _INSTANCE_RE = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.\-]{0,63}$")
 
 def validate_instance_name(name: str) -> str:
     """Instance names are one key chunk: letters, digits, '_', '-', '.' (not first), ≤ 64."""
-    if not isinstance(name, str) or not _INSTANCE_RE.match(name):
+    if not isinstance(name, str) or not _INSTANCE_RE.fullmatch(name):
         raise InvalidArgumentError(
             f"instance name {name!r} is not valid: use 1-64 letters, digits, '_', '-' or '.', "
             "not starting with '-' or '.'"

@@ -131,3 +131,13 @@ def test_replies_of_a_newer_daemon_with_extra_fields_still_parse() -> None:
     caps = {"engine": "mujoco", "engine_version": "x", "protocol_version": 1,
             "body_shapes": [], "model_formats": [], "features": [], "new_thing": {}}
     assert Capabilities.from_wire(caps).engine == "mujoco"
+
+
+def test_an_instance_name_ending_in_a_line_break_is_refused() -> None:
+    """``$`` matches before a final newline: the name is matched whole, so a key chunk
+    never carries one."""
+    from galton.protocol import InvalidArgumentError, validate_instance_name
+
+    assert validate_instance_name("robot-1") == "robot-1"
+    with pytest.raises(InvalidArgumentError):
+        validate_instance_name("robot-1\n")
