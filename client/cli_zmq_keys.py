@@ -28,9 +28,10 @@ def zmq_keys(
     users-file line of its public key."""
     def make() -> str:
         folder.mkdir(parents=True, exist_ok=True)
-        secret_file = folder / f"{name}.key_secret"
-        if secret_file.exists():
-            raise InvalidArgumentError(f"{secret_file} exists: nothing was overwritten")
+        for made in (folder / f"{name}.key", folder / f"{name}.key_secret"):
+            if made.exists():  # NAME.key may be the daemon's public key, kept there
+                raise InvalidArgumentError(
+                    f"{made} exists: nothing was overwritten (give another --name)")
         public_file, secret_file_made = zmq.auth.create_certificates(str(folder), name)
         os.chmod(secret_file_made, 0o600)
         public, _ = zmq.auth.load_certificate(public_file)

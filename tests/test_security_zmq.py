@@ -174,3 +174,22 @@ def test_a_key_without_users_encrypts_and_lets_any_key_in(keys: Keys, tmp_path: 
                     zmq_keys=keys.client("stranger")) as anyone:
             anyone.load_world("mujoco")
             assert anyone.spawn(spheres(["b"], [[0, 0, 1]], 0.1)) == ["b"]
+
+
+def test_zmq_keys_writes_a_pair_and_overwrites_no_key(tmp_path: Path) -> None:
+    """``galton-client zmq-keys`` used to check only NAME.key_secret, and replaced a NAME.key
+    already there (say the daemon's public key, copied beside the client's keys)."""
+    from cli_support import run
+
+    result = run(["zmq-keys", str(tmp_path / "mine")])
+    assert result.exit_code == 0, result.output
+    public = zmq.auth.load_certificate(str(tmp_path / "mine" / "galton.key"))[0].decode()
+    assert f'zmq_public_key = "{public}"' in result.stdout
+    assert stat.S_IMODE(os.stat(tmp_path / "mine" / "galton.key_secret").st_mode) == 0o600
+    daemon_key = tmp_path / "theirs" / "galton.key"
+    daemon_key.parent.mkdir()
+    daemon_key.write_text("the daemon's public key")
+    result = run(["zmq-keys", str(daemon_key.parent)])
+    assert result.exit_code != 0 and "nothing was overwritten" in result.output, result.output
+    assert daemon_key.read_text() == "the daemon's public key"
+    assert not (daemon_key.parent / "galton.key_secret").exists()
