@@ -220,3 +220,20 @@ def test_a_router_config_file_silent_on_listen_keeps_the_loopback_default(
     assert listens([], silent) == [DEFAULT_ROUTER_LISTEN]
     assert listens([], listening) == ["tcp/127.0.0.1:7999"]
     assert listens(["tcp/127.0.0.1:7998"], listening) == ["tcp/127.0.0.1:7998"]
+
+
+def test_a_daemon_whose_control_another_holds_is_dropped(
+        router: RouterProcess, three: list[EmbeddedDaemon]) -> None:
+    """Another client holds one daemon's control: its trial is refused (CONTROL_HELD) and
+    re-run on the others, none lost."""
+    held, free = three[0].instance, three[1].instance
+    with Client(held, router.endpoint) as holder, holder.control(), \
+            pool_clients(router.endpoint, [held, free], TIMEOUT_S, 1, "mujoco") as daemons:
+        results = run_pool(daemons.clients, small_config(), daemons.hosts)
+    plan = small_config().trials()
+    assert [(t.engine, t.repetition) for t in results.trials] == [
+        (t.engine, t.repetition) for t in plan]
+    assert {t.daemon for t in results.trials} == {free}
+    failovers = results.extra["pool"]["failovers"]
+    assert [f["daemon"] for f in failovers] == [held]
+    assert "ControlHeld" in failovers[0]["error"] or "CONTROL_HELD" in failovers[0]["error"]

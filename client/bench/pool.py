@@ -2,10 +2,12 @@
 
 One worker thread per daemon, each with its own Client, pulls trials from one shared queue;
 any daemon serves any engine, since a trial loads its own world. A daemon whose request finds
-it gone or silent (DaemonUnreachableError, RequestTimeoutError) is dropped and its unfinished
-trial goes back to the queue for the others, so no trial is lost; results.json records the
-failover. A trial is seeded by its own config, so its bins do not depend on which daemon ran
-it, and the records keep the plan's order whatever order they finished in.
+it gone or silent (DaemonUnreachableError, RequestTimeoutError), or that will not take our
+trials (ControlHeldError: another client holds its control; AccessDeniedError), is dropped
+and its unfinished trial goes back to the queue for the others, so no trial is lost;
+results.json records the failover. A trial is seeded by its own config, so its bins do not
+depend on which daemon ran it, and the records keep the plan's order whatever order they
+finished in.
 """
 
 from __future__ import annotations
@@ -22,10 +24,18 @@ from galton.client.bench.experiment import ExperimentConfig, experiment_results,
 from galton.client.bench.picture import Animation, first_trials
 from galton.client.bench.trial import TrialConfig, run_trial
 from galton.client.sdk import Client
-from galton.protocol import DaemonUnreachableError, GaltonError, RequestTimeoutError
+from galton.protocol import (
+    AccessDeniedError,
+    ControlHeldError,
+    DaemonUnreachableError,
+    GaltonError,
+    RequestTimeoutError,
+)
 
-# A daemon failing with these is taken for gone: it is dropped and its trial re-run elsewhere.
-FAILOVER_ERRORS = (DaemonUnreachableError, RequestTimeoutError)
+# A daemon failing with these is gone, silent, or will not take our trials (another client
+# holds its control; it refuses us): it is dropped and its trial re-run elsewhere.
+FAILOVER_ERRORS = (DaemonUnreachableError, RequestTimeoutError, ControlHeldError,
+                   AccessDeniedError)
 
 
 @dataclass
