@@ -41,7 +41,8 @@ _recv: Callable[..., Any] = BaseSocket.recv
 _get: Callable[..., Any] = BaseSocket.get
 MONITOR_PERIOD_S = 0.05  # closed connections and subscribers are looked for this often
 # A message is routing frames (echoed in the reply, as ZeroMQ's REQ/DEALER envelopes are),
-# then one frame holding the request: at most this many frames in all, ROUTER's included.
+# then one frame holding the request: at most this many frames as the client sent them
+# (the ROUTER's identity frame in front is not counted: protocol.md speaks of the client's).
 MAX_FRAMES = 8
 MAX_ROUTING_FRAME_BYTES = 256
 LOOPBACK = "127.0.0.1"
@@ -223,7 +224,7 @@ class ZmqFront:
             frame = _recv(router, 0, False)
             frames.append(frame.bytes)
         routing, payload = frames[:-1], frames[-1]
-        if len(frames) < 2 or len(frames) > MAX_FRAMES or any(
+        if len(frames) < 2 or len(frames) - 1 > MAX_FRAMES or any(
                 len(part) > MAX_ROUTING_FRAME_BYTES for part in routing[1:]):
             return None
         if routing[0] not in self.known[index]:

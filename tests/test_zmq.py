@@ -125,7 +125,7 @@ def test_a_closed_holder_loses_control_when_a_new_connection_takes_its_fd(
 
 
 @pytest.mark.parametrize("frames", [
-    [b"x"] * 8 + [envelope("status")],  # more than 8 frames with the ROUTER's
+    [b"x"] * 8 + [envelope("status")],  # 9 frames: more than 8
     [b"x" * 257, envelope("status")],  # a routing frame past 256 bytes
 ], ids=["too-many-frames", "long-routing-frame"])
 def test_a_message_with_no_address_is_dropped_and_serving_goes_on(
@@ -134,6 +134,15 @@ def test_a_message_with_no_address_is_dropped_and_serving_goes_on(
     dealer.send_multipart([b"after", envelope("status")])
     tag, reply = receive(dealer)  # the first reply is the second request's: none came before
     assert tag == b"after" and msgpack.unpackb(reply)["code"] == 0
+
+
+def test_a_message_of_eight_frames_is_answered(dealer: zmq.Socket) -> None:
+    """protocol.md drops a message of *more* than 8 frames: one of 8 (7 routing frames and
+    the envelope) was dropped too, the ROUTER's identity frame counted as the client's."""
+    routing = [b"r%d" % i for i in range(7)]
+    dealer.send_multipart([*routing, envelope("status")])
+    *echoed, reply = receive(dealer)
+    assert echoed == routing and msgpack.unpackb(reply)["code"] == 0
 
 
 @pytest.mark.parametrize("payload, code", [
