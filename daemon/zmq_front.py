@@ -54,6 +54,11 @@ def parse_endpoint(text: str) -> str:
     text = text.strip()
     if text.isdigit():
         text = f"tcp://{LOOPBACK}:{text}"
+    if text.startswith("ipc://@"):
+        raise InvalidArgumentError(
+            f"--zmq {brief(text)} is an abstract socket, which has no file and so no "
+            "permissions: every account on the host could connect to it (and the SDK "
+            "looks for a file); give ipc:///path/to/socket")
     if text.startswith("ipc://") and len(text) > len("ipc://"):
         return text
     if text.startswith("tcp://"):

@@ -202,6 +202,15 @@ def test_bad_zmq_endpoints_are_refused_at_start() -> None:
         assert done.returncode == 2 and "is not an endpoint" in done.stderr, done.stderr
 
 
+def test_an_abstract_ipc_socket_is_refused_at_start() -> None:
+    """``ipc://@name`` has no file, so none of the permissions docs/SECURITY.md promises,
+    and the SDK refused it ("no socket file"): it used to be served all the same."""
+    done = subprocess.run([*daemon_command(), "--zmq", "ipc://@galton-abstract", "--listen",
+                           f"tcp/127.0.0.1:{free_loopback_port()}"],
+                          capture_output=True, text=True, timeout=60)
+    assert done.returncode == 2 and "abstract socket" in done.stderr, done.stderr
+
+
 def test_a_port_in_use_is_refused_at_start() -> None:
     """The daemon used to hang for ever here: the ROUTER that failed to bind was never
     closed, and closing the ZeroMQ context waits for every socket."""
