@@ -18,6 +18,7 @@ import os
 import queue
 import select
 import socket as sockets
+import stat
 import time
 from collections import deque
 from collections.abc import Callable, Iterator
@@ -324,6 +325,11 @@ def _refuse_if_served(endpoint: str) -> None:
     if not endpoint.startswith("ipc://") or endpoint == "ipc://*":
         return
     path = endpoint[len("ipc://"):]
+    with contextlib.suppress(OSError):
+        if not stat.S_ISSOCK(os.stat(path).st_mode):  # ZeroMQ would delete it, say a file
+            raise InvalidArgumentError(  # named by a typo
+                f"--zmq {endpoint}: {path} exists and is no socket: give a path that is "
+                "free or a socket file (it would be replaced)")
     probe = sockets.socket(sockets.AF_UNIX, sockets.SOCK_STREAM)
     try:
         probe.settimeout(1.0)

@@ -211,6 +211,19 @@ def test_an_abstract_ipc_socket_is_refused_at_start() -> None:
     assert done.returncode == 2 and "abstract socket" in done.stderr, done.stderr
 
 
+@pytest.mark.parametrize("taken", ["", ".pub"], ids=["control", "telemetry"])
+def test_an_ipc_path_that_is_a_file_is_refused_and_kept(tmp_path: Path, taken: str) -> None:
+    """ZeroMQ deletes whatever is at an ipc path it binds: a daemon started on a file's
+    name (a typo) used to delete that file, or the file beside it named PATH.pub."""
+    path = tmp_path / "notes"
+    Path(f"{path}{taken}").write_text("keep me")
+    done = subprocess.run([*daemon_command(), "--zmq", f"ipc://{path}", "--listen",
+                           f"tcp/127.0.0.1:{free_loopback_port()}"],
+                          capture_output=True, text=True, timeout=60)
+    assert done.returncode == 2 and "is no socket" in done.stderr, done.stderr
+    assert Path(f"{path}{taken}").read_text() == "keep me"
+
+
 def test_a_port_in_use_is_refused_at_start() -> None:
     """The daemon used to hang for ever here: the ROUTER that failed to bind was never
     closed, and closing the ZeroMQ context waits for every socket."""
