@@ -180,8 +180,8 @@ class ZmqTransport:
     def subscribe(self, topic: Topic, callback: Callable[[bytes], None]) -> ZmqSubscription:
         subscription = ZmqSubscription(self.context, self.telemetry_endpoint(), topic,
                                        callback, self.keys)
-        with self._lock:
-            self._subscriptions.append(subscription)
+        with self._lock:  # those undeclared since are let go
+            self._subscriptions = [*(s for s in self._subscriptions if s.live), subscription]
         return subscription
 
     def close(self) -> None:
@@ -238,6 +238,11 @@ class ZmqSubscription:
             return
         finally:
             socket.close(linger=0)
+
+    @property
+    def live(self) -> bool:
+        """Whether ``undeclare`` has not been called."""
+        return not self._stop.is_set()
 
     def undeclare(self) -> None:
         """Stop the thread (within one poll period) and close its socket."""
