@@ -121,6 +121,9 @@ class Daemon:
         self._token: Any = None
         self._clients: Any = None
         self.finished = threading.Event()
+        # Client ids whose liveliness token this daemon has seen come and not go (updated on
+        # Zenoh's thread; a set's add and discard are atomic under the GIL).
+        self._live_clients: set[str] = set()
 
     def _first_world(self, engine: Engine) -> World:
         """The checkpointed world when --state-dir holds one, else an empty world."""
@@ -149,20 +152,28 @@ class Daemon:
         """Declare the control queryable and the liveliness token: clients can reach us.
         Watch the clients' tokens: a step job whose client vanishes ends (docs/protocol.md)."""
         self._clients = self.session.liveliness().declare_subscriber(
-            CLIENTS_PATTERN, self._on_client_token)
+            CLIENTS_PATTERN, self._on_client_token, history=True)
         self._queryable = self.session.declare_queryable(self.keys.control_all, self._on_query)
         self._token = self.session.liveliness().declare_token(self.keys.alive)
 
     def _client_alive(self, client: str) -> bool:
-        """Whether the client's liveliness token is visible (one liveliness get: well under
-        a millisecond on loopback, asked only by take_control)."""
+        """Whether the client's liveliness token is there: seen by the subscriber (no wait),
+        else asked once (a token declared a moment ago may not have reached us yet; the get
+        holds the physics thread, under a millisecond on loopback)."""
+        if client in self._live_clients:
+            return True
         replies = self.session.liveliness().get(client_token_key(client),
                                                 timeout=CLIENT_TOKEN_TIMEOUT_S)
         return any(reply.ok is not None for reply in replies)
 
     def _on_client_token(self, sample: zenoh.Sample) -> None:
         client = client_from_token_key(str(sample.key_expr))
-        if sample.kind == zenoh.SampleKind.DELETE and client is not None:
+        if client is None:
+            return
+        if sample.kind == zenoh.SampleKind.PUT:
+            self._live_clients.add(client)
+        else:
+            self._live_clients.discard(client)
             self.loop.submit(Task(lambda: self.loop.client_gone(client)))
 
     def start(self) -> None:
