@@ -19,8 +19,8 @@ from galton.client.session import (
     split_endpoints,
     undeclare,
 )
-from galton.protocol import InvalidArgumentError, Keys, Reply
-from galton.protocol.errors import brief
+from galton.protocol import DaemonUnreachableError, InvalidArgumentError, Keys, Reply
+from galton.protocol.errors import ClientClosedError, brief
 from galton.protocol.keys import client_token_key
 
 ZMQ_SCHEME = "zmq+"
@@ -79,7 +79,13 @@ class ZenohTransport:
         # A querier declared once per operation took about 1 % off a status round trip
         # (docs/PERFORMANCE.md) and ended gets in flight when a client sharing the session
         # closed: plain gets it is.
-        return query(self.session, self.keys, op, args, timeout, client)
+        try:
+            return query(self.session, self.keys, op, args, timeout, client)
+        except zenoh.ZError as error:
+            if self.session.is_closed():  # closed by another thread while this one waited
+                raise ClientClosedError(
+                    f"{op}: the client was closed while its request waited") from None
+            raise DaemonUnreachableError(f"{op}: Zenoh failed: {error}") from error
 
     def send_raw(self, op: str, payload: bytes, timeout: float) -> list[bytes]:
         replies = self.session.get(self.keys.control(op), payload=payload, timeout=timeout)

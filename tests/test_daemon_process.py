@@ -174,4 +174,6 @@ def test_sigterm_in_the_middle_of_a_long_spawn_ends_the_daemon() -> None:
         daemon.process.send_signal(signal.SIGTERM)
         code = daemon.process.wait(10)
         daemon.stop()
+        request.join(30)  # its request ends with the daemon: before the client closes
+        assert not request.is_alive()
     assert code == -signal.SIGTERM  # ended inside the spawn: not after it, gracefully

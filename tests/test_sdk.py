@@ -293,3 +293,38 @@ def test_a_client_that_owns_its_session_closes_it_once(daemon: EmbeddedDaemon) -
     with pytest.raises(ClientClosedError):
         sim.status()
 
+
+
+
+def test_a_request_waiting_while_its_client_closes_gets_a_galton_error(daemons: dict) -> None:
+    """Closing a Zenoh client while another thread's step waits ends that step with a typed
+    error (ClientClosedError, or the daemon's 'client disappeared' if it came first), never
+    Zenoh's own ZError."""
+    import threading
+
+    from support_daemons import start_daemon
+
+    from galton.protocol import ClientClosedError, OperationFailedError
+
+    daemon = start_daemon(daemons, "mujoco")
+    client = Client(daemon.instance, daemon.endpoint, timeout=30)
+    client.load_world("mujoco")
+    client.spawn(spheres(["b"], [[0, 0, 1]], 0.05))
+    errors: list[BaseException] = []
+
+    def long_step() -> None:
+        try:
+            client.step(10**9, timeout=120)
+        except BaseException as error:  # what it raises is the question
+            errors.append(error)
+    waiting = threading.Thread(target=long_step)
+    waiting.start()
+    with Client(daemon.instance, daemon.endpoint) as watcher:
+        deadline = time.monotonic() + 30
+        while watcher.status().step == 0:  # the step is under way
+            assert time.monotonic() < deadline
+        client.close()
+        waiting.join(60)
+        assert not waiting.is_alive() and len(errors) == 1
+        assert isinstance(errors[0], (ClientClosedError, OperationFailedError)), errors[0]
+        watcher.pause()
