@@ -1,4 +1,4 @@
-"""The daemon's ZeroMQ front: ROUTER sockets for requests and one PUB socket for telemetry
+"""The daemon's ZeroMQ front: ROUTER sockets for requests and one XPUB socket for telemetry
 and events, beside Zenoh, on the same host or a trusted link (docs/protocol.md, "ZeroMQ").
 
 No thread of its own and no hand-off: the physics thread polls the sockets between steps
@@ -158,7 +158,7 @@ class ZmqFront:
     def _own(self, bound: str) -> None:
         """Remember which file an ipc endpoint is, so that ``close`` removes only ours."""
         if bound.startswith("ipc://"):
-            with contextlib.suppress(OSError):  # an abstract socket (ipc://@name): no file
+            with contextlib.suppress(OSError):  # gone already: nothing to remove at close
                 found = os.stat(bound[len("ipc://"):])
                 self.files[bound] = (found.st_dev, found.st_ino)
 
@@ -265,6 +265,9 @@ class ZmqFront:
         """Publish on ``galton/<instance>/<topic>`` (the Zenoh key, as the topic frame)."""
         with contextlib.suppress(zmq.Again):
             self.pub.send_multipart([self.prefix + topic.encode(), data], zmq.NOBLOCK)
+        # A send may take the XPUB's edge-triggered ZMQ_FD signal of a new subscription:
+        # the next receive() reads its ZMQ_EVENTS (and so re-arms it) before any sleep.
+        self._next_side_check = 0.0
 
     def close(self) -> None:
         """Close every socket (after the physics thread has stopped using them)."""
