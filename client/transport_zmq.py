@@ -67,7 +67,6 @@ class ZmqTransport:
         self._local = threading.local()
         self._tags = itertools.count(1)
         self._lock = threading.Lock()
-        self._sockets: list[zmq.Socket[bytes]] = []
         self._subscriptions: list[ZmqSubscription] = []
         self._telemetry_endpoint: str | None = None
         try:
@@ -95,9 +94,7 @@ class ZmqTransport:
                     f"{brief(self.endpoint)} is not a ZeroMQ endpoint ZeroMQ can connect to "
                     f"({error}): give zmq+ipc:///path/to/socket or zmq+tcp://HOST:PORT"
                 ) from None
-            with self._lock:
-                self._sockets.append(socket)
-            self._local.socket = socket
+            self._local.socket = socket  # closed with the context (close())
             try:
                 wait_for_handshake(socket, monitor, self.endpoint, self.connect_timeout)
             finally:
