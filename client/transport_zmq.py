@@ -67,6 +67,9 @@ class ZmqTransport:
         self._local = threading.local()
         self._tags = itertools.count(1)
         self._lock = threading.Lock()
+        # Every thread's DEALER, held here: a thread's local storage goes with the thread, and
+        # a socket collected unclosed warns (ResourceWarning); close() destroys them all.
+        self._sockets: list[zmq.Socket[bytes]] = []
         self._subscriptions: list[ZmqSubscription] = []
         self._telemetry_endpoint: str | None = None
         try:
@@ -94,7 +97,9 @@ class ZmqTransport:
                     f"{brief(self.endpoint)} is not a ZeroMQ endpoint ZeroMQ can connect to "
                     f"({error}): give zmq+ipc:///path/to/socket or zmq+tcp://HOST:PORT"
                 ) from None
-            self._local.socket = socket  # closed with the context (close())
+            with self._lock:
+                self._sockets.append(socket)
+            self._local.socket = socket
             try:
                 wait_for_handshake(socket, monitor, self.endpoint, self.connect_timeout)
             finally:
