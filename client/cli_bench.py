@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import itertools
 import json
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
@@ -27,11 +28,13 @@ from galton.client.bench.experiment import (
     ExperimentConfig,
     run_experiment,
 )
+from galton.client.bench.journal import Journal
 from galton.client.bench.picture import Animation
 from galton.client.bench.pool import Failover, PoolHooks, run_pool
 from galton.client.bench.trial import DEFAULT_MAX_SIM_TIME_S, TrialConfig
-from galton.client.cli import JsonOpt, app, console, run_guarded
+from galton.client.cli import JsonOpt, app, console, fail, run_guarded
 from galton.client.credentials import Credentials
+from galton.protocol import GaltonError
 
 if TYPE_CHECKING:
     from galton.analysis.summary import EngineSummary
@@ -67,11 +70,16 @@ def bench(
     engines: Annotated[str, typer.Option(help="Comma-separated engines.")] = ",".join(
         DEFAULT_ENGINES),
     connect: Annotated[str | None, typer.Option(
-        help="Endpoint(s) of remote daemons (else the global --connect; if neither is given "
-             "and none answers on the default endpoint, embedded daemons are started).")
+        help="Endpoint(s) of daemons to run on, whose worlds the trials replace (else the "
+             "global --connect; with neither, nor --instances or --use-running, the bench "
+             "starts daemons of its own).")
     ] = None,
     instances: Annotated[str | None, typer.Option(
         help="Comma-separated daemon instances to use, in engine order.")] = None,
+    use_running: Annotated[bool, typer.Option(
+        help="Run on the daemons already answering on the default endpoint. A trial "
+             "replaces a daemon's world, so without this (or --connect/--instances) the "
+             "bench starts daemons of its own and touches no running one.")] = False,
     board: Annotated[str, typer.Option(help="Preset (paper, small) or a TOML/JSON file.")
                      ] = "paper",
     balls: Annotated[str, typer.Option(help="Ball count(s), e.g. 1,25,100.")] = ",".join(
@@ -106,27 +114,43 @@ def bench(
     endpoints = connect.split(",") if connect else ctx.obj.connect
     names = _csv(instances, "--instances") if instances else None
     shown = Animation() if animation else None
+    journal = Journal(config, out)
     if pool:
-        results = run_guarded(lambda: _run_pool(config, endpoints, names, ctx.obj.timeout,
-                                                pool_size, as_json, out, shown,
-                                                ctx.obj.credentials))
+        results = _kept(journal, lambda: _run_pool(
+            config, endpoints, names, ctx.obj.timeout, pool_size, as_json, out, shown,
+            ctx.obj.credentials, use_running, journal))
     else:
-        results = run_guarded(lambda: _run(config, endpoints, names, ctx.obj.timeout, as_json,
-                                           out, shown, ctx.obj.credentials))
+        results = _kept(journal, lambda: _run(
+            config, endpoints, names, ctx.obj.timeout, as_json, out, shown,
+            ctx.obj.credentials, use_running, journal))
     _finish(results, out, as_json)
+
+
+def _kept(journal: Journal, action: Callable[[], ExperimentResults]) -> ExperimentResults:
+    """Run the trials; on a failure, say which trials were kept (journal) and exit 1."""
+    try:
+        return action()
+    except GaltonError as error:
+        if journal.count:
+            typer.echo(f"galton-client: {journal.count} trial(s) finished before the failure "
+                       f"are kept in {journal.path} (`galton-client report {journal.path}` "
+                       "reports them)", err=True)
+        raise fail(error) from error
 
 
 def _run(config: ExperimentConfig, connect: list[str] | None, instances: list[str] | None,
          timeout: float, quiet: bool, pictures: Path | None = None,
-         animation: Animation | None = None,
-         credentials: Credentials | None = None) -> ExperimentResults:
+         animation: Animation | None = None, credentials: Credentials | None = None,
+         use_running: bool = False, journal: Journal | None = None) -> ExperimentResults:
     plan = config.trials()
     with bench_clients(config.engines, connect, instances, max(timeout, 30.0),
-                       credentials) as clients, \
+                       credentials, use_running) as clients, \
             _progress(quiet) as progress:
         task = progress.add_task("Galton trials", total=len(plan))
 
         def advance(trial: TrialConfig, record: TrialRecord) -> None:
+            if journal is not None:
+                journal.add(trial, record)
             progress.update(task, advance=1, description=(
                 f"{trial.engine} {trial.balls} balls rep {trial.repetition + 1}: "
                 f"lost {record.lost}, RTF {record.rtf or 0:.2f}"))
@@ -136,10 +160,11 @@ def _run(config: ExperimentConfig, connect: list[str] | None, instances: list[st
 def _run_pool(config: ExperimentConfig, connect: list[str] | None,
               instances: list[str] | None, timeout: float, size: int, quiet: bool,
               pictures: Path, animation: Animation | None,
-              credentials: Credentials | None = None) -> ExperimentResults:
+              credentials: Credentials | None = None, use_running: bool = False,
+              journal: Journal | None = None) -> ExperimentResults:
     """The plan over a pool of daemons: a progress row per daemon and one for the whole."""
     with pool_clients(connect, instances, max(timeout, 30.0), size, config.engines[0],
-                      credentials) as \
+                      credentials, use_running) as \
             daemons, _progress(quiet) as progress:
         overall = progress.add_task(f"Galton trials on {len(daemons.clients)} daemons",
                                     total=len(config.trials()))
@@ -151,6 +176,8 @@ def _run_pool(config: ExperimentConfig, connect: list[str] | None,
                 f"{name}: {trial.engine} {trial.balls} balls rep {trial.repetition + 1}"))
 
         def advance(name: str, trial: TrialConfig, record: TrialRecord) -> None:
+            if journal is not None:
+                journal.add(trial, record)
             progress.update(rows[name], advance=1, description=(
                 f"{name}: {trial.engine} {trial.balls} balls rep {trial.repetition + 1}: "
                 f"lost {record.lost}, RTF {record.rtf or 0:.2f}"))
@@ -232,8 +259,6 @@ def report(
     _finish(load(), out or results_json.parent, as_json)
 
 
-
-
 @app.command()
 def sweep(
     ctx: typer.Context,
@@ -244,6 +269,9 @@ def sweep(
         DEFAULT_ENGINES),
     connect: Annotated[str | None, typer.Option(help="Endpoint(s) of remote daemons.")] = None,
     instances: Annotated[str | None, typer.Option(help="Daemon instances to use.")] = None,
+    use_running: Annotated[bool, typer.Option(
+        help="Run on the daemons already answering on the default endpoint (their worlds "
+             "are replaced); else the sweep starts its own.")] = False,
     board: Annotated[str, typer.Option(help="Preset or TOML/JSON file.")] = "paper",
     balls: Annotated[int, typer.Option(min=1)] = 100,
     repetitions: Annotated[int, typer.Option(min=1)] = 3,
@@ -266,7 +294,7 @@ def sweep(
 
     def go() -> ExperimentResults:
         with bench_clients(config.engines, endpoints, names, max(ctx.obj.timeout, 30.0),
-                           ctx.obj.credentials) as \
+                           ctx.obj.credentials, use_running) as \
                 clients, _progress(as_json) as progress:
             task = progress.add_task("sweep", total=total)
             return run_sweep(clients, config, axes,

@@ -17,9 +17,9 @@ from galton.protocol.errors import (
     brief,
     did_you_mean,
 )
-from galton.protocol.model import finite_number, integer_in
+from galton.protocol.model import ENGINE_NAMES, finite_number, integer_in
 
-KNOWN_ENGINES = ("mujoco", "pybullet")
+KNOWN_ENGINES = ENGINE_NAMES
 
 
 @dataclass(frozen=True)

@@ -47,6 +47,7 @@ from galton.protocol.keys import (
 )
 from galton.protocol.model import (
     BODY_SHAPES,
+    ENGINE_NAMES,
     JOINT_TYPES,
     MODEL_SHAPES,
     POSE_WIDTH,
@@ -69,6 +70,7 @@ from galton.protocol.model import (
 __all__ = [
     "BODY_SHAPES",
     "DEFAULT_PORT",
+    "ENGINE_NAMES",
     "JOINT_TYPES",
     "MODEL_SHAPES",
     "POSE_WIDTH",

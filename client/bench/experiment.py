@@ -22,7 +22,8 @@ from galton.client.bench.trial import (
     run_trial,
 )
 from galton.client.sdk import Client
-from galton.protocol import GaltonError, InvalidArgumentError
+from galton.protocol import ENGINE_NAMES, GaltonError, InvalidArgumentError
+from galton.protocol.errors import did_you_mean
 
 DEFAULT_ENGINES = ("mujoco", "pybullet")
 DEFAULT_BALLS = (100,)
@@ -50,6 +51,7 @@ class ExperimentConfig:
             raise InvalidArgumentError(f"ball counts must be positive, got {self.balls}")
         if not self.engines:
             raise InvalidArgumentError("name at least one engine")
+        check_engines(self.engines)
 
     def board_for(self, balls: int) -> BoardSpec:
         """The board with this ball count and the release mode asked for."""
@@ -66,6 +68,19 @@ class ExperimentConfig:
                             self.check_interval)
                 for engine in self.engines for balls in self.balls
                 for rep in range(self.repetitions)]
+
+
+def check_engines(engines: tuple[str, ...]) -> None:
+    """Refuse an unknown or repeated engine before any trial runs (a typo found after ten
+    trials would waste them)."""
+    for engine in engines:
+        if engine not in ENGINE_NAMES:
+            raise InvalidArgumentError(
+                f"--engines: unknown engine {engine!r}{did_you_mean(engine, ENGINE_NAMES)}; "
+                f"known: {', '.join(ENGINE_NAMES)}")
+    repeated = sorted({e for e in engines if engines.count(e) > 1})
+    if repeated:
+        raise InvalidArgumentError(f"--engines names {', '.join(repeated)} more than once")
 
 
 def run_experiment(clients: dict[str, Client], config: ExperimentConfig,
