@@ -300,9 +300,10 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
         self._held.clear()
         self._given.clear()
         if self._robots.busy():
-            actuate, bc, uid_of = self._robots.actuate, self._bc, self._uid_of
+            actuate, bc, uid_of, dt = self._robots.actuate, self._bc, self._uid_of, \
+                self.timestep
             for _ in range(count):
-                actuate(bc, uid_of)
+                actuate(bc, uid_of, dt)
                 step()
             return
         for _ in range(count):
