@@ -56,6 +56,12 @@ def size_values(shape: str, size: str | None) -> tuple[float, ...]:
     return (half,) * len(SIZE_LAYOUT[shape])
 
 
+def default_position(shape: str) -> str:
+    """Where a body goes unless --pos says: a plane is the ground, at z = 0 (as the SDK's
+    ``plane()``); a body 1 m above it."""
+    return "0,0,0" if shape == "plane" else "0,0,1"
+
+
 def positions(pos: str, count: int, spacing: float) -> np.ndarray:
     """x,y,z per body, or one x,y,z for the first body and the rest ``spacing`` apart in x."""
     given = numbers(pos, "--pos")
@@ -89,9 +95,10 @@ def spawn(
     size: Annotated[str | None, typer.Option(
         help=f"Half sizes, {LIST_HELP} (sphere: radius; box: x,y,z; cylinder and capsule: "
              "radius,half length; plane: x,y). Default 0.05 m each, plane 50 m.")] = None,
-    pos: Annotated[str, typer.Option(
+    pos: Annotated[str | None, typer.Option(
         help=f"Positions x,y,z per body, {LIST_HELP}; or one x,y,z for the first body, the "
-             "others --spacing apart in x.")] = "0,0,1",
+             "others --spacing apart in x. Default: a plane at 0,0,0 (the ground, as the "
+             "SDK's plane()), other shapes from 0,0,1.", show_default=False)] = None,
     spacing: Annotated[float, typer.Option(help="x distance between bodies, m.")] = 0.2,
     twists: Annotated[str | None, typer.Option(
         help=f"Initial twists vx,vy,vz,wx,wy,wz per body or one for all, {LIST_HELP}.")
@@ -108,7 +115,8 @@ def spawn(
     """Spawn bodies of one shape and material, in a single request."""
     every = body_names(names, count)
     group = body_group(
-        str(shape), size_values(shape, size), every, positions(pos, len(every), spacing),
+        str(shape), size_values(shape, size), every,
+        positions(pos or default_position(shape), len(every), spacing),
         twists=None if twists is None else rows(twists, len(every), TWIST_WIDTH, "--twists"),
         static=static or shape == "plane", mass=mass, friction=friction,
         restitution=restitution, rgba=rgba_values(rgba), tags=tag_values(tags) or ())
