@@ -13,6 +13,7 @@ import json
 import math
 import os
 import re
+import sys
 from collections.abc import Callable
 from dataclasses import asdict
 from importlib.metadata import PackageNotFoundError, version
@@ -221,7 +222,27 @@ def tidy_help(typer_app: typer.Typer) -> None:
 
 
 def main() -> None:
-    app()
+    """The console command: every error is one line on stderr, exit code 2 for a bad
+    command line (typer's boxed usage text and pydantic's "Value error, " left out)."""
+    try:
+        code = app(standalone_mode=False)
+    except typer.Abort:
+        typer.echo("galton-client: aborted", err=True)
+        sys.exit(1)
+    except typer.TyperException as error:  # click's UsageError and its kin
+        sys.exit(usage_error(error))
+    sys.exit(code if isinstance(code, int) else 0)
+
+
+def usage_error(error: typer.TyperException) -> int:
+    """Print a command-line error as one line; return its exit code."""
+    message = " ".join(str(getattr(error, "format_message", error.__str__)()).split())
+    message = message.replace("Value error, ", "")
+    context = getattr(error, "ctx", None)
+    command = context.command_path if context is not None else "galton-client"
+    typer.echo(f"galton-client: {message} (see '{command} --help')", err=True)
+    code: int = getattr(error, "exit_code", 2)
+    return code
 
 
 # Registering every command on ``app`` (each module adds its own):

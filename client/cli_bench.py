@@ -57,6 +57,14 @@ def _ints(text: str, where: str) -> tuple[int, ...]:
             from None
 
 
+def checked(make: Callable[[], ExperimentConfig]) -> ExperimentConfig:
+    """The run's configuration, or a command-line error (exit 2) before anything starts."""
+    try:
+        return make()
+    except GaltonError as error:
+        raise typer.BadParameter(str(error)) from error
+
+
 def load_board(source: str) -> BoardSpec:
     try:
         return BoardSpec.load(source)
@@ -107,7 +115,7 @@ def bench(
     picture of the board after each engine's first trial."""
     if release is not None and release not in ("all-at-once", "stream"):
         raise typer.BadParameter(f"--release must be all-at-once or stream, got {release!r}")
-    config = run_guarded(lambda: ExperimentConfig(
+    config = checked(lambda: ExperimentConfig(
         board=load_board(board), engines=tuple(_csv(engines, "--engines")),
         balls=_ints(balls, "--balls"), repetitions=repetitions, release=release, seed=seed,
         max_sim_time=max_sim_time))
@@ -285,7 +293,7 @@ def sweep(
     from galton.analysis.sweep import plot_sweep, sweep_cells, sweep_table
     from galton.client.bench.sweep import parse_axis, run_sweep
     axes = run_guarded(lambda: [parse_axis(p) for p in param])
-    config = run_guarded(lambda: ExperimentConfig(
+    config = checked(lambda: ExperimentConfig(
         board=load_board(board), engines=tuple(_csv(engines, "--engines")), balls=(balls,),
         repetitions=repetitions, release=release, seed=seed, max_sim_time=max_sim_time))
     endpoints = connect.split(",") if connect else ctx.obj.connect

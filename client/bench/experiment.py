@@ -13,6 +13,8 @@ from pathlib import Path
 from typing import Any
 
 from galton.analysis.board import BallSpec, BoardSpec, ReleaseSpec
+from galton.analysis.board_release import nominal_positions
+from galton.analysis.errors import AnalysisError
 from galton.analysis.records import ExperimentResults, TrialRecord
 from galton.client.bench.picture import Animation, animate_trial, first_trials, render_board
 from galton.client.bench.trial import (
@@ -52,6 +54,12 @@ class ExperimentConfig:
         if not self.engines:
             raise InvalidArgumentError("name at least one engine")
         check_engines(self.engines)
+        for balls in sorted(set(self.balls)):
+            try:
+                nominal_positions(self.board_for(balls))
+            except AnalysisError as error:
+                raise InvalidArgumentError(f"--balls {balls} on board "
+                                           f"{self.board.name!r}: {error}") from error
 
     def board_for(self, balls: int) -> BoardSpec:
         """The board with this ball count and the release mode asked for."""
