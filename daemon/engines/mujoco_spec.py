@@ -129,7 +129,7 @@ PARAMS: dict[str, ParamSpec] = {p.name: p for p in (
               integer(1, 10_000)),
     ParamSpec("mujoco.noslip_iterations", 0, "", "no-slip solver iterations (0 = off)",
               integer(0, 10_000)),
-    ParamSpec("mujoco.integrator", "implicitfast", "", "numerical integrator", choice(*INTEGRATORS)),
+    ParamSpec("mujoco.integrator", "euler", "", "numerical integrator", choice(*INTEGRATORS)),
     ParamSpec("mujoco.threads", 1, "",
               "worker threads MuJoCo adds to the physics thread while the world is crowded "
               "(from 400 contacts until below 200): collision detection and the constraint "
