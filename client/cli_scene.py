@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -173,11 +174,28 @@ def load_model(
     chosen = model_format(fmt, file, path)
     text = None if file is None else model_text(file)
     folders = None if search_path is None else split_list(search_path, "--search-path")
+    if file is not None:
+        folders = with_own_folder(file, text or "", folders)
     loaded = with_client(ctx, lambda c: c.load_model(
         chosen, text=text, path=path, prefix=prefix, fixed_base=fixed_base,
         search_path=folders))
     emit({"names": loaded}, as_json, lambda: console.print(
         f"loaded {counted(len(loaded), 'entity', 'entities')}: {', '.join(loaded)}", markup=False))
+
+
+# An attribute by which a URDF or MJCF file names another file (a mesh, a texture, ...).
+_NAMES_A_FILE = re.compile(r"\b(?:file|filename)\s*=")
+
+
+def with_own_folder(file: Path, text: str, folders: list[str] | None) -> list[str] | None:
+    """The search path with the model file's own folder first, when the model names other
+    files (its meshes sit beside it): the daemon gets the text, not the path. A model that
+    names none is sent as it was, so a daemon on another machine is not asked to search a
+    folder it lacks."""
+    if not _NAMES_A_FILE.search(text):
+        return folders
+    own = str(file.resolve().parent)
+    return [own, *(f for f in folders or [] if f != own)]
 
 
 @app.command(rich_help_panel=PANEL)

@@ -120,6 +120,16 @@ def test_load_model_from_a_local_file_or_the_daemons_path(target: list[str],
     assert sources == {"m_crate": "model", "n_crate": "model"}
 
 
+def test_load_model_from_a_file_finds_the_meshes_beside_it(target: list[str]) -> None:
+    """kuka_iiwa/model.urdf names meshes/link_0.obj and so on: its own folder is searched
+    without --search-path (issue 33)."""
+    import pybullet_data
+
+    urdf = Path(pybullet_data.getDataPath()) / "kuka_iiwa" / "model.urdf"
+    loaded = invoke([*target, "load-model", "--file", str(urdf), "--prefix", "k_", "--json"])
+    assert "k_lbr_iiwa_link_7" in loaded["names"]
+
+
 def test_load_model_needs_one_source_and_a_known_format(target: list[str],
                                                         tmp_path: Path) -> None:
     odd = tmp_path / "crate.model"
