@@ -75,6 +75,14 @@ def test_compare_prints_errors_and_score(target: list[str]) -> None:
     assert again.exit_code == 0 and "anomaly score 0" in flat(again.output)
 
 
+def test_compare_takes_positions_as_set_states_does(target: list[str]) -> None:
+    """x,y,z alone is an unrotated pose, in compare as in set-states (issue 33)."""
+    short = invoke([*target, "compare", "ball", "--poses", "0.03,0.04,0.5", "--json"])
+    full = invoke([*target, "compare", "ball", "--poses", "0.03,0.04,0.5,0,0,0,1", "--json"])
+    assert short["position_errors"] == full["position_errors"]
+    assert short["angle_errors"] == full["angle_errors"] and short["score"] == full["score"]
+
+
 @pytest.mark.parametrize("args", [["snapshot"], ["restore"],
                                   ["restore", "--slot", "a", "--file", "x"],
                                   ["compare", "ball", "--poses", "1,2"]])
