@@ -68,6 +68,7 @@ from galton.daemon.engine import (
     FEATURE_UPDATE_RGBA,
     FEATURE_WRENCH,
     Engine,
+    native_output_silenced,
 )
 from galton.daemon.engines import pybullet_props as bodyprops
 from galton.daemon.engines import pybullet_rebuild as rebuild
@@ -105,7 +106,8 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
     name = "pybullet"
 
     def __init__(self) -> None:
-        self._bc = BulletClient(connection_mode=pybullet.DIRECT)
+        with native_output_silenced():  # "argv[0]=" when it connects
+            self._bc = BulletClient(connection_mode=pybullet.DIRECT)
         self._closed = False
         bc = self._bc
         # Bound once: BulletClient builds a new functools.partial on every attribute access.
