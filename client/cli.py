@@ -18,7 +18,7 @@ from collections.abc import Callable
 from dataclasses import asdict
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
-from typing import Annotated, Any, TypeVar
+from typing import TYPE_CHECKING, Annotated, Any, TypeVar
 
 import typer
 from rich.console import Console
@@ -26,17 +26,18 @@ from rich.markup import escape
 from rich.table import Table
 
 from galton.client.credentials import Credentials, resolve_credentials
-from galton.client.sdk import Client, Stamp
-from galton.client.transport import zmq_endpoint
-from galton.client.zmq_keys import ZmqKeys
 from galton.protocol import (
     AccessDeniedError,
     DaemonUnreachableError,
     GaltonError,
     RemoteError,
     RequestTimeoutError,
-    SimStatus,
 )
+
+if TYPE_CHECKING:  # the SDK (numpy, Zenoh, ZeroMQ) is imported when a command needs it
+    from galton.client.sdk import Client, Stamp
+    from galton.client.zmq_keys import ZmqKeys
+    from galton.protocol import SimStatus
 
 app = typer.Typer(add_completion=False, help=__doc__, no_args_is_help=True)
 console = Console()
@@ -59,6 +60,9 @@ class Target:
         self.zmq_keys = zmq_keys
 
     def client(self) -> Client:
+        from galton.client.sdk import Client
+        from galton.client.transport import zmq_endpoint
+
         over_zmq = zmq_endpoint(self.connect) is not None
         return Client(self.instance, self.connect, timeout=self.timeout,
                       credentials=None if over_zmq else self.credentials,
@@ -135,6 +139,7 @@ def _zmq_keys(key: Path | None, server_key: str | None) -> ZmqKeys | None:
         return None
     if key is None or server_key is None:
         raise typer.BadParameter("--zmq-key and --zmq-server-key go together")
+    from galton.client.zmq_keys import ZmqKeys
     try:
         return ZmqKeys.load(key, server_key)
     except GaltonError as error:

@@ -13,28 +13,31 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from galton.analysis.board import BoardSpec
 from galton.analysis.errors import AnalysisError
 from galton.analysis.published import PUBLISHED_LABEL, PUBLISHED_TABLE2
-from galton.analysis.records import ExperimentResults, TrialRecord
-from galton.client.bench.daemons import bench_clients, default_pool_size, pool_clients
-from galton.client.bench.experiment import (
+from galton.client.bench.defaults import (
     DEFAULT_BALLS,
     DEFAULT_ENGINES,
+    DEFAULT_MAX_SIM_TIME_S,
     DEFAULT_REPETITIONS,
-    ExperimentConfig,
-    run_experiment,
+    default_pool_size,
 )
-from galton.client.bench.journal import Journal
-from galton.client.bench.picture import Animation
-from galton.client.bench.pool import Failover, PoolHooks, run_pool
-from galton.client.bench.trial import DEFAULT_MAX_SIM_TIME_S, TrialConfig
 from galton.client.cli import JsonOpt, app, console, fail, run_guarded
-from galton.client.credentials import Credentials
 from galton.protocol import GaltonError
+
+if TYPE_CHECKING:
+    from rich.progress import Progress
+
+    from galton.analysis.board import BoardSpec
+    from galton.analysis.records import ExperimentResults, TrialRecord
+    from galton.client.bench.experiment import ExperimentConfig
+    from galton.client.bench.journal import Journal
+    from galton.client.bench.picture import Animation
+    from galton.client.bench.pool import Failover
+    from galton.client.bench.trial import TrialConfig
+    from galton.client.credentials import Credentials
 
 if TYPE_CHECKING:
     from galton.analysis.summary import EngineSummary
@@ -66,6 +69,7 @@ def checked(make: Callable[[], ExperimentConfig]) -> ExperimentConfig:
 
 
 def load_board(source: str) -> BoardSpec:
+    from galton.analysis.board import BoardSpec
     try:
         return BoardSpec.load(source)
     except (AnalysisError, OSError) as error:
@@ -113,6 +117,9 @@ def bench(
 ) -> None:
     """Run the paper's Galton-board experiment through the bridge and report it, with a
     picture of the board after each engine's first trial."""
+    from galton.client.bench.experiment import ExperimentConfig
+    from galton.client.bench.journal import Journal
+    from galton.client.bench.picture import Animation
     if release is not None and release not in ("all-at-once", "stream"):
         raise typer.BadParameter(f"--release must be all-at-once or stream, got {release!r}")
     config = checked(lambda: ExperimentConfig(
@@ -150,6 +157,8 @@ def _run(config: ExperimentConfig, connect: list[str] | None, instances: list[st
          timeout: float, quiet: bool, pictures: Path | None = None,
          animation: Animation | None = None, credentials: Credentials | None = None,
          use_running: bool = False, journal: Journal | None = None) -> ExperimentResults:
+    from galton.client.bench.daemons import bench_clients
+    from galton.client.bench.experiment import run_experiment
     plan = config.trials()
     with bench_clients(config.engines, connect, instances, max(timeout, 30.0),
                        credentials, use_running) as clients, \
@@ -171,6 +180,8 @@ def _run_pool(config: ExperimentConfig, connect: list[str] | None,
               credentials: Credentials | None = None, use_running: bool = False,
               journal: Journal | None = None) -> ExperimentResults:
     """The plan over a pool of daemons: a progress row per daemon and one for the whole."""
+    from galton.client.bench.daemons import pool_clients
+    from galton.client.bench.pool import PoolHooks, run_pool
     with pool_clients(connect, instances, max(timeout, 30.0), size, config.engines[0],
                       credentials, use_running) as \
             daemons, _progress(quiet) as progress:
@@ -201,6 +212,7 @@ def _run_pool(config: ExperimentConfig, connect: list[str] | None,
 
 def _finish(results: ExperimentResults, out: Path, as_json: bool) -> None:
     from galton.analysis.outputs import write_outputs
+    from galton.analysis.records import ExperimentResults
     from galton.analysis.summary import summarise
     try:
         written = write_outputs(results, out)
@@ -259,6 +271,7 @@ def report(
     as_json: JsonOpt = False,
 ) -> None:
     """Re-render the report, CSV and plots from saved results."""
+    from galton.analysis.records import ExperimentResults
     def load() -> ExperimentResults:
         try:
             return ExperimentResults.from_json(results_json)
@@ -291,6 +304,8 @@ def sweep(
 ) -> None:
     """The benchmark over a grid of one or two parameters: a fidelity map per engine."""
     from galton.analysis.sweep import plot_sweep, sweep_cells, sweep_table
+    from galton.client.bench.daemons import bench_clients
+    from galton.client.bench.experiment import ExperimentConfig
     from galton.client.bench.sweep import parse_axis, run_sweep
     axes = run_guarded(lambda: [parse_axis(p) for p in param])
     config = checked(lambda: ExperimentConfig(
@@ -323,5 +338,6 @@ def sweep(
 
 
 def _progress(quiet: bool) -> Progress:
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
     return Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
                     TimeElapsedColumn(), console=console, disable=quiet)

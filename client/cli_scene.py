@@ -4,9 +4,8 @@ from __future__ import annotations
 
 import re
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
-import numpy as np
 import typer
 from rich.table import Table
 
@@ -22,9 +21,12 @@ from galton.client.cli_values import (
     rows,
     split_list,
 )
-from galton.client.sdk import body_group
 from galton.protocol import TWIST_WIDTH
-from galton.protocol.model import SIZE_LAYOUT
+from galton.protocol.vocabulary import SIZE_LAYOUT
+
+if TYPE_CHECKING:
+    import numpy as np
+
 
 PANEL = "Scene"
 DEFAULT_HALF_SIZE = 0.05  # m, every size number of a body
@@ -65,6 +67,7 @@ def default_position(shape: str) -> str:
 
 def positions(pos: str, count: int, spacing: float) -> np.ndarray:
     """x,y,z per body, or one x,y,z for the first body and the rest ``spacing`` apart in x."""
+    import numpy as np
     given = numbers(pos, "--pos")
     if len(given) == 3:
         xyz = np.tile(np.asarray(given, dtype=float), (count, 1))
@@ -114,6 +117,7 @@ def spawn(
     as_json: JsonOpt = False,
 ) -> None:
     """Spawn bodies of one shape and material, in a single request."""
+    from galton.client.sdk import body_group
     every = body_names(names, count)
     group = body_group(
         str(shape), size_values(shape, size), every,

@@ -7,13 +7,17 @@ import queue
 import sys
 from collections.abc import Callable
 from dataclasses import asdict
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
 from galton.client.cli import JsonOpt, Target, app, console, with_client
-from galton.client.sdk import Client
-from galton.protocol import Telemetry
+
+if TYPE_CHECKING:
+    from galton.protocol import Telemetry
+
+if TYPE_CHECKING:
+    from galton.client.sdk import Client
 
 PANEL = "Streams"
 Count = Annotated[int, typer.Option(help="Stop after N samples (0 = run until Ctrl-C).",

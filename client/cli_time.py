@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import json
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
@@ -11,7 +11,9 @@ from galton.client.cli import JsonOpt, app, show_stamp, show_status, with_client
 from galton.client.cli_joints import joint_states_dict, render_joint_states, show_joint_states
 from galton.client.cli_states import show_states, states_dict
 from galton.client.cli_values import LIST_HELP, ResetScope, counted, numbers, split_list
-from galton.client.sdk import Client, JointStates, States
+
+if TYPE_CHECKING:
+    from galton.client.sdk import Client, JointStates, States
 
 PANEL = "Clock"
 Read = Annotated[str | None, typer.Option(

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from dataclasses import asdict
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 from rich.table import Table
@@ -16,9 +16,11 @@ from rich.table import Table
 from galton.client.cli import JsonOpt, app, console, emit, with_client
 from galton.client.cli_states import NamesArg, pose_values
 from galton.client.cli_values import LIST_HELP, Engine, assignments, rows, split_list
-from galton.client.sdk import Client
-from galton.client.values import Comparison, Prediction, SnapshotInfo, WorldInfo
 from galton.protocol import TWIST_WIDTH
+
+if TYPE_CHECKING:
+    from galton.client.sdk import Client
+    from galton.client.values import Comparison, Prediction, SnapshotInfo, WorldInfo
 
 PANEL = "Worlds and snapshots"
 WorldOpt = Annotated[str | None, typer.Option(

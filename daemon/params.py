@@ -17,7 +17,8 @@ from galton.protocol.errors import (
     brief,
     did_you_mean,
 )
-from galton.protocol.model import ENGINE_NAMES, finite_number, integer_in
+from galton.protocol.model import finite_number, integer_in
+from galton.protocol.vocabulary import ENGINE_NAMES
 
 KNOWN_ENGINES = ENGINE_NAMES
 

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from galton.protocol.errors import UnknownOperationError, did_you_mean
-from galton.protocol.model import ENGINE_NAMES, TARGET_MODES, check_fields
+from galton.protocol.vocabulary import ENGINE_NAMES, TARGET_MODES, check_fields
 
 ARG_KINDS = ("number", "count", "string", "bool", "names", "map", "groups", "poses", "twists",
              "choice", "values", "wrenches", "points", "blob", "cameras")

@@ -3,7 +3,6 @@
 
 from __future__ import annotations
 
-import os
 from collections.abc import Iterator, Mapping, Sequence
 from contextlib import ExitStack, contextmanager
 from dataclasses import dataclass
@@ -19,7 +18,6 @@ from galton.client.session import close_session, open_session
 from galton.protocol import DaemonUnreachableError
 
 START_TIMEOUT_S = 60.0
-MAX_DEFAULT_POOL = 4
 DISCOVERY_TIMEOUT_S = 5.0
 
 
@@ -74,11 +72,6 @@ class PoolDaemons:
 
     clients: dict[str, Client]
     hosts: dict[str, dict[str, Any]]
-
-
-def default_pool_size() -> int:
-    """Embedded daemons for ``--pool`` with nothing running: one per core, at most 4."""
-    return max(1, min(os.cpu_count() or 1, MAX_DEFAULT_POOL))
 
 
 @contextmanager

@@ -16,20 +16,21 @@ from galton.analysis.board import BallSpec, BoardSpec, ReleaseSpec
 from galton.analysis.board_release import nominal_positions
 from galton.analysis.errors import AnalysisError
 from galton.analysis.records import ExperimentResults, TrialRecord
+from galton.client.bench.defaults import (
+    DEFAULT_BALLS,
+    DEFAULT_ENGINES,
+    DEFAULT_MAX_SIM_TIME_S,
+    DEFAULT_REPETITIONS,
+)
 from galton.client.bench.picture import Animation, animate_trial, first_trials, render_board
 from galton.client.bench.trial import (
     DEFAULT_CHECK_INTERVAL_S,
-    DEFAULT_MAX_SIM_TIME_S,
     TrialConfig,
     run_trial,
 )
 from galton.client.sdk import Client
 from galton.protocol import ENGINE_NAMES, GaltonError, InvalidArgumentError
 from galton.protocol.errors import did_you_mean
-
-DEFAULT_ENGINES = ("mujoco", "pybullet")
-DEFAULT_BALLS = (100,)
-DEFAULT_REPETITIONS = 10
 
 
 @dataclass

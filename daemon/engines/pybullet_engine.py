@@ -97,7 +97,7 @@ from galton.protocol import (
     NameNotUniqueError,
     NotFoundError,
 )
-from galton.protocol.model import BODY_SHAPES, POSE_WIDTH, TWIST_WIDTH
+from galton.protocol.vocabulary import BODY_SHAPES, POSE_WIDTH, TWIST_WIDTH
 
 
 class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception, Engine):
