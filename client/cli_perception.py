@@ -109,7 +109,7 @@ def render(
     as_json: JsonOpt = False,
 ) -> None:
     """Render one camera and write its pictures (give at least one of --out, --depth-out,
-    --seg-out); prints the size, the files and the entities seen."""
+    --seg-out); prints the size and the files, and with --seg-out the entities seen."""
     import numpy as np
     wanted = [kind for kind, path in (("rgb", out), ("depth", depth_out),
                                       ("segmentation", seg_out)) if path is not None]

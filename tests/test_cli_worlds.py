@@ -61,6 +61,10 @@ def test_commands_act_on_a_side_world(target: list[str]) -> None:
     assert found["names"] == ["ball"] and len(found["times"]) == len(found["poses"]) == 3
     human = run([*target, "predict", "0.01", "--read", "ball"])
     assert human.exit_code == 0 and "steps ahead" in flat(human.output)
+    stepped = invoke([*target, "step", "7", "--world", "side", "--json"])
+    live = invoke([*target, "status", "--json"])
+    sides = {w["name"]: w["step"] for w in invoke([*target, "worlds", "--json"])}
+    assert stepped["step"] == sides["side"] == 7 and live["step"] == sides["default"] == 0
 
 
 def test_compare_prints_errors_and_score(target: list[str]) -> None:
