@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any, TypeVar
 
 import typer
+from rich import box
 from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
@@ -39,8 +40,32 @@ if TYPE_CHECKING:  # the SDK (numpy, Zenoh, ZeroMQ) is imported when a command n
     from galton.client.zmq_keys import ZmqKeys
     from galton.protocol import SimStatus
 
+class ReadableConsole(Console):
+    """A console whose tables keep every character at 80 columns: the first column (the
+    names a user types back: joints, links, parameters) as wide as its longest cell (up to
+    KEY_WIDTH), the others folded onto more lines instead of cut to "…", light borders."""
+
+    def print(self, *objects: Any, **kwargs: Any) -> None:
+        for item in objects:
+            if isinstance(item, Table):
+                readable(item)
+        super().print(*objects, **kwargs)
+
+
+KEY_WIDTH = 40
+
+
+def readable(table: Table) -> None:
+    table.box = box.SIMPLE_HEAD
+    for index, column in enumerate(table.columns):
+        column.overflow = "fold"
+        if index == 0:
+            cells = [len(str(cell)) for cell in column.cells]
+            column.min_width = min(KEY_WIDTH, max([len(str(column.header)), *cells]))
+
+
 app = typer.Typer(add_completion=False, help=__doc__, no_args_is_help=True)
-console = Console()
+console = ReadableConsole()
 T = TypeVar("T")
 PACKAGE = "galton-bridge"
 
