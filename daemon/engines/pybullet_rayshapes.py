@@ -4,7 +4,8 @@ Bullet casts a ray at a sphere, capsule or cylinder by a convex cast that stops 
 tolerance: a ray at a 0.1 m sphere lands 4e-4 m off the surface, with a tilted normal. The
 engine contract wants the same answers as MuJoCo's exact ray tests, so a hit on a spawned
 primitive is computed again here from the body's pose and size: the first surface point at
-t >= 0 along the ray (from inside a body: where the ray leaves it), with the outward
+t >= 0 along the ray (from inside a body: where the ray leaves it, which the caller
+skips), with the outward
 normal there; a plane's hits are exact already, but Bullet's is seen from both sides.
 Each function takes local origins and unit directions (n, 3) and returns the
 distances (n,), inf where the ray misses, and local normals (n, 3).
@@ -136,3 +137,26 @@ def plane(o: np.ndarray, d: np.ndarray, size: np.ndarray) -> Hits:
 
 EXACT = {"sphere": sphere, "box": box, "cylinder": cylinder, "capsule": capsule,
          "plane": plane}
+
+
+def _inside_sphere(p: np.ndarray, size: np.ndarray) -> bool:
+    return bool(p @ p < size[0] ** 2)
+
+
+def _inside_box(p: np.ndarray, size: np.ndarray) -> bool:
+    return bool(np.all(np.abs(p) < size[:3]))
+
+
+def _inside_cylinder(p: np.ndarray, size: np.ndarray) -> bool:
+    return bool(p[0] ** 2 + p[1] ** 2 < size[0] ** 2 and abs(p[2]) < size[1])
+
+
+def _inside_capsule(p: np.ndarray, size: np.ndarray) -> bool:
+    axis = np.array([0.0, 0.0, float(np.clip(p[2], -size[1], size[1]))])
+    return bool((p - axis) @ (p - axis) < size[0] ** 2)
+
+
+# Whether a local point lies strictly inside each primitive (a plane has no inside: a ray
+# meets it from its front only).
+INSIDE = {"sphere": _inside_sphere, "box": _inside_box, "cylinder": _inside_cylinder,
+          "capsule": _inside_capsule, "plane": lambda p, size: False}

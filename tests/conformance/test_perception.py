@@ -203,6 +203,16 @@ def test_rays_hit_where_the_geometry_is(scene: Client) -> None:
         assert hits.distances[i] == pytest.approx(math.dist(origin, point), abs=RAY_TOL)
 
 
+def test_a_ray_does_not_see_the_shape_it_starts_in(scene: Client) -> None:
+    """From inside the ball it goes on to the box; from inside the box, to nothing."""
+    inside_ball = BALL_CENTRE + [0, 0, -BALL_RADIUS / 2]  # level with the box's middle
+    hits = scene.raycast([inside_ball, BOX_CENTRE], directions=[[1, 0, 0], [0, 0, 1]])
+    assert hits.entities == ["box", ""]
+    face = BOX_CENTRE[0] - BOX_HALF
+    assert hits.distances[0] == pytest.approx(face - inside_ball[0], abs=RAY_TOL)
+    assert hits.normals[0] == pytest.approx([-1, 0, 0], abs=RAY_TOL)
+
+
 def test_rays_stop_at_their_ends_and_max_length(scene: Client) -> None:
     short = scene.raycast([[2, 0, 1]], directions=[[0, 0, -1]], max_length=0.5)
     assert not short.hits[0]
