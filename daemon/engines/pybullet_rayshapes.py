@@ -156,7 +156,11 @@ def _inside_capsule(p: np.ndarray, size: np.ndarray) -> bool:
     return bool((p - axis) @ (p - axis) < size[0] ** 2)
 
 
-# Whether a local point lies strictly inside each primitive (a plane has no inside: a ray
-# meets it from its front only).
+def _inside_plane(p: np.ndarray, size: np.ndarray) -> bool:
+    """A plane has no inside: a ray meets it from its front only."""
+    return False
+
+
+# Whether a local point lies strictly inside each primitive.
 INSIDE = {"sphere": _inside_sphere, "box": _inside_box, "cylinder": _inside_cylinder,
-          "capsule": _inside_capsule, "plane": lambda p, size: False}
+          "capsule": _inside_capsule, "plane": _inside_plane}

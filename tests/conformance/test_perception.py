@@ -205,7 +205,7 @@ def test_rays_hit_where_the_geometry_is(scene: Client) -> None:
 
 def test_a_ray_does_not_see_the_shape_it_starts_in(scene: Client) -> None:
     """From inside the ball it goes on to the box; from inside the box, to nothing."""
-    inside_ball = BALL_CENTRE + [0, 0, -BALL_RADIUS / 2]  # level with the box's middle
+    inside_ball = BALL_CENTRE - np.array([0, 0, BALL_RADIUS / 2])  # level with the box's middle
     hits = scene.raycast([inside_ball, BOX_CENTRE], directions=[[1, 0, 0], [0, 0, 1]])
     assert hits.entities == ["box", ""]
     face = BOX_CENTRE[0] - BOX_HALF
