@@ -11,9 +11,12 @@ exact test would graze misses: both need a ray within Bullet's tolerance of a su
 (4e-4 m on a 0.1 m sphere). A ray that meets a plane from behind goes on past it.
 
 A ray does not see a shape it starts inside (docs/protocol.md, ``raycast``): Bullet's rays
-see a convex shape from outside only, and where the exact test finds a ray leaving a
-primitive, it goes on from just past that point (MuJoCo's engine does the same,
-mujoco_sensing.py).
+see a convex shape from outside only, and go on to what lies beyond. But Bullet reports the
+shape a ray starts in when a shape nested in it is hit first (its search, bounded by that
+hit, then lies wholly inside): for a spawned primitive that is found by the exact test (the
+ray meets its surface leaving it), and the ray's hits are then listed one by one
+(``_nearest_outside``). Should the exact test still find a ray leaving a primitive, the ray
+goes on from just past that point, as MuJoCo's engine does (mujoco_sensing.py).
 """
 
 from __future__ import annotations
@@ -27,14 +30,14 @@ import pybullet
 from pybullet_utils.bullet_client import BulletClient
 
 from galton.daemon.engines.pybullet_frames import conjugate, rotate
-from galton.daemon.engines.pybullet_rayshapes import EXACT, INSIDE
+from galton.daemon.engines.pybullet_rayshapes import EXACT
 from galton.protocol import OperationFailedError
 
 # rayTestBatch refuses more than its maximum, and at exactly the maximum answers one ray
 # short (from lists) or not at all (from arrays): one less is what it takes whole.
 BATCH = int(getattr(pybullet, "MAX_RAY_INTERSECTION_BATCH_SIZE", 256)) - 1
 REGRAZE_TRIES = 3
-EXIT_TRIES = 8  # shapes inside shapes a ray starts in
+MAX_HITS = 8  # hits listed for a ray Bullet answers with a shape it starts inside
 STEP_PAST = 1e-9  # m past the surface a ray leaves, where it is cast again
 BOUND_SLACK = 0.02  # wider than Bullet's shapes stand out (5e-4 m on a 0.1 m sphere)
 Primitive = tuple[str, tuple[float, ...]]  # a spawned body's shape and half sizes
@@ -51,108 +54,33 @@ def raycast(bc: BulletClient, codes: Mapping[int, str], primitives: Mapping[int,
     found = np.full(n, -1, np.int64)
     points, normals, distances = np.full((n, 3), np.nan), np.full((n, 3), np.nan), np.full(
         n, np.nan)
-    starts, lengths = origins.copy(), np.full(n, float(max_length))
     todo = np.arange(n)
-    for _ in range(EXIT_TRIES + 1):
-        hit = _trace(bc, primitives, todo, starts, directions, lengths, max_length)
-        for row, (code, distance, point, normal) in hit.items():
-            found[row], distances[row], points[row], normals[row] = code, distance, point, normal
-        todo = _leave_primitives(bc, primitives, todo[found[todo] < 0], starts, directions,
-                                 lengths)
-        if not len(todo):
-            break
-    return found >= 0, _names(codes, found), points, normals, distances
-
-
-Hit = tuple[int, float, np.ndarray, np.ndarray]  # code, distance, point, normal
-
-
-def _trace(bc: BulletClient, primitives: Mapping[int, Primitive], todo: np.ndarray,
-           starts: np.ndarray, directions: np.ndarray, lengths: np.ndarray,
-           max_length: float) -> dict[int, Hit]:
-    """Bullet's hits for these rows, made exact, grazes cast again (``starts`` and
-    ``lengths`` move on with them)."""
-    hits: dict[int, Hit] = {}
+    starts, lengths = origins.copy(), np.full(n, float(max_length))
     for _ in range(REGRAZE_TRIES + 1):
         if not len(todo):
             break
         hit_code, distance, point, normal = _bullet(bc, starts[todo], directions[todo],
                                                     lengths[todo])
+        # Bullet reports a shape the ray starts in at the start itself (fraction 0).
+        at_start = np.flatnonzero((hit_code >= 0) & (distance <= STEP_PAST))
+        inside = at_start[_leaves(bc, primitives, hit_code[at_start], starts[todo][at_start],
+                                  directions[todo][at_start])]
+        if len(inside):
+            _nearest_outside(bc, primitives, inside, starts[todo], directions[todo],
+                             lengths[todo], (hit_code, distance, point, normal))
         travelled = max_length - lengths[todo]
         again = _exact(bc, primitives, hit_code, starts[todo], directions[todo], lengths[todo],
                        distance, point, normal)
-        done = np.flatnonzero((hit_code >= 0) & ~again)
-        for k in done.tolist():
-            hits[int(todo[k])] = (int(hit_code[k]), float(travelled[k] + distance[k]),
-                                  point[k], normal[k])
+        done = (hit_code >= 0) & ~again
+        rows = todo[done]
+        found[rows] = hit_code[done]
+        distances[rows] = travelled[done] + distance[done]
+        points[rows], normals[rows] = point[done], normal[done]
         todo, skip = todo[again], distance[again]
         starts[todo] += directions[todo] * skip[:, None]
         lengths[todo] -= skip
         todo = todo[lengths[todo] > 0.0]
-    return hits
-
-
-def _leave_primitives(bc: BulletClient, primitives: Mapping[int, Primitive],
-                      rows: np.ndarray, starts: np.ndarray, directions: np.ndarray,
-                      lengths: np.ndarray) -> np.ndarray:
-    """Rays that missed because they start inside a spawned primitive (Bullet then reports
-    nothing at all along them) move on to where they leave it, plus BOUND_SLACK of its
-    size (Bullet's skin); returns those rows. Only rays starting within the primitives'
-    bounding box and hitting something when cast backwards from their end (one more
-    batch) are looked at, each distinct start once in Bullet's broadphase."""
-    if len(rows) and primitives:
-        rows = rows[_near_primitives(bc, primitives, starts[rows])]
-    if len(rows):  # a true miss is a miss backwards too: one batch
-        back, _, _, _ = _bullet(bc, starts[rows] + directions[rows] * lengths[rows, None],
-                                -directions[rows], lengths[rows])
-        rows = rows[back >= 0]
-    if not len(rows):
-        return rows
-    unique, inverse = np.unique(starts[rows], axis=0, return_inverse=True)
-    container = np.array([_container(bc, primitives, p) for p in unique], np.int64)
-    codes = container[inverse.reshape(-1)]
-    moved = rows[codes >= 0]
-    for code in np.unique(codes[codes >= 0]).tolist():
-        these = rows[codes == code]
-        kind, size = primitives[code]
-        position, orientation = bc.getBasePositionAndOrientation(code)
-        turn_back = conjugate(np.tile(orientation, (len(these), 1)))
-        o = rotate(turn_back, starts[these] - np.asarray(position))
-        d = rotate(turn_back, directions[these])
-        t, _ = EXACT[kind](o, d, np.tile(np.asarray(size, float), (len(these), 1)))
-        # Bullet's shape stands out a little: a ray starting on its skin is still inside it.
-        skip = np.where(np.isfinite(t), t, 0.0) + BOUND_SLACK * max(size) + STEP_PAST
-        starts[these] += directions[these] * skip[:, None]
-        lengths[these] -= skip
-    kept: np.ndarray = moved[lengths[moved] > 0.0]
-    return kept
-
-
-def _near_primitives(bc: BulletClient, primitives: Mapping[int, Primitive],
-                     points: np.ndarray) -> np.ndarray:
-    """Whether each point lies in the box bounding every spawned primitive but planes."""
-    solid = [(code, size) for code, (kind, size) in primitives.items() if kind != "plane"]
-    if not solid:
-        return np.zeros(len(points), bool)
-    centres = np.array([bc.getBasePositionAndOrientation(code)[0] for code, _ in solid])
-    reach = np.array([float(np.linalg.norm(size)) for _, size in solid])[:, None]
-    low, high = (centres - reach).min(axis=0), (centres + reach).max(axis=0)
-    near: np.ndarray = np.all((points >= low) & (points <= high), axis=1)
-    return near
-
-
-def _container(bc: BulletClient, primitives: Mapping[int, Primitive], point: np.ndarray
-               ) -> int:
-    """The code of a spawned primitive holding ``point`` inside it, else -1."""
-    for uid, link in bc.getOverlappingObjects(point - STEP_PAST, point + STEP_PAST) or ():
-        code = uid + ((link + 1) << 24)
-        if code in primitives:
-            position, orientation = bc.getBasePositionAndOrientation(code)
-            local = rotate(conjugate(np.array([orientation], float)),
-                           np.array([point - np.asarray(position)]))[0]
-            if INSIDE[primitives[code][0]](local, np.asarray(primitives[code][1], float)):
-                return int(code)
-    return -1
+    return found >= 0, _names(codes, found), points, normals, distances
 
 
 def _names(codes: Mapping[int, str], found: np.ndarray) -> list[str]:
@@ -163,14 +91,60 @@ def _names(codes: Mapping[int, str], found: np.ndarray) -> list[str]:
     return listed
 
 
+def _leaves(bc: BulletClient, primitives: Mapping[int, Primitive], code: np.ndarray,
+            starts: np.ndarray, directions: np.ndarray) -> np.ndarray:
+    """Whether each ray starts inside the spawned primitive its code names (the exact test
+    meets that shape's surface first where the ray leaves it)."""
+    out = np.zeros(len(code), bool)
+    for c in np.unique(code).tolist():
+        if c not in primitives:
+            continue
+        rows = np.flatnonzero(code == c)
+        kind, size = primitives[c]
+        position, orientation = bc.getBasePositionAndOrientation(c)
+        turn_back = conjugate(np.tile(np.asarray(orientation, float), (len(rows), 1)))
+        o = rotate(turn_back, starts[rows] - np.asarray(position, float))
+        d = rotate(turn_back, directions[rows])
+        t, local = EXACT[kind](o, d, np.tile(np.asarray(size, float), (len(rows), 1)))
+        out[rows] = np.isfinite(t) & (np.sum(local * d, axis=1) > 0.0)
+    return out
+
+
+def _nearest_outside(bc: BulletClient, primitives: Mapping[int, Primitive], rows: np.ndarray,
+                     starts: np.ndarray, directions: np.ndarray, lengths: np.ndarray,
+                     answer: tuple[np.ndarray, ...]) -> None:
+    """Bullet reports a shape a ray starts inside when a nearer hit (a shape nested in it)
+    bounds its search within that shape: such rays have their hits listed one by one
+    (at most MAX_HITS) and keep the nearest on a shape they do not start in (``answer``,
+    Bullet's code, distance, point and normal, changed in place)."""
+    start, direction, length = starts[rows], directions[rows], lengths[rows]
+    best = np.full(len(rows), np.inf)
+    code, point, normal = np.full(len(rows), -1), np.zeros((len(rows), 3)), np.zeros(
+        (len(rows), 3))
+    for k in range(MAX_HITS):
+        c, dist, p, n = _bullet(bc, start, direction, length, report=k)
+        if not (c >= 0).any():
+            break
+        better = (c >= 0) & (dist < best)
+        better[better] = ~_leaves(bc, primitives, c[better], start[better], direction[better])
+        best[better], code[better], point[better], normal[better] = (
+            dist[better], c[better], p[better], n[better])
+    hit_code, distance, points, normals = answer
+    hit_code[rows], points[rows], normals[rows] = code, point, normal
+    distance[rows] = np.where(code >= 0, best, length)
+
+
 def _bullet(bc: BulletClient, origins: np.ndarray, directions: np.ndarray,
-            lengths: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Bullet's answer per ray: the code hit (-1: none), distance, point and normal."""
+            lengths: np.ndarray, report: int | None = None
+            ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Bullet's answer per ray: the code hit (-1: none), distance, point and normal (the
+    nearest hit, or with ``report`` the hit of that index in Bullet's list of all)."""
     ends = origins + directions * lengths[:, None]
+    extra = {} if report is None else {"reportHitNumber": report}
     results: list[Any] = []
     for first in range(0, len(origins), BATCH):
         results.extend(bc.rayTestBatch(origins[first:first + BATCH],
-                                       ends[first:first + BATCH]))
+                                       ends[first:first + BATCH], **extra))
     n = len(results)
     if n != len(origins):
         raise OperationFailedError(f"PyBullet rayTestBatch answered {n} of {len(origins)} rays")

@@ -137,30 +137,3 @@ def plane(o: np.ndarray, d: np.ndarray, size: np.ndarray) -> Hits:
 
 EXACT = {"sphere": sphere, "box": box, "cylinder": cylinder, "capsule": capsule,
          "plane": plane}
-
-
-def _inside_sphere(p: np.ndarray, size: np.ndarray) -> bool:
-    return bool(p @ p < size[0] ** 2)
-
-
-def _inside_box(p: np.ndarray, size: np.ndarray) -> bool:
-    return bool(np.all(np.abs(p) < size[:3]))
-
-
-def _inside_cylinder(p: np.ndarray, size: np.ndarray) -> bool:
-    return bool(p[0] ** 2 + p[1] ** 2 < size[0] ** 2 and abs(p[2]) < size[1])
-
-
-def _inside_capsule(p: np.ndarray, size: np.ndarray) -> bool:
-    axis = np.array([0.0, 0.0, float(np.clip(p[2], -size[1], size[1]))])
-    return bool((p - axis) @ (p - axis) < size[0] ** 2)
-
-
-def _inside_plane(p: np.ndarray, size: np.ndarray) -> bool:
-    """A plane has no inside: a ray meets it from its front only."""
-    return False
-
-
-# Whether a local point lies strictly inside each primitive.
-INSIDE = {"sphere": _inside_sphere, "box": _inside_box, "cylinder": _inside_cylinder,
-          "capsule": _inside_capsule, "plane": _inside_plane}
