@@ -209,7 +209,8 @@ def joint_info(bc: BulletClient, uid: int, j: int, tree: Tree, prefix: str,
         name=prefix + own, model=tree.root, type=TYPES.get(info[2], "fixed"),
         parent=tree.parent(info[16]), child=tree.child(j), axis=axis,
         lower=float(info[8]) if limited else None, upper=float(info[9]) if limited else None,
-        damping=float(info[6]), effort_limit=float(info[10]) if info[10] > 0 else None,
+        damping=file.damping.get(own, float(info[6])),
+        effort_limit=float(info[10]) if info[10] > 0 else None,
         velocity_limit=float(info[11]) if info[11] > 0 else None)
 
 
