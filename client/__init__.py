@@ -10,8 +10,9 @@ module that needs one name do not load Zenoh, ZeroMQ and numpy for the rest.
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from galton.protocol.lazy import lazy_exports
 
 if TYPE_CHECKING:
     from galton.client.credentials import (
@@ -92,7 +93,7 @@ if TYPE_CHECKING:
     )
 
 # Where each public name lives, imported when first asked for.
-_SOURCES = {
+_SOURCES: dict[str, tuple[str, ...]] = {
     "galton.client.credentials": ("Credentials",),
     "galton.client.discovery": (
         "DaemonInfo", "discover", "discover_at", "instances", "wait_for_daemon"),
@@ -115,17 +116,7 @@ _SOURCES = {
         "SimState", "SimStatus", "Telemetry", "UnknownOperationError",
         "UnsupportedVersionError"),
 }
-_MODULE_OF = {name: module for module, names in _SOURCES.items() for name in names}
-
-
-def __getattr__(name: str) -> Any:
-    module = _MODULE_OF.get(name)
-    if module is None:
-        raise AttributeError(f"module 'galton.client' has no attribute {name!r}")
-    value = getattr(importlib.import_module(module), name)
-    globals()[name] = value
-    return value
-
+__getattr__ = lazy_exports("galton.client", _SOURCES, globals())
 
 __all__ = [
     "AccessDeniedError",

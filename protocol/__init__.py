@@ -9,8 +9,9 @@ of them does not load numpy, Zenoh or ZeroMQ for the rest.
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from galton.protocol.lazy import lazy_exports
 
 if TYPE_CHECKING:
     from galton.protocol.arrays import (
@@ -84,7 +85,7 @@ if TYPE_CHECKING:
     )
 
 # Where each public name lives, imported when first asked for.
-_SOURCES = {
+_SOURCES: dict[str, tuple[str, ...]] = {
     "galton.protocol.arrays": ("pack_f64", "unpack_f64"),
     "galton.protocol.codes": ("ResultCode",),
     "galton.protocol.envelope": (
@@ -107,17 +108,7 @@ _SOURCES = {
         "RESET_SCOPES", "SCALAR_JOINT_TYPES", "SIM_STATES", "TARGET_MODES", "TWIST_WIDTH",
         "WRENCH_WIDTH", "SimState"),
 }
-_MODULE_OF = {name: module for module, names in _SOURCES.items() for name in names}
-
-
-def __getattr__(name: str) -> Any:
-    module = _MODULE_OF.get(name)
-    if module is None:
-        raise AttributeError(f"module 'galton.protocol' has no attribute {name!r}")
-    value = getattr(importlib.import_module(module), name)
-    globals()[name] = value
-    return value
-
+__getattr__ = lazy_exports("galton.protocol", _SOURCES, globals())
 
 __all__ = [
     "BODY_SHAPES",
