@@ -129,3 +129,38 @@ class RosClient:
 
     def close(self) -> None:
         self.session.close()
+
+
+def topic_key(domain: int, topic: str, dds_type: str, ros_type: str) -> str:
+    return f"{domain}/{topic.lstrip('/')}/{dds_type}/{HASHES[ros_type]}"
+
+
+CLOCK_KEY = ("rosgraph_msgs::msg::dds_::Clock_", "rosgraph_msgs/msg/Clock")
+TF_KEY = ("tf2_msgs::msg::dds_::TFMessage_", "tf2_msgs/msg/TFMessage")
+JOINT_STATE_KEY = ("sensor_msgs::msg::dds_::JointState_", "sensor_msgs/msg/JointState")
+
+
+def read_clock(payload: bytes) -> float:
+    sec, nanosec = Cdr(payload).get("iI")
+    return float(sec + nanosec * 1e-9)
+
+
+def read_tf(payload: bytes) -> dict[str, tuple[float, ...]]:
+    """child frame -> (x, y, z, qx, qy, qz, qw) of a TFMessage."""
+    cdr, frames = Cdr(payload), {}
+    for _ in range(cdr.get("I")):
+        cdr.get("iI")
+        assert cdr.get_string() == "world"
+        child = cdr.get_string()
+        frames[child] = (*cdr.get("3d"), *cdr.get("4d"))
+    return frames
+
+
+def joint_state(names: list[str], positions: list[float]) -> bytes:
+    cdr = Cdr.writer().put("iI", 0, 0).put_string("").put("I", len(names))
+    for name in names:
+        cdr.put_string(name)
+    cdr.put("I", len(positions))
+    for value in positions:
+        cdr.put("d", value)
+    return bytes(cdr.put("I", 0).put("I", 0).data)

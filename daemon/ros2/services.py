@@ -91,7 +91,8 @@ def _reset_scopes(bits: int) -> list[str]:
 def step_simulation(request: Any) -> Gen:
     if request.steps < 1:
         raise Refusal(codes.OPERATION_FAILED, "steps must be at least 1")
-    yield from ask("step", {"count": int(request.steps)})
+    yield from ask("step", {"count": int(request.steps)},
+                   code_of=lambda reply: codes.OPERATION_FAILED)  # the standard's code
     return response("StepSimulation", result=result())
 
 

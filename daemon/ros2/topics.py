@@ -116,7 +116,9 @@ class TopicLoop:
 
 
 class Mirror:
-    """``--ros2-mirror MODEL=TOPIC``: the model's joints follow JointState messages."""
+    """``--ros2-mirror MODEL=TOPIC``: the model's joints follow JointState messages.
+    MODEL is a loaded model's root entity, or the name it was spawned with over ROS (its
+    entities are then ``MODEL/...``); it may be loaded after the daemon starts."""
 
     def __init__(self, front: Ros2Front, model: str, topic: str) -> None:
         self.front, self.model, self.topic = front, model, topic
@@ -154,8 +156,7 @@ class Mirror:
                 self._busy = False
                 return
         if self._joints is None:
-            self.front.call("joints", {"model": self.model},
-                            lambda reply: self._mapped(reply, message))
+            self.front.call("joints", {}, lambda reply: self._mapped(reply, message))
         else:
             self._apply(message)
 
@@ -163,8 +164,17 @@ class Mirror:
         if not reply.ok:
             self._refused(reply)
             return
+        model, below = self.model, f"{self.model}/"
         self._joints = [joint["name"] for joint in reply.result["joints"]
-                        if joint["type"] in ("revolute", "prismatic")]
+                        if joint["type"] in ("revolute", "prismatic")
+                        and (joint["model"] == model or joint["model"].startswith(below))]
+        if not self._joints:
+            self._joints = None
+            self.refused += 1
+            log.warning("mirror %s <- %s: no model %r with revolute or prismatic joints "
+                        "(yet)", self.model, self.topic, self.model)
+            self._next()
+            return
         self._apply(message)
 
     def _apply(self, message: Any) -> None:
