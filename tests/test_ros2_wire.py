@@ -12,7 +12,7 @@ import pytest
 from rosbags.typesys import Stores, get_typestore
 
 from galton.daemon.ros2 import interfaces, rmw_zenoh
-from galton.daemon.ros2.messages import encode, new
+from galton.daemon.ros2.messages import decode, encode, new
 from galton.protocol import InvalidArgumentError
 
 ROSIDL = json.loads((Path(__file__).parent / "ros2_rosidl_hashes.json").read_text())
@@ -118,3 +118,12 @@ def test_cdr_equals_rclpys_bytes() -> None:
     assert [b for i, b in enumerate(ours) if i not in JOINT_STATE_PADDING] == [
         b for i, b in enumerate(theirs) if i not in JOINT_STATE_PADDING]
     assert len(RCLPY_JOINT_STATE) - len(ours) == 8
+    read = decode(RCLPY_JOINT_STATE, interfaces.JOINT_STATE)  # its 8 extra bytes ignored
+    assert (read.name, list(read.position)) == (["a", "bc"], [0.5, -1.0])
+
+
+def test_bytes_that_are_not_cdr_are_refused() -> None:
+    with pytest.raises(InvalidArgumentError, match="not CDR"):
+        decode(b"{}", interfaces.JOINT_STATE)
+    with pytest.raises(InvalidArgumentError, match="not a CDR"):
+        decode(RCLPY_JOINT_STATE[:30], interfaces.JOINT_STATE)

@@ -96,7 +96,7 @@ class Ros2Front:
                                   "timestamp, GID): docs/ROS2.md")
             attachment = rmw_zenoh.Attachment.decode(query.attachment.to_bytes())
             payload = query.payload.to_bytes() if query.payload is not None else b""
-            request = decode(rmw_zenoh.check_cdr(payload), request_type)
+            request = decode(payload, request_type)
         except GaltonError as error:
             with query:
                 query.reply_err(str(error))

@@ -48,9 +48,18 @@ def encode(message: Any, typename: str) -> bytes:
 
 
 def decode(payload: bytes, typename: str) -> Any:
-    """A message from CDR bytes; bytes that do not parse are INVALID_ARGUMENT."""
+    """A message from CDR bytes; bytes that do not parse are INVALID_ARGUMENT. Bytes past
+    the message's end are ignored: rclpy's serialize_message leaves 8 there (Kilted), which
+    rosbags' own deserialize_cdr refuses ("size mismatch")."""
+    if len(payload) < 4 or payload[:2] not in (b"\x00\x00", b"\x00\x01"):
+        raise InvalidArgumentError(
+            f"the payload is not CDR: it starts {payload[:4].hex() or 'empty'}, not an "
+            "encapsulation header such as 00 01 00 00")
+    definition = typestore().get_msgdef(typename)
+    read = definition.deserialize_cdr_le if payload[1] else definition.deserialize_cdr_be
     try:
-        return typestore().deserialize_cdr(payload, typename)
+        message, _ = read(memoryview(payload)[4:], 0, definition.cls, typestore())
+        return message
     except Exception as exc:
         raise InvalidArgumentError(
             f"the payload is not a CDR {typename}: {brief(str(exc))}") from exc

@@ -119,12 +119,3 @@ class NodeIdentity:
         return "/".join((ADMIN_SPACE, str(self.domain), self.zid, str(self.node_id),
                          str(entity_id), kind, mangle(self.enclave), mangle(self.namespace),
                          self.node, mangle(qualified), dds_type, type_hash, qos))
-
-
-def check_cdr(payload: bytes) -> bytes:
-    """The payload, checked to start with a plain CDR encapsulation header."""
-    if len(payload) < 4 or payload[:2] not in (b"\x00\x01", b"\x00\x00"):
-        raise InvalidArgumentError(
-            f"the payload is not CDR: it starts {payload[:4].hex() or 'empty'}, not an "
-            "encapsulation header such as 00 01 00 00")
-    return payload

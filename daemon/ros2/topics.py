@@ -135,7 +135,7 @@ class Mirror:
 
     def _on_sample(self, sample: zenoh.Sample) -> None:
         try:
-            message = decode(rmw_zenoh.check_cdr(sample.payload.to_bytes()), JOINT_STATE)
+            message = decode(sample.payload.to_bytes(), JOINT_STATE)
         except GaltonError as error:
             log.warning("%s: %s", self.topic, error)
             return
