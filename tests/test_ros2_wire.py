@@ -10,7 +10,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 from rosbags.typesys import Stores, get_typestore
+from typer.testing import CliRunner
 
+from galton.daemon.cli import app as daemon_app
 from galton.daemon.ros2 import interfaces, rmw_zenoh
 from galton.daemon.ros2.messages import decode, encode, new
 from galton.protocol import InvalidArgumentError
@@ -127,3 +129,16 @@ def test_bytes_that_are_not_cdr_are_refused() -> None:
         decode(b"{}", interfaces.JOINT_STATE)
     with pytest.raises(InvalidArgumentError, match="not a CDR"):
         decode(RCLPY_JOINT_STATE[:30], interfaces.JOINT_STATE)
+
+
+@pytest.mark.parametrize(("args", "says"), [
+    (["--ros2", "--ros2-mirror", "arm"], "MODEL=TOPIC"),
+    (["--ros2", "--ros-domain-id", "300"], "0 to 232"),
+    (["--ros2", "--ros-namespace", "/1sim"], "not a ROS namespace"),
+    (["--ros-namespace", "/sim"], "need --ros2"),
+])
+def test_bad_ros2_options_are_refused_before_anything_starts(args: list[str],
+                                                             says: str) -> None:
+    result = CliRunner().invoke(daemon_app, args)
+    assert result.exit_code == 2
+    assert says in result.output

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from galton.daemon.ros2.rmw_zenoh import check_namespace
 from galton.protocol import InvalidArgumentError
 
 MAX_DOMAIN_ID = 232  # ROS 2 domain ids are 0-232 (0-101 portable)
@@ -23,7 +24,7 @@ class Ros2Options:
 def parse_mirror(text: str) -> tuple[str, str]:
     """``MODEL=/joint_states`` -> (model, topic)."""
     model, sep, topic = text.partition("=")
-    if not sep or not model or not topic:
+    if not sep or not model or not topic or " " in topic:
         raise InvalidArgumentError(f"--ros2-mirror {text!r}: give MODEL=TOPIC, e.g. "
                                    "arm=/joint_states (MODEL: a loaded model's root entity)")
     return model, topic
@@ -33,5 +34,5 @@ def ros2_options(domain: int, namespace: str, mirrors: list[str]) -> Ros2Options
     if not 0 <= domain <= MAX_DOMAIN_ID:
         raise InvalidArgumentError(f"--ros-domain-id {domain}: ROS 2 domain ids are 0 to "
                                    f"{MAX_DOMAIN_ID}")
-    return Ros2Options(domain=domain, namespace=namespace,
+    return Ros2Options(domain=domain, namespace=check_namespace(namespace),
                        mirrors=dict(parse_mirror(text) for text in mirrors))
