@@ -108,9 +108,11 @@ class RosClient:
         return [parse_token(str(reply.ok.key_expr)) for reply in replies if reply.ok]
 
     def key(self, name: str, service: str) -> str:
-        ros_type = f"simulation_interfaces/srv/{service}"
-        return (f"{self.domain}/{name.lstrip('/')}/simulation_interfaces::srv::dds_::"
-                f"{service}_/{HASHES[ros_type]}")
+        """The key of a simulation_interfaces service, or of any ``pkg/kind/Name`` type."""
+        ros_type = service if "/" in service else f"simulation_interfaces/srv/{service}"
+        package, kind, type_name = ros_type.split("/")
+        return (f"{self.domain}/{name.lstrip('/')}/{package}::{kind}::dds_::{type_name}_/"
+                f"{HASHES[ros_type]}")
 
     def call(self, name: str, service: str, request: bytes,
              timeout: float = 10.0) -> tuple[Cdr, bytes]:

@@ -24,7 +24,8 @@ import tempfile
 from pathlib import Path
 
 TF_MESSAGE = "geometry_msgs/TransformStamped[] transforms\n"
-STANDARD = ("rosgraph_msgs/msg/Clock", "sensor_msgs/msg/JointState", "std_msgs/msg/String")
+STANDARD = ("rosgraph_msgs/msg/Clock", "sensor_msgs/msg/JointState", "std_msgs/msg/String",
+            "action_msgs/srv/CancelGoal", "action_msgs/msg/GoalStatusArray")
 
 
 def package_hashes(package_dir: Path, share: Path) -> dict[str, str]:
@@ -57,8 +58,8 @@ def main(checkout: Path, share: Path) -> None:
     (tf_dir / "msg" / "TFMessage.msg").write_text(TF_MESSAGE)
     hashes.update(package_hashes(tf_dir, share))
     for name in STANDARD:
-        package, _, message = name.split("/")
-        described = json.loads((share / package / "msg" / f"{message}.json").read_text())
+        package, kind, message = name.split("/")
+        described = json.loads((share / package / kind / f"{message}.json").read_text())
         hashes[name] = described["type_hashes"][0]["hash_string"]
     json.dump(hashes, sys.stdout, indent=1, sort_keys=True)
     print()

@@ -6,6 +6,7 @@ from __future__ import annotations
 import queue
 import struct
 from collections.abc import Iterator
+from typing import Any
 
 import pytest
 from ros2_client import (
@@ -80,14 +81,18 @@ def test_the_graph_lists_the_node_its_services_and_topics(ros: RosClient) -> Non
     tokens = ros.graph()
     assert [t.node for t in tokens if t.kind == "NN"] == ["rostest"]
     servers = {t.name: t for t in tokens if t.kind == "SS"}
-    assert set(servers) == {f"{NODE}/{name}" for name in SERVICES}
+    assert {name for name in servers if "_action" not in name} == {
+        f"{NODE}/{name}" for name in SERVICES}
     step = servers[f"{NODE}/step_simulation"]
     assert step.type_name == "simulation_interfaces::srv::dds_::StepSimulation_"
     assert step.type_hash == HASHES["simulation_interfaces/srv/StepSimulation"]
     publishers = {t.name: t.type_hash for t in tokens if t.kind == "MP"}
-    assert publishers == {"/clock": HASHES["rosgraph_msgs/msg/Clock"],
-                          "/tf": HASHES["tf2_msgs/msg/TFMessage"]}
+    assert publishers["/clock"] == HASHES["rosgraph_msgs/msg/Clock"]
+    assert publishers["/tf"] == HASHES["tf2_msgs/msg/TFMessage"]
     assert {t.name for t in tokens if t.kind == "MS"} == {"/joint_states"}
+    action = f"{NODE}/simulate_steps/_action"
+    assert {f"{action}/send_goal", f"{action}/get_result", f"{action}/cancel_goal"} <= set(
+        servers)
 
 
 def test_features_come_first(ros: RosClient) -> None:
@@ -204,3 +209,37 @@ def test_joint_mirroring_sets_the_arm(ros: RosClient, native: Client) -> None:
         assert list(get_joint_states(native, names).positions) == pytest.approx(targets)
     finally:
         publisher.undeclare()
+
+
+ACTION = "simulation_interfaces/action/SimulateSteps"
+
+
+def test_the_simulate_steps_action_steps_with_feedback(ros: RosClient) -> None:
+    base = f"{NODE}/simulate_steps/_action"
+    feedback: queue.SimpleQueue[tuple[int, int]] = queue.SimpleQueue()
+
+    def on_feedback(sample: Any) -> None:
+        message = Cdr(sample.payload.to_bytes())
+        message.get("16B")
+        feedback.put(message.get("QQ"))
+    key = topic_key(0, f"{base}/feedback",
+                    "simulation_interfaces::action::dds_::SimulateSteps_FeedbackMessage_",
+                    f"{ACTION}_FeedbackMessage")
+    subscriber = ros.session.declare_subscriber(key, on_feedback)
+    goal = bytes(range(1, 17))
+    try:
+        _, before, _ = entity_z(ros, "ball")
+        sent, _ = ros.call(f"{base}/send_goal", f"{ACTION}_SendGoal",
+                           bytes(Cdr.writer().put("16B", *goal).put("Q", 30).data))
+        assert sent.get("B") == 1  # accepted
+        result, _ = ros.call(f"{base}/get_result", f"{ACTION}_GetResult",
+                             bytes(Cdr.writer().put("16B", *goal).data))
+        assert (result.get("b"), result.get_result()) == (4, (OK, ""))  # SUCCEEDED
+        seen = [feedback.get(timeout=TIMEOUT_S) for _ in range(30)]
+        assert seen == [(done, 30 - done) for done in range(1, 31)]
+        assert entity_z(ros, "ball")[1] == pytest.approx(before + 30 * 0.002)
+        refused, _ = ros.call(f"{base}/send_goal", f"{ACTION}_SendGoal",
+                              bytes(Cdr.writer().put("16B", *bytes(16)).put("Q", 0).data))
+        assert refused.get("B") == 0  # 0 steps: not accepted
+    finally:
+        subscriber.undeclare()

@@ -20,12 +20,13 @@ import zenoh
 
 from galton.daemon.calls import Call
 from galton.daemon.ros2 import codes, rmw_zenoh
+from galton.daemon.ros2.action import SimulateStepsServer
 from galton.daemon.ros2.interfaces import dds_type_name, service_type, type_hash
 from galton.daemon.ros2.messages import decode, encode, new
 from galton.daemon.ros2.native import Handler, NativeRequest, Refusal
 from galton.daemon.ros2.options import Ros2Options
 from galton.daemon.ros2.services import HANDLERS
-from galton.daemon.ros2.topics import TopicLoop
+from galton.daemon.ros2.topics import Publisher, TopicLoop
 from galton.protocol import GaltonError, Reply, decode_reply, encode_request
 
 log = logging.getLogger("galton.daemon.ros2")
@@ -59,6 +60,7 @@ class Ros2Front:
             self.identity.node_token())]
         for name, handler in HANDLERS.items():
             self._serve(name, handler)
+        self.action = SimulateStepsServer(self)
         self.topics = TopicLoop(self, options)
 
     def qualified(self, name: str) -> str:
@@ -77,38 +79,29 @@ class Ros2Front:
         return rmw_zenoh.key_expr(self.identity.domain, qualified, dds, hashed)
 
     def _serve(self, name: str, handler: Handler) -> None:
-        qualified = self.qualified(f"{self.identity.node}/{service_name(name)}")
-        key = self.declare_entity(rmw_zenoh.SERVICE_SERVER, qualified, service_type(name))
-        request_type = f"{service_type(name)}_Request"
         response_type = f"{service_type(name)}_Response"
+        self.serve_raw(self.qualified(f"{self.identity.node}/{service_name(name)}"),
+                       service_type(name),
+                       lambda request, answer: self.run(handler(request), answer,
+                                                        response_type))
+
+    def serve_raw(self, qualified: str, ros_type: str,
+                  take: Callable[[Any, Callable[[Any], None]], None]) -> None:
+        """A service server: ``take(request, answer)`` gets each decoded request and calls
+        ``answer(response)`` exactly once, from any thread, whenever it is ready."""
+        key = self.declare_entity(rmw_zenoh.SERVICE_SERVER, qualified, ros_type)
+        request_type, response_type = f"{ros_type}_Request", f"{ros_type}_Response"
 
         def on_query(query: zenoh.Query) -> None:
-            self._on_query(query, handler, request_type, response_type)
+            read = _read_query(query, request_type)
+            if read is not None:
+                attachment, request = read
+                take(request, lambda response: _answer(query, attachment, response,
+                                                       response_type))
         self._declared.append(self.session.declare_queryable(key, on_query, complete=True))
 
-    def _on_query(self, query: zenoh.Query, handler: Handler, request_type: str,
-                  response_type: str) -> None:
-        """Decode the attachment and request, then run the handler; a request that cannot
-        be read gets an error reply (rcl would drop it), never silence."""
-        try:
-            if query.attachment is None:
-                raise GaltonError("the query has no rmw_zenoh attachment (sequence number, "
-                                  "timestamp, GID): docs/ROS2.md")
-            attachment = rmw_zenoh.Attachment.decode(query.attachment.to_bytes())
-            payload = query.payload.to_bytes() if query.payload is not None else b""
-            request = decode(payload, request_type)
-        except GaltonError as error:
-            with query:
-                query.reply_err(str(error))
-            return
-
-        def finish(response: Any) -> None:
-            try:
-                query.reply(query.key_expr, encode(response, response_type),
-                            attachment=attachment.reply().encode())
-            finally:
-                query.drop()
-        self.run(handler(request), finish, response_type)
+    def publisher(self, name: str, ros_type: str) -> Publisher:
+        return Publisher(self, name, ros_type)
 
     def run(self, steps: Any, finish: Callable[[Any], None], response_type: str,
             reply: Reply | None = None) -> None:
@@ -139,6 +132,33 @@ class Ros2Front:
         for declared in reversed(self._declared):
             declared.undeclare()
         self._declared.clear()
+
+
+def _read_query(query: zenoh.Query, request_type: str) -> tuple[rmw_zenoh.Attachment,
+                                                                  Any] | None:
+    """The attachment and decoded request of a query; one that cannot be read gets an error
+    reply (rcl would drop it), never silence, and None."""
+    try:
+        if query.attachment is None:
+            raise GaltonError("the query has no rmw_zenoh attachment (sequence number, "
+                              "timestamp, GID): docs/ROS2.md")
+        attachment = rmw_zenoh.Attachment.decode(query.attachment.to_bytes())
+        payload = query.payload.to_bytes() if query.payload is not None else b""
+        return attachment, decode(payload, request_type)
+    except GaltonError as error:
+        with query:
+            query.reply_err(str(error))
+        return None
+
+
+def _answer(query: zenoh.Query, attachment: rmw_zenoh.Attachment, response: Any,
+            response_type: str) -> None:
+    """Reply with the response and the request's sequence number and GID, then finish."""
+    try:
+        query.reply(query.key_expr, encode(response, response_type),
+                    attachment=attachment.reply().encode())
+    finally:
+        query.drop()
 
 
 def refused(response_type: str, code: int, message: str) -> Any:

@@ -79,6 +79,26 @@ SERVICES: dict[str, tuple[str, str]] = {
     "UnloadWorld": ("", "Result result"),
 }
 
+# The SimulateSteps action, as rosidl makes an action: its goal, result and feedback, the
+# SendGoal and GetResult services and the FeedbackMessage (names fully qualified).
+ACTION = f"{PACKAGE}/action/SimulateSteps"
+ACTION_MESSAGES: dict[str, str] = {
+    f"{ACTION}_Goal": "uint64 steps",
+    f"{ACTION}_Result": f"{PACKAGE}/Result result",
+    f"{ACTION}_Feedback": "uint64 completed_steps\nuint64 remaining_steps",
+    f"{ACTION}_FeedbackMessage": f"unique_identifier_msgs/UUID goal_id\n"
+                                 f"{ACTION}_Feedback feedback",
+}
+ACTION_SERVICES: dict[str, tuple[str, str]] = {
+    f"{ACTION}_SendGoal": (f"unique_identifier_msgs/UUID goal_id\n{ACTION}_Goal goal",
+                           "bool accepted\nbuiltin_interfaces/Time stamp"),
+    f"{ACTION}_GetResult": ("unique_identifier_msgs/UUID goal_id",
+                            f"int8 status\n{ACTION}_Result result"),
+    "action_msgs/srv/CancelGoal": ("action_msgs/GoalInfo goal_info",
+                                   "int8 return_code\naction_msgs/GoalInfo[] goals_canceling"),
+}
+GOAL_STATUS_ARRAY = "action_msgs/msg/GoalStatusArray"
+
 # Standard messages of ROS 2 the front publishes or subscribes to (in rosbags' Kilted store).
 CLOCK = "rosgraph_msgs/msg/Clock"
 TF_MESSAGE = "tf2_msgs/msg/TFMessage"
@@ -97,17 +117,17 @@ def dds_type_name(ros_type: str) -> str:
     return f"{package}::{kind}::dds_::{name}_"
 
 
-def _fields(text: str, typename: str) -> Any:
-    """The rosbags field list of a .msg text, nested names resolved in our package."""
-    parsed = get_types_from_msg(text or EMPTY_MEMBER, f"{PACKAGE}/msg/{typename}")
-    return parsed[f"{PACKAGE}/msg/{typename}"]
+def _fields(text: str) -> Any:
+    """The rosbags field list of a .msg text, short nested names resolved in our package."""
+    return get_types_from_msg(text or EMPTY_MEMBER, f"{PACKAGE}/msg/Parsed")[
+        f"{PACKAGE}/msg/Parsed"]
 
 
 def _service_types(name: str, request: str, response: str) -> dict[str, Any]:
-    """The four types rosidl makes of one service (see the module docstring)."""
-    base = service_type(name)
-    types = {f"{base}_Request": _fields(request, f"{name}_Request"),
-             f"{base}_Response": _fields(response, f"{name}_Response")}
+    """The four types rosidl makes of one service (see the module docstring); ``name`` is
+    a service of our package, or a full type name (an action's services)."""
+    base = name if "/" in name else service_type(name)
+    types = {f"{base}_Request": _fields(request), f"{base}_Response": _fields(response)}
 
     def at_most_one(typ: str) -> Any:
         return (Nodetype.SEQUENCE, ((Nodetype.NAME, typ), 1))
@@ -131,8 +151,9 @@ def typestore() -> Typestore:
     types: dict[str, Any] = {}
     for name, text in MESSAGES.items():
         types.update(get_types_from_msg(text, f"{PACKAGE}/msg/{name}"))
-    for name, (request, response) in SERVICES.items():
+    for name, (request, response) in (SERVICES | ACTION_SERVICES).items():
         types.update(_service_types(name, request, response))
+    types.update({name: _fields(text) for name, text in ACTION_MESSAGES.items()})
     store.register(types)
     return store
 

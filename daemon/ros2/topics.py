@@ -54,8 +54,8 @@ class TopicLoop:
 
     def __init__(self, front: Ros2Front, options: Ros2Options) -> None:
         self.front = front
-        self.clock = Publisher(front, "/clock", CLOCK)
-        self.tf = Publisher(front, "/tf", TF_MESSAGE)
+        self.clock = front.publisher("/clock", CLOCK)
+        self.tf = front.publisher("/tf", TF_MESSAGE)
         self.mirrors = [Mirror(front, model, topic) for model, topic in options.mirrors.items()]
         self._clock_period = 1.0 / options.clock_rate_hz
         self._tf_period = 1.0 / options.tf_rate_hz
