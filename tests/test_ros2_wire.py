@@ -14,7 +14,7 @@ from typer.testing import CliRunner
 
 from galton.daemon.cli import app as daemon_app
 from galton.daemon.ros2 import interfaces, rmw_zenoh
-from galton.daemon.ros2.messages import decode, encode, new
+from galton.daemon.ros2.messages import decode, encode, header, new, tf_cdr, vector
 from galton.protocol import InvalidArgumentError
 
 ROSIDL = json.loads((Path(__file__).parent / "ros2_rosidl_hashes.json").read_text())
@@ -143,3 +143,17 @@ def test_bad_ros2_options_are_refused_before_anything_starts(args: list[str],
     result = CliRunner().invoke(daemon_app, args)
     assert result.exit_code == 2
     assert says in result.output
+
+
+def test_the_fast_tf_writer_equals_the_general_one() -> None:
+    rng = np.random.default_rng(40)
+    names = ["a", "ball_10", "arm/lbr_iiwa_link_3", "xyz", "é"]
+    poses = rng.normal(size=(len(names), 7))
+    general = new(interfaces.TF_MESSAGE, transforms=[
+        new("geometry_msgs/msg/TransformStamped", header=header(12.345678901),
+            child_frame_id=name, transform=new(
+                "geometry_msgs/msg/Transform", translation=vector(*pose[:3]),
+                rotation=new("geometry_msgs/msg/Quaternion", x=pose[3], y=pose[4],
+                             z=pose[5], w=pose[6])))
+        for name, pose in zip(names, poses, strict=True)])
+    assert tf_cdr(names, poses, 12.345678901) == encode(general, interfaces.TF_MESSAGE)

@@ -4,15 +4,18 @@ rmw_zenoh's wire format, on the daemon's own Zenoh session.
 It reaches the physics thread only as the Zenoh front does: it hands ``Call`` objects
 (msgpack native requests) to the daemon's ``dispatch`` and reads their replies. A service
 request runs as a handler (daemon/ros2/services.py) that yields native requests; each reply
-is sent back into the handler on the thread that answered it, so no thread waits for
-physics. Topics run on one thread of their own (daemon/ros2/topics.py).
+is sent back into the handler on the front's one reply thread, so no thread waits for
+physics and the physics thread does no ROS work. Topics run on one thread of their own
+(daemon/ros2/topics.py).
 """
 
 from __future__ import annotations
 
 import itertools
 import logging
+import queue
 import re
+import threading
 from collections.abc import Callable
 from typing import Any
 
@@ -56,6 +59,11 @@ class Ros2Front:
             options.domain, str(session.info.zid()), 0,
             rmw_zenoh.check_namespace(options.namespace), node_name(node))
         self._entity_ids = itertools.count(1)
+        self._replies: queue.SimpleQueue[tuple[Callable[[Reply], None], bytes] | None] = \
+            queue.SimpleQueue()
+        self._reply_thread = threading.Thread(target=self._take_replies, name="ros2-replies",
+                                              daemon=True)
+        self._reply_thread.start()
         self._declared: list[Any] = [session.liveliness().declare_token(
             self.identity.node_token())]
         for name, handler in HANDLERS.items():
@@ -123,12 +131,23 @@ class Ros2Front:
 
     def call(self, op: str, args: dict[str, Any], then: Callable[[Reply], None]) -> None:
         """One native request through the daemon's own dispatch; ``then`` gets its Reply
-        on the thread that answers it (the physics thread, or ours for ``status``)."""
+        on the front's reply thread, so ROS-side work (CDR, the next request of a handler)
+        never holds the physics thread that answered."""
         self.dispatch(Call(op, encode_request(op, args),
-                           lambda data: then(decode_reply(data))))
+                           lambda data: self._replies.put((then, data))))
+
+    def _take_replies(self) -> None:
+        while (item := self._replies.get()) is not None:
+            then, data = item
+            try:
+                then(decode_reply(data))
+            except Exception:  # one bad continuation must not end the others
+                log.exception("ROS 2 front: a reply's continuation failed")
 
     def close(self) -> None:
         self.topics.close()
+        self._replies.put(None)
+        self._reply_thread.join(timeout=5)
         for declared in reversed(self._declared):
             declared.undeclare()
         self._declared.clear()

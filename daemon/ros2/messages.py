@@ -3,6 +3,8 @@ poses and twists between the daemon's packed float64 rows and geometry_msgs."""
 
 from __future__ import annotations
 
+import struct
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -12,6 +14,7 @@ from galton.daemon.ros2.interfaces import typestore
 from galton.protocol import InvalidArgumentError
 from galton.protocol.errors import brief
 
+CDR_HEADER = b"\x00\x01\x00\x00"  # plain CDR, little endian
 _NUMPY = {"bool": np.bool_, "int8": np.int8, "uint8": np.uint8, "byte": np.uint8,
           "char": np.uint8, "int16": np.int16, "uint16": np.uint16, "int32": np.int32,
           "uint32": np.uint32, "int64": np.int64, "uint64": np.uint64,
@@ -110,3 +113,36 @@ def rows(data: bytes, width: int) -> np.ndarray:
 
 def packed(values: list[list[float]]) -> bytes:
     return np.asarray(values, dtype="<f8").tobytes()
+
+
+def tf_cdr(names: list[str], poses: np.ndarray, seconds: float, frame: str = "world") -> bytes:
+    """A tf2_msgs/TFMessage of ``frame`` -> each name, written straight to CDR: the same
+    bytes as ``encode`` (a test holds them equal) at about 1/100 of its cost, which for a
+    thousand bodies at 20 Hz is the difference between a few percent of a core and all
+    of it. Each transform ends with its 56 bytes of float64, so every one but the first
+    starts 8-aligned: the bytes between its stamp and its pose depend only on its name and
+    that alignment, and are kept."""
+    total = max(round(seconds * 1e9), 0)
+    stamp = struct.pack("<iI", total // 1_000_000_000, total % 1_000_000_000)
+    rows_bytes = np.ascontiguousarray(poses, dtype="<f8").tobytes()
+    parts = [CDR_HEADER, struct.pack("<I", len(names))]
+    for index, name in enumerate(names):
+        parts += (stamp, _between(frame, name, 4 if index == 0 else 0),
+                  rows_bytes[56 * index:56 * index + 56])
+    return b"".join(parts)
+
+
+@lru_cache(maxsize=65536)
+def _between(frame: str, name: str, start: int) -> bytes:
+    """A transform's bytes after its stamp and before its pose, for a transform starting
+    at ``start`` mod 8 (the stamp is 8 bytes: the parent starts at that alignment too)."""
+    out = bytearray(_cdr_string(frame))
+    out += b"\x00" * (-(start + len(out)) % 4)
+    out += _cdr_string(name)
+    out += b"\x00" * (-(start + 8 + len(out)) % 8)
+    return bytes(out)
+
+
+def _cdr_string(text: str) -> bytes:
+    raw = text.encode() + b"\x00"
+    return struct.pack("<I", len(raw)) + raw

@@ -21,7 +21,7 @@ import zenoh
 
 from galton.daemon.ros2 import rmw_zenoh
 from galton.daemon.ros2.interfaces import CLOCK, JOINT_STATE, TF_MESSAGE
-from galton.daemon.ros2.messages import decode, encode, header, new, packed, rows, time_msg
+from galton.daemon.ros2.messages import decode, encode, new, packed, rows, tf_cdr, time_msg
 from galton.protocol import GaltonError, Reply, ResultCode
 
 if TYPE_CHECKING:
@@ -29,7 +29,7 @@ if TYPE_CHECKING:
     from galton.daemon.ros2.options import Ros2Options
 
 log = logging.getLogger("galton.daemon.ros2")
-ANSWER_WAIT_S = 2.0  # how long the topic thread waits for one native reply
+ANSWER_WAIT_S = 0.5  # how long the topic thread waits for one native reply
 CLOCK_REPEAT_S = 1.0  # a still clock is published again this often (for late joiners)
 
 
@@ -45,8 +45,12 @@ class Publisher:
         self._sequence = itertools.count(1)
 
     def put(self, message: Any) -> None:
+        self.put_cdr(encode(message, self.ros_type))
+
+    def put_cdr(self, data: bytes) -> None:
+        """Publish a message already in CDR."""
         attachment = rmw_zenoh.Attachment(next(self._sequence), time.time_ns(), self._gid)
-        self._publisher.put(encode(message, self.ros_type), attachment=attachment.encode())
+        self._publisher.put(data, attachment=attachment.encode())
 
 
 class TopicLoop:
@@ -96,16 +100,8 @@ class TopicLoop:
         states = self._ask("get_states")
         if states is None or not states.result["names"]:
             return False
-        stamp = header(states.sim_time)
-        poses = rows(states.result["poses"], 7)
-        self.tf.put(new(TF_MESSAGE, transforms=[
-            new("geometry_msgs/msg/TransformStamped", header=stamp, child_frame_id=name,
-                transform=new("geometry_msgs/msg/Transform",
-                              translation=new("geometry_msgs/msg/Vector3", x=p[0], y=p[1],
-                                              z=p[2]),
-                              rotation=new("geometry_msgs/msg/Quaternion", x=p[3], y=p[4],
-                                           z=p[5], w=p[6])))
-            for name, p in zip(states.result["names"], poses.tolist(), strict=True)]))
+        self.tf.put_cdr(tf_cdr(states.result["names"], rows(states.result["poses"], 7),
+                               states.sim_time))
         return True
 
     def close(self) -> None:
@@ -149,7 +145,8 @@ class Mirror:
         self._next()
 
     def _next(self) -> None:
-        """Apply the newest waiting message, or go idle (on whichever thread answered)."""
+        """Apply the newest waiting message, or go idle (on the front's reply thread, or
+        the subscriber's)."""
         with self._lock:
             message, self._pending = self._pending, None
             if message is None:
