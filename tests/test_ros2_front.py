@@ -38,9 +38,13 @@ TIMEOUT_S = 10.0
 
 @pytest.fixture(scope="module")
 def daemon() -> Iterator[EmbeddedDaemon]:
-    with EmbeddedDaemon("mujoco", instance="rostest", extra_args=[
-            "--ros2", "--ros2-mirror", "arm=/joint_states"]) as running:
+    running = EmbeddedDaemon("mujoco", instance="rostest", extra_args=[
+        "--ros2", "--ros2-mirror", "arm=/joint_states"]).start()
+    try:
         yield running
+    finally:
+        code = running.stop()
+    assert code == 0, running.output  # the front closes with the daemon, cleanly
 
 
 @pytest.fixture(scope="module")
@@ -243,3 +247,23 @@ def test_the_simulate_steps_action_steps_with_feedback(ros: RosClient) -> None:
         assert refused.get("B") == 0  # 0 steps: not accepted
     finally:
         subscriber.undeclare()
+
+
+def test_a_canceled_goal_stops_between_chunks(ros: RosClient) -> None:
+    base = f"{NODE}/simulate_steps/_action"
+    goal = bytes(range(101, 117))
+    sent, _ = ros.call(f"{base}/send_goal", f"{ACTION}_SendGoal",
+                       bytes(Cdr.writer().put("16B", *goal).put("Q", 1_000_000).data))
+    assert sent.get("B") == 1
+    cancel = Cdr.writer().put("16B", *goal).put("iI", 0, 0)
+    canceled, _ = ros.call(f"{base}/cancel_goal", "action_msgs/srv/CancelGoal",
+                           bytes(cancel.data))
+    assert canceled.get("b") == 0 and canceled.get("I") == 1  # ERROR_NONE, one goal
+    result, _ = ros.call(f"{base}/get_result", f"{ACTION}_GetResult",
+                         bytes(Cdr.writer().put("16B", *goal).data))
+    assert result.get("b") == 5  # CANCELED
+    again, _ = ros.call(f"{base}/cancel_goal", "action_msgs/srv/CancelGoal",
+                        bytes(cancel.data))
+    assert again.get("b") == 3  # GOAL_TERMINATED
+    state = call(ros, "get_simulation_state", EMPTY)
+    assert state.get("B") == 2  # paused where it got to
