@@ -72,7 +72,7 @@ class Ros2Front:
         self.topics = TopicLoop(self, options)
 
     def qualified(self, name: str) -> str:
-        """A name relative to the node: services are ``<ns>/<node>/<name>``."""
+        """A name in the node's namespace (an absolute name, ``/clock``, stays as it is)."""
         return rmw_zenoh.qualified_name(self.identity.namespace, name)
 
     def declare_entity(self, kind: str, qualified: str, ros_type: str) -> str:
@@ -97,7 +97,8 @@ class Ros2Front:
                   take: Callable[[Any, Callable[[Any], None]], None]) -> None:
         """A service server: ``take(request, answer)`` gets each decoded request and calls
         ``answer(response)`` exactly once, from any thread, whenever it is ready."""
-        key = self.declare_entity(rmw_zenoh.SERVICE_SERVER, qualified, ros_type)
+        key = rmw_zenoh.key_expr(self.identity.domain, qualified, dds_type_name(ros_type),
+                                 type_hash(ros_type))
         request_type, response_type = f"{ros_type}_Request", f"{ros_type}_Response"
 
         def on_query(query: zenoh.Query) -> None:
@@ -107,6 +108,7 @@ class Ros2Front:
                 take(request, lambda response: _answer(query, attachment, response,
                                                        response_type))
         self._declared.append(self.session.declare_queryable(key, on_query, complete=True))
+        self.declare_entity(rmw_zenoh.SERVICE_SERVER, qualified, ros_type)  # then announce
 
     def publisher(self, name: str, ros_type: str) -> Publisher:
         return Publisher(self, name, ros_type)
