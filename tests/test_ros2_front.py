@@ -32,7 +32,8 @@ EMPTY = bytes(Cdr.writer().put("B", 0).data)  # an empty request: one byte in ro
 SERVICES = {"get_simulator_features", "get_simulation_state", "set_simulation_state",
             "reset_simulation", "step_simulation", "spawn_entity", "spawn_entities",
             "delete_entity", "get_entities", "get_entities_states", "get_entity_state",
-            "set_entity_state", "get_entity_info", "get_entity_bounds", "get_spawnables"}
+            "set_entity_state", "get_entity_info", "get_entity_bounds", "get_spawnables",
+            "get_current_world"}
 TIMEOUT_S = 10.0
 
 
@@ -105,6 +106,8 @@ def test_features_come_first(ros: RosClient) -> None:
     formats = [reply.get_string() for _ in range(reply.get("I"))]
     assert {0, 1, 10, 11, 24, 25, 31, 32} <= set(features)
     assert {"mjcf", "urdf", "galton"} <= set(formats)
+    world = call(ros, "get_current_world", EMPTY)
+    assert (world.get_result(), world.get_string()) == ((OK, ""), "default")
 
 
 def test_spawn_step_and_read_back(ros: RosClient) -> None:

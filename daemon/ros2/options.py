@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
+import importlib.util
 from dataclasses import dataclass, field
 
 from galton.daemon.ros2.rmw_zenoh import check_namespace
-from galton.protocol import InvalidArgumentError
+from galton.protocol import FeatureUnsupportedError, InvalidArgumentError
 
 MAX_DOMAIN_ID = 232  # ROS 2 domain ids are 0-232 (0-101 portable)
 
@@ -31,6 +32,10 @@ def parse_mirror(text: str) -> tuple[str, str]:
 
 
 def ros2_options(domain: int, namespace: str, mirrors: list[str]) -> Ros2Options:
+    """The front's options, checked; without the ``[ros2]`` extra, FEATURE_UNSUPPORTED."""
+    if importlib.util.find_spec("rosbags") is None:
+        raise FeatureUnsupportedError("--ros2 needs the [ros2] extra (rosbags): pip install "
+                                      "'galton-bridge[daemon,ros2]'")
     if not 0 <= domain <= MAX_DOMAIN_ID:
         raise InvalidArgumentError(f"--ros-domain-id {domain}: ROS 2 domain ids are 0 to "
                                    f"{MAX_DOMAIN_ID}")

@@ -257,6 +257,15 @@ def get_spawnables(request: Any) -> Gen:
     return response("GetSpawnables", result=result(), spawnables=spawnables)
 
 
+def get_current_world(request: Any) -> Gen:
+    """The live world: its name and engine (it is never unloaded; no file loaded it)."""
+    status = yield from ask("status")
+    world = new(f"{PKG}/msg/WorldResource", name=status["world"],
+                description=f"the live {status['engine']} world of daemon "
+                            f"{status['instance']}")
+    return response("GetCurrentWorld", result=result(), world=world)
+
+
 HANDLERS: dict[str, Handler] = {
     "GetSimulatorFeatures": get_simulator_features,
     "GetSimulationState": get_simulation_state,
@@ -273,4 +282,5 @@ HANDLERS: dict[str, Handler] = {
     "GetEntityInfo": get_entity_info,
     "GetEntityBounds": get_entity_bounds,
     "GetSpawnables": get_spawnables,
+    "GetCurrentWorld": get_current_world,
 }
