@@ -23,6 +23,7 @@ from ros2_client import (
     topic_key,
 )
 from support_models import KUKA_JOINTS, ROBOTS, get_joint_states
+from support_urdf import ARM_URDF
 
 from galton.client import Client, EmbeddedDaemon
 
@@ -234,8 +235,9 @@ def test_the_simulate_steps_action_steps_with_feedback(ros: RosClient) -> None:
                     f"{ACTION}_FeedbackMessage")
     subscriber = ros.session.declare_subscriber(key, on_feedback)
     goal = bytes(range(1, 17))
+    spawn(ros, "stepper", "galton://sphere?size=0.05")
     try:
-        _, before, _ = entity_z(ros, "ball")
+        _, before, _ = entity_z(ros, "stepper")
         sent, _ = ros.call(f"{base}/send_goal", f"{ACTION}_SendGoal",
                            bytes(Cdr.writer().put("16B", *goal).put("Q", 30).data))
         assert sent.get("B") == 1  # accepted
@@ -244,7 +246,7 @@ def test_the_simulate_steps_action_steps_with_feedback(ros: RosClient) -> None:
         assert (result.get("b"), result.get_result()) == (4, (OK, ""))  # SUCCEEDED
         seen = [feedback.get(timeout=TIMEOUT_S) for _ in range(30)]
         assert seen == [(done, 30 - done) for done in range(1, 31)]
-        assert entity_z(ros, "ball")[1] == pytest.approx(before + 30 * 0.002)
+        assert entity_z(ros, "stepper")[1] == pytest.approx(before + 30 * 0.002)
         refused, _ = ros.call(f"{base}/send_goal", f"{ACTION}_SendGoal",
                               bytes(Cdr.writer().put("16B", *bytes(16)).put("Q", 0).data))
         assert refused.get("B") == 0  # 0 steps: not accepted
@@ -270,3 +272,35 @@ def test_a_canceled_goal_stops_between_chunks(ros: RosClient) -> None:
     assert again.get("b") == 3  # GOAL_TERMINATED
     state = call(ros, "get_simulation_state", EMPTY)
     assert state.get("B") == 2  # paused where it got to
+
+
+def spawn_request(cdr: Cdr, name: str, uri: str, text: str, z: float) -> None:
+    cdr.put_string(name).put("B", 0).put_string(uri).put_string(text).put_string("")
+    put_pose_stamped(cdr, "world", (0.0, 0.0, z))
+
+
+def test_models_batches_and_states(ros: RosClient) -> None:
+    batch = Cdr.writer().put("I", 2)
+    spawn_request(batch, "hinge", "", ARM_URDF, 0.5)
+    spawn_request(batch, "nothing", "", "", 0.0)
+    reply = call(ros, "spawn_entities", bytes(batch.data))
+    assert reply.get_result()[0] == 150  # ENTITIES_SPAWN_FAILED: one of two
+    results = [(reply.get_result(), reply.get_string()) for _ in range(reply.get("I"))]
+    assert results[0] == ((OK, ""), "hinge/base")
+    assert results[1][0][0] == 104  # NO_RESOURCE
+    assert entity_z(ros, "hinge/base")[2] == pytest.approx(0.5)
+    spawn(ros, "mover", "galton://sphere?size=0.05")
+    set_state = Cdr.writer().put_string("mover").put("iI", 0, 0).put_string("")
+    set_state.put("3d", 0.0, 0.0, 4.0).put("4d", 0.0, 0.0, 0.0, 1.0)
+    set_state.put("6d", *[0.0] * 6).put("6d", *[0.0] * 6).put("B", 1).put("B", 0).put("B", 0)
+    assert call(ros, "set_entity_state", bytes(set_state.data)).get_result() == (OK, "")
+    assert entity_z(ros, "mover")[2] == 4.0
+    filters = Cdr.writer().put_string("^(mover|hinge/base)$").put("I", 0).put("I", 0)
+    filters.put("B", 0).put("B", 0).put("I", 0)
+    states = call(ros, "get_entities_states", bytes(filters.data))
+    assert states.get_result() == (OK, "")
+    assert sorted(states.get_string() for _ in range(states.get("I"))) == ["hinge/base",
+                                                                          "mover"]
+    delete = call(ros, "delete_entity", bytes(Cdr.writer().put_string("hinge/base").data))
+    assert delete.get_result() == (OK, "")
+    assert entity_z(ros, "hinge/arm")[0][0] == NOT_FOUND  # the whole model went
