@@ -127,6 +127,7 @@ class Mirror:
         self.applied = 0  # messages applied
         self.superseded = 0  # messages replaced by a newer one before being applied
         self.refused = 0  # messages the daemon refused (unknown model, bad values)
+        self._last_warning = ""  # a refusal is logged when it differs from the last one
         self._subscriber = front.session.declare_subscriber(key, self._on_sample)
 
     def _on_sample(self, sample: zenoh.Sample) -> None:
@@ -168,8 +169,7 @@ class Mirror:
         if not self._joints:
             self._joints = None
             self.refused += 1
-            log.warning("mirror %s <- %s: no model %r with revolute or prismatic joints "
-                        "(yet)", self.model, self.topic, self.model)
+            self._warn(f"no model {self.model!r} with revolute or prismatic joints (yet)")
             self._next()
             return
         self._apply(message)
@@ -212,8 +212,14 @@ class Mirror:
         self.refused += 1
         if reply.code == ResultCode.NOT_FOUND:
             self._joints = None  # the model was deleted or reloaded: ask again next time
-        log.warning("mirror %s <- %s: %s", self.model, self.topic, reply.message)
+        self._warn(reply.message)
         self._next()
+
+    def _warn(self, message: str) -> None:
+        """Log a refusal once, not at the rate of the messages (100 Hz would flood)."""
+        if message != self._last_warning:
+            self._last_warning = message
+            log.warning("mirror %s <- %s: %s", self.model, self.topic, message)
 
     def close(self) -> None:
         self._subscriber.undeclare()
