@@ -304,3 +304,18 @@ def test_models_batches_and_states(ros: RosClient) -> None:
     delete = call(ros, "delete_entity", bytes(Cdr.writer().put_string("hinge/base").data))
     assert delete.get_result() == (OK, "")
     assert entity_z(ros, "hinge/arm")[0][0] == NOT_FOUND  # the whole model went
+
+
+def test_domain_namespace_and_node_name_reach_the_keys() -> None:
+    with EmbeddedDaemon("mujoco", instance="sim-1", extra_args=[
+            "--ros2", "--ros-domain-id", "7", "--ros-namespace", "/lab"]) as other:
+        client = RosClient(other.endpoint, domain=7)
+        try:
+            tokens = client.graph()
+            assert {(t.domain, t.namespace, t.node) for t in tokens} == {("7", "/lab", "sim_1")}
+            assert "/lab/sim_1/step_simulation" in {t.name for t in tokens}
+            reply, _ = client.call("/lab/sim_1/get_simulation_state", "GetSimulationState",
+                                   EMPTY)
+            assert reply.get("B") == 0  # STOPPED: a fresh daemon
+        finally:
+            client.close()
