@@ -233,6 +233,7 @@ from galton.client import (  # noqa: E402,F401
     cli_control,
     cli_fuzz,
     cli_joints,
+    cli_laws,
     cli_perception,
     cli_router,
     cli_scene,
