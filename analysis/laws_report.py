@@ -8,6 +8,7 @@ calls, and a saved results.json gives the same report.
 
 from __future__ import annotations
 
+import json
 import math
 from pathlib import Path
 
@@ -81,7 +82,8 @@ def render_law_report(results: LawResults, plots: list[str] | None = None) -> st
     config = results.config
     lines = ["# Physical laws through the bridge", "",
              f"Engines: {', '.join(r.engine for r in results.engines)}; laws: "
-             f"{', '.join(config.get('laws', []))}; seed {config.get('seed', 0)}. Each "
+             f"{', '.join(config.get('laws', []))}; seed {config.get('seed', 0)}; "
+             f"parameters {json.dumps(config.get('params') or 'the defaults')}. Each "
              "value is measured through the daemon, each error is value − theory, and a "
              "check passes when |error| ≤ tolerance.", "", *summary_lines(results), "",
              law_table(results), "", "## Tolerances and why", "",

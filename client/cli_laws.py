@@ -5,10 +5,11 @@ The report's plots need matplotlib (the ``[bench]`` extra), imported inside the 
 
 from __future__ import annotations
 
+import json
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 from rich.table import Table
@@ -50,6 +51,9 @@ def laws(
     seed: Annotated[int, typer.Option(min=0, help="Seeds the torque-free body's wobble.")
                     ] = 0,
     out: Annotated[Path, typer.Option(help="Output folder.")] = DEFAULT_OUT,
+    params: Annotated[str | None, typer.Option(
+        help="Engine parameters as JSON for every world the suite loads, e.g. "
+             "'{\"solver_iterations\": 50}' (default: each engine's defaults).")] = None,
     plots: Annotated[bool, typer.Option(help="Draw the plots (needs matplotlib).")] = True,
     as_json: JsonOpt = False,
 ) -> None:
@@ -59,13 +63,26 @@ def laws(
     from galton.analysis.laws_report import write_law_outputs
 
     wanted = _csv(engines)
+    given = _params(params)
 
     def run() -> LawResults:
         with _daemon(ctx.obj, wanted) as sim:
-            return run_laws(sim, wanted, _csv(only), seed, None if as_json else _say)
+            return run_laws(sim, wanted, _csv(only), seed, None if as_json else _say, given)
     results = run_guarded(run)
     written = write_law_outputs(results, out, plots)
     emit(results.to_dict(), as_json, lambda: _show(results, written))
+
+
+def _params(text: str | None) -> dict[str, Any] | None:
+    if text is None:
+        return None
+    try:
+        given = json.loads(text)
+    except json.JSONDecodeError as error:
+        raise typer.BadParameter(f"--params is not JSON ({error}): {text!r}") from error
+    if not isinstance(given, dict):
+        raise typer.BadParameter(f"--params must be a JSON object, got {text!r}")
+    return given
 
 
 def _say(engine: str, key: str) -> None:

@@ -10,7 +10,7 @@ a daemon adds joins the suite as it is.
 from __future__ import annotations
 
 from galton.client.laws.registry import EXPERIMENTS, KEYS, Experiment
-from galton.client.laws.runner import choose, engines_of, run_engine, run_laws
+from galton.client.laws.runner import choose, engines_of, run_engine, run_law, run_laws
 
 __all__ = ["EXPERIMENTS", "KEYS", "Experiment", "choose", "engines_of", "run_engine",
-           "run_laws"]
+           "run_law", "run_laws"]
