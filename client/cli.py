@@ -235,6 +235,7 @@ from galton.client import (  # noqa: E402,F401
     cli_joints,
     cli_laws,
     cli_perception,
+    cli_report_card,
     cli_router,
     cli_scene,
     cli_states,
