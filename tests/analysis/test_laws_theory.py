@@ -60,3 +60,18 @@ def test_a_check_passes_within_its_tolerance_only() -> None:
     assert not Check("x", "q", "m", 1.0, 1.06, 0.05, "why").passed
     assert not Check("x", "q", "m", 1.0, None, 0.05, "why").passed
     assert not Check("x", "q", "m", 1.0, math.nan, 0.05, "why").passed
+
+
+def test_the_report_shows_unrun_checks_and_each_engines_own_tolerance() -> None:
+    from galton.analysis.laws import EngineLaws, LawResults
+    from galton.analysis.laws_report import render_law_report
+
+    fine = EngineLaws("a", "1", 0.002, 9.81, [Check("fall", "drop", "m", 4.9, 4.91, 0.02, "w")])
+    coarse = EngineLaws("b", "2", 0.004, 9.81, [
+        Check("fall", "drop", "m", 4.9, 4.95, 0.04, "w"),
+        Check("swing", "period", "s", 1.4, None, 0.01, "w", note="the engine loads no URDF")])
+    text = render_law_report(LawResults([fine, coarse], {"laws": ["fall", "swing"]}))
+    assert "| fall | drop | m | 4.9 | 4.91 (0.01) ±0.02 **pass** | 4.95 (0.05) ±0.04 **FAIL** |" \
+        in text
+    assert "| swing | period | s | 1.4 | not run | — (the engine loads no URDF) |" in text
+    assert "- **b** 2: 0 of 2 checks pass" in text
