@@ -18,7 +18,7 @@ from galton.analysis.laws import LawResults
 from galton.analysis.report_card import CardResults
 from galton.client.cli import app, console, run_guarded
 from galton.client.embedded import EmbeddedDaemon
-from galton.client.report_card import CardPlan, run_card
+from galton.client.report_card import CardPlan, run_card, write_report_card
 from galton.client.sdk import Client
 
 DEFAULT_OUT = Path("galton-report-card")
@@ -47,9 +47,6 @@ def report_card(
     """Measure every engine on daemons started here (the Galton board, the physical laws,
     footprint, embedding costs) and write a ranked report card: report-card.md, a
     self-contained report-card.html, card.json and the laws' report under laws/."""
-    from galton.analysis.laws_report import write_law_outputs
-    from galton.analysis.report_card_outputs import write_card_outputs
-
     plan = CardPlan.quick() if quick else CardPlan()
     chosen = [e.strip() for e in engines.split(",") if e.strip()] if engines else None
 
@@ -60,8 +57,5 @@ def report_card(
     card.config |= {"quick": quick, "board_plan": plan.describe(), "machine_note": note,
                     "taken": datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC"),
                     "command": "galton-client " + shlex.join(sys.argv[1:])}
-    written = write_law_outputs(laws, out / "laws")
-    images = [p for k, p in written.items() if p.suffix == ".png"]
-    card_files = write_card_outputs(card, out, extra_images=images)
-    console.print(f"wrote {', '.join(str(p) for p in card_files.values())} and {out / 'laws'}",
-                  markup=False)
+    written = write_report_card(card, laws, out)
+    console.print(f"wrote {', '.join(str(p) for p in written.values())}", markup=False)

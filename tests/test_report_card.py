@@ -7,8 +7,7 @@ import json
 from pathlib import Path
 
 from galton.analysis.report_card import CRITERIA, CardResults, value_text
-from galton.analysis.report_card_outputs import write_card_outputs
-from galton.client.report_card import CardPlan, run_card
+from galton.client.report_card import CardPlan, run_card, write_report_card
 
 TINY = CardPlan(fidelity_balls=20, repetitions=1, curve=(1,), footprint_s=0.5, round_trips=5,
                 world_ops=1, laws=("free-fall",))
@@ -23,7 +22,8 @@ def test_a_tiny_card_measures_every_criterion(tmp_path: Path) -> None:
     assert 0 < measures["idle_rss_mb"] < 2000  # type: ignore[operator]
     assert measures["step_zmq_ms"] > 0 and set(card.curves["pybullet"]) == {1, 20}  # type: ignore[operator]
     assert [c.law for c in laws.engines[0].checks] == ["free-fall"]
-    files = write_card_outputs(card, tmp_path, plots=False)
+    files = write_report_card(card, laws, tmp_path)
+    assert files["laws/results_json"].exists() and files["card_html"].exists()
     saved = CardResults.from_dict(json.loads(files["card_json"].read_text()))
     text = files["card_md"].read_text()
     for criterion in CRITERIA:

@@ -4,6 +4,6 @@ with a recommendation per use (``galton.analysis.report_card``)."""
 
 from __future__ import annotations
 
-from galton.client.report_card.run import CardPlan, run_card
+from galton.client.report_card.run import CardPlan, run_card, write_report_card
 
-__all__ = ["CardPlan", "run_card"]
+__all__ = ["CardPlan", "run_card", "write_report_card"]

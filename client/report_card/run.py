@@ -9,6 +9,7 @@ import time
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
+from pathlib import Path
 
 from galton.analysis.board import BoardSpec
 from galton.analysis.laws import LawResults
@@ -126,3 +127,15 @@ def run_card(engines: Sequence[str], plan: CardPlan, seed: int = 0, timeout: flo
     return card, LawResults(law_records, {"engines": list(engines),
                                           "laws": [e.key for e in choose(plan.laws)],
                                           "seed": seed})
+
+
+def write_report_card(card: CardResults, laws: LawResults, out: Path) -> dict[str, Path]:
+    """The card's files in ``out`` and the laws' report in ``out/laws``, its plots inlined
+    in the card's HTML page too."""
+    from galton.analysis.laws_report import write_law_outputs
+    from galton.analysis.report_card_outputs import write_card_outputs
+
+    written = write_law_outputs(laws, out / "laws")
+    images = [path for path in written.values() if path.suffix == ".png"]
+    return {**write_card_outputs(card, out, extra_images=images),
+            **{f"laws/{key}": path for key, path in written.items()}}
