@@ -14,7 +14,6 @@ from pathlib import Path
 from galton.analysis.board import BoardSpec
 from galton.analysis.laws import LawResults
 from galton.analysis.report_card import CardResults
-from galton.analysis.summary import summarise_group
 from galton.client.bench.experiment import ExperimentConfig, run_experiment
 from galton.client.embedded import EmbeddedDaemon
 from galton.client.laws import choose, run_engine
@@ -60,6 +59,8 @@ def board_measures(sim: Client, engine: str, plan: CardPlan, seed: int
                    ) -> tuple[dict[str, float | None], dict[int, float], int]:
     """Fidelity at the plan's ball count, the RTF curve (mean RTF per ball count), and
     the balls lost to a diverged (NaN) state."""
+    from galton.analysis.summary import summarise_group  # scipy: the [bench] extra
+
     board = BoardSpec.load("paper")
     fidelity = ExperimentConfig(board=board, engines=(engine,), balls=(plan.fidelity_balls,),
                                 repetitions=plan.repetitions, seed=seed)
