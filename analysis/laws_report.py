@@ -94,8 +94,12 @@ def render_law_report(results: LawResults, plots: list[str] | None = None) -> st
 
 
 def plot_series(results: LawResults, out: Path) -> list[str]:
-    """One PNG per kind of series any engine kept; the file names written."""
-    from matplotlib.figure import Figure  # the [bench] extra, loaded only to draw
+    """One PNG per kind of series any engine kept; the file names written (none where
+    matplotlib, the [bench] extra, is not installed: the report says so)."""
+    try:
+        from matplotlib.figure import Figure
+    except ImportError:
+        return []
 
     written = []
     for filename, prefix in PLOT_FILES.items():
