@@ -6,19 +6,15 @@ import numpy as np
 import pytest
 
 from galton.client import Client, plane, spheres
+from galton.client.laws import run_law
 from galton.protocol import PhysicsError
 
-GRAVITY = 9.81
 
-
-def test_free_fall_matches_half_g_t_squared(sim: Client) -> None:
-    sim.spawn(spheres(["ball"], [[0, 0, 10.0]], 0.05))
-    dt = sim.status().timestep
-    steps = round(1.0 / dt)
-    stamp = sim.step(steps)
-    z = sim.get_states(["ball"]).positions[0, 2]
-    expected = 10.0 - 0.5 * GRAVITY * stamp.sim_time**2
-    assert z == pytest.approx(expected, abs=0.01 * (10.0 - expected))
+@pytest.mark.parametrize("law", ["free-fall", "projectile"])
+def test_free_flight_matches_the_law_suite(sim: Client, law: str) -> None:
+    """The law suite's experiment (galton-client laws), within its tolerance g·t·dt."""
+    for check in run_law(sim, law):
+        assert check.passed, check
 
 
 def test_a_slow_body_touching_nothing_keeps_coasting(sim: Client) -> None:
