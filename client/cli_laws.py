@@ -9,16 +9,16 @@ import json
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 from rich.table import Table
 
-from galton.analysis.laws import LawResults
 from galton.client.cli import JsonOpt, Target, app, console, emit, run_guarded
-from galton.client.embedded import EmbeddedDaemon
-from galton.client.laws import KEYS, run_laws
-from galton.client.sdk import Client
+
+if TYPE_CHECKING:
+    from galton.analysis.laws import LawResults
+    from galton.client.sdk import Client
 
 DEFAULT_OUT = Path("galton-laws")
 
@@ -31,6 +31,8 @@ def _csv(text: str | None) -> list[str] | None:
 @contextmanager
 def _daemon(target: Target, engines: list[str] | None) -> Iterator[Client]:
     """The daemon at --connect, or one started here (on the first engine asked for)."""
+    from galton.client.embedded import EmbeddedDaemon
+    from galton.client.sdk import Client
     if target.connect:
         with target.client() as client:
             yield client
@@ -47,7 +49,9 @@ def laws(
     engines: Annotated[str | None, typer.Option(
         help="Comma-separated engines (default: every engine the daemon offers).")] = None,
     only: Annotated[str | None, typer.Option(
-        help=f"Comma-separated laws to run (default all: {', '.join(KEYS)}).")] = None,
+        help="Comma-separated laws to run, e.g. free-fall,pendulum-small (default all; an "
+             "unknown name is refused with the suite's list; docs/PHYSICS.md has them).")
+    ] = None,
     seed: Annotated[int, typer.Option(min=0, help="Seeds the torque-free body's wobble.")
                     ] = 0,
     out: Annotated[Path, typer.Option(help="Output folder.")] = DEFAULT_OUT,
@@ -61,6 +65,7 @@ def laws(
     friction, bounce, collisions, a tower, a torque-free spin) and write results.json,
     report.md and plots. With no --connect a daemon is started here."""
     from galton.analysis.laws_report import write_law_outputs
+    from galton.client.laws import run_laws
 
     wanted = _csv(engines)
     given = _params(params)

@@ -10,22 +10,23 @@ import shlex
 import sys
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from galton.analysis.laws import LawResults
-from galton.analysis.report_card import CardResults
 from galton.client.cli import app, console, run_guarded
-from galton.client.embedded import EmbeddedDaemon
-from galton.client.report_card import CardPlan, run_card, write_report_card
-from galton.client.sdk import Client
+
+if TYPE_CHECKING:
+    from galton.analysis.laws import LawResults
+    from galton.analysis.report_card import CardResults
 
 DEFAULT_OUT = Path("galton-report-card")
 
 
 def offered_engines() -> list[str]:
     """The engines an installed daemon offers (asked of one started for a moment)."""
+    from galton.client.embedded import EmbeddedDaemon
+    from galton.client.sdk import Client
     with EmbeddedDaemon("mujoco") as daemon, Client(daemon.instance, daemon.endpoint,
                                                      timeout=30.0) as sim:
         return list(sim.capabilities().engines_available)
@@ -47,6 +48,7 @@ def report_card(
     """Measure every engine on daemons started here (the Galton board, the physical laws,
     footprint, embedding costs) and write a ranked report card: report-card.md, a
     self-contained report-card.html, card.json and the laws' report under laws/."""
+    from galton.client.report_card import CardPlan, run_card, write_report_card
     plan = CardPlan.quick() if quick else CardPlan()
     chosen = [e.strip() for e in engines.split(",") if e.strip()] if engines else None
 
