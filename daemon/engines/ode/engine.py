@@ -23,11 +23,17 @@ import numpy as np
 from galton.daemon.engine import (
     FEATURE_CONTACTS,
     FEATURE_DELETE,
+    FEATURE_JOINT_TARGETS,
+    FEATURE_JOINTS,
+    FEATURE_LOAD_MODEL,
     FEATURE_RAYCAST,
     FEATURE_SET_STATE,
     FEATURE_SNAPSHOT,
     FEATURE_SPAWN,
     FEATURE_STATIC_POSE,
+    FEATURE_TARGET_EFFORT,
+    FEATURE_TARGET_POSITION,
+    FEATURE_TARGET_VELOCITY,
     FEATURE_UPDATE_FRICTION,
     FEATURE_UPDATE_MASS,
     FEATURE_UPDATE_RESTITUTION,
@@ -39,7 +45,7 @@ from galton.daemon.engines.ode import snapshot as snapshots
 from galton.daemon.engines.ode import spawn as spawning
 from galton.daemon.engines.ode import state as states
 from galton.daemon.engines.ode.contacts import Collider, sync_sleep
-from galton.daemon.engines.ode.joints import Robots
+from galton.daemon.engines.ode.joints import Robots, place
 from galton.daemon.engines.ode.native import LIB, version
 from galton.daemon.engines.ode.params import SPECS, SURFACE_DEFAULTS, default_keys
 from galton.daemon.engines.ode.rays import RayCaster
@@ -62,7 +68,9 @@ from galton.protocol import (
 
 FEATURES = (FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDATE_MASS,
             FEATURE_UPDATE_FRICTION, FEATURE_UPDATE_RESTITUTION, FEATURE_UPDATE_RGBA,
-            FEATURE_STATIC_POSE, FEATURE_WRENCH, FEATURE_SNAPSHOT, FEATURE_RAYCAST,
+            FEATURE_STATIC_POSE, FEATURE_LOAD_MODEL, FEATURE_JOINTS, FEATURE_JOINT_TARGETS,
+            FEATURE_TARGET_POSITION, FEATURE_TARGET_VELOCITY, FEATURE_TARGET_EFFORT,
+            FEATURE_WRENCH, FEATURE_SNAPSHOT, FEATURE_RAYCAST,
             FEATURE_CONTACTS)
 
 
@@ -154,7 +162,8 @@ class OdeEngine(Engine):
         for body in made:
             body.serial = next(self._serials)
             self._bodies[body.name] = body
-            self._by_geom[body.geom] = body
+            for geom in body.geoms():
+                self._by_geom[geom] = body
             if not body.static:
                 self._moving.append(body)
 
@@ -170,7 +179,8 @@ class OdeEngine(Engine):
         self._collider.forget()
         for body in bodies:
             del self._bodies[body.name]
-            del self._by_geom[body.geom]
+            for geom in body.geoms():
+                del self._by_geom[geom]
             self._wrenches.pop(body.name, None)
         self._moving = [b for b in self._moving if b.name in self._bodies]
         spawning.destroy(bodies)
@@ -225,6 +235,9 @@ class OdeEngine(Engine):
             self._diverged = True  # not handed to ODE: such a world has diverged
             return
         states.write(bodies, poses, twists)
+        for body in bodies:
+            if body.model == body.name:  # a model's root carries its links
+                place(self._robots.models[body.name], self._bodies, {})
 
     def step(self, count: int) -> None:
         collide, world, dt = self._collider.collide, self._world, self.timestep

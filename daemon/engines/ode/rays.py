@@ -38,10 +38,14 @@ class RayCaster:
             LIB.dGeomRaySet(self.ray, *origins[k].tolist(), *directions[k].tolist())
             self.best = None
             LIB.dSpaceCollide2(self.ray, self.space, None, self.callback)
-            if self.best is not None:
-                distances[k], names[k], point, normal = self.best
+            found = self._found()
+            if found is not None:
+                distances[k], names[k], point, normal = found
                 hits[k], points[k], normals[k] = True, point, normal
         return hits, names, points, normals, distances
+
+    def _found(self) -> tuple[float, str, tuple[float, ...], tuple[float, ...]] | None:
+        return self.best
 
     def _near(self, _data: Any, g1: int, g2: int) -> None:
         other = g2 if g1 == self.ray else g1

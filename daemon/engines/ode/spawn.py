@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from galton.daemon.engines.ode.frames import Frame
 from galton.daemon.engines.ode.native import LIB, Mass, body_state, quaternion
 from galton.protocol import BodyGroup, InvalidArgumentError
 from galton.protocol.model import POSE_WIDTH, TWIST_WIDTH
@@ -48,10 +49,16 @@ class Body:
     awake: bool = True
     model: str | None = None  # the root of the loaded model it belongs to
     serial: int = 0  # its place in the order bodies were made (contacts.Collider)
+    extra: list[int] = field(default_factory=list)  # a link's further collision geoms
+    frame: Frame | None = None  # a link's centre of mass in its frame (None: at its origin)
+
+    def geoms(self) -> list[int]:
+        return ([self.geom] if self.geom else []) + self.extra
 
     def set_bits(self, kind: int) -> None:
-        LIB.dGeomSetCategoryBits(self.geom, kind)
-        LIB.dGeomSetCollideBits(self.geom, COLLIDES[kind])
+        for geom in self.geoms():
+            LIB.dGeomSetCategoryBits(geom, kind)
+            LIB.dGeomSetCollideBits(geom, COLLIDES[kind])
 
 
 def volume(shape: str, size: tuple[float, ...]) -> float:
@@ -180,9 +187,9 @@ def set_mass(body: Body, total: float) -> None:
 def destroy(bodies: list[Body]) -> None:
     """Free the geoms and bodies (a body's contact joints go with the next step's empty)."""
     for body in bodies:
-        if body.geom:
-            LIB.dGeomDestroy(body.geom)
-            body.geom = 0
+        for geom in body.geoms():
+            LIB.dGeomDestroy(geom)
+        body.geom, body.extra = 0, []
         if body.body:
             LIB.dBodyDestroy(body.body)
             body.body = 0

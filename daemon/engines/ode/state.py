@@ -12,6 +12,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from galton.daemon.engines.ode import frames
 from galton.daemon.engines.ode.native import AVEL, LIB, LVEL, POS, QUAT, quaternion
 from galton.daemon.engines.ode.spawn import AWAKE, Body, place_static
 
@@ -34,7 +35,26 @@ def read(bodies: Sequence[Body]) -> tuple[np.ndarray, np.ndarray]:
     for k, body in enumerate(bodies):
         if body.static:
             poses[k] = body.pose
+        elif body.frame is not None:
+            poses[k], twists[k] = link_state(body, poses[k], twists[k])
     return poses, twists
+
+
+def link_state(body: Body, pose: np.ndarray, twist: np.ndarray
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """A link's frame and its twist there, from its body at the centre of mass."""
+    assert body.frame is not None
+    position, turn = frames.compose((pose[:3], pose[3:]), frames.inverse(body.frame))
+    linear = twist[:3] + np.cross(twist[3:], position - pose[:3])
+    return np.concatenate([position, turn]), np.concatenate([linear, twist[3:]])
+
+
+def body_pose(body: Body, pose: np.ndarray) -> np.ndarray:
+    """Where the body (at the centre of mass) is when its link's frame is at ``pose``."""
+    if body.frame is None:
+        return pose
+    position, turn = frames.compose((pose[:3], pose[3:]), body.frame)
+    return np.concatenate([position, turn])
 
 
 def wild(values: np.ndarray | None) -> bool:
@@ -51,14 +71,23 @@ def write(bodies: Sequence[Body], poses: np.ndarray | None, twists: np.ndarray |
             continue
         handle = body.body
         if poses is not None:
-            pose = poses[k].tolist()
+            pose = body_pose(body, poses[k]).tolist()
             LIB.dBodySetPosition(handle, *pose[:3])
             LIB.dBodySetQuaternion(handle, quaternion(pose[3:]))
         if twists is not None:
-            twist = twists[k].tolist()
+            twist = body_twist(body, twists[k]).tolist()
             LIB.dBodySetLinearVel(handle, *twist[:3])
             LIB.dBodySetAngularVel(handle, *twist[3:])
         wake(body)
+
+
+def body_twist(body: Body, twist: np.ndarray) -> np.ndarray:
+    """The body's twist at its centre of mass from its link's twist at the link's frame."""
+    if body.frame is None:
+        return twist
+    pose = read([body])[0][0]  # the link's frame now (poses are set before twists)
+    centre = body.state[POS:POS + 3]
+    return np.concatenate([twist[:3] + np.cross(twist[3:], centre - pose[:3]), twist[3:]])
 
 
 def wake(body: Body) -> None:
