@@ -58,7 +58,7 @@ class Collider:
         for contact in self.buffer:
             surface = contact.surface
             surface.bounce_vel = values["ode.bounce_velocity"]
-            surface.soft_cfm = values["ode.contact_soft_cfm"]
+            surface.soft_cfm = soft_cfm(values)
             surface.soft_erp = values["ode.contact_soft_erp"]
 
     def collide(self, recording: bool) -> None:
@@ -136,6 +136,13 @@ class Collider:
 
     def close(self) -> None:
         LIB.dJointGroupDestroy(self.group)
+
+
+def soft_cfm(values: dict[str, Any]) -> float:
+    """The contacts' soft CFM at this step (params.py, ``ode.soft_cfm_step``)."""
+    reference = values["ode.soft_cfm_step"]
+    scale = values["timestep"] / reference if reference > 0 else 1.0
+    return float(values["ode.contact_soft_cfm"] * scale)
 
 
 def sync_sleep(moving: list[Body]) -> None:

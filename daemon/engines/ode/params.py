@@ -44,6 +44,12 @@ SPECS: dict[str, ParamSpec] = {spec.name: spec for spec in (
     ParamSpec("ode.contact_soft_cfm", 0.001, "", "Contact softness (ContactProperties."
               "softCFM): with soft_erp, a spring of soft_erp / (timestep x soft_cfm) N/m.",
               number(0, 1)),
+    ParamSpec("ode.soft_cfm_step", WEBOTS_TIMESTEP, "s", "The step ode.contact_soft_cfm is "
+              "meant for. ODE softens a contact's solve by soft_cfm / timestep, so Webots' "
+              "0.001, made for 32 ms, takes most of the bounce at small steps (a 0.5 bounce "
+              "gives 0.26 at 2 ms); the engine uses soft_cfm x timestep / this, which bounces "
+              "as Webots does at every step and is Webots' own value at 32 ms. 0: soft CFM as "
+              "given.", number(0, 1)),
     ParamSpec("ode.contact_soft_erp", 0.2, "", "Contact error reduction (ContactProperties."
               "softERP).", number(0, 1)),
     ParamSpec("ode.bounce_velocity", 0.01, "m/s", "Contacts approaching slower than this do "
