@@ -135,3 +135,26 @@ def test_a_ray_hits_the_nearest_ball(engine: OdeEngine) -> None:
     np.testing.assert_allclose(points[0], [1 - RADIUS, 0, 1], atol=1e-9)
     np.testing.assert_allclose(normals[0], [-1, 0, 0], atol=1e-9)
     assert distances[0] == pytest.approx(1 - RADIUS) and np.isnan(distances[1])
+
+
+def test_a_robot_with_targets_and_a_wrench_replays_after_a_restore(engine: OdeEngine) -> None:
+    from galton.daemon.engine_check_joints import DRIVEN, RIG
+
+    engine.load_model("urdf", RIG, None, "r_", fixed_base=True)
+    engine.spawn([ground(), balls(["ball"], [0.3, 0.0, 2.0])])
+    engine.set_joint_targets(DRIVEN, "position", np.array([0.4, 0.1]), np.array([40.0, 30.0]),
+                             np.array([2.0, 1.0]), np.array([np.inf, 5.0]))
+    engine.set_wrenches(["r_tip"], np.array([[0.0, 0.0, 3.0, 0.0, 0.0, 0.0]]), None)
+    engine.step(50)
+    copy = OdeEngine()
+    try:
+        copy.restore(engine.snapshot())
+        names = ["r_base", "r_arm", "r_carriage", "r_tip", "ball"]
+        for world in (engine, copy):
+            world.step(200)
+        for mine, theirs in zip(engine.get_states(names), copy.get_states(names), strict=True):
+            assert np.array_equal(mine, theirs)
+        assert np.array_equal(engine.get_joint_states(DRIVEN)[2], copy.get_joint_states(
+            DRIVEN)[2])
+    finally:
+        copy.close()

@@ -282,9 +282,10 @@ class OdeEngine(Engine):
     def set_wrenches(self, names: Sequence[str], wrenches: np.ndarray,
                      points: np.ndarray | None) -> None:
         bodies = self._lookup(names)
-        static = [b.name for b in bodies if b.static]
+        static = [b.name for b in bodies if b.static or b.welded]
         if static:
-            raise InvalidArgumentError(f"entity {static[0]!r} is static: no wrench moves it")
+            raise InvalidArgumentError(f"entity {static[0]!r} is static or a fixed base: no "
+                                       "wrench moves it")
         for k, body in enumerate(bodies):
             force, torque = wrenches[k, :3], wrenches[k, 3:]
             if points is not None:
@@ -345,20 +346,49 @@ class OdeEngine(Engine):
     def snapshot(self, *, canonical: bool = True) -> dict[str, Any]:
         if canonical:
             self.reset_dynamics()
-        if self._robots.models:
-            raise FeatureUnsupportedError("the ode engine takes no snapshot of a world "
-                                          "holding loaded models")
-        bodies = [snapshots.body_data(b, b.static or b.awake, self._wrenches.get(b.name))
-                  for b in self._bodies.values()]
+        bodies = [self._body_data(b) for b in self._bodies.values()
+                  if b.model is None or b.model == b.name]
         return {"format": snapshots.FORMAT, "version": snapshots.VERSION, "engine": self.name,
                 "params": self.get_params(), "bodies": bodies, "diverged": self._diverged}
+
+    def _body_data(self, body: Body) -> dict[str, Any]:
+        if body.model is None:
+            return snapshots.body_data(body, body.static or body.awake,
+                                       self._wrenches.get(body.name))
+        model = self._robots.models[body.name]
+        links = [snapshots.body_data(b, b.awake, self._wrenches.get(b.name))
+                 for b in self._robots.links_of(body.name, self._bodies)]
+        joints = [{"name": j.info.name, "mode": j.info.mode, "target": j.target, "kp": j.kp,
+                   "kd": j.kd, "max_effort": j.max_effort, "effort": j.effort}
+                  for j in model.joints]
+        return snapshots.model_data(model.source, links, joints)
 
     def restore(self, data: dict[str, Any]) -> None:
         params, bodies = snapshots.check(data)
         self.set_params(params)
         for body in bodies:
-            self._restore_body(body)
+            if "model" in body:
+                self._restore_model(body)
+            else:
+                self._restore_body(body)
         self._diverged = bool(data.get("diverged", False))
+
+    def _restore_model(self, data: dict[str, Any]) -> None:
+        source = data["model"]
+        self.load_model("urdf", source["text"], source["path"], source["prefix"],
+                        fixed_base=source["fixed_base"])
+        for link in data["links"]:
+            body = self._lookup([link["name"]])[0]
+            body.friction, body.restitution = link["friction"], link["restitution"]
+            body.follows_friction, body.follows_restitution = link["follows"]
+            self._write_raw(body, link)
+        for joint in data["joints"]:
+            held = self._robots.by_name.get(joint["name"])
+            if held is None:
+                raise InvalidArgumentError(f"not an ode snapshot: no joint {joint['name']!r}")
+            held.info.mode = joint["mode"]
+            held.target, held.kp, held.kd = joint["target"], joint["kp"], joint["kd"]
+            held.max_effort, held.effort = joint["max_effort"], joint["effort"]
 
     def _restore_body(self, data: dict[str, Any]) -> None:
         static, state = data["static"], data["state"]
@@ -371,9 +401,12 @@ class OdeEngine(Engine):
         body = made[0]
         body.follows_friction, body.follows_restitution = data["follows"]
         self._adopt(made)
-        if static:
-            return
-        LIB.dBodySetPosition(body.body, *state[:3])  # marks the geom moved
+        if not static:
+            self._write_raw(body, data)
+
+    def _write_raw(self, body: Body, data: dict[str, Any]) -> None:
+        state = data["state"]
+        LIB.dBodySetPosition(body.body, *state[:3])  # marks the geoms moved
         body.state[:] = state  # ODE's own doubles, as they were
         if not data["enabled"]:
             LIB.dBodyDisable(body.body)

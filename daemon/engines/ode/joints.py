@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -73,7 +74,8 @@ class Model:
     root: str
     links: list[str]  # root first, then in load order
     joints: list[Joint]  # parents before children
-    base: int = 0  # the fixed joint to the world (0: a floating base)
+    free: JointInfo | None = None  # a floating base's free joint (its root's pose)
+    source: dict[str, Any] = field(default_factory=dict)  # how it was loaded (snapshots)
 
 
 @dataclass
@@ -114,7 +116,8 @@ class Robots:
             joint.push(tau - damping * rate)
 
     def infos(self) -> list[JointInfo]:
-        return [j.info for m in self.models.values() for j in m.joints]
+        return [info for m in self.models.values()
+                for info in ([m.free] if m.free else []) + [j.info for j in m.joints]]
 
     def links_of(self, root: str, bodies: dict[str, Body]) -> list[Body]:
         model = self.models.get(root)
@@ -133,8 +136,6 @@ class Robots:
             self.by_name.pop(joint.info.name, None)
             if joint.handle:
                 LIB.dJointDestroy(joint.handle)
-        if model.base:
-            LIB.dJointDestroy(model.base)
 
     def destroy(self) -> None:
         for root in list(self.models):

@@ -57,6 +57,9 @@ def check(data: Any) -> tuple[dict[str, Any], list[dict[str, Any]]]:
         raise _fail("bodies", "must be a list")
     names: set[str] = set()
     for k, body in enumerate(bodies):
+        if isinstance(body, dict) and "model" in body:
+            check_model(body, f"bodies[{k}]")
+            continue
         _check_body(body, f"bodies[{k}]")
         if body["name"] in names:
             raise _fail(f"bodies[{k}].name", "repeats another body's")
@@ -97,3 +100,43 @@ def _check_body(body: Any, where: str) -> None:
         _numbers(body.get("state"), STATE_LENGTH, f"{where}.state")
     if body.get("wrench") is not None:
         _numbers(body["wrench"], 6, f"{where}.wrench")
+
+
+JOINT_FIELDS = ("target", "kp", "kd", "max_effort", "effort")
+
+
+def model_data(source: dict[str, Any], links: list[dict[str, Any]],
+               joints: list[dict[str, Any]]) -> dict[str, Any]:
+    """A loaded model: how it was loaded, then its links' states and its joints' targets."""
+    return {"model": dict(source), "links": links, "joints": joints}
+
+
+def check_model(entry: Any, where: str) -> None:
+    source = entry.get("model")
+    if not isinstance(source, dict) or not isinstance(source.get("prefix"), str) or \
+            not isinstance(source.get("fixed_base"), bool) or not all(
+                source.get(k) is None or isinstance(source.get(k), str)
+                for k in ("text", "path")):
+        raise _fail(f"{where}.model", "must say text or path, prefix and fixed_base")
+    links, joints = entry.get("links"), entry.get("joints")
+    if not isinstance(links, list) or not isinstance(joints, list):
+        raise _fail(where, "must hold lists of links and joints")
+    for k, link in enumerate(links):
+        if not isinstance(link, dict) or not isinstance(link.get("name"), str) or \
+                not isinstance(link.get("enabled"), bool):
+            raise _fail(f"{where}.links[{k}]", "must name the link and its sleep flag")
+        _numbers(link.get("state"), STATE_LENGTH, f"{where}.links[{k}].state")
+        for key in ("friction", "restitution"):
+            _numbers([link.get(key)], 1, f"{where}.links[{k}].{key}")
+        if link.get("wrench") is not None:
+            _numbers(link["wrench"], 6, f"{where}.links[{k}].wrench")
+        follows = link.get("follows")
+        if not isinstance(follows, list) or len(follows) != 2 or not all(
+                isinstance(f, bool) for f in follows):
+            raise _fail(f"{where}.links[{k}].follows", "must be two booleans")
+    for k, joint in enumerate(joints):
+        if not isinstance(joint, dict) or not isinstance(joint.get("name"), str) or \
+                joint.get("mode") not in ("none", "position", "velocity", "effort"):
+            raise _fail(f"{where}.joints[{k}]", "must name the joint and its mode")
+        _numbers([joint.get(f) for f in JOINT_FIELDS], len(JOINT_FIELDS),
+                 f"{where}.joints[{k}]")

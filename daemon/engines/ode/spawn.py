@@ -51,6 +51,7 @@ class Body:
     serial: int = 0  # its place in the order bodies were made (contacts.Collider)
     extra: list[int] = field(default_factory=list)  # a link's further collision geoms
     frame: Frame | None = None  # a link's centre of mass in its frame (None: at its origin)
+    welded: bool = False  # a fixed-base model's root: kinematic, no force moves it
 
     def geoms(self) -> list[int]:
         return ([self.geom] if self.geom else []) + self.extra

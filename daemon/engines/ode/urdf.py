@@ -5,8 +5,8 @@ each joint an ODE joint (joints.py). MJCF is not offered: ODE has no loader for 
 Collision shapes: box, sphere and cylinder as ODE's own; a mesh as the box of its bounds (ODE
 trimeshes are left out). Links of one model do not collide with each other (contacts.py).
 A link without inertial gets 1 g and a 1e-6 kg·m² inertia, as such a link must move with
-its joint. The root sits at the world's origin, welded to the world unless ``fixed_base``
-is False.
+its joint. The root sits at the world's origin, a kinematic body (held still, moved only by
+teleports) unless ``fixed_base`` is False, when it is free and its free joint is listed.
 """
 
 from __future__ import annotations
@@ -15,6 +15,7 @@ import ctypes
 import io
 import math
 import os
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -34,14 +35,17 @@ JOINT_TYPES = {"revolute": "revolute", "continuous": "revolute", "prismatic": "p
 def parse(text: str | None, path: str | None) -> Any:
     """The URDF's robot (yourdfpy), or InvalidArgumentError saying why not."""
     import yourdfpy  # only when a model is loaded: it pulls in trimesh
+    from lxml import etree
 
     if text is None and path is None:
         raise InvalidArgumentError("give a model as text or as a path")
     if text is None and not os.path.isfile(path or ""):
         raise InvalidArgumentError(f"no model file at {path!r}")
     try:
-        source = io.StringIO(text) if text is not None else path
-        urdf = yourdfpy.URDF.load(source, build_scene_graph=False, load_meshes=False,
+        data = text.encode() if text is not None else Path(path or "").read_bytes()
+        etree.fromstring(data)  # strict: yourdfpy would recover what it can of a broken file
+        urdf = yourdfpy.URDF.load(io.BytesIO(data) if text is not None else path,
+                                  build_scene_graph=False, load_meshes=False,
                                   load_collision_meshes=False)
     except Exception as exc:  # lxml's and yourdfpy's errors alike: the file is bad
         raise InvalidArgumentError(f"the URDF model does not parse: {exc}") from exc
@@ -153,11 +157,14 @@ def load_urdf(world: int, space: int, robots: Robots, text: str | None, path: st
             made.append(_link_body(world, space, by_name[name], names[name], names[root],
                                    placed[name], shapes[name], values, name == root))
         bodies = {b.name: b for b in made}
-        model = Model(names[root], [names[n] for n in links], [])
-        if fixed_base:
-            model.base = int(LIB.dJointCreateFixed(world, None))
-            LIB.dJointAttach(model.base, bodies[names[root]].body, None)
-            LIB.dJointSetFixed(model.base)
+        model = Model(names[root], [names[n] for n in links], [], source={
+            "text": text, "path": path, "prefix": prefix, "fixed_base": fixed_base})
+        if fixed_base:  # a kinematic body: immovable by any force, moved by teleports
+            LIB.dBodySetKinematic(bodies[names[root]].body)
+            bodies[names[root]].welded = True
+        else:
+            model.free = JointInfo(name=names[root] + ":free", model=names[root], type="free",
+                                   parent="", child=names[root])
         for joint in ordered:
             model.joints.append(_joint(world, joint, prefix, names, bodies, placed))
     except BaseException:
@@ -166,7 +173,7 @@ def load_urdf(world: int, space: int, robots: Robots, text: str | None, path: st
         raise
     robots.add(model)
     infos = [EntityInfo(name=b.name, shape="model" if b.name == names[root] else "link",
-                        static=False, mass=b.mass, friction=b.friction,
+                        static=b.welded, mass=b.mass, friction=b.friction,
                         restitution=b.restitution, source="model", model=names[root])
              for b in made]
     infos[0].mass = float(sum(b.mass for b in made))
