@@ -15,7 +15,7 @@ from galton.daemon.engines.ode.engine import OdeEngine
 from galton.protocol import BodyGroup
 
 RADIUS = 0.05
-WEBOTS = {"timestep": 0.004, "ode.stepper": "world", "ode.cfm": 1e-5, "ode.erp": 0.2,
+WEBOTS = {"timestep": 0.002, "ode.stepper": "world", "ode.cfm": 1e-5, "ode.erp": 0.2,
           "ode.contact_soft_cfm": 0.001, "ode.contact_soft_erp": 0.2,
           "ode.bounce_velocity": 0.01, "ode.max_contacts": 10, "ode.auto_disable": True,
           "ode.disable_time": 1.0, "default_friction": 1.0, "default_restitution": 0.5}

@@ -244,7 +244,10 @@ class OdeEngine(Engine):
         quick = self._values["ode.stepper"] == "quick"
         stepper = LIB.dWorldQuickStep if quick else LIB.dWorldStep
         sleepy = self._values["ode.auto_disable"]
+        moving = self._moving
         for k in range(count):
+            if self._diverged:
+                return  # ODE's solver may never return from a NaN: stop stepping it
             collide(k == count - 1)
             if self._wrenches:
                 self._push()
@@ -254,7 +257,9 @@ class OdeEngine(Engine):
                 LIB.dRandSetSeed(0)
             stepper(world, dt)
             if sleepy:
-                sync_sleep(self._moving)
+                sync_sleep(moving)
+            if moving and not states.tame(moving):
+                self._diverged = True
 
     def _push(self) -> None:
         for name, wrench in self._wrenches.items():
