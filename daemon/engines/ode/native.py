@@ -26,6 +26,7 @@ POS, ROT, QUAT, LVEL, AVEL, STATE_LENGTH = 0, 4, 16, 20, 24, 28
 
 CONTACT_BOUNCE, CONTACT_SOFT_ERP, CONTACT_SOFT_CFM, CONTACT_APPROX1 = 4, 8, 16, 0x7000
 RAY_CLASS = 5
+SAP_AXES_XZY = 0 | (2 << 2) | (1 << 4)  # dSAP_AXES_XZY: sort along x (the board's width) first
 SPHERE, BOX, CAPSULE, CYLINDER = 0, 1, 2, 3  # ODE's geom classes
 JOINT_TYPE_CONTACT = 4
 
@@ -71,6 +72,7 @@ _SIGNATURES: dict[str, tuple[Any, tuple[Any, ...]]] = {
     "dWorldSetLinearDampingThreshold": (None, (P, D)),
     "dWorldSetAngularDampingThreshold": (None, (P, D)),
     "dHashSpaceCreate": (P, (P,)), "dSpaceDestroy": (None, (P,)),
+    "dSweepAndPruneSpaceCreate": (P, (P, N)),
     "dSpaceCollide": (None, (P, P, NEAR_CALLBACK)),
     "dSpaceCollide2": (None, (P, P, P, NEAR_CALLBACK)),
     "dCollide": (N, (P, P, N, P, N)),
