@@ -5,7 +5,8 @@ Webots sources in docs/ENGINES.md).
 
 One world, one sweep-and-prune space holding every geom, one group of contact joints emptied before
 each step's collision. Parts: bodies (spawn.py), states (state.py), collision and contact
-reports (contacts.py), ray casts (rays.py), snapshots (snapshot.py), robots (joints.py).
+reports (contacts.py), ray casts (rays.py), snapshots (snapshot.py, restore.py), robots
+(joints.py, urdf.py).
 
 Determinism: ``dWorldStep`` draws no random numbers, ODE's space visits geoms in the order
 they were made, and a restore makes them again in that order, so the same steps give the
@@ -41,7 +42,6 @@ from galton.daemon.engine import (
     FEATURE_WRENCH,
     Engine,
 )
-from galton.daemon.engines.ode import snapshot as snapshots
 from galton.daemon.engines.ode import spawn as spawning
 from galton.daemon.engines.ode import state as states
 from galton.daemon.engines.ode.contacts import Collider, sync_sleep
@@ -49,7 +49,8 @@ from galton.daemon.engines.ode.joints import Robots, place
 from galton.daemon.engines.ode.native import LIB, SAP_AXES_XZY, version
 from galton.daemon.engines.ode.params import SPECS, SURFACE_DEFAULTS, default_keys
 from galton.daemon.engines.ode.rays import RayCaster
-from galton.daemon.engines.ode.spawn import ASLEEP, Body
+from galton.daemon.engines.ode.restore import Snapshots
+from galton.daemon.engines.ode.spawn import Body
 from galton.daemon.engines.ode.urdf import MODEL_FORMATS, load_urdf
 from galton.daemon.params import check_updates
 from galton.protocol import (
@@ -74,7 +75,7 @@ FEATURES = (FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDATE_MAS
             FEATURE_CONTACTS)
 
 
-class OdeEngine(Engine):
+class OdeEngine(Snapshots, Engine):
     """Named rigid bodies in an ODE world stepped as Webots steps it."""
 
     name = "ode"
@@ -348,80 +349,6 @@ class OdeEngine(Engine):
     def restore_joints(self) -> None:
         self._robots.rewind(self._bodies)
         self.clear_wrenches(None)
-
-    # -- snapshots ------------------------------------------------------------------------------
-    def snapshot(self, *, canonical: bool = True) -> dict[str, Any]:
-        if canonical:
-            self.reset_dynamics()
-        bodies = [self._body_data(b) for b in self._bodies.values()
-                  if b.model is None or b.model == b.name]
-        return {"format": snapshots.FORMAT, "version": snapshots.VERSION, "engine": self.name,
-                "params": self.get_params(), "bodies": bodies, "diverged": self._diverged}
-
-    def _body_data(self, body: Body) -> dict[str, Any]:
-        if body.model is None:
-            return snapshots.body_data(body, body.static or body.awake,
-                                       self._wrenches.get(body.name))
-        model = self._robots.models[body.name]
-        links = [snapshots.body_data(b, b.awake, self._wrenches.get(b.name))
-                 for b in self._robots.links_of(body.name, self._bodies)]
-        joints = [{"name": j.info.name, "mode": j.info.mode, "target": j.target, "kp": j.kp,
-                   "kd": j.kd, "max_effort": j.max_effort, "effort": j.effort}
-                  for j in model.joints]
-        return snapshots.model_data(model.source, links, joints)
-
-    def restore(self, data: dict[str, Any]) -> None:
-        params, bodies = snapshots.check(data)
-        self.set_params(params)
-        for body in bodies:
-            if "model" in body:
-                self._restore_model(body)
-            else:
-                self._restore_body(body)
-        self._diverged = bool(data.get("diverged", False))
-
-    def _restore_model(self, data: dict[str, Any]) -> None:
-        source = data["model"]
-        self.load_model("urdf", source["text"], source["path"], source["prefix"],
-                        fixed_base=source["fixed_base"])
-        for link in data["links"]:
-            body = self._lookup([link["name"]])[0]
-            body.friction, body.restitution = link["friction"], link["restitution"]
-            body.follows_friction, body.follows_restitution = link["follows"]
-            self._write_raw(body, link)
-        for joint in data["joints"]:
-            held = self._robots.by_name.get(joint["name"])
-            if held is None:
-                raise InvalidArgumentError(f"not an ode snapshot: no joint {joint['name']!r}")
-            held.info.mode = joint["mode"]
-            held.target, held.kp, held.kd = joint["target"], joint["kp"], joint["kd"]
-            held.max_effort, held.effort = joint["max_effort"], joint["effort"]
-
-    def _restore_body(self, data: dict[str, Any]) -> None:
-        static, state = data["static"], data["state"]
-        pose = data["pose"] if static else state[0:3] + state[17:20] + state[16:17]
-        group = BodyGroup(data["shape"], tuple(data["size"]), [data["name"]],
-                          np.array([pose], dtype=float), static=static, mass=data["mass"],
-                          friction=data["friction"], restitution=data["restitution"],
-                          rgba=None if data["rgba"] is None else tuple(data["rgba"]))
-        made = spawning.spawn_group(self._world, self._space, group, self._values)
-        body = made[0]
-        body.follows_friction, body.follows_restitution = data["follows"]
-        self._adopt(made)
-        if not static:
-            self._write_raw(body, data)
-
-    def _write_raw(self, body: Body, data: dict[str, Any]) -> None:
-        state = data["state"]
-        LIB.dBodySetPosition(body.body, *state[:3])  # marks the geoms moved
-        body.state[:] = state  # ODE's own doubles, as they were
-        if not data["enabled"]:
-            LIB.dBodyDisable(body.body)
-            body.awake = False
-            body.set_bits(ASLEEP)
-        if data["wrench"] is not None:
-            self._wrenches[body.name] = [float(v) for v in data["wrench"]]
-            LIB.dBodySetAutoDisableFlag(body.body, 0)
 
     # -- life -----------------------------------------------------------------------------------
     def close(self) -> None:
