@@ -3,59 +3,129 @@
 Everything a program using the SDK catches or reads is importable from here: the
 ``Client``, the body builders, the value types its methods return and every error class
 (all rooted at ``GaltonError``).
+
+They are imported on first use (PEP 562), so that ``galton-client --help`` and a
+module that needs one name do not load Zenoh, ZeroMQ and numpy for the rest.
 """
 
-from galton.client.credentials import Credentials
-from galton.client.discovery import DaemonInfo, discover, discover_at, instances, wait_for_daemon
-from galton.client.embedded import EmbeddedDaemon
-from galton.client.sdk import Client, body_group, boxes, plane, spheres
-from galton.client.sdk_perception import camera
-from galton.client.sdk_worlds import lockstep
-from galton.client.telemetry import Subscription, TelemetryStream
-from galton.client.values import (
-    Comparison,
-    Contacts,
-    Image,
-    JointStates,
-    Prediction,
-    RayHits,
-    SnapshotInfo,
-    Stamp,
-    States,
-    WorldInfo,
-)
-from galton.client.zmq_keys import ZmqKeys
-from galton.protocol import (
-    AccessDeniedError,
-    BodyGroup,
-    BodyProperties,
-    Capabilities,
-    ClientClosedError,
-    ControlHeldError,
-    DaemonUnreachableError,
-    EntityInfo,
-    FeatureUnsupportedError,
-    GaltonError,
-    IncorrectStateError,
-    InvalidArgumentError,
-    JointInfo,
-    MalformedRequestError,
-    NameNotUniqueError,
-    NotFoundError,
-    OperationFailedError,
-    PhysicsError,
-    RemoteError,
-    Reply,
-    RequestTimeoutError,
-    ResourceLimitError,
-    ResultCode,
-    RoleDeniedError,
-    SimState,
-    SimStatus,
-    Telemetry,
-    UnknownOperationError,
-    UnsupportedVersionError,
-)
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from galton.client.credentials import (
+        Credentials,
+    )
+    from galton.client.discovery import (
+        DaemonInfo,
+        discover,
+        discover_at,
+        instances,
+        wait_for_daemon,
+    )
+    from galton.client.embedded import (
+        EmbeddedDaemon,
+    )
+    from galton.client.sdk import (
+        Client,
+        body_group,
+        boxes,
+        plane,
+        spheres,
+    )
+    from galton.client.sdk_perception import (
+        camera,
+    )
+    from galton.client.sdk_worlds import (
+        lockstep,
+    )
+    from galton.client.telemetry import (
+        Subscription,
+        TelemetryStream,
+    )
+    from galton.client.values import (
+        Comparison,
+        Contacts,
+        Image,
+        JointStates,
+        Prediction,
+        RayHits,
+        SnapshotInfo,
+        Stamp,
+        States,
+        WorldInfo,
+    )
+    from galton.client.zmq_keys import (
+        ZmqKeys,
+    )
+    from galton.protocol import (
+        AccessDeniedError,
+        BodyGroup,
+        BodyProperties,
+        Capabilities,
+        ClientClosedError,
+        ControlHeldError,
+        DaemonUnreachableError,
+        EntityInfo,
+        FeatureUnsupportedError,
+        GaltonError,
+        IncorrectStateError,
+        InvalidArgumentError,
+        JointInfo,
+        MalformedRequestError,
+        NameNotUniqueError,
+        NotFoundError,
+        OperationFailedError,
+        PhysicsError,
+        RemoteError,
+        Reply,
+        RequestTimeoutError,
+        ResourceLimitError,
+        ResultCode,
+        RoleDeniedError,
+        SimState,
+        SimStatus,
+        Telemetry,
+        UnknownOperationError,
+        UnsupportedVersionError,
+    )
+
+# Where each public name lives, imported when first asked for.
+_SOURCES = {
+    "galton.client.credentials": ("Credentials",),
+    "galton.client.discovery": (
+        "DaemonInfo", "discover", "discover_at", "instances", "wait_for_daemon"),
+    "galton.client.embedded": ("EmbeddedDaemon",),
+    "galton.client.sdk": ("Client", "body_group", "boxes", "plane", "spheres"),
+    "galton.client.sdk_perception": ("camera",),
+    "galton.client.sdk_worlds": ("lockstep",),
+    "galton.client.telemetry": ("Subscription", "TelemetryStream"),
+    "galton.client.values": (
+        "Comparison", "Contacts", "Image", "JointStates", "Prediction", "RayHits",
+        "SnapshotInfo", "Stamp", "States", "WorldInfo"),
+    "galton.client.zmq_keys": ("ZmqKeys",),
+    "galton.protocol": (
+        "AccessDeniedError", "BodyGroup", "BodyProperties", "Capabilities",
+        "ClientClosedError", "ControlHeldError", "DaemonUnreachableError", "EntityInfo",
+        "FeatureUnsupportedError", "GaltonError", "IncorrectStateError",
+        "InvalidArgumentError", "JointInfo", "MalformedRequestError", "NameNotUniqueError",
+        "NotFoundError", "OperationFailedError", "PhysicsError", "RemoteError", "Reply",
+        "RequestTimeoutError", "ResourceLimitError", "ResultCode", "RoleDeniedError",
+        "SimState", "SimStatus", "Telemetry", "UnknownOperationError",
+        "UnsupportedVersionError"),
+}
+_MODULE_OF = {name: module for module, names in _SOURCES.items() for name in names}
+
+
+def __getattr__(name: str) -> Any:
+    module = _MODULE_OF.get(name)
+    if module is None:
+        raise AttributeError(f"module 'galton.client' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
 
 __all__ = [
     "AccessDeniedError",

@@ -21,6 +21,19 @@ def test_free_fall_matches_half_g_t_squared(sim: Client) -> None:
     assert z == pytest.approx(expected, abs=0.01 * (10.0 - expected))
 
 
+def test_a_slow_body_touching_nothing_keeps_coasting(sim: Client) -> None:
+    """Only what is at rest may sleep: a ball drifting at 2 mm/s in zero gravity, touching
+    nothing, keeps its speed (MuJoCo's island sleeping once froze it within 10 steps)."""
+    speed = 0.002
+    sim.set_params({"gravity": [0.0, 0.0, 0.0]})
+    sim.spawn(spheres(["drifter"], [[0, 0, 1]], 0.05,
+                      twists=np.array([[speed, 0, 0, 0, 0, 0]])))
+    stamp = sim.step(100)
+    states = sim.get_states(["drifter"])
+    assert states.twists[0, 0] == pytest.approx(speed, rel=1e-6)
+    assert states.positions[0, 0] == pytest.approx(speed * stamp.sim_time, rel=1e-3)
+
+
 def test_a_ball_dropped_on_a_plane_comes_to_rest_on_it(sim: Client) -> None:
     radius = 0.05
     sim.spawn(plane(), spheres(["ball"], [[0, 0, 0.5]], radius))
