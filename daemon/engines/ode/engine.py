@@ -247,18 +247,20 @@ class OdeEngine(Snapshots, Engine):
         quick = self._values["ode.stepper"] == "quick"
         stepper = LIB.dWorldQuickStep if quick else LIB.dWorldStep
         sleepy = self._values["ode.auto_disable"]
-        moving = self._moving
+        moving, busy = self._moving, self._robots.busy()
         for k in range(count):
             if self._diverged:
                 return  # ODE's solver may never return from a NaN: stop stepping it
             collide(k == count - 1)
             if self._wrenches:
                 self._push()
-            if self._robots.busy():
+            if busy:
                 self._robots.actuate()
             if quick:
                 LIB.dRandSetSeed(0)
             stepper(world, dt)
+            if busy:
+                self._robots.settle()
             if sleepy:
                 sync_sleep(moving)
             if moving and not states.tame(moving):

@@ -2,10 +2,15 @@
 ODE fixed joints (URDF fixed, and a fixed base to the world), the targets held on them and
 the rewind to the as-loaded state.
 
-A target is applied by the engine before every step as a joint torque (force) with the
-interface's law, clipped to max_effort: position tau = kp (target - q) - kd q̇, velocity
-tau = kd (target - q̇), effort tau = target. URDF damping adds -damping q̇ beside it (not
-counted in the reported effort). Limits are ODE's joint stops.
+A target follows the interface's law, clipped to max_effort: position tau = kp (target - q)
+- kd q̇, velocity tau = kd (target - q̇), effort tau = target. The spring and effort parts are
+joint torques (forces) added before each step; the damping part is ODE's joint motor, a
+velocity constraint whose CFM 1 / kd makes it exactly a damper solved implicitly with the
+step, so the gains robot users type hold at the default step: for a position target the
+spring is clipped to max_effort and the damper is not, for a velocity target the damper is
+the drive, at most max_effort. The reported effort is the law with the velocity the step
+ends with (``settle``). URDF damping adds -damping q̇ beside it (explicit, not counted in
+the effort). Limits are ODE's stops.
 """
 
 from __future__ import annotations
@@ -23,7 +28,7 @@ from galton.daemon.engines.ode.spawn import Body
 from galton.protocol import InvalidArgumentError, JointInfo, NotFoundError
 from galton.protocol.errors import did_you_mean
 
-LO_STOP, HI_STOP = 0, 1  # ODE's dParamLoStop, dParamHiStop
+LO_STOP, HI_STOP, MOTOR_VELOCITY, MOTOR_MAX_FORCE, MOTOR_CFM = 0, 1, 2, 5, 8  # ODE's dParam*
 HINGES = ("revolute", "continuous")
 
 
@@ -40,6 +45,7 @@ class Joint:
     kd: float = 0.0
     max_effort: float = np.inf
     effort: float = 0.0
+    pushed: float = 0.0  # the explicit part applied for the current step
 
     @property
     def scalar(self) -> bool:
@@ -61,6 +67,16 @@ class Joint:
         if self.info.type == "prismatic":
             return self.axis * q, frames.IDENTITY[1]
         return frames.IDENTITY
+
+    def motor(self, velocity: float, damping: float, max_force: float) -> None:
+        """ODE's motor as a damper: force damping (velocity - q̇), at most max_force; off
+        for no damping."""
+        set_param = LIB.dJointSetHingeParam if self.info.type in HINGES else \
+            LIB.dJointSetSliderParam
+        on = damping > 0 and max_force > 0
+        set_param(self.handle, MOTOR_VELOCITY, velocity if on else 0.0)
+        set_param(self.handle, MOTOR_CFM, 1.0 / damping if on else 1e-5)
+        set_param(self.handle, MOTOR_MAX_FORCE, min(max_force, 1e30) if on else 0.0)
 
     def push(self, tau: float) -> None:
         if self.info.type in HINGES:
@@ -103,17 +119,31 @@ class Robots:
             if mode == "none" and damping <= 0:
                 continue
             q, rate = joint.read()
+            limit = joint.max_effort
+            explicit = 0.0  # what is pushed now; the motor adds the damping with the step
             if mode == "position":
+                explicit = float(np.clip(joint.kp * (joint.target - q), -limit, limit))
                 tau = joint.kp * (joint.target - q) - joint.kd * rate
             elif mode == "velocity":
                 tau = joint.kd * (joint.target - rate)
             elif mode == "effort":
-                tau = joint.target
+                tau = explicit = float(np.clip(joint.target, -limit, limit))
             else:
                 tau = 0.0
-            tau = float(np.clip(tau, -joint.max_effort, joint.max_effort))
-            joint.effort = tau
-            joint.push(tau - damping * rate)
+            joint.effort = float(np.clip(tau, -limit, limit))
+            joint.pushed = explicit
+            joint.push(explicit - damping * rate)
+
+    def settle(self) -> None:
+        """The efforts of the step just taken: the damper's part at the velocity it ended
+        with (ODE solved it with the step)."""
+        for joint in self.by_name.values():
+            mode = joint.info.mode
+            if mode == "position":
+                joint.effort = joint.pushed - joint.kd * joint.read()[1]
+            elif mode == "velocity":
+                joint.effort = float(np.clip(joint.kd * (joint.target - joint.read()[1]),
+                                             -joint.max_effort, joint.max_effort))
 
     def infos(self) -> list[JointInfo]:
         return [info for m in self.models.values()
@@ -176,6 +206,12 @@ class Robots:
             joint.info.mode = mode
             joint.target, joint.kp, joint.kd = float(targets[k]), float(kp[k]), float(kd[k])
             joint.max_effort = float(max_effort[k])
+            if mode == "position":
+                joint.motor(0.0, joint.kd, np.inf)
+            elif mode == "velocity":
+                joint.motor(joint.target, joint.kd, joint.max_effort)
+            else:
+                joint.motor(0.0, 0.0, 0.0)
             if mode == "none":
                 joint.effort = 0.0
             for link in (joint.info.parent, joint.info.child):
@@ -187,6 +223,8 @@ class Robots:
         for model in self.models.values():
             for joint in model.joints:
                 joint.info.mode, joint.effort = "none", 0.0
+                if joint.scalar:
+                    joint.motor(0.0, 0.0, 0.0)
             place(model, bodies, {j.info.name: (0.0, 0.0) for j in model.joints if j.scalar})
 
 

@@ -86,6 +86,11 @@ class Snapshots:
             held.info.mode = joint["mode"]
             held.target, held.kp, held.kd = joint["target"], joint["kp"], joint["kd"]
             held.max_effort, held.effort = joint["max_effort"], joint["effort"]
+            if held.scalar:
+                velocity = held.target if held.info.mode == "velocity" else 0.0
+                damping = held.kd if held.info.mode in ("position", "velocity") else 0.0
+                limit = np.inf if held.info.mode == "position" else held.max_effort
+                held.motor(velocity, damping, limit)
 
     def _restore_body(self, data: dict[str, Any]) -> None:
         static, state = data["static"], data["state"]
