@@ -21,7 +21,7 @@ import numpy as np
 from galton.daemon.engines.ode.frames import Frame
 from galton.daemon.engines.ode.native import LIB, Mass, body_state, quaternion
 from galton.protocol import BodyGroup, InvalidArgumentError
-from galton.protocol.model import POSE_WIDTH, TWIST_WIDTH
+from galton.protocol.vocabulary import POSE_WIDTH, TWIST_WIDTH
 
 DENSITY = 1000.0  # kg/m³ of a body spawned with no mass
 AWAKE, STATIC, ASLEEP, RAY = 1, 2, 4, 8
