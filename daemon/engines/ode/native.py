@@ -27,7 +27,7 @@ POS, ROT, QUAT, LVEL, AVEL, STATE_LENGTH = 0, 4, 16, 20, 24, 28
 CONTACT_BOUNCE, CONTACT_SOFT_ERP, CONTACT_SOFT_CFM, CONTACT_APPROX1 = 4, 8, 16, 0x7000
 RAY_CLASS = 5
 SAP_AXES_XZY = 0 | (2 << 2) | (1 << 4)  # dSAP_AXES_XZY: sort along x (the board's width) first
-SPHERE, BOX, CAPSULE, CYLINDER = 0, 1, 2, 3  # ODE's geom classes
+SPHERE, BOX, CAPSULE, CYLINDER, PLANE = 0, 1, 2, 3, 4  # ODE's geom classes
 JOINT_TYPE_CONTACT = 4
 
 
@@ -82,6 +82,10 @@ _SIGNATURES: dict[str, tuple[Any, tuple[Any, ...]]] = {
     "dGeomRaySet": (None, (P, D, D, D, D, D, D)), "dGeomRaySetLength": (None, (P, D)),
     "dGeomRaySetClosestHit": (None, (P, N)),
     "dGeomDestroy": (None, (P,)), "dGeomSetBody": (None, (P, P)),
+    "dGeomGetClass": (N, (P,)), "dGeomSpherePointDepth": (D, (P, D, D, D)),
+    "dGeomBoxPointDepth": (D, (P, D, D, D)), "dGeomCapsulePointDepth": (D, (P, D, D, D)),
+    "dGeomPlanePointDepth": (D, (P, D, D, D)), "dGeomGetPosRelPoint": (None, (P, D, D, D, P)),
+    "dGeomCylinderGetParams": (None, (P, P, P)),
     "dGeomSetPosition": (None, (P, D, D, D)), "dGeomSetQuaternion": (None, (P, P)),
     "dGeomPlaneSetParams": (None, (P, D, D, D, D)),
     "dGeomSetCategoryBits": (None, (P, c_ulong)), "dGeomSetCollideBits": (None, (P, c_ulong)),
