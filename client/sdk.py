@@ -30,6 +30,7 @@ from galton.client.credentials import Credentials
 from galton.client.sdk_control import ControlMethods
 from galton.client.sdk_joints import SearchPath
 from galton.client.sdk_perception import PerceptionMethods
+from galton.client.sdk_streams import StateSample, StateStream, StreamMethods
 from galton.client.sdk_worlds import WorldMethods
 from galton.client.session import checked_timeout
 from galton.client.telemetry import Subscription, TelemetryStream, subscribe_events
@@ -54,11 +55,11 @@ from galton.protocol.operations import OPERATIONS
 
 DEFAULT_TIMEOUT_S = 5.0
 
-__all__ = ["DEFAULT_TIMEOUT_S", "Client", "JointStates", "Stamp", "States", "body_group",
-           "boxes", "plane", "spheres"]
+__all__ = ["DEFAULT_TIMEOUT_S", "Client", "JointStates", "Stamp", "StateSample", "StateStream",
+           "States", "body_group", "boxes", "plane", "spheres"]
 
 
-class Client(WorldMethods, PerceptionMethods, ControlMethods):
+class Client(WorldMethods, PerceptionMethods, ControlMethods, StreamMethods):
     """A connection to one daemon instance (the session may be shared with others).
 
     ``timeout``: seconds a quick operation waits for its reply; operations that rebuild a

@@ -21,6 +21,7 @@ from galton.daemon import (
     ops_joints,
     ops_perception,
     predict,
+    state_streams,
     time_control,
     worlds,
 )
@@ -99,6 +100,8 @@ HANDLERS: dict[str, Handler] = {
     "set_params": _scene("set_params", ops.set_params),
     "take_control": lease.take_control,
     "release_control": lease.release_control,
+    "stream_states": state_streams.stream_states,
+    "close_stream": state_streams.close_stream,
 }
 
 
