@@ -239,6 +239,7 @@ from galton.client import (  # noqa: E402,F401
     cli_states,
     cli_streams,
     cli_time,
+    cli_view,
     cli_world,
     cli_worlds,
     cli_zmq_keys,

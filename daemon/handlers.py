@@ -44,8 +44,11 @@ def _scene(name: str, apply: ops.SceneOp) -> Handler:
         world = loop.world_for(args)
         result = apply(world, args)
         if mutates:
-            loop.emit({"kind": "scene", "op": name, "world": world.name,
-                       "step": world.step_index})
+            event = {"kind": "scene", "op": name, "world": world.name,
+                     "step": world.step_index}
+            if name == "compare" and result is not None:  # the view charts the score
+                event.update(score=result["score"], sim_time=world.sim_time)
+            loop.emit(event)
             loop.check_job_reads()
         return result
     return handle

@@ -1,0 +1,126 @@
+"""galton-client view: the live world in a browser page (the ``[view]`` extra, viser), or a
+bench trial's recording replayed in the same page."""
+
+from __future__ import annotations
+
+import importlib.util
+import signal
+import threading
+from pathlib import Path
+from typing import Annotated
+
+import numpy as np
+import typer
+
+from galton.client.cli import Target, app, run_guarded
+from galton.client.view.recording import SUFFIX, Recorder
+from galton.protocol import InvalidArgumentError
+
+PANEL = "Streams"
+
+
+def _point(text: str | None, option: str) -> np.ndarray | None:
+    if text is None:
+        return None
+    try:
+        values = [float(part) for part in text.split(",")]
+    except ValueError:
+        values = []
+    if len(values) != 3 or not all(np.isfinite(values)):
+        raise typer.BadParameter(f"{option} takes three numbers, x,y,z; got {text!r}")
+    return np.asarray(values)
+
+
+def _require_viser() -> None:
+    if importlib.util.find_spec("viser") is None:
+        raise InvalidArgumentError(
+            "galton-client view needs the [view] extra: pip install 'galton-bridge[view]'")
+
+
+@app.command(rich_help_panel=PANEL)
+def view(ctx: typer.Context,
+         source: Annotated[Path | None, typer.Argument(
+             help="A bench results directory or a recording (.npz) to replay, instead of a "
+                  "live daemon.")] = None,
+         port: Annotated[int, typer.Option(help="The page's port.", min=1, max=65535)] = 8080,
+         host: Annotated[str, typer.Option(
+             help="The address the page is served on (0.0.0.0: every interface).")
+         ] = "127.0.0.1",
+         rate: Annotated[float, typer.Option(
+             help="State samples a second, 1-60.", min=1.0, max=60.0)] = 20.0,
+         read_only: Annotated[bool, typer.Option(
+             "--read-only", help="No operator buttons, whatever this client's role.")
+         ] = False,
+         camera: Annotated[str | None, typer.Option(
+             help="Camera position x,y,z (default: framing the bodies from the front).")
+         ] = None,
+         look_at: Annotated[str | None, typer.Option(help="Camera target x,y,z.")] = None,
+         ) -> None:
+    """Serve a live 3-D view of the daemon's world at http://HOST:PORT: every body as its
+    shape coloured by tag, side worlds as translucent ghosts, the clock, compare's anomaly
+    score, contacts on demand, and play/pause/step/reset for an operator (a viewer's page
+    has none). Opening the page never changes the world. With SOURCE, replay a bench
+    trial's recording instead."""
+    target: Target = ctx.obj
+    position, aim = _point(camera, "--camera"), _point(look_at, "--look-at")
+    framed = (position, aim) if position is not None and aim is not None else None
+    if (position is None) != (aim is None):
+        raise typer.BadParameter("--camera and --look-at go together")
+    stop = threading.Event()
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, lambda *_: stop.set())
+
+    def serve() -> None:
+        _require_viser()
+        import viser
+        server = viser.ViserServer(host=host, port=port, verbose=False)
+        try:
+            if source is not None:
+                from galton.client.view.replay import ReplayView
+                replay = ReplayView.open(source, server, framed)
+                _ready(host, port)
+                replay.run(stop)
+                return
+            from galton.client.view.live import LiveView
+            with target.client() as client:
+                page = LiveView(client, server, rate, False if read_only else None, framed)
+                _ready(host, port)
+                try:
+                    page.run(stop)
+                finally:
+                    page.close()
+        finally:
+            server.stop()
+    run_guarded(serve)
+
+
+def _ready(host: str, port: int) -> None:
+    """The readiness line a script (or a test) waits for."""
+    typer.echo(f"galton-client view: serving http://{host}:{port}", err=True)
+
+
+@app.command(rich_help_panel=PANEL)
+def record(ctx: typer.Context,
+           out: Annotated[Path, typer.Argument(help="The recording to write (.npz).")],
+           rate: Annotated[float, typer.Option(
+               help="State samples a second, 1-60.", min=1.0, max=60.0)] = 60.0,
+           seconds: Annotated[float, typer.Option(
+               help="Stop after this many seconds of wall time (0: at Ctrl-C).", min=0.0)
+           ] = 0.0) -> None:
+    """Record the daemon's world (a bench trial as it runs) for ``galton-client view OUT``:
+    the entities and their poses at RATE samples a second. Recording reads the world and
+    never changes it."""
+    target: Target = ctx.obj
+    if out.suffix != SUFFIX:
+        raise typer.BadParameter(f"the recording is a {SUFFIX} file, got {str(out)!r}")
+    stop = threading.Event()
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, lambda *_: stop.set())
+
+    def go() -> None:
+        with target.client() as client, Recorder(client, out, rate) as recorder:
+            typer.echo(f"galton-client record: recording to {out}", err=True)
+            stop.wait(seconds if seconds > 0 else None)
+        typer.echo(f"galton-client record: {len(recorder.samples)} samples saved to {out}",
+                   err=True)
+    run_guarded(go)
