@@ -4,7 +4,9 @@ bench trial's recording replayed in the same page."""
 from __future__ import annotations
 
 import importlib.util
+import json
 import signal
+import sys
 import threading
 from pathlib import Path
 from typing import Annotated
@@ -12,7 +14,9 @@ from typing import Annotated
 import numpy as np
 import typer
 
-from galton.client.cli import Target, app, run_guarded
+from galton.client.cli import JsonOpt, Target, app, run_guarded
+from galton.client.cli_streams import until_interrupted
+from galton.client.sdk import Client, StateSample
 from galton.client.view.recording import SUFFIX, Recorder
 from galton.protocol import InvalidArgumentError
 
@@ -124,3 +128,37 @@ def record(ctx: typer.Context,
         typer.echo(f"galton-client record: {len(recorder.samples)} samples saved to {out}",
                    err=True)
     run_guarded(go)
+
+
+@app.command("stream-states", rich_help_panel=PANEL)
+def stream_states(ctx: typer.Context,
+                  names: Annotated[list[str] | None, typer.Argument(
+                      help="Entities to stream (default: every one).")] = None,
+                  rate: Annotated[float, typer.Option(
+                      help="Samples a second, 1-60.", min=1.0, max=60.0)] = 10.0,
+                  count: Annotated[int, typer.Option(
+                      help="Stop after N samples (0 = run until Ctrl-C).", min=0)] = 0,
+                  as_json: JsonOpt = False) -> None:
+    """Print a state stream's samples: the poses of every entity (or NAMEs) at RATE Hz, one
+    line each (JSON: step, sim_time, names, poses as lists). The stream is closed
+    (close_stream) when the command ends."""
+    def go(client: Client) -> None:
+        with client.stream_states(rate, names or None, timeout=max(10.0, 3 / rate)) as stream:
+            typer.echo(f"streaming {stream.key} at {stream.rate:g} Hz", err=True)
+            for seen, sample in enumerate(stream, start=1):
+                _print_sample(sample, as_json)
+                if count and seen >= count:
+                    return
+    until_interrupted(ctx, go)
+
+
+def _print_sample(sample: StateSample, as_json: bool) -> None:
+    if as_json:
+        typer.echo(json.dumps({"seq": sample.seq, "world": sample.world, "step": sample.step,
+                               "sim_time": sample.sim_time, "state": sample.state,
+                               "names": list(sample.names),
+                               "poses": sample.poses.tolist()}))
+        sys.stdout.flush()
+        return
+    typer.echo(f"#{sample.seq:<6} {sample.state:<8} t={sample.sim_time:10.3f}s "
+               f"step={sample.step:<9} bodies={len(sample.names)}")

@@ -85,13 +85,19 @@ class Recorder:
         self.path = path
         self.rate = rate
         self.samples: list[StateSample] = []
-        self._lock = threading.Lock()
+        self._lock = threading.Condition()
         self._stream: StateStream | None = None
 
     def _take(self, sample: StateSample) -> None:
         if sample.ended is None:
             with self._lock:
                 self.samples.append(sample)
+                self._lock.notify_all()
+
+    def wait_for(self, count: int, timeout: float) -> bool:
+        """Wait until ``count`` samples are recorded (False if ``timeout`` s pass first)."""
+        with self._lock:
+            return self._lock.wait_for(lambda: len(self.samples) >= count, timeout)
 
     def __enter__(self) -> Recorder:
         self._stream = self.client.stream_states(rate=self.rate, callback=self._take)
