@@ -66,8 +66,10 @@ def test_a_file_that_is_no_recording_is_refused(tmp_path: Path) -> None:
     bad.write_bytes(b"not a zip")
     with pytest.raises(InvalidArgumentError, match="no recording"):
         Recording.load(bad)
+    empty = tmp_path / "empty"
+    empty.mkdir()
     with pytest.raises(InvalidArgumentError, match="holds no recording"):
-        recordings_in(tmp_path)  # a directory with no .npz in it
+        recordings_in(empty)
 
 
 def test_stream_states_prints_samples_and_closes_its_stream(
