@@ -57,11 +57,11 @@ class Target:
         self.credentials = credentials
         self.zmq_keys = zmq_keys
 
-    def client(self) -> Client:
+    def client(self, client_id: str | None = None) -> Client:
         over_zmq = zmq_endpoint(self.connect) is not None
         return Client(self.instance, self.connect, timeout=self.timeout,
                       credentials=None if over_zmq else self.credentials,
-                      zmq_keys=self.zmq_keys if over_zmq else None)
+                      zmq_keys=self.zmq_keys if over_zmq else None, client_id=client_id)
 
 
 def package_version() -> str:

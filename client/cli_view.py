@@ -8,6 +8,7 @@ import json
 import signal
 import sys
 import threading
+import uuid
 from pathlib import Path
 from typing import Annotated
 
@@ -19,6 +20,7 @@ from galton.client.cli_streams import until_interrupted
 from galton.client.sdk import Client, StateSample
 from galton.client.view.recording import SUFFIX, Recorder
 from galton.protocol import InvalidArgumentError
+from galton.protocol.keys import VIEWER_ID_PREFIX
 
 PANEL = "Streams"
 
@@ -85,9 +87,13 @@ def view(ctx: typer.Context,
                 _ready(host, port)
                 replay.run(stop)
                 return
-            from galton.client.view.live import LiveView
-            with target.client() as client:
-                page = LiveView(client, server, rate, False if read_only else None, framed)
+            from galton.client.view.live import LiveView, may_operate
+            with target.client() as probe:
+                operator = not read_only and may_operate(probe)
+            # A viewer's id is one a viewer may hold a token for under --users.
+            client_id = None if operator else f"{VIEWER_ID_PREFIX}{uuid.uuid4().hex}"
+            with target.client(client_id) as client:
+                page = LiveView(client, server, rate, operator, framed)
                 _ready(host, port)
                 try:
                     page.run(stop)

@@ -71,7 +71,7 @@ class Client(WorldMethods, PerceptionMethods, ControlMethods, StreamMethods):
                  *, timeout: float = DEFAULT_TIMEOUT_S, session: zenoh.Session | None = None,
                  config_file: str | None = None,
                  credentials: Credentials | None = None,
-                 zmq_keys: ZmqKeys | None = None) -> None:
+                 zmq_keys: ZmqKeys | None = None, client_id: str | None = None) -> None:
         self.keys = Keys(instance)
         self.timeout = checked_timeout(timeout)
         self._closed = False
@@ -79,7 +79,9 @@ class Client(WorldMethods, PerceptionMethods, ControlMethods, StreamMethods):
         self._parent: WorldMethods | None = None
         # A daemon ends a step request whose client has vanished: this client's liveliness
         # token says so over Zenoh, the connection itself over ZeroMQ.
-        self.client_id = uuid.uuid4().hex
+        # ``client_id``: one of the caller's choosing (galton-client view names a viewer's
+        # VIEWER_ID_PREFIX + hex, the token a viewer may hold under --users).
+        self.client_id = client_id or uuid.uuid4().hex
         self._own_transport = True
         self.transport = _transport(self.keys, self.client_id, connect, session, config_file,
                                     credentials, zmq_keys)

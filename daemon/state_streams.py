@@ -23,6 +23,7 @@ from galton.daemon.calls import Call
 from galton.protocol import InvalidArgumentError, Keys, NotFoundError, ResourceLimitError
 from galton.protocol.arrays import pack_f64
 from galton.protocol.errors import brief
+from galton.protocol.keys import STREAMS_CHUNK
 
 if TYPE_CHECKING:
     from galton.daemon.loop import SimLoop
@@ -31,7 +32,6 @@ if TYPE_CHECKING:
 MIN_RATE_HZ = 1.0
 MAX_RATE_HZ = 60.0
 MAX_STREAMS = 32  # open streams in one daemon, all clients together
-STREAMS_CHUNK = "states"  # samples go to galton/<instance>/states/<stream id>
 NO_OWNER = ("a state stream belongs to a client, and ends when it goes: the request needs "
             "a 'client' id in its envelope (the SDK sends one)")
 
