@@ -3,7 +3,7 @@ entities of a world, published by the daemon at the rate asked (1-60 Hz).
 
 >>> with sim.stream_states(rate=20) as stream:     # every entity of the live world
 ...     sample = stream.next(timeout=1.0)
-...     sample.names, sample.poses                  # (n,) names, (n, 7) x y z qw qx qy qz
+...     sample.names, sample.poses                  # (n,) names, (n, 7) x y z qx qy qz qw
 
 The stream is this client's: closing it (or the client) ends it in the daemon. A consumer
 slower than the rate loses the oldest samples, never slows the world.
@@ -47,7 +47,7 @@ class StateSample:
     state: str
     rtf: float
     names: tuple[str, ...]
-    poses: np.ndarray  # (n, 7): x, y, z, qw, qx, qy, qz
+    poses: np.ndarray  # (n, 7): x, y, z, qx, qy, qz, qw
     ended: str | None = None
 
     @classmethod

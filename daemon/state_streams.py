@@ -18,8 +18,10 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import msgpack
+import numpy as np
 
 from galton.daemon.calls import Call
+from galton.daemon.world import World, canonical_quaternions
 from galton.protocol import InvalidArgumentError, Keys, NotFoundError, ResourceLimitError
 from galton.protocol.arrays import pack_f64
 from galton.protocol.errors import brief
@@ -27,7 +29,6 @@ from galton.protocol.keys import STREAMS_CHUNK
 
 if TYPE_CHECKING:
     from galton.daemon.loop import SimLoop
-    from galton.daemon.world import World
 
 MIN_RATE_HZ = 1.0
 MAX_RATE_HZ = 60.0
@@ -118,7 +119,7 @@ class StateStreams:
         if world.faulted:
             return  # a diverged state is never published (as telemetry)
         names = _present(world, stream.names)
-        poses = world.get_states(names)[0] if names else None
+        poses = _poses(world, names) if names else None
         stream.seq += 1
         sample = {"stream": stream.stream_id, "seq": stream.seq, "world": world.name,
                   "step": world.step_index, "sim_time": world.sim_time,
@@ -140,6 +141,13 @@ class StateStreams:
 
     def _reschedule(self) -> None:
         self.next_due = min((s.next_due for s in self.streams.values()), default=math.inf)
+
+
+def _poses(world: World, names: list[str]) -> np.ndarray:
+    """What get_states reads, without its checks of names known to be there (a sample
+    costs the physics thread; docs/PERFORMANCE.md)."""
+    world.verify()
+    return canonical_quaternions(world.engine.get_states(names)[0])
 
 
 def _present(world: World, names: tuple[str, ...] | None) -> list[str]:

@@ -26,9 +26,9 @@ from galton.protocol import AccessDeniedError, GaltonError, RequestTimeoutError
 
 log = logging.getLogger("galton.client")
 
-GHOST_OPACITY = 0.35
-GHOST_TINT = (120, 200, 255)
-PREDICT_TINT = (255, 200, 60)
+GHOST_OPACITY = 0.5
+GHOST_TINT = (255, 150, 0)  # what the model expects: orange beside the real red
+PREDICT_TINT = (160, 80, 255)
 WORLDS_PERIOD_S = 1.0  # side worlds are looked for this often
 CONTACTS_PERIOD_S = 0.25
 SCORE_HISTORY = 300  # points of the anomaly chart
@@ -112,7 +112,8 @@ class LiveView:
         server.scene.add_grid("/grid", width=10, height=10, plane="xy", position=(0, 0, -0.01))
         self.live = Followed(client, WorldDrawing(server.scene, "/live"), rate, self.wake)
         self.ghosts: dict[str, Followed] = {}
-        self.prediction = WorldDrawing(server.scene, "/predict", GHOST_OPACITY, PREDICT_TINT)
+        self.prediction = WorldDrawing(server.scene, "/predict", GHOST_OPACITY, PREDICT_TINT,
+                                       moving_only=True)
         self.scores: deque[tuple[float, float]] = deque(maxlen=SCORE_HISTORY)
         self.scores_seen = 0
         self._framed = False
@@ -253,7 +254,7 @@ class LiveView:
                 self.ghosts[name] = Followed(
                     self.client.world(name),
                     WorldDrawing(self.server.scene, f"/ghosts/{name}", GHOST_OPACITY,
-                                 GHOST_TINT), self.rate, self.wake)
+                                 GHOST_TINT, moving_only=True), self.rate, self.wake)
             except GaltonError as error:  # deleted meanwhile
                 log.info("no ghost for world %s: %s", name, error)
 

@@ -21,7 +21,7 @@ def visible_poses(poses: np.ndarray) -> np.ndarray:
     """A sample's poses with absent entities (NaN) moved out of sight."""
     shown = poses.copy()
     absent = np.isnan(shown).any(axis=1)
-    shown[absent] = [0.0, 0.0, HIDDEN_Z, 1.0, 0.0, 0.0, 0.0]
+    shown[absent] = [0.0, 0.0, HIDDEN_Z, 0.0, 0.0, 0.0, 1.0]
     return shown
 
 

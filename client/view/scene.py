@@ -13,7 +13,7 @@ import numpy as np
 import trimesh
 import viser
 
-from galton.client.view.palette import Rgb, colour_of
+from galton.client.view.palette import Rgb, colour_of, opacity_of
 from galton.protocol import EntityInfo
 
 LINK_HALF = 0.02  # a loaded model's link has no shape in `list`: a small cube marks it
@@ -28,6 +28,7 @@ class GroupKey:
     shape: str
     size: tuple[float, ...]
     colour: Rgb
+    opacity: float | None
 
 
 def shape_mesh(shape: str, size: Sequence[float]) -> tuple[np.ndarray, np.ndarray]:
@@ -58,12 +59,18 @@ def _trimesh(shape: str, size: Sequence[float]) -> Any:  # a trimesh.Trimesh (un
     return creation.box(extents=[2 * LINK_HALF] * 3)  # a link, a model's root
 
 
+def wxyz(poses: np.ndarray) -> np.ndarray:
+    """The quaternions of wire poses (x y z qx qy qz qw) in viser's order (w x y z)."""
+    return poses[:, [6, 3, 4, 5]]
+
+
 class WorldDrawing:
     """The batched meshes of one world under ``root``; ``opacity`` below 1 draws a ghost."""
 
     def __init__(self, scene: viser.SceneApi, root: str, opacity: float | None = None,
-                 tint: Rgb | None = None) -> None:
+                 tint: Rgb | None = None, moving_only: bool = False) -> None:
         self.scene = scene
+        self.moving_only = moving_only  # a ghost: static bodies are the live world's
         self.root = root
         self.opacity = opacity
         self.tint = tint
@@ -80,15 +87,19 @@ class WorldDrawing:
         members: dict[GroupKey, list[int]] = defaultdict(list)
         for index, name in enumerate(names):
             info = by_name.get(name, EntityInfo(name, "link"))
+            if self.moving_only and info.static:
+                continue
             colour = self.tint or colour_of(info.tags, info.static)
-            members[GroupKey(info.shape, tuple(info.size), colour)].append(index)
+            opacity = min(self.opacity or 1.0, opacity_of(info.tags) or 1.0)
+            members[GroupKey(info.shape, tuple(info.size), colour,
+                             None if opacity >= 1.0 else opacity)].append(index)
         for number, (key, indices) in enumerate(members.items()):
             rows = np.asarray(indices)
             vertices, faces = shape_mesh(key.shape, key.size)
             handle = self.scene.add_batched_meshes_simple(
                 f"{self.root}/group{number}", vertices, faces,
-                batched_wxyzs=poses[rows, 3:7], batched_positions=poses[rows, :3],
-                batched_colors=key.colour, opacity=self.opacity, lod="off",
+                batched_wxyzs=wxyz(poses[rows]), batched_positions=poses[rows, :3],
+                batched_colors=key.colour, opacity=key.opacity, lod="off",
                 cast_shadow=False, receive_shadow=False)
             self._groups.append((handle, rows))
         self.names = tuple(names)
@@ -97,7 +108,7 @@ class WorldDrawing:
         """Move every instance to its pose (rows in the order of ``names``)."""
         for handle, rows in self._groups:
             handle.batched_positions = poses[rows, :3]
-            handle.batched_wxyzs = poses[rows, 3:7]
+            handle.batched_wxyzs = wxyz(poses[rows])
 
     def clear(self) -> None:
         for handle, _ in self._groups:
@@ -119,4 +130,4 @@ def framing(infos: Sequence[EntityInfo], names: Sequence[str],
     low[2] = min(low[2], 0.0)
     centre = (low + high) / 2
     reach = max(float(np.max(high - low)), 0.5)
-    return centre + np.array([0.0, -1.8 * reach - 0.5, 0.3 * reach]), centre
+    return centre + np.array([0.0, -1.4 * reach - 0.3, 0.25 * reach]), centre
