@@ -161,9 +161,17 @@ def plot_resources(trials: Sequence[TrialRecord], out_dir: str | Path) -> Path:
 
 def plot_all(trials: Sequence[TrialRecord], out_dir: str | Path,
              draws: int = stats.DEFAULT_DRAWS, seed: int = stats.DEFAULT_SEED) -> list[Path]:
-    """Every figure; returns the paths written (none when there are no trials)."""
+    """Every figure; returns the paths written (none when there are no trials). The RTF
+    and footprint curves need two ball counts at least: one count would draw one point."""
     if not trials:
         return []
     Path(out_dir).mkdir(parents=True, exist_ok=True)
-    return [*plot_histograms(trials, out_dir, draws, seed), plot_rtf(trials, out_dir),
-            plot_resources(trials, out_dir)]
+    histograms = plot_histograms(trials, out_dir, draws, seed)
+    if not has_curve(trials):
+        return histograms
+    return [*histograms, plot_rtf(trials, out_dir), plot_resources(trials, out_dir)]
+
+
+def has_curve(trials: Sequence[TrialRecord]) -> bool:
+    """Whether the trials ran at two ball counts at least (a curve versus balls)."""
+    return len({t.balls for t in trials}) >= 2

@@ -191,8 +191,16 @@ def render_report(results: ExperimentResults, summaries: Sequence[EngineSummary]
                 _board_config(results), _table2(summaries), _details(summaries),
                 _calibration(summaries, draws, seed), _verdicts(verdicts),
                 _pictures(results.extra.get("pictures") or {}),
-                ["## Plots", ""] + [f"- [{name}]({name})" for name in plot_files]]
+                _plots(results, plot_files)]
     return "\n".join(line for section in sections for line in [*section, ""]).rstrip() + "\n"
+
+
+def _plots(results: ExperimentResults, plot_files: Sequence[str]) -> list[str]:
+    lines = ["## Plots", ""] + [f"- [{name}]({name})" for name in plot_files]
+    if len({t.balls for t in results.trials}) < 2:
+        lines += ["", "The real-time factor and footprint versus balls are drawn for two ball "
+                  "counts at least (e.g. `--balls 1,25,100`); this run has one."]
+    return lines
 
 
 def csv_header(trials: Sequence[TrialRecord]) -> list[str]:

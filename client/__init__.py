@@ -3,59 +3,120 @@
 Everything a program using the SDK catches or reads is importable from here: the
 ``Client``, the body builders, the value types its methods return and every error class
 (all rooted at ``GaltonError``).
+
+They are imported on first use (PEP 562), so that ``galton-client --help`` and a
+module that needs one name do not load Zenoh, ZeroMQ and numpy for the rest.
 """
 
-from galton.client.credentials import Credentials
-from galton.client.discovery import DaemonInfo, discover, discover_at, instances, wait_for_daemon
-from galton.client.embedded import EmbeddedDaemon
-from galton.client.sdk import Client, body_group, boxes, plane, spheres
-from galton.client.sdk_perception import camera
-from galton.client.sdk_worlds import lockstep
-from galton.client.telemetry import Subscription, TelemetryStream
-from galton.client.values import (
-    Comparison,
-    Contacts,
-    Image,
-    JointStates,
-    Prediction,
-    RayHits,
-    SnapshotInfo,
-    Stamp,
-    States,
-    WorldInfo,
-)
-from galton.client.zmq_keys import ZmqKeys
-from galton.protocol import (
-    AccessDeniedError,
-    BodyGroup,
-    BodyProperties,
-    Capabilities,
-    ClientClosedError,
-    ControlHeldError,
-    DaemonUnreachableError,
-    EntityInfo,
-    FeatureUnsupportedError,
-    GaltonError,
-    IncorrectStateError,
-    InvalidArgumentError,
-    JointInfo,
-    MalformedRequestError,
-    NameNotUniqueError,
-    NotFoundError,
-    OperationFailedError,
-    PhysicsError,
-    RemoteError,
-    Reply,
-    RequestTimeoutError,
-    ResourceLimitError,
-    ResultCode,
-    RoleDeniedError,
-    SimState,
-    SimStatus,
-    Telemetry,
-    UnknownOperationError,
-    UnsupportedVersionError,
-)
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from galton.protocol.lazy import lazy_exports
+
+if TYPE_CHECKING:
+    from galton.client.credentials import (
+        Credentials,
+    )
+    from galton.client.discovery import (
+        DaemonInfo,
+        discover,
+        discover_at,
+        instances,
+        wait_for_daemon,
+    )
+    from galton.client.embedded import (
+        EmbeddedDaemon,
+    )
+    from galton.client.sdk import (
+        Client,
+        body_group,
+        boxes,
+        plane,
+        spheres,
+    )
+    from galton.client.sdk_perception import (
+        camera,
+    )
+    from galton.client.sdk_worlds import (
+        lockstep,
+    )
+    from galton.client.telemetry import (
+        Subscription,
+        TelemetryStream,
+    )
+    from galton.client.values import (
+        Comparison,
+        Contacts,
+        Image,
+        JointStates,
+        Prediction,
+        RayHits,
+        SnapshotInfo,
+        Stamp,
+        States,
+        WorldInfo,
+    )
+    from galton.client.zmq_keys import (
+        ZmqKeys,
+    )
+    from galton.protocol import (
+        AccessDeniedError,
+        BodyGroup,
+        BodyProperties,
+        Capabilities,
+        ClientClosedError,
+        ControlHeldError,
+        DaemonUnreachableError,
+        EntityInfo,
+        FeatureUnsupportedError,
+        GaltonError,
+        IncorrectStateError,
+        InvalidArgumentError,
+        JointInfo,
+        MalformedRequestError,
+        NameNotUniqueError,
+        NotFoundError,
+        OperationFailedError,
+        PhysicsError,
+        RemoteError,
+        Reply,
+        RequestTimeoutError,
+        ResourceLimitError,
+        ResultCode,
+        RoleDeniedError,
+        SimState,
+        SimStatus,
+        Telemetry,
+        UnknownOperationError,
+        UnsupportedVersionError,
+    )
+
+# Where each public name lives, imported when first asked for.
+_SOURCES: dict[str, tuple[str, ...]] = {
+    "galton.client.credentials": ("Credentials",),
+    "galton.client.discovery": (
+        "DaemonInfo", "discover", "discover_at", "instances", "wait_for_daemon"),
+    "galton.client.embedded": ("EmbeddedDaemon",),
+    "galton.client.sdk": ("Client", "body_group", "boxes", "plane", "spheres"),
+    "galton.client.sdk_perception": ("camera",),
+    "galton.client.sdk_worlds": ("lockstep",),
+    "galton.client.telemetry": ("Subscription", "TelemetryStream"),
+    "galton.client.values": (
+        "Comparison", "Contacts", "Image", "JointStates", "Prediction", "RayHits",
+        "SnapshotInfo", "Stamp", "States", "WorldInfo"),
+    "galton.client.zmq_keys": ("ZmqKeys",),
+    "galton.protocol": (
+        "AccessDeniedError", "BodyGroup", "BodyProperties", "Capabilities",
+        "ClientClosedError", "ControlHeldError", "DaemonUnreachableError", "EntityInfo",
+        "FeatureUnsupportedError", "GaltonError", "IncorrectStateError",
+        "InvalidArgumentError", "JointInfo", "MalformedRequestError", "NameNotUniqueError",
+        "NotFoundError", "OperationFailedError", "PhysicsError", "RemoteError", "Reply",
+        "RequestTimeoutError", "ResourceLimitError", "ResultCode", "RoleDeniedError",
+        "SimState", "SimStatus", "Telemetry", "UnknownOperationError",
+        "UnsupportedVersionError"),
+}
+__getattr__ = lazy_exports("galton.client", _SOURCES, globals())
 
 __all__ = [
     "AccessDeniedError",

@@ -16,6 +16,7 @@ What a refusal looks like to a client, found by experiment with zenoh 1.10.2 on 
 
 from __future__ import annotations
 
+import re
 import socket
 from collections.abc import Sequence
 
@@ -87,8 +88,14 @@ def _refusal_hint(credentials: Credentials | None) -> str:
     return "; or ".join(hints) or "it needs other credentials"
 
 
+# Where in its Rust source Zenoh raised an error: " at /root/.cargo/.../orchestrator.rs:447."
+_RUST_SOURCE = re.compile(r"\s+at \S+\.rs:\d+\.?")
+
+
 def _scrubbed(text: str, credentials: Credentials | None) -> str:
-    """Zenoh's message with any secret of ours cut out (none is expected in it)."""
+    """Zenoh's message without its Rust source path (noise to a user) and with any secret
+    of ours cut out (none is expected in it)."""
+    text = _RUST_SOURCE.sub("", text).strip()
     if credentials is None:
         return text
     for secret in (credentials.password, credentials.wire_password):

@@ -13,32 +13,59 @@ import json
 import math
 import os
 import re
+import sys
 from collections.abc import Callable
 from dataclasses import asdict
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
-from typing import Annotated, Any, TypeVar
+from typing import TYPE_CHECKING, Annotated, Any, TypeVar
 
 import typer
+from rich import box
 from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
 from galton.client.credentials import Credentials, resolve_credentials
-from galton.client.sdk import Client, Stamp
-from galton.client.transport import zmq_endpoint
-from galton.client.zmq_keys import ZmqKeys
 from galton.protocol import (
     AccessDeniedError,
     DaemonUnreachableError,
     GaltonError,
     RemoteError,
     RequestTimeoutError,
-    SimStatus,
 )
 
+if TYPE_CHECKING:  # the SDK (numpy, Zenoh, ZeroMQ) is imported when a command needs it
+    from galton.client.sdk import Client, Stamp
+    from galton.client.zmq_keys import ZmqKeys
+    from galton.protocol import SimStatus
+
+class ReadableConsole(Console):
+    """A console whose tables keep every character at 80 columns: the first column (the
+    names a user types back: joints, links, parameters) as wide as its longest cell (up to
+    KEY_WIDTH), the others folded onto more lines instead of cut to "…", light borders."""
+
+    def print(self, *objects: Any, **kwargs: Any) -> None:
+        for item in objects:
+            if isinstance(item, Table):
+                readable(item)
+        super().print(*objects, **kwargs)
+
+
+KEY_WIDTH = 40
+
+
+def readable(table: Table) -> None:
+    table.box = box.SIMPLE_HEAD
+    for index, column in enumerate(table.columns):
+        column.overflow = "fold"
+        if index == 0:
+            cells = [len(str(cell)) for cell in column.cells]
+            column.min_width = min(KEY_WIDTH, max([len(str(column.header)), *cells]))
+
+
 app = typer.Typer(add_completion=False, help=__doc__, no_args_is_help=True)
-console = Console()
+console = ReadableConsole()
 T = TypeVar("T")
 PACKAGE = "galton-bridge"
 
@@ -58,6 +85,9 @@ class Target:
         self.zmq_keys = zmq_keys
 
     def client(self, client_id: str | None = None) -> Client:
+        from galton.client.sdk import Client
+        from galton.client.transport import zmq_endpoint
+
         over_zmq = zmq_endpoint(self.connect) is not None
         return Client(self.instance, self.connect, timeout=self.timeout,
                       credentials=None if over_zmq else self.credentials,
@@ -134,6 +164,7 @@ def _zmq_keys(key: Path | None, server_key: str | None) -> ZmqKeys | None:
         return None
     if key is None or server_key is None:
         raise typer.BadParameter("--zmq-key and --zmq-server-key go together")
+    from galton.client.zmq_keys import ZmqKeys
     try:
         return ZmqKeys.load(key, server_key)
     except GaltonError as error:
@@ -221,7 +252,27 @@ def tidy_help(typer_app: typer.Typer) -> None:
 
 
 def main() -> None:
-    app()
+    """The console command: every error is one line on stderr, exit code 2 for a bad
+    command line (typer's boxed usage text and pydantic's "Value error, " left out)."""
+    try:
+        code = app(standalone_mode=False)
+    except typer.Abort:
+        typer.echo("galton-client: aborted", err=True)
+        sys.exit(1)
+    except typer.TyperException as error:  # click's UsageError and its kin
+        sys.exit(usage_error(error))
+    sys.exit(code if isinstance(code, int) else 0)
+
+
+def usage_error(error: typer.TyperException) -> int:
+    """Print a command-line error as one line; return its exit code."""
+    message = " ".join(str(getattr(error, "format_message", error.__str__)()).split())
+    message = message.replace("Value error, ", "")
+    context = getattr(error, "ctx", None)
+    command = context.command_path if context is not None else "galton-client"
+    typer.echo(f"galton-client: {message} (see '{command} --help')", err=True)
+    code: int = getattr(error, "exit_code", 2)
+    return code
 
 
 # Registering every command on ``app`` (each module adds its own):
@@ -233,7 +284,9 @@ from galton.client import (  # noqa: E402,F401
     cli_control,
     cli_fuzz,
     cli_joints,
+    cli_laws,
     cli_perception,
+    cli_report_card,
     cli_router,
     cli_scene,
     cli_states,

@@ -8,30 +8,36 @@ from __future__ import annotations
 
 import itertools
 import json
+from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from galton.analysis.board import BoardSpec
 from galton.analysis.errors import AnalysisError
 from galton.analysis.published import PUBLISHED_LABEL, PUBLISHED_TABLE2
-from galton.analysis.records import ExperimentResults, TrialRecord
-from galton.client.bench.daemons import bench_clients, default_pool_size, pool_clients
-from galton.client.bench.experiment import (
+from galton.client.bench.defaults import (
     DEFAULT_BALLS,
     DEFAULT_ENGINES,
+    DEFAULT_MAX_SIM_TIME_S,
     DEFAULT_REPETITIONS,
-    ExperimentConfig,
-    run_experiment,
+    default_pool_size,
 )
-from galton.client.bench.picture import Animation
-from galton.client.bench.pool import Failover, PoolHooks, run_pool
-from galton.client.bench.trial import DEFAULT_MAX_SIM_TIME_S, TrialConfig
-from galton.client.cli import JsonOpt, app, console, run_guarded
-from galton.client.credentials import Credentials
+from galton.client.cli import JsonOpt, app, console, fail, run_guarded
+from galton.protocol import GaltonError
+
+if TYPE_CHECKING:
+    from rich.progress import Progress
+
+    from galton.analysis.board import BoardSpec
+    from galton.analysis.records import ExperimentResults, TrialRecord
+    from galton.client.bench.experiment import ExperimentConfig
+    from galton.client.bench.journal import Journal
+    from galton.client.bench.picture import Animation
+    from galton.client.bench.pool import Failover
+    from galton.client.bench.trial import TrialConfig
+    from galton.client.credentials import Credentials
 
 if TYPE_CHECKING:
     from galton.analysis.summary import EngineSummary
@@ -54,7 +60,16 @@ def _ints(text: str, where: str) -> tuple[int, ...]:
             from None
 
 
+def checked(make: Callable[[], ExperimentConfig]) -> ExperimentConfig:
+    """The run's configuration, or a command-line error (exit 2) before anything starts."""
+    try:
+        return make()
+    except GaltonError as error:
+        raise typer.BadParameter(str(error)) from error
+
+
 def load_board(source: str) -> BoardSpec:
+    from galton.analysis.board import BoardSpec
     try:
         return BoardSpec.load(source)
     except (AnalysisError, OSError) as error:
@@ -67,11 +82,16 @@ def bench(
     engines: Annotated[str, typer.Option(help="Comma-separated engines.")] = ",".join(
         DEFAULT_ENGINES),
     connect: Annotated[str | None, typer.Option(
-        help="Endpoint(s) of remote daemons (else the global --connect; if neither is given "
-             "and none answers on the default endpoint, embedded daemons are started).")
+        help="Endpoint(s) of daemons to run on, whose worlds the trials replace (else the "
+             "global --connect; with neither, nor --instances or --use-running, the bench "
+             "starts daemons of its own).")
     ] = None,
     instances: Annotated[str | None, typer.Option(
         help="Comma-separated daemon instances to use, in engine order.")] = None,
+    use_running: Annotated[bool, typer.Option(
+        help="Run on the daemons already answering on the default endpoint. A trial "
+             "replaces a daemon's world, so without this (or --connect/--instances) the "
+             "bench starts daemons of its own and touches no running one.")] = False,
     board: Annotated[str, typer.Option(help="Preset (paper, small) or a TOML/JSON file.")
                      ] = "paper",
     balls: Annotated[str, typer.Option(help="Ball count(s), e.g. 1,25,100.")] = ",".join(
@@ -97,36 +117,57 @@ def bench(
 ) -> None:
     """Run the paper's Galton-board experiment through the bridge and report it, with a
     picture of the board after each engine's first trial."""
+    from galton.client.bench.experiment import ExperimentConfig
+    from galton.client.bench.journal import Journal
+    from galton.client.bench.picture import Animation
     if release is not None and release not in ("all-at-once", "stream"):
         raise typer.BadParameter(f"--release must be all-at-once or stream, got {release!r}")
-    config = run_guarded(lambda: ExperimentConfig(
+    config = checked(lambda: ExperimentConfig(
         board=load_board(board), engines=tuple(_csv(engines, "--engines")),
         balls=_ints(balls, "--balls"), repetitions=repetitions, release=release, seed=seed,
         max_sim_time=max_sim_time))
     endpoints = connect.split(",") if connect else ctx.obj.connect
     names = _csv(instances, "--instances") if instances else None
     shown = Animation() if animation else None
+    journal = Journal(config, out)
     if pool:
-        results = run_guarded(lambda: _run_pool(config, endpoints, names, ctx.obj.timeout,
-                                                pool_size, as_json, out, shown,
-                                                ctx.obj.credentials))
+        results = _kept(journal, lambda: _run_pool(
+            config, endpoints, names, ctx.obj.timeout, pool_size, as_json, out, shown,
+            ctx.obj.credentials, use_running, journal))
     else:
-        results = run_guarded(lambda: _run(config, endpoints, names, ctx.obj.timeout, as_json,
-                                           out, shown, ctx.obj.credentials))
+        results = _kept(journal, lambda: _run(
+            config, endpoints, names, ctx.obj.timeout, as_json, out, shown,
+            ctx.obj.credentials, use_running, journal))
     _finish(results, out, as_json)
+
+
+def _kept(journal: Journal, action: Callable[[], ExperimentResults]) -> ExperimentResults:
+    """Run the trials; on a failure, say which trials were kept (journal) and exit 1."""
+    try:
+        return action()
+    except GaltonError as error:
+        if journal.count:
+            typer.echo(f"galton-client: {journal.count} trial(s) finished before the failure "
+                       f"are kept in {journal.path} (`galton-client report {journal.path}` "
+                       "reports them)", err=True)
+        raise fail(error) from error
 
 
 def _run(config: ExperimentConfig, connect: list[str] | None, instances: list[str] | None,
          timeout: float, quiet: bool, pictures: Path | None = None,
-         animation: Animation | None = None,
-         credentials: Credentials | None = None) -> ExperimentResults:
+         animation: Animation | None = None, credentials: Credentials | None = None,
+         use_running: bool = False, journal: Journal | None = None) -> ExperimentResults:
+    from galton.client.bench.daemons import bench_clients
+    from galton.client.bench.experiment import run_experiment
     plan = config.trials()
     with bench_clients(config.engines, connect, instances, max(timeout, 30.0),
-                       credentials) as clients, \
+                       credentials, use_running) as clients, \
             _progress(quiet) as progress:
         task = progress.add_task("Galton trials", total=len(plan))
 
         def advance(trial: TrialConfig, record: TrialRecord) -> None:
+            if journal is not None:
+                journal.add(trial, record)
             progress.update(task, advance=1, description=(
                 f"{trial.engine} {trial.balls} balls rep {trial.repetition + 1}: "
                 f"lost {record.lost}, RTF {record.rtf or 0:.2f}"))
@@ -136,10 +177,13 @@ def _run(config: ExperimentConfig, connect: list[str] | None, instances: list[st
 def _run_pool(config: ExperimentConfig, connect: list[str] | None,
               instances: list[str] | None, timeout: float, size: int, quiet: bool,
               pictures: Path, animation: Animation | None,
-              credentials: Credentials | None = None) -> ExperimentResults:
+              credentials: Credentials | None = None, use_running: bool = False,
+              journal: Journal | None = None) -> ExperimentResults:
     """The plan over a pool of daemons: a progress row per daemon and one for the whole."""
+    from galton.client.bench.daemons import pool_clients
+    from galton.client.bench.pool import PoolHooks, run_pool
     with pool_clients(connect, instances, max(timeout, 30.0), size, config.engines[0],
-                      credentials) as \
+                      credentials, use_running) as \
             daemons, _progress(quiet) as progress:
         overall = progress.add_task(f"Galton trials on {len(daemons.clients)} daemons",
                                     total=len(config.trials()))
@@ -151,6 +195,8 @@ def _run_pool(config: ExperimentConfig, connect: list[str] | None,
                 f"{name}: {trial.engine} {trial.balls} balls rep {trial.repetition + 1}"))
 
         def advance(name: str, trial: TrialConfig, record: TrialRecord) -> None:
+            if journal is not None:
+                journal.add(trial, record)
             progress.update(rows[name], advance=1, description=(
                 f"{name}: {trial.engine} {trial.balls} balls rep {trial.repetition + 1}: "
                 f"lost {record.lost}, RTF {record.rtf or 0:.2f}"))
@@ -166,6 +212,7 @@ def _run_pool(config: ExperimentConfig, connect: list[str] | None,
 
 def _finish(results: ExperimentResults, out: Path, as_json: bool) -> None:
     from galton.analysis.outputs import write_outputs
+    from galton.analysis.records import ExperimentResults
     from galton.analysis.summary import summarise
     try:
         written = write_outputs(results, out)
@@ -224,14 +271,13 @@ def report(
     as_json: JsonOpt = False,
 ) -> None:
     """Re-render the report, CSV and plots from saved results."""
+    from galton.analysis.records import ExperimentResults
     def load() -> ExperimentResults:
         try:
             return ExperimentResults.from_json(results_json)
         except (AnalysisError, ValueError) as error:
             raise typer.BadParameter(f"{results_json}: {error}") from error
     _finish(load(), out or results_json.parent, as_json)
-
-
 
 
 @app.command()
@@ -244,6 +290,9 @@ def sweep(
         DEFAULT_ENGINES),
     connect: Annotated[str | None, typer.Option(help="Endpoint(s) of remote daemons.")] = None,
     instances: Annotated[str | None, typer.Option(help="Daemon instances to use.")] = None,
+    use_running: Annotated[bool, typer.Option(
+        help="Run on the daemons already answering on the default endpoint (their worlds "
+             "are replaced); else the sweep starts its own.")] = False,
     board: Annotated[str, typer.Option(help="Preset or TOML/JSON file.")] = "paper",
     balls: Annotated[int, typer.Option(min=1)] = 100,
     repetitions: Annotated[int, typer.Option(min=1)] = 3,
@@ -255,9 +304,11 @@ def sweep(
 ) -> None:
     """The benchmark over a grid of one or two parameters: a fidelity map per engine."""
     from galton.analysis.sweep import plot_sweep, sweep_cells, sweep_table
+    from galton.client.bench.daemons import bench_clients
+    from galton.client.bench.experiment import ExperimentConfig
     from galton.client.bench.sweep import parse_axis, run_sweep
     axes = run_guarded(lambda: [parse_axis(p) for p in param])
-    config = run_guarded(lambda: ExperimentConfig(
+    config = checked(lambda: ExperimentConfig(
         board=load_board(board), engines=tuple(_csv(engines, "--engines")), balls=(balls,),
         repetitions=repetitions, release=release, seed=seed, max_sim_time=max_sim_time))
     endpoints = connect.split(",") if connect else ctx.obj.connect
@@ -266,7 +317,7 @@ def sweep(
 
     def go() -> ExperimentResults:
         with bench_clients(config.engines, endpoints, names, max(ctx.obj.timeout, 30.0),
-                           ctx.obj.credentials) as \
+                           ctx.obj.credentials, use_running) as \
                 clients, _progress(as_json) as progress:
             task = progress.add_task("sweep", total=total)
             return run_sweep(clients, config, axes,
@@ -287,5 +338,6 @@ def sweep(
 
 
 def _progress(quiet: bool) -> Progress:
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
     return Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
                     TimeElapsedColumn(), console=console, disable=quiet)

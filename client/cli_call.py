@@ -10,14 +10,19 @@ exits 1.
 from __future__ import annotations
 
 import json
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
-import numpy as np
 import typer
 
 from galton.client.cli import Target, app, fail, run_guarded
-from galton.protocol import POSE_WIDTH, TWIST_WIDTH, GaltonError, Reply, pack_f64, unpack_f64
+from galton.protocol import POSE_WIDTH, TWIST_WIDTH, GaltonError
 from galton.protocol.operations import OPERATIONS
+
+if TYPE_CHECKING:
+    from galton.protocol import Reply
+
+if TYPE_CHECKING:
+    pass
 
 BIN_WIDTHS = {"poses": POSE_WIDTH, "twists": TWIST_WIDTH}
 # Argument kinds sent as float64 bins (a single number of kind "values" stays a number).
@@ -36,6 +41,9 @@ def parse_args(text: str) -> dict[str, Any]:
 
 def packed(value: Any) -> Any:
     """Rows of numbers as a float64 bin; anything else as it is (the daemon judges it)."""
+    import numpy as np
+
+    from galton.protocol import pack_f64
     if not isinstance(value, list):
         return value
     try:
@@ -69,6 +77,7 @@ def pack_group(group: Any) -> Any:
 def unpacked(value: Any, key: str = "") -> Any:
     """A result with every bin as numbers: rows for poses and twists, a flat list for another
     bin of float64, hex for one that is not."""
+    from galton.protocol import unpack_f64
     if isinstance(value, dict):
         return {k: unpacked(v, str(k)) for k, v in value.items()}
     if isinstance(value, list):

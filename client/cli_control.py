@@ -10,12 +10,14 @@ from __future__ import annotations
 import json
 import threading
 from contextlib import suppress
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
 from galton.client.cli import JsonOpt, app, console, emit, with_client
-from galton.client.sdk import Client
+
+if TYPE_CHECKING:
+    from galton.client.sdk import Client
 
 PANEL = "Control"
 

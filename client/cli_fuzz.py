@@ -4,15 +4,15 @@ from __future__ import annotations
 
 import json
 from contextlib import ExitStack
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
-from rich.progress import Progress
 
 from galton.client.cli import JsonOpt, app, console, run_guarded
-from galton.client.embedded import EmbeddedDaemon
-from galton.client.fuzz import FuzzReport, run_campaign
-from galton.client.sdk import Client
+
+if TYPE_CHECKING:
+
+    from galton.client.fuzz import FuzzReport
 
 
 @app.command()
@@ -27,6 +27,11 @@ def fuzz(
 ) -> None:
     """Send seeded malformed and well-formed requests; check each gets one typed reply and
     that a rejected one changes nothing. Exit 1 on any finding."""
+    from rich.progress import Progress
+
+    from galton.client.embedded import EmbeddedDaemon
+    from galton.client.fuzz import run_campaign
+    from galton.client.sdk import Client
     def go() -> FuzzReport:
         with ExitStack() as stack:
             daemon = None

@@ -9,17 +9,22 @@ apply-wrench), hidden from the command list.
 
 from __future__ import annotations
 
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
-import numpy as np
 import typer
 from rich.table import Table
 
 from galton.client.cli import JsonOpt, app, console, emit, show_stamp, with_client
 from galton.client.cli_states import NamesArg
 from galton.client.cli_values import LIST_HELP, TargetMode, counted, numbers, rows
-from galton.client.values import JointStates
-from galton.protocol import JointInfo
+
+if TYPE_CHECKING:
+    from galton.protocol import JointInfo
+
+if TYPE_CHECKING:
+    import numpy as np
+
+    from galton.client.values import JointStates
 
 PANEL = "Joints"
 JointNamesArg = Annotated[list[str], typer.Argument(
@@ -31,6 +36,7 @@ PER_JOINT = f"{LIST_HELP}, one per joint or one for all"
 
 def joint_values(text: str, count: int, where: str) -> np.ndarray:
     """One number per joint from one option value; one number alone is given to all."""
+    import numpy as np
     values = numbers(text, where)
     if len(values) == 1:
         return np.full(count, values[0])
@@ -163,6 +169,7 @@ def wrench(
     as_json: JsonOpt = False,
 ) -> None:
     """Apply a world-frame force and torque on bodies or links, held every step."""
+    import numpy as np
     count = len(names)
     wrenches = np.hstack([rows(force, count, 3, "--force"), rows(torque, count, 3, "--torque")])
     points = None if at is None else rows(at, count, 3, "--at")

@@ -10,17 +10,21 @@ RGB picture, --depth-out the depth (16-bit millimetres; a .npy file keeps float3
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
-import numpy as np
 import typer
 from rich.table import Table
 
 from galton.client.cli import JsonOpt, app, console, emit, with_client
 from galton.client.cli_values import LIST_HELP, numbers, split_list
-from galton.client.sdk_perception import camera
-from galton.client.values import Contacts, Image, RayHits
-from galton.protocol.png import depth_png, encode_png, segmentation_png
+
+if TYPE_CHECKING:
+    pass
+
+if TYPE_CHECKING:
+    import numpy as np
+
+    from galton.client.values import Contacts, Image, RayHits
 
 PANEL = "Perception"
 XYZ = "x,y,z"
@@ -63,6 +67,7 @@ def camera_map(eye: str | None, target: str | None, up: str | None, fov: float |
                size: str | None, near: float | None, far: float | None, attach: str | None,
                outputs: list[str] | None) -> dict[str, Any]:
     """A camera map from the command's options (--eye and --target required)."""
+    from galton.client.sdk_perception import camera
     seen, looked_at = point(eye, "--eye"), point(target, "--target")
     if seen is None or looked_at is None:
         raise typer.BadParameter("a camera needs --eye and --target (or --camera NAME)")
@@ -73,6 +78,9 @@ def camera_map(eye: str | None, target: str | None, up: str | None, fov: float |
 def write_image(image: Image, out: Path | None, depth_out: Path | None,
                 seg_out: Path | None) -> list[str]:
     """Write the asked files; return their paths."""
+    import numpy as np
+
+    from galton.protocol.png import depth_png, encode_png, segmentation_png
     written: list[str] = []
     for path, pixels, png in ((out, image.rgb, encode_png), (depth_out, image.depth, depth_png),
                               (seg_out, image.segmentation, segmentation_png)):
@@ -101,7 +109,8 @@ def render(
     as_json: JsonOpt = False,
 ) -> None:
     """Render one camera and write its pictures (give at least one of --out, --depth-out,
-    --seg-out); prints the size, the files and the entities seen."""
+    --seg-out); prints the size and the files, and with --seg-out the entities seen."""
+    import numpy as np
     wanted = [kind for kind, path in (("rgb", out), ("depth", depth_out),
                                       ("segmentation", seg_out)) if path is not None]
     if not wanted:
@@ -169,6 +178,7 @@ def _xyz(values: Any) -> str:
 
 
 def ray_rows(text: str, where: str) -> np.ndarray:
+    import numpy as np
     values = numbers(text, where)
     if len(values) % 3:
         raise typer.BadParameter(f"{where} takes rows of x,y,z ({len(values)} numbers given)")
@@ -189,6 +199,7 @@ def raycast(
     as_json: JsonOpt = False,
 ) -> None:
     """Cast rays (--from with --dir or --to) and print each one's first hit."""
+    import numpy as np
     if (directions is None) == (ends is None):
         raise typer.BadParameter("give exactly one of --dir or --to")
     start = ray_rows(origins, "--from")
@@ -219,6 +230,7 @@ def show_hits(hits: RayHits, as_json: bool) -> None:
 
 
 def _finite(row: np.ndarray) -> list[float] | None:
+    import numpy as np
     return [float(v) for v in row] if np.isfinite(row).all() else None
 
 

@@ -12,13 +12,15 @@ import signal
 import threading
 from pathlib import Path
 from types import FrameType
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
-import zenoh
 
 from galton.client.cli import app
-from galton.client.session import close_session
+
+if TYPE_CHECKING:
+    import zenoh
+
 
 DEFAULT_ROUTER_LISTEN = "tcp/127.0.0.1:7447"
 READY_PREFIX = "galton-client router ready:"
@@ -29,6 +31,7 @@ def router_config(listen: list[str], connect: list[str], multicast: bool,
     """A router listening on ``listen``, else on the config file's endpoints, else on
     DEFAULT_ROUTER_LISTEN (never Zenoh's own default: every interface), joined to other
     routers at ``connect``; a Zenoh config file (TLS, access control) may set the rest."""
+    import zenoh
     config = zenoh.Config.from_file(str(config_file)) if config_file else zenoh.Config()
     silent = config.get_json("listen/endpoints") == zenoh.Config().get_json("listen/endpoints")
     config.insert_json5("mode", json.dumps("router"))
@@ -66,6 +69,9 @@ def router(
 ) -> None:
     """Run a Zenoh router until Ctrl-C or SIGTERM: start daemons with `galton-daemon
     --connect tcp/HOST:7447`, and point clients at the same endpoint."""
+    import zenoh
+
+    from galton.client.session import close_session
     endpoints = listen or []
     try:
         config = router_config(endpoints, connect or [], multicast, zenoh_config)

@@ -2,10 +2,10 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
-import numpy as np
 import typer
 from rich.table import Table
 
@@ -21,9 +21,12 @@ from galton.client.cli_values import (
     rows,
     split_list,
 )
-from galton.client.sdk import body_group
 from galton.protocol import TWIST_WIDTH
-from galton.protocol.model import SIZE_LAYOUT
+from galton.protocol.vocabulary import SIZE_LAYOUT
+
+if TYPE_CHECKING:
+    import numpy as np
+
 
 PANEL = "Scene"
 DEFAULT_HALF_SIZE = 0.05  # m, every size number of a body
@@ -56,8 +59,15 @@ def size_values(shape: str, size: str | None) -> tuple[float, ...]:
     return (half,) * len(SIZE_LAYOUT[shape])
 
 
+def default_position(shape: str) -> str:
+    """Where a body goes unless --pos says: a plane is the ground, at z = 0 (as the SDK's
+    ``plane()``); a body 1 m above it."""
+    return "0,0,0" if shape == "plane" else "0,0,1"
+
+
 def positions(pos: str, count: int, spacing: float) -> np.ndarray:
     """x,y,z per body, or one x,y,z for the first body and the rest ``spacing`` apart in x."""
+    import numpy as np
     given = numbers(pos, "--pos")
     if len(given) == 3:
         xyz = np.tile(np.asarray(given, dtype=float), (count, 1))
@@ -89,9 +99,10 @@ def spawn(
     size: Annotated[str | None, typer.Option(
         help=f"Half sizes, {LIST_HELP} (sphere: radius; box: x,y,z; cylinder and capsule: "
              "radius,half length; plane: x,y). Default 0.05 m each, plane 50 m.")] = None,
-    pos: Annotated[str, typer.Option(
+    pos: Annotated[str | None, typer.Option(
         help=f"Positions x,y,z per body, {LIST_HELP}; or one x,y,z for the first body, the "
-             "others --spacing apart in x.")] = "0,0,1",
+             "others --spacing apart in x. Default: a plane at 0,0,0 (the ground, as the "
+             "SDK's plane()), other shapes from 0,0,1.", show_default=False)] = None,
     spacing: Annotated[float, typer.Option(help="x distance between bodies, m.")] = 0.2,
     twists: Annotated[str | None, typer.Option(
         help=f"Initial twists vx,vy,vz,wx,wy,wz per body or one for all, {LIST_HELP}.")
@@ -106,9 +117,11 @@ def spawn(
     as_json: JsonOpt = False,
 ) -> None:
     """Spawn bodies of one shape and material, in a single request."""
+    from galton.client.sdk import body_group
     every = body_names(names, count)
     group = body_group(
-        str(shape), size_values(shape, size), every, positions(pos, len(every), spacing),
+        str(shape), size_values(shape, size), every,
+        positions(pos or default_position(shape), len(every), spacing),
         twists=None if twists is None else rows(twists, len(every), TWIST_WIDTH, "--twists"),
         static=static or shape == "plane", mass=mass, friction=friction,
         restitution=restitution, rgba=rgba_values(rgba), tags=tag_values(tags) or ())
@@ -165,11 +178,28 @@ def load_model(
     chosen = model_format(fmt, file, path)
     text = None if file is None else model_text(file)
     folders = None if search_path is None else split_list(search_path, "--search-path")
+    if file is not None:
+        folders = with_own_folder(file, text or "", folders)
     loaded = with_client(ctx, lambda c: c.load_model(
         chosen, text=text, path=path, prefix=prefix, fixed_base=fixed_base,
         search_path=folders))
     emit({"names": loaded}, as_json, lambda: console.print(
         f"loaded {counted(len(loaded), 'entity', 'entities')}: {', '.join(loaded)}", markup=False))
+
+
+# An attribute by which a URDF or MJCF file names another file (a mesh, a texture, ...).
+_NAMES_A_FILE = re.compile(r"\b(?:file|filename)\s*=")
+
+
+def with_own_folder(file: Path, text: str, folders: list[str] | None) -> list[str] | None:
+    """The search path with the model file's own folder first, when the model names other
+    files (its meshes sit beside it): the daemon gets the text, not the path. A model that
+    names none is sent as it was, so a daemon on another machine is not asked to search a
+    folder it lacks."""
+    if not _NAMES_A_FILE.search(text):
+        return folders
+    own = str(file.resolve().parent)
+    return [own, *(f for f in folders or [] if f != own)]
 
 
 @app.command(rich_help_panel=PANEL)

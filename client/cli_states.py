@@ -2,16 +2,19 @@
 
 from __future__ import annotations
 
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
-import numpy as np
 import typer
 from rich.table import Table
 
 from galton.client.cli import JsonOpt, app, console, emit, show_stamp, with_client
 from galton.client.cli_values import LIST_HELP, counted, numbers, rows
-from galton.client.sdk import States
 from galton.protocol import POSE_WIDTH, TWIST_WIDTH
+
+if TYPE_CHECKING:
+    import numpy as np
+
+    from galton.client.sdk import States
 
 PANEL = "Scene"
 NamesArg = Annotated[list[str], typer.Argument(
@@ -84,6 +87,7 @@ def set_states(
 
 def pose_values(text: str, count: int, where: str) -> np.ndarray:
     """Full poses (7 per body), or positions (3 per body) with the identity orientation."""
+    import numpy as np
     given = len(numbers(text, where))
     if given in (POSE_WIDTH, count * POSE_WIDTH):
         return rows(text, count, POSE_WIDTH, where)

@@ -7,13 +7,17 @@ import queue
 import sys
 from collections.abc import Callable
 from dataclasses import asdict
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
 from galton.client.cli import JsonOpt, Target, app, console, with_client
-from galton.client.sdk import Client
-from galton.protocol import Telemetry
+
+if TYPE_CHECKING:
+    from galton.protocol import Telemetry
+
+if TYPE_CHECKING:
+    from galton.client.sdk import Client
 
 PANEL = "Streams"
 Count = Annotated[int, typer.Option(help="Stop after N samples (0 = run until Ctrl-C).",
@@ -22,7 +26,8 @@ Count = Annotated[int, typer.Option(help="Stop after N samples (0 = run until Ct
 
 @app.command(rich_help_panel=PANEL)
 def watch(ctx: typer.Context, count: Count = 0, as_json: JsonOpt = False) -> None:
-    """Print live telemetry: sim time, RTF, CPU and memory (JSON: one object a line)."""
+    """Print live telemetry, a line per world each period: sim time, RTF, CPU and memory
+    (JSON: one object a line)."""
     target: Target = ctx.obj
 
     def go(client: Client) -> None:
@@ -40,7 +45,8 @@ def print_telemetry(sample: Telemetry, as_json: bool) -> None:
         sys.stdout.flush()
         return
     console.print(
-        f"#{sample.seq:<6} {sample.state:<8} t={sample.sim_time:10.3f}s step={sample.step:<9} "
+        f"#{sample.seq:<6} {sample.world} {sample.state:<8} t={sample.sim_time:10.3f}s "
+        f"step={sample.step:<9} "
         f"rtf={sample.rtf:7.3f} (target {sample.target_rtf:g}) n={sample.entity_count:<5} "
         f"cpu={sample.cpu_percent:5.1f}% rss={sample.rss_bytes / 2**20:7.1f} MiB",
         markup=False)

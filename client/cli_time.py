@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import json
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
@@ -11,7 +11,10 @@ from galton.client.cli import JsonOpt, app, show_stamp, show_status, with_client
 from galton.client.cli_joints import joint_states_dict, render_joint_states, show_joint_states
 from galton.client.cli_states import show_states, states_dict
 from galton.client.cli_values import LIST_HELP, ResetScope, counted, numbers, split_list
-from galton.client.sdk import Client, JointStates, States
+from galton.client.cli_worlds import WorldOpt, on_world
+
+if TYPE_CHECKING:
+    from galton.client.sdk import Client, JointStates, States
 
 PANEL = "Clock"
 Read = Annotated[str | None, typer.Option(
@@ -57,7 +60,9 @@ def reset(ctx: typer.Context,
               help="time: clock to 0; state: entities to their created state; spawned: "
                    "remove every entity; all: both removal and clock.")] = "all",
           as_json: JsonOpt = False) -> None:
-    """Reset time, states, spawned entities, or all (parameters are kept)."""
+    """Reset time, states, spawned entities, or all (parameters are kept). A playing or
+    paused world stays so (a paused world at time 0 is not "stopped": stop rewinds and
+    stops)."""
     show_status(with_client(ctx, lambda c: c.reset(str(scope))), as_json)
 
 
@@ -95,14 +100,17 @@ def step(ctx: typer.Context,
          count: Annotated[int, typer.Argument(help="Steps to advance.", min=1)] = 1,
          read: Read = None,
          read_joints: ReadJoints = None,
+         world: WorldOpt = None,
          as_json: JsonOpt = False) -> None:
-    """Advance exactly COUNT steps (paused or stopped); returns when they are done."""
+    """Advance exactly COUNT steps (paused or stopped; a side world moves only so);
+    returns when they are done."""
     names, joints = read_names(read), read_names(read_joints, "--read-joints")
     if names is None and joints is None:
-        stamp = with_client(ctx, lambda c: c.step(count))
+        stamp = with_client(ctx, lambda c: on_world(c, world).step(count))
         show_stamp(f"{counted(count, 'step', 'steps')} done", stamp, as_json, steps=count)
         return
-    show_reading(*with_client(ctx, lambda c: read_step(c, count, names, joints)), as_json)
+    show_reading(*with_client(ctx, lambda c: read_step(on_world(c, world), count, names,
+                                                        joints)), as_json)
 
 
 def rest_rule(text: str) -> tuple[float, float]:

@@ -16,11 +16,13 @@ from collections.abc import Sequence
 from enum import StrEnum
 from typing import TYPE_CHECKING, Any, TypeAlias
 
-import numpy as np
 import typer
 
 from galton.protocol import BODY_SHAPES, RESET_SCOPES
 from galton.protocol.operations import OPERATIONS
+
+if TYPE_CHECKING:
+    import numpy as np
 
 LIST_HELP = "comma-separated"
 
@@ -81,6 +83,7 @@ def numbers(text: str, where: str) -> list[float]:
 def rows(text: str, count: int, width: int, where: str) -> np.ndarray:
     """``count`` rows of ``width`` numbers from one comma-separated value, row after row;
     one row alone is repeated for every body."""
+    import numpy as np
     values = numbers(text, where)
     if len(values) == width:
         return np.tile(np.asarray(values, dtype=float), (count, 1))

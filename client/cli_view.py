@@ -5,39 +5,41 @@ from __future__ import annotations
 
 import importlib.util
 import json
+import math
 import signal
 import sys
 import threading
 import uuid
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
-import numpy as np
 import typer
 
 from galton.client.cli import JsonOpt, Target, app, run_guarded
 from galton.client.cli_streams import until_interrupted
-from galton.client.sdk import Client, StateSample
-from galton.client.view.recording import SUFFIX, Recorder
-from galton.protocol import InvalidArgumentError
-from galton.protocol.keys import VIEWER_ID_PREFIX
+
+if TYPE_CHECKING:  # numpy, the SDK and viser load when a command runs, not for --help
+    from galton.client.sdk import Client, StateSample
 
 PANEL = "Streams"
+RECORDING_SUFFIX = ".npz"  # galton.client.view.recording.SUFFIX
+Point = tuple[float, float, float]
 
 
-def _point(text: str | None, option: str) -> np.ndarray | None:
+def _point(text: str | None, option: str) -> Point | None:
     if text is None:
         return None
     try:
         values = [float(part) for part in text.split(",")]
     except ValueError:
         values = []
-    if len(values) != 3 or not all(np.isfinite(values)):
+    if len(values) != 3 or not all(math.isfinite(v) for v in values):
         raise typer.BadParameter(f"{option} takes three numbers, x,y,z; got {text!r}")
-    return np.asarray(values)
+    return values[0], values[1], values[2]
 
 
 def _require_viser() -> None:
+    from galton.protocol import InvalidArgumentError
     if importlib.util.find_spec("viser") is None:
         raise InvalidArgumentError(
             "galton-client view needs the [view] extra: pip install 'galton-bridge[view]'")
@@ -78,12 +80,17 @@ def view(ctx: typer.Context,
 
     def serve() -> None:
         _require_viser()
+        import numpy as np
         import viser
+
+        from galton.protocol.keys import VIEWER_ID_PREFIX
+        framed_arrays = (None if framed is None else
+                         (np.asarray(framed[0]), np.asarray(framed[1])))
         server = viser.ViserServer(host=host, port=port, verbose=False)
         try:
             if source is not None:
                 from galton.client.view.replay import ReplayView
-                replay = ReplayView.open(source, server, framed)
+                replay = ReplayView.open(source, server, framed_arrays)
                 _ready(host, port)
                 replay.run(stop)
                 return
@@ -93,7 +100,7 @@ def view(ctx: typer.Context,
             # A viewer's id is one a viewer may hold a token for under --users.
             client_id = None if operator else f"{VIEWER_ID_PREFIX}{uuid.uuid4().hex}"
             with target.client(client_id) as client:
-                page = LiveView(client, server, rate, operator, framed)
+                page = LiveView(client, server, rate, operator, framed_arrays)
                 _ready(host, port)
                 try:
                     page.run(stop)
@@ -121,13 +128,15 @@ def record(ctx: typer.Context,
     the entities and their poses at RATE samples a second. Recording reads the world and
     never changes it."""
     target: Target = ctx.obj
-    if out.suffix != SUFFIX:
-        raise typer.BadParameter(f"the recording is a {SUFFIX} file, got {str(out)!r}")
+    if out.suffix != RECORDING_SUFFIX:
+        raise typer.BadParameter(
+            f"the recording is a {RECORDING_SUFFIX} file, got {str(out)!r}")
     stop = threading.Event()
     for signum in (signal.SIGINT, signal.SIGTERM):
         signal.signal(signum, lambda *_: stop.set())
 
     def go() -> None:
+        from galton.client.view.recording import Recorder
         with target.client() as client, Recorder(client, out, rate) as recorder:
             typer.echo(f"galton-client record: recording to {out}", err=True)
             stop.wait(seconds if seconds > 0 else None)

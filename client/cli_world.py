@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import json
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 from rich.table import Table
@@ -19,8 +19,12 @@ from galton.client.cli import (
     with_client,
 )
 from galton.client.cli_values import Engine, assignments
-from galton.client.discovery import discover_at
-from galton.protocol import Capabilities
+
+if TYPE_CHECKING:
+    from galton.protocol import Capabilities
+
+if TYPE_CHECKING:
+    pass
 
 PANEL = "World"
 Assignments = Annotated[list[str] | None, typer.Argument(
@@ -32,6 +36,7 @@ Assignments = Annotated[list[str] | None, typer.Argument(
 def daemons(ctx: typer.Context, as_json: JsonOpt = False) -> None:
     """List the daemons reachable through --connect, with instance, engine, state, host
     and ZeroMQ endpoints."""
+    from galton.client.discovery import discover_at
     target: Target = ctx.obj
     found = run_guarded(lambda: discover_at(target.connect, target.timeout,
                                             target.credentials))

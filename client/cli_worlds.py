@@ -8,17 +8,19 @@ from __future__ import annotations
 
 from dataclasses import asdict
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 from rich.table import Table
 
 from galton.client.cli import JsonOpt, app, console, emit, with_client
-from galton.client.cli_states import NamesArg
+from galton.client.cli_states import NamesArg, pose_values
 from galton.client.cli_values import LIST_HELP, Engine, assignments, rows, split_list
-from galton.client.sdk import Client
-from galton.client.values import Comparison, Prediction, SnapshotInfo, WorldInfo
-from galton.protocol import POSE_WIDTH, TWIST_WIDTH
+from galton.protocol import TWIST_WIDTH
+
+if TYPE_CHECKING:
+    from galton.client.sdk import Client
+    from galton.client.values import Comparison, Prediction, SnapshotInfo, WorldInfo
 
 PANEL = "Worlds and snapshots"
 WorldOpt = Annotated[str | None, typer.Option(
@@ -208,7 +210,9 @@ def render_comparison(found: Comparison) -> None:
 def compare(
     ctx: typer.Context, names: NamesArg,
     poses: Annotated[str, typer.Option(
-        help="Observed poses x,y,z,qx,qy,qz,qw per body (one for all), comma-separated.")],
+        help="Observed poses, comma-separated: x,y,z,qx,qy,qz,qw per body, or x,y,z per "
+             "body (unrotated: compared with the identity orientation), as set-states "
+             "takes them; one alone is every body's.")],
     twists: Annotated[str | None, typer.Option(
         help="Observed twists vx,vy,vz,wx,wy,wz per body, comma-separated.")] = None,
     sigma_position: Annotated[float | None, typer.Option(help="m (default 0.01).")] = None,
@@ -220,7 +224,7 @@ def compare(
 ) -> None:
     """Compare observed poses with a world's: per-body errors and one anomaly score (about 1
     at the sigmas' noise; above 3, a surprise)."""
-    pose_rows = rows(poses, len(names), POSE_WIDTH, "--poses")
+    pose_rows = pose_values(poses, len(names), "--poses")
     twist_rows = None if twists is None else rows(twists, len(names), TWIST_WIDTH, "--twists")
     found = with_client(ctx, lambda c: on_world(c, world).compare(
         names, pose_rows, twist_rows, sigma_position, sigma_angle, sigma_speed, correct))

@@ -9,13 +9,15 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
-import zmq.auth
 
 from galton.client.cli import app, run_guarded
 from galton.protocol.errors import InvalidArgumentError
+
+if TYPE_CHECKING:
+    pass
 
 
 @app.command("zmq-keys", rich_help_panel="Network")
@@ -26,6 +28,7 @@ def zmq_keys(
 ) -> None:
     """Write a CURVE key pair (the secret file readable by its owner only) and print the
     users-file line of its public key."""
+    import zmq.auth
     def make() -> str:
         folder.mkdir(parents=True, exist_ok=True)
         for made in (folder / f"{name}.key", folder / f"{name}.key_secret"):

@@ -12,7 +12,8 @@ from galton.daemon.engine import IMAGE_OUTPUTS, CameraView
 from galton.daemon.world import World
 from galton.protocol import InvalidArgumentError
 from galton.protocol.errors import brief
-from galton.protocol.model import check_fields, check_name, check_type, finite_number, integer_in
+from galton.protocol.model import check_name, check_type, finite_number, integer_in
+from galton.protocol.vocabulary import check_fields
 
 CAMERA_FIELDS = ("eye", "target", "up", "fov", "width", "height", "near", "far", "outputs",
                  "attach")

@@ -11,6 +11,7 @@ import typer
 import zenoh
 
 from galton.daemon.limits import Limits, describe_limits, parse_limits
+from galton.daemon.ros2.options import Ros2Options, ros2_options
 from galton.daemon.server import DaemonOptions, run_daemon
 from galton.daemon.users import User, load_users, readable_by_others
 from galton.daemon.zenoh_merge import DEFAULT_LISTEN, DEFAULT_TLS_LISTEN
@@ -62,9 +63,19 @@ def _users(path: Path | None) -> dict[str, User] | None:
     return found
 
 
+def _ros2(on: bool, domain: int, namespace: str, mirrors: list[str]) -> Ros2Options | None:
+    """--ros2's options; its sub-options without --ros2 are refused, not ignored."""
+    if not on:
+        if mirrors or namespace or domain:
+            raise InvalidArgumentError("--ros-domain-id, --ros-namespace and --ros2-mirror "
+                                       "need --ros2")
+        return None
+    return ros2_options(domain, namespace, mirrors)
+
+
 @app.command()
 def serve(
-    engine: Annotated[str, typer.Option(help="Physics engine: mujoco or pybullet.")] = "mujoco",
+    engine: Annotated[str, typer.Option(help="Physics engine (mujoco, pybullet, ode).")] = "mujoco",
     instance: Annotated[str, typer.Option(help="Instance name, one key chunk.")] = "galton",
     listen: Annotated[list[str] | None, typer.Option(
         help=f"Zenoh endpoint to listen on (repeatable). Default: the --zenoh-config "
@@ -110,6 +121,16 @@ def serve(
              "and on SIGTERM) and restored from when the daemon starts again.")] = None,
     checkpoint_every: Annotated[float, typer.Option(
         help="Seconds between checkpoints with --state-dir.", min=0.1)] = 10.0,
+    ros2: Annotated[bool, typer.Option(
+        help="Also serve ROS 2 nodes on rmw_zenoh: simulation_interfaces services, /clock, "
+             "/tf (docs/ROS2.md; needs the [ros2] extra).")] = False,
+    ros_domain_id: Annotated[int, typer.Option(
+        help="The ROS_DOMAIN_ID of --ros2's keys.")] = 0,
+    ros_namespace: Annotated[str, typer.Option(
+        help="The ROS namespace of --ros2's node, e.g. /sim.")] = "",
+    ros2_mirror: Annotated[list[str] | None, typer.Option(
+        help="MODEL=TOPIC (repeatable): with --ros2, set the loaded model's joints from "
+             "each sensor_msgs/JointState on TOPIC, e.g. arm=/joint_states.")] = None,
     log_level: Annotated[str, typer.Option(help="Logging level.")] = "warning",
 ) -> None:
     """Serve one world on ENGINE as INSTANCE until SIGINT or SIGTERM."""
@@ -124,7 +145,8 @@ def serve(
             limits=_parse_limits(limit or []), state_dir=state_dir,
             checkpoint_period_s=checkpoint_every, zmq=zmq or [],
             users=_users(users), zmq_key=zmq_key,
-            tls=_tls_files(tls_cert, tls_key, tls_ca))
+            tls=_tls_files(tls_cert, tls_key, tls_ca),
+            ros2=_ros2(ros2, ros_domain_id, ros_namespace, ros2_mirror or []))
         code = run_daemon(options, announce=lambda line: print(line, flush=True))
     except GaltonError as error:
         typer.echo(f"galton-daemon: {error}", err=True)

@@ -12,8 +12,11 @@ leaves the engine's scene as it was before the call.
 
 from __future__ import annotations
 
+import contextlib
+import os
+import sys
 from abc import ABC, abstractmethod
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -279,3 +282,23 @@ class Engine(ABC):
 
     def _unsupported(self, what: str) -> FeatureUnsupportedError:
         return FeatureUnsupportedError(f"the {self.name} engine does not support {what}")
+
+
+@contextlib.contextmanager
+def native_output_silenced() -> Iterator[None]:
+    """Nothing a native library prints to the process's stdout or stderr while inside (a
+    build banner, a debug line): the daemon's output is its own lines and its log. Python's
+    own streams are flushed first, so nothing of ours is lost."""
+    sys.stdout.flush()
+    sys.stderr.flush()
+    saved = [os.dup(1), os.dup(2)]
+    try:
+        with open(os.devnull, "wb") as null:
+            os.dup2(null.fileno(), 1)
+            os.dup2(null.fileno(), 2)
+            yield
+    finally:
+        os.dup2(saved[0], 1)
+        os.dup2(saved[1], 2)
+        for fd in saved:
+            os.close(fd)

@@ -90,8 +90,9 @@ def check_joint_state_round_trip(ctx: CheckContext) -> None:
 
 
 def check_target_law(ctx: CheckContext) -> None:
-    """A position target applies kp (target - q) - kd q̇ and an effort target its value,
-    each clipped to max_effort, as the effort get_joint_states reports after one step."""
+    """A position target applies kp (target - q), clipped to max_effort, minus kd q̇ at the
+    velocity the step ends with (damping is implicit, and not clipped), and an effort target
+    its value clipped, as the effort get_joint_states reports after one step."""
     engine = ctx.engine
     load_rig(engine)
     skip_unless(engine, FEATURE_JOINT_TARGETS)
@@ -102,9 +103,9 @@ def check_target_law(ctx: CheckContext) -> None:
     engine.set_joint_targets(DRIVEN, "position", np.array([0.3, 0.1]), kp, kd,
                              np.array([np.inf, 1.0]))
     engine.step(1)
-    _, _, efforts = engine.get_joint_states(DRIVEN)
-    expect_close(efforts, np.array([40.0 * 0.1, 1.0]), 1e-6,
-                 "the position law's effort (the slider's clipped to 1 N)")
+    _, velocities, efforts = engine.get_joint_states(DRIVEN)
+    expect_close(efforts, np.array([40.0 * 0.1, 1.0]) - kd * velocities, 1e-6,
+                 "the position law's effort (the slider's drive clipped to 1 N)")
     engine.set_joint_targets(DRIVEN, "effort", np.array([-3.0, 5.0]), np.zeros(2),
                              np.zeros(2), np.array([np.inf, 2.0]))
     engine.step(1)

@@ -7,6 +7,7 @@ it. Computed once per process: none of it changes while the daemon runs.
 
 from __future__ import annotations
 
+import ctypes.util
 import functools
 import importlib.metadata
 import os
@@ -54,4 +55,5 @@ def engine_versions() -> dict[str, str]:
             found[package] = importlib.metadata.version(package)
         except importlib.metadata.PackageNotFoundError:
             found[package] = "not installed"
+    found["ode"] = ctypes.util.find_library("ode") or "not installed"  # a system library
     return found

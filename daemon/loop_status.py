@@ -21,6 +21,7 @@ from galton.protocol import (
     RemoteError,
     Reply,
     ResultCode,
+    SimState,
     SimStatus,
     Telemetry,
     decode_request,
@@ -32,6 +33,7 @@ from galton.protocol.operations import operation
 
 if TYPE_CHECKING:
     from galton.daemon.loop import SimLoop
+    from galton.daemon.world import World
 
 log = logging.getLogger("galton.daemon")
 
@@ -81,21 +83,30 @@ def answer_status(loop: SimLoop, call: Call) -> None:
     loop.send(call, data)
 
 
+def side_state(world: World) -> SimState:
+    """A side world never plays: stopped until its first step, paused after."""
+    return SimState.STOPPED if world.step_index == 0 else SimState.PAUSED
+
+
 def publish_telemetry(loop: SimLoop, now: float) -> None:
-    """Publish one telemetry sample (after checking the world is still finite)."""
+    """Publish one telemetry sample per world, the live one first (after checking it is
+    still finite); a side world's sample reads as its ``status`` does (never playing)."""
     if not loop.world.faulted:
         loop.verify_physics()
     cpu, rss, peak = loop.monitor.sample()
     rtf = loop.rtf = loop.rtf_window.add(now, loop.world.sim_time)
-    loop.telemetry_seq += 1
-    world = loop.world
-    sample = Telemetry(
-        seq=loop.telemetry_seq, instance=loop.instance, engine=world.engine.name, state=loop.state,
-        step=world.step_index, sim_time=world.sim_time, wall_time=time.time(), rtf=rtf,
-        target_rtf=loop.target_rtf, timestep=world.engine.timestep,
-        entity_count=len(world.entities), cpu_percent=cpu, rss_bytes=rss,
-        peak_rss_bytes=peak, world=world.name)
-    try:
-        loop.publish_telemetry(sample)
-    except Exception:
-        log.exception("could not publish telemetry")
+    wall = time.time()
+    samples = [(loop.world, loop.state, rtf, loop.target_rtf)]
+    samples.extend((world, side_state(world), 0.0, 0.0) for world in loop.side.values())
+    for world, state, world_rtf, target_rtf in samples:
+        loop.telemetry_seq += 1
+        sample = Telemetry(
+            seq=loop.telemetry_seq, instance=loop.instance, engine=world.engine.name,
+            state=state, step=world.step_index, sim_time=world.sim_time, wall_time=wall,
+            rtf=world_rtf, target_rtf=target_rtf, timestep=world.engine.timestep,
+            entity_count=len(world.entities), cpu_percent=cpu, rss_bytes=rss,
+            peak_rss_bytes=peak, world=world.name)
+        try:
+            loop.publish_telemetry(sample)
+        except Exception:
+            log.exception("could not publish telemetry")

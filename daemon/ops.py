@@ -25,14 +25,8 @@ from galton.protocol import (
     pack_f64,
 )
 from galton.protocol.errors import brief
-from galton.protocol.model import (
-    MAX_BATCH,
-    check_names,
-    check_type,
-    decode_poses,
-    decode_twists,
-    require,
-)
+from galton.protocol.model import check_names, check_type, decode_poses, decode_twists, require
+from galton.protocol.vocabulary import MAX_BATCH
 
 SceneOp = Callable[[World, dict[str, Any]], dict[str, Any]]
 MAX_PREFIX_LENGTH = 64

@@ -11,15 +11,9 @@ from galton.daemon.cameras import Camera, parse_camera, view_of
 from galton.daemon.world import World
 from galton.protocol import InvalidArgumentError, NotFoundError, ResourceLimitError, pack_f64
 from galton.protocol.errors import brief
-from galton.protocol.model import (
-    check_fields,
-    check_names,
-    check_type,
-    decode_points,
-    finite_number,
-    require,
-)
+from galton.protocol.model import check_names, check_type, decode_points, finite_number, require
 from galton.protocol.png import depth_png, encode_png, segmentation_png
+from galton.protocol.vocabulary import check_fields
 
 MAX_CAMERAS_PER_REQUEST = 16
 MAX_NAMED_CAMERAS = 32

@@ -18,8 +18,9 @@ from galton.protocol.errors import (
     did_you_mean,
 )
 from galton.protocol.model import finite_number, integer_in
+from galton.protocol.vocabulary import ENGINE_NAMES
 
-KNOWN_ENGINES = ("mujoco", "pybullet")
+KNOWN_ENGINES = ENGINE_NAMES
 
 
 @dataclass(frozen=True)

@@ -22,6 +22,7 @@ from galton.daemon.engine import Engine
 from galton.daemon.engines import ENGINE_CLASSES, create_engine
 from galton.daemon.limits import DEFAULT_LIMITS, Limits
 from galton.daemon.loop import SimLoop
+from galton.daemon.ros2.options import Ros2Options
 from galton.daemon.users import User
 from galton.daemon.world import World
 from galton.daemon.zenoh_merge import file_says, listen_endpoints, merge
@@ -70,6 +71,7 @@ class DaemonOptions:
     users: Mapping[str, User] | None = None  # --users: authentication and roles (SECURITY.md)
     zmq_key: Path | None = None  # --zmq-key: the ZeroMQ front's CURVE key pair
     tls: TlsFiles | None = None  # --tls-cert/--tls-key/--tls-ca
+    ros2: Ros2Options | None = None  # --ros2: the ROS 2 front (daemon/ros2, docs/ROS2.md)
 
 
 def zenoh_config(options: DaemonOptions) -> zenoh.Config:
@@ -121,6 +123,7 @@ class Daemon:
         self._queryable: Any = None
         self._token: Any = None
         self._clients: Any = None
+        self.ros2: Any = None  # the ROS 2 front, with --ros2
         self.finished = threading.Event()
         # Client ids whose liveliness token this daemon has seen come and not go (updated on
         # Zenoh's thread; a set's add and discard are atomic under the GIL).
@@ -156,6 +159,10 @@ class Daemon:
             CLIENTS_PATTERN, self._on_client_token, history=True)
         self._queryable = self.session.declare_queryable(self.keys.control_all, self._on_query)
         self._token = self.session.liveliness().declare_token(self.keys.alive)
+        if self.options.ros2 is not None:
+            from galton.daemon.ros2.front import Ros2Front  # [ros2] extra: imported here only
+            self.ros2 = Ros2Front(self.session, self.dispatch, self.options.instance,
+                                  self.options.ros2)
 
     def _client_alive(self, client: str) -> bool:
         """Whether the client's liveliness token is there: seen by the subscriber (no wait),
@@ -200,6 +207,8 @@ class Daemon:
             self._queryable.undeclare()
         if self._clients is not None:
             self._clients.undeclare()
+        if self.ros2 is not None:
+            self.ros2.close()
         self.loop.world.engine.close()
         if self.front is not None:
             self.front.close()
@@ -208,8 +217,12 @@ class Daemon:
     def _on_query(self, query: zenoh.Query) -> None:
         op = op_from_control_key(str(query.key_expr))
         payload = query.payload.to_bytes() if query.payload is not None else b""
-        call = Call(op, payload, _responder(query))
-        declared = OPERATIONS.get(op)
+        self.dispatch(Call(op, payload, _responder(query)))
+
+    def dispatch(self, call: Call) -> None:
+        """Hand a request to the physics thread, or answer a fast one on this thread: the
+        one path of every Zenoh front (this one's queryable, the ROS 2 front's)."""
+        declared = OPERATIONS.get(call.op)
         if declared is not None and declared.fast:
             self.loop.handle_readonly(call)
         else:

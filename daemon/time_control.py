@@ -22,14 +22,8 @@ from galton.protocol import (
     OperationFailedError,
     SimStatus,
 )
-from galton.protocol.model import (
-    SimState,
-    check_fields,
-    check_names,
-    check_type,
-    finite_number,
-    integer_in,
-)
+from galton.protocol.model import check_names, check_type, finite_number, integer_in
+from galton.protocol.vocabulary import SimState, check_fields
 
 if TYPE_CHECKING:
     from galton.daemon.loop import SimLoop

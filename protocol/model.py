@@ -7,58 +7,27 @@ quaternion, as ROS and scipy), a twist 6 floats ``vx vy vz wx wy wz`` in the wor
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field, fields
-from enum import StrEnum
 from typing import Any, TypeVar, overload
 
 import numpy as np
 
 from galton.protocol.arrays import pack_f64, unpack_f64
-from galton.protocol.errors import InvalidArgumentError, brief, did_you_mean
+from galton.protocol.errors import InvalidArgumentError, brief
+from galton.protocol.vocabulary import (
+    BODY_SHAPES,
+    MAX_BATCH,
+    MAX_NAME_LENGTH,
+    POSE_WIDTH,
+    SCALAR_JOINT_TYPES,
+    SIZE_LAYOUT,
+    TWIST_WIDTH,
+    WRENCH_WIDTH,
+    SimState,
+    check_fields,
+)
 
 T = TypeVar("T")
-POSE_WIDTH = 7
-TWIST_WIDTH = 6
-MAX_BATCH = 100_000
-MAX_NAME_LENGTH = 128
-
-
-class SimState(StrEnum):
-    """Where a world's clock is; a str on the wire ("stopped", "playing", "paused")."""
-
-    STOPPED = "stopped"  # at time 0 with every entity in its created state
-    PLAYING = "playing"  # advancing on its own at the target real-time factor
-    PAUSED = "paused"  # holding its time; steps only on request
-
-
-SIM_STATES = tuple(state.value for state in SimState)
-RESET_SCOPES = ("time", "state", "spawned", "all")
-BODY_SHAPES = ("sphere", "box", "cylinder", "capsule", "plane")
-# What list reports for the bodies of a loaded model: its root, and every other link.
-MODEL_SHAPES = ("model", "link")
-JOINT_TYPES = ("revolute", "prismatic", "spherical", "free", "fixed")
-SCALAR_JOINT_TYPES = ("revolute", "prismatic")  # one degree of freedom: states and targets
-TARGET_MODES = ("none", "position", "velocity", "effort")
-WRENCH_WIDTH = 6  # fx fy fz tx ty tz, world frame
-# How many numbers ``size`` holds per shape, and what they mean (all half sizes, metres).
-SIZE_LAYOUT: dict[str, tuple[str, ...]] = {
-    "sphere": ("radius",),
-    "box": ("half_x", "half_y", "half_z"),
-    "cylinder": ("radius", "half_length"),
-    "capsule": ("radius", "half_length"),
-    "plane": ("half_x", "half_y"),
-}
-
-
-def check_fields(body: dict[str, Any], allowed: Sequence[str], where: str) -> None:
-    """The one rule for keys: a field that is not one of ``allowed`` is refused, naming the
-    closest one (operations' arguments, spawn groups, update properties, until_rest)."""
-    for key in body:
-        if key not in allowed:
-            raise InvalidArgumentError(
-                f"{where} takes no field {brief(key)}{did_you_mean(str(key)[:64], allowed)}; "
-                f"it takes: {', '.join(allowed)}")
 
 
 def require(args: dict[str, Any], key: str, kind: type | tuple[type, ...], where: str) -> Any:

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from galton.protocol.errors import UnknownOperationError, did_you_mean
-from galton.protocol.model import TARGET_MODES, check_fields
+from galton.protocol.vocabulary import ENGINE_NAMES, TARGET_MODES, check_fields
 
 ARG_KINDS = ("number", "count", "string", "bool", "names", "map", "groups", "poses", "twists",
              "choice", "values", "wrenches", "points", "blob", "cameras")
@@ -101,7 +101,7 @@ OPERATIONS: dict[str, Operation] = {op.name: op for op in (
     Operation("reset", (Arg("scope", "choice", choices=("time", "state", "spawned", "all")),),
               mutates=True),
     Operation("load_world", (Arg("engine", "choice", required=True,
-                                 choices=("mujoco", "pybullet")), Arg("params", "map")),
+                                 choices=ENGINE_NAMES), Arg("params", "map")),
               mutates=True, timeout_floor_s=_REBUILDS),
     Operation("spawn", (Arg("groups", "groups", required=True),), mutates=True,
               timeout_floor_s=_REBUILDS),
@@ -138,7 +138,7 @@ OPERATIONS: dict[str, Operation] = {op.name: op for op in (
     Operation("delete_snapshot", (Arg("slot", "string", required=True),)),
     Operation("list_worlds"),
     Operation("create_world", (Arg("name", "string", required=True),
-                               Arg("engine", "choice", choices=("mujoco", "pybullet")),
+                               Arg("engine", "choice", choices=ENGINE_NAMES),
                                Arg("params", "map")), timeout_floor_s=_REBUILDS),
     Operation("fork_world", (Arg("name", "string", required=True), Arg("source", "string")),
               timeout_floor_s=_REBUILDS),

@@ -5,7 +5,13 @@ from __future__ import annotations
 
 from galton.client import Client, EmbeddedDaemon, wait_for_daemon
 
-ENGINES = ("mujoco", "pybullet")
+ENGINES = ("mujoco", "pybullet", "ode")
+# What an engine states it does not do (FEATURE_UNSUPPORTED, and left out of its
+# capabilities): a conformance test that meets one of these refusals is skipped, saying so;
+# any other refusal fails (tests/conformance/conftest.py).
+STATED_GAPS: dict[str, tuple[str, ...]] = {
+    "ode": ("loads urdf models, not 'mjcf'", "does not support rendering"),
+}
 START_TIMEOUT_S = 60.0
 
 

@@ -91,3 +91,50 @@ def test_experiment_config_validates() -> None:
 
     with pytest.raises(InvalidArgumentError):
         ExperimentConfig(board=BoardSpec.load("small"), balls=(0,))
+
+
+def test_bench_never_replaces_the_world_of_a_daemon_it_was_not_pointed_at(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A user's daemon answering on the default endpoint keeps its scene: with no --connect,
+    --instances or --use-running the bench starts daemons of its own."""
+    import galton.client.session as session_module
+    from galton.client import plane, spheres
+
+    with EmbeddedDaemon("mujoco", instance="users-robot") as daemon, \
+            Client(daemon.instance, daemon.endpoint) as user:
+        user.spawn(plane("ground"), spheres(["ball"], radius=0.1, positions=[[0, 0, 1]]))
+        user.step(10)
+        before = (user.list(), user.status().step)
+        monkeypatch.setattr(session_module, "DEFAULT_ENDPOINT", daemon.endpoint)
+        result = runner.invoke(app, [
+            "bench", "--engines", "mujoco", "--board", "small", "--balls", "5",
+            "--repetitions", "1", "--out", str(tmp_path / "run"), "--json"])
+        assert result.exit_code == 0, result.output
+        assert (user.list(), user.status().step) == before
+
+
+def test_bench_refuses_a_misspelled_engine_before_any_trial(tmp_path: Path) -> None:
+    result = runner.invoke(app, ["bench", "--engines", "mujoco,bullet", "--board", "small",
+                                 "--out", str(tmp_path / "run")])
+    from cli_support import flat
+
+    assert result.exit_code == 2
+    assert "'bullet'" in flat(result.output) and "did you mean 'pybullet'" in flat(result.output)
+    assert not (tmp_path / "run").exists()
+
+
+def test_a_failed_bench_keeps_the_trials_it_finished(daemons: dict[str, EmbeddedDaemon],
+                                                     tmp_path: Path) -> None:
+    """The second engine's daemon is not there: the first engine's trials stay on disk."""
+    from support_daemons import start_daemon
+
+    daemon = start_daemon(daemons, "mujoco")
+    out = tmp_path / "run"
+    result = runner.invoke(app, [
+        "bench", "--connect", daemon.endpoint, "--instances", f"{daemon.instance},nobody",
+        "--engines", "mujoco,pybullet", "--board", "small", "--balls", "5",
+        "--repetitions", "2", "--out", str(out)])
+    assert result.exit_code == 1, result.output
+    kept = ExperimentResults.from_json(out / "results.json")
+    assert [(t.engine, t.balls) for t in kept.trials] == [("mujoco", 5), ("mujoco", 5)]
+    assert "2 trial(s) finished before the failure are kept" in result.output

@@ -40,9 +40,12 @@ def test_load_model_bases_and_the_joint_table(target: list[str],
     joints = invoke([*target, "joints", "--json"])
     assert [j["name"] for j in joints] == ["f_lbr_iiwa_link_0:free", *(f"f_{n}" for n in JOINTS)]
     assert joints[0]["type"] == "free" and joints[1]["axis"] == [0.0, 0.0, 1.0]
-    monkeypatch.setattr(console, "width", 200)  # a terminal wide enough for whole names
-    table = flat(run([*target, "joints", "--model", "f_lbr_iiwa_link_0"]).stdout)
-    assert "f_lbr_iiwa_joint_3" in table and "revolute" in table and "(world)" in table
+    monkeypatch.setattr(console, "width", 80)  # issue 33: names cut to "lbr_iiwa_j…"
+    printed = run([*target, "joints", "--model", "f_lbr_iiwa_link_0"]).stdout
+    assert "…" not in printed and all(len(line) <= 80 for line in printed.splitlines())
+    assert all(f"f_{n}" in printed.split() for n in JOINTS)  # each whole, on one line
+    table = flat(printed)
+    assert "revolute" in table and "(world)" in table
     one = invoke([*target, "joints", "f_lbr_iiwa_joint_2", "--json"])
     assert [j["name"] for j in one] == ["f_lbr_iiwa_joint_2"]
 

@@ -45,6 +45,19 @@ def test_spawn_with_twists_and_a_static_plane(target: list[str]) -> None:
     assert [e["name"] for e in static] == ["ground"]
 
 
+def test_a_plane_is_the_ground_at_z_0_and_a_body_rests_on_it(target: list[str]) -> None:
+    """One default everywhere: the CLI's plane is at z = 0, as the SDK's plane(); a box
+    spawned at z = 0.5 (issue 33: it flew to 390 m from inside a plane at z = 1) falls onto
+    it and rests."""
+    invoke([*target, "spawn", "plane", "ground", "--json"])
+    invoke([*target, "spawn", "box", "crate", "--size", "0.1,0.1,0.1", "--pos", "0,0,0.5",
+            "--json"])
+    assert invoke([*target, "get-states", "ground", "--json"])["poses"][0][:3] == [0, 0, 0]
+    invoke([*target, "step", "2000", "--json"])
+    z = invoke([*target, "get-states", "crate", "--json"])["poses"][0][2]
+    assert z == pytest.approx(0.1, abs=0.01)  # its half height above the ground
+
+
 def test_a_spawn_line_with_the_wrong_count_of_numbers_sends_nothing(target: list[str]) -> None:
     result = run([*target, "spawn", "sphere", "a", "b", "--pos", "0,0,1,2"])
     assert result.exit_code == 2 and "--pos needs 3 numbers per body" in flat(result.output)
@@ -105,6 +118,16 @@ def test_load_model_from_a_local_file_or_the_daemons_path(target: list[str],
                    "--prefix", "n_", "--json"])["names"] == ["n_crate"]
     sources = {e["name"]: e["source"] for e in invoke([*target, "entities", "--json"])}
     assert sources == {"m_crate": "model", "n_crate": "model"}
+
+
+def test_load_model_from_a_file_finds_the_meshes_beside_it(target: list[str]) -> None:
+    """kuka_iiwa/model.urdf names meshes/link_0.obj and so on: its own folder is searched
+    without --search-path (issue 33)."""
+    import pybullet_data
+
+    urdf = Path(pybullet_data.getDataPath()) / "kuka_iiwa" / "model.urdf"
+    loaded = invoke([*target, "load-model", "--file", str(urdf), "--prefix", "k_", "--json"])
+    assert "k_lbr_iiwa_link_7" in loaded["names"]
 
 
 def test_load_model_needs_one_source_and_a_known_format(target: list[str],

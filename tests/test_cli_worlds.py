@@ -61,6 +61,10 @@ def test_commands_act_on_a_side_world(target: list[str]) -> None:
     assert found["names"] == ["ball"] and len(found["times"]) == len(found["poses"]) == 3
     human = run([*target, "predict", "0.01", "--read", "ball"])
     assert human.exit_code == 0 and "steps ahead" in flat(human.output)
+    stepped = invoke([*target, "step", "7", "--world", "side", "--json"])
+    live = invoke([*target, "status", "--json"])
+    sides = {w["name"]: w["step"] for w in invoke([*target, "worlds", "--json"])}
+    assert stepped["step"] == sides["side"] == 7 and live["step"] == sides["default"] == 0
 
 
 def test_compare_prints_errors_and_score(target: list[str]) -> None:
@@ -73,6 +77,14 @@ def test_compare_prints_errors_and_score(target: list[str]) -> None:
     assert corrected["corrected"]
     again = run([*target, "compare", "ball", "--poses", "0.03,0.04,0.5,0,0,0,1"])
     assert again.exit_code == 0 and "anomaly score 0" in flat(again.output)
+
+
+def test_compare_takes_positions_as_set_states_does(target: list[str]) -> None:
+    """x,y,z alone is an unrotated pose, in compare as in set-states (issue 33)."""
+    short = invoke([*target, "compare", "ball", "--poses", "0.03,0.04,0.5", "--json"])
+    full = invoke([*target, "compare", "ball", "--poses", "0.03,0.04,0.5,0,0,0,1", "--json"])
+    assert short["position_errors"] == full["position_errors"]
+    assert short["angle_errors"] == full["angle_errors"] and short["score"] == full["score"]
 
 
 @pytest.mark.parametrize("args", [["snapshot"], ["restore"],

@@ -41,6 +41,18 @@ def test_sigterm_withdraws_liveliness_and_exits_zero() -> None:
     assert gone.wait(10)
 
 
+def test_a_pybullet_daemon_prints_only_its_own_lines() -> None:
+    """PyBullet's build banner and its "argv[0]=" line stay out of the daemon's output;
+    the readiness line is there (issue 33)."""
+    daemon = EmbeddedDaemon("pybullet", instance="quiet").start()
+    with Client(daemon.instance, daemon.endpoint) as client:
+        client.load_world("pybullet")  # a second PyBullet connection
+    daemon.process.send_signal(signal.SIGTERM)
+    assert daemon.stop() == 0
+    assert "galton-daemon ready" in daemon.output
+    assert "build time" not in daemon.output and "argv[0]" not in daemon.output
+
+
 def test_sigint_also_exits_zero() -> None:
     daemon = EmbeddedDaemon("mujoco", instance="interrupted").start()
     daemon.process.send_signal(signal.SIGINT)

@@ -75,7 +75,8 @@ def test_the_base_install_names_no_engine_and_no_plotting() -> None:
     assert {"mujoco", "pybullet", "psutil"} <= {d.split(">")[0] for d in extras["daemon"]}
     assert {"scipy", "matplotlib"} <= {d.split(">")[0] for d in extras["bench"]}
     assert "matplotlib" not in " ".join(extras["daemon"])
-    assert extras["all"] == ["galton-bridge[daemon,bench]"]
+    assert extras["all"] == ["galton-bridge[daemon,bench,ode]"]
+    assert {"yourdfpy"} <= {d.split(">")[0] for d in extras["ode"]}
 
 
 @pytest.mark.parametrize("engine", ["pybullet"])

@@ -8,7 +8,9 @@ from dataclasses import fields
 from pathlib import Path
 
 import pytest
+import typer
 
+from galton.daemon.cli import app as daemon_app
 from galton.daemon.limits import Limits
 from galton.protocol import ResultCode
 from galton.protocol.operations import LONG_RUNNING_TIMEOUT_S, OPERATIONS, Operation
@@ -66,3 +68,10 @@ def test_the_operations_table_is_the_registry() -> None:
     rows = re.findall(r"^\| `\w+` \| .* \| (?:yes|no) \| (?:yes|no) \| (?:yes|no) \| .*\|$",
                       PAGE, re.MULTILINE)
     assert rows == [summary_row(op) for op in OPERATIONS.values()]
+
+
+def test_every_daemon_option_the_page_names_exists() -> None:
+    options = {opt for param in typer.main.get_command(daemon_app).params
+               for opt in param.opts}
+    named = set(re.findall(r"(?<![\w#-])(--[a-z][a-z-]*[a-z])(?![\w*-])", PAGE))
+    assert named - options == set(), "docs/protocol.md names options galton-daemon lacks"

@@ -3,7 +3,6 @@
 
 from __future__ import annotations
 
-import os
 from collections.abc import Iterator, Mapping, Sequence
 from contextlib import ExitStack, contextmanager
 from dataclasses import dataclass
@@ -19,30 +18,35 @@ from galton.client.session import close_session, open_session
 from galton.protocol import DaemonUnreachableError
 
 START_TIMEOUT_S = 60.0
-MAX_DEFAULT_POOL = 4
 DISCOVERY_TIMEOUT_S = 5.0
 
 
 @contextmanager
 def bench_clients(engines: Sequence[str], connect: str | list[str] | None,
                   instances: Sequence[str] | None, timeout: float,
-                  credentials: Credentials | None = None) -> Iterator[dict[str, Client]]:
-    """A client per engine: named instances, daemons found at ``connect`` (with these
-    credentials), or, when no endpoint was given and none answers on the default one,
-    embedded daemons (one per engine, stopped on exit). Any daemon can serve any engine: a
-    trial loads its world."""
+                  credentials: Credentials | None = None,
+                  use_running: bool = False) -> Iterator[dict[str, Client]]:
+    """A client per engine. A trial loads its own world, replacing the daemon's, so a daemon
+    already running is used only when the caller named it: ``connect`` (with these
+    credentials), ``instances``, or ``use_running`` (any daemon on the default endpoint).
+    Otherwise embedded daemons are started (one per engine, stopped on exit), whatever runs
+    here, and no world the bench did not create is touched."""
     with ExitStack() as stack:
-        try:
-            session = open_session(connect, credentials=credentials)
-        except DaemonUnreachableError:
-            if connect is not None:
-                raise
+        if not names_running(connect, instances, use_running):
             yield stack.enter_context(_embedded(engines, timeout))
             return
+        session = open_session(connect, credentials=credentials)
         stack.callback(session.close)
         names = list(instances) if instances else _matching(session, engines, timeout)
         yield {engine: Client(names[min(i, len(names) - 1)], session=session, timeout=timeout)
                for i, engine in enumerate(engines)}
+
+
+def names_running(connect: str | list[str] | None, instances: Sequence[str] | None,
+                  use_running: bool) -> bool:
+    """Whether the command line asked for daemons that already run (their worlds will be
+    replaced), rather than daemons of the bench's own."""
+    return connect is not None or bool(instances) or use_running
 
 
 def _matching(session: zenoh.Session, engines: Sequence[str], timeout: float) -> list[str]:
@@ -70,25 +74,20 @@ class PoolDaemons:
     hosts: dict[str, dict[str, Any]]
 
 
-def default_pool_size() -> int:
-    """Embedded daemons for ``--pool`` with nothing running: one per core, at most 4."""
-    return max(1, min(os.cpu_count() or 1, MAX_DEFAULT_POOL))
-
-
 @contextmanager
 def pool_clients(connect: str | list[str] | None, instances: Sequence[str] | None,
                  timeout: float, size: int, engine: str,
-                 credentials: Credentials | None = None) -> Iterator[PoolDaemons]:
-    """Every daemon found at ``connect`` (or the named ``instances``), or, when no endpoint
-    was given and none answers on the default one, ``size`` embedded daemons (started with
-    ``engine``: any daemon serves any engine), stopped on exit."""
+                 credentials: Credentials | None = None,
+                 use_running: bool = False) -> Iterator[PoolDaemons]:
+    """Every daemon found at ``connect`` (or the named ``instances``, or with
+    ``use_running`` every daemon on the default endpoint), or else ``size`` embedded
+    daemons (started with ``engine``: any daemon serves any engine), stopped on exit; as for
+    ``bench_clients``, a running daemon's world is replaced only when it was asked for."""
     with ExitStack() as stack:
-        try:
+        if names_running(connect, instances, use_running):
             session = open_session(connect, credentials=credentials)
             stack.callback(close_session, session)
-        except DaemonUnreachableError:
-            if connect is not None:
-                raise
+        else:
             session = stack.enter_context(
                 embedded_mesh({f"pool-{i + 1}": engine for i in range(size)}))
         found = _pool_members(session, instances, timeout)

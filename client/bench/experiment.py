@@ -13,20 +13,24 @@ from pathlib import Path
 from typing import Any
 
 from galton.analysis.board import BallSpec, BoardSpec, ReleaseSpec
+from galton.analysis.board_release import nominal_positions
+from galton.analysis.errors import AnalysisError
 from galton.analysis.records import ExperimentResults, TrialRecord
+from galton.client.bench.defaults import (
+    DEFAULT_BALLS,
+    DEFAULT_ENGINES,
+    DEFAULT_MAX_SIM_TIME_S,
+    DEFAULT_REPETITIONS,
+)
 from galton.client.bench.picture import Animation, animate_trial, first_trials, render_board
 from galton.client.bench.trial import (
     DEFAULT_CHECK_INTERVAL_S,
-    DEFAULT_MAX_SIM_TIME_S,
     TrialConfig,
     run_trial,
 )
 from galton.client.sdk import Client
-from galton.protocol import GaltonError, InvalidArgumentError
-
-DEFAULT_ENGINES = ("mujoco", "pybullet")
-DEFAULT_BALLS = (100,)
-DEFAULT_REPETITIONS = 10
+from galton.protocol import ENGINE_NAMES, GaltonError, InvalidArgumentError
+from galton.protocol.errors import did_you_mean
 
 
 @dataclass
@@ -50,6 +54,13 @@ class ExperimentConfig:
             raise InvalidArgumentError(f"ball counts must be positive, got {self.balls}")
         if not self.engines:
             raise InvalidArgumentError("name at least one engine")
+        check_engines(self.engines)
+        for balls in sorted(set(self.balls)):
+            try:
+                nominal_positions(self.board_for(balls))
+            except AnalysisError as error:
+                raise InvalidArgumentError(f"--balls {balls} on board "
+                                           f"{self.board.name!r}: {error}") from error
 
     def board_for(self, balls: int) -> BoardSpec:
         """The board with this ball count and the release mode asked for."""
@@ -66,6 +77,19 @@ class ExperimentConfig:
                             self.check_interval)
                 for engine in self.engines for balls in self.balls
                 for rep in range(self.repetitions)]
+
+
+def check_engines(engines: tuple[str, ...]) -> None:
+    """Refuse an unknown or repeated engine before any trial runs (a typo found after ten
+    trials would waste them)."""
+    for engine in engines:
+        if engine not in ENGINE_NAMES:
+            raise InvalidArgumentError(
+                f"--engines: unknown engine {engine!r}{did_you_mean(engine, ENGINE_NAMES)}; "
+                f"known: {', '.join(ENGINE_NAMES)}")
+    repeated = sorted({e for e in engines if engines.count(e) > 1})
+    if repeated:
+        raise InvalidArgumentError(f"--engines names {', '.join(repeated)} more than once")
 
 
 def run_experiment(clients: dict[str, Client], config: ExperimentConfig,

@@ -15,10 +15,10 @@ from galton.analysis.board_release import Perturbation, perturbation
 from galton.analysis.board_scoring import DEFAULT_SETTLE_SPEED, BallOutcomes, classify_balls
 from galton.analysis.records import TrialRecord
 from galton.client.bench.build import ball_group, ball_names, board_groups
+from galton.client.bench.defaults import DEFAULT_MAX_SIM_TIME_S
 from galton.client.sdk import Client, States
 from galton.protocol import Telemetry
 
-DEFAULT_MAX_SIM_TIME_S = 120.0
 DEFAULT_CHECK_INTERVAL_S = 0.5
 # The daemon checks for rest every check interval; the bench looks itself this often, so a
 # lost ball falling for ever (never at rest) stops the trial within this much sim time.

@@ -26,7 +26,7 @@ if TYPE_CHECKING:
     from galton.client.sdk import Client
     from galton.client.sdk_streams import StateStream
 
-SUFFIX = ".npz"
+SUFFIX = ".npz"  # galton.client.cli_view.RECORDING_SUFFIX
 
 
 @dataclass

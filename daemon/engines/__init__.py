@@ -4,13 +4,14 @@ from __future__ import annotations
 
 import importlib
 
-from galton.daemon.engine import Engine
+from galton.daemon.engine import Engine, native_output_silenced
 from galton.protocol import FeatureUnsupportedError, InvalidArgumentError
 from galton.protocol.errors import did_you_mean
 
 ENGINE_CLASSES: dict[str, str] = {
     "mujoco": "galton.daemon.engines.mujoco_engine:MujocoEngine",
     "pybullet": "galton.daemon.engines.pybullet_engine:PybulletEngine",
+    "ode": "galton.daemon.engines.ode.engine:OdeEngine",
 }
 
 
@@ -23,7 +24,8 @@ def create_engine(name: str) -> Engine:
             f"available: {', '.join(ENGINE_CLASSES)}")
     module_name, class_name = target.split(":")
     try:
-        module = importlib.import_module(module_name)
+        with native_output_silenced():  # PyBullet prints its build time when imported
+            module = importlib.import_module(module_name)
     except ImportError as exc:
         raise FeatureUnsupportedError(f"the {name} engine is not installed here: {exc}") from exc
     engine_class: type[Engine] = getattr(module, class_name)

@@ -109,4 +109,6 @@ def _joints(source: Joints) -> Joints:
     joints.targets = dict(source.targets)  # Target is frozen
     joints.slot = dict(source.slot)
     joints.qadr, joints.vadr = source.qadr.copy(), source.vadr.copy()
+    joints.own, joints.own_damping = dict(source.own), source.own_damping.copy()
+    joints.target_damping = source.target_damping.copy()
     return joints

@@ -1,18 +1,24 @@
 """Loaded models' joints in the MuJoCo world: their descriptions, states and held targets.
 
 Every 1-DOF joint has one general actuator of its own name (``mujoco_rig``); a target is
-written into that actuator's gain, bias, control and force range, so MuJoCo applies the PD
-law itself in every step:
+written into that actuator's gain, bias, control and force range, and its damping into the
+joint's own damping, so MuJoCo applies the PD law itself in every step:
 
-    position: gain kp, bias (0, -kp, -kd), ctrl = target  ->  kp (target - q) - kd qdot
-    velocity: gain kd, bias (0, 0, -kd),   ctrl = target  ->  kd (target - qdot)
-    effort:   gain 1,  bias 0,             ctrl = target  ->  target
-    none:     everything 0                                ->  0
+    position: gain kp, bias (0, -kp, 0), ctrl = target, damping + kd -> kp (target - q) - kd qdot
+    velocity: gain kd, bias 0,           ctrl = target, damping + kd -> kd (target - qdot)
+    effort:   gain 1,  bias 0,           ctrl = target               -> target
+    none:     everything 0                                           -> 0
 
-clipped by MuJoCo to the force range +-max_effort when finite. The compiled values are lost
-to a recompile, so the held targets are kept here by joint name and written again after
-each one (``apply``); states and targets are read and written through index arrays, one
-numpy operation per call.
+The actuator's part is clipped by MuJoCo to the force range +-max_effort when finite. The
+damping part goes into ``dof_damping`` because MuJoCo's Euler integrator applies joint
+damping implicitly (at the step's end velocity): as an actuator bias it is explicit, and a
+kd that robot users type (40 N·m·s on a kuka_iiwa's light last link, whose inertia is
+~1e-3 kg·m²) makes kd·dt/I far above 2, so the arm shakes and diverges. Implicit, any kd is
+stable; it is not clipped by max_effort. The efforts read are the law's whole value.
+
+The compiled values are lost to a recompile, so the held targets are kept here by joint
+name and written again after each one (``apply``); states and targets are read and written
+through index arrays, one numpy operation per call.
 """
 
 from __future__ import annotations
@@ -53,6 +59,9 @@ class Joints:
         self.slot: dict[str, int] = {}  # 1-DOF joint -> its actuator's id
         self.qadr = np.zeros(0, dtype=np.int64)  # by actuator id
         self.vadr = np.zeros(0, dtype=np.int64)
+        self.own: dict[str, float] = {}  # 1-DOF joint -> its damping as loaded
+        self.own_damping = np.zeros(0)  # by actuator id: the same
+        self.target_damping = np.zeros(0)  # by actuator id: what a held target adds
 
     # -- books -----------------------------------------------------------------------------
     def reindex(self, m: mujoco.MjModel) -> None:
@@ -62,6 +71,10 @@ class Joints:
         joint = m.actuator_trnid[:, 0]
         self.qadr = m.jnt_qposadr[joint].astype(np.int64)
         self.vadr = m.jnt_dofadr[joint].astype(np.int64)
+        for name, a in self.slot.items():  # a joint new to the books has its compiled value
+            self.own.setdefault(name, float(m.dof_damping[self.vadr[a]]))
+        self.own_damping = np.array([self.own[name] for name in self.slot], float)
+        self.target_damping = np.zeros(m.nu)
 
     def add_model(self, root: str, infos: list[JointInfo]) -> None:
         self.infos[root] = infos
@@ -69,6 +82,7 @@ class Joints:
     def forget_model(self, root: str) -> None:
         for info in self.infos.pop(root, []):
             self.targets.pop(info.name, None)
+            self.own.pop(info.name, None)
 
     def describe(self) -> list[JointInfo]:
         """Every joint, in load order, with the mode it holds now."""
@@ -95,9 +109,12 @@ class Joints:
     # -- states ----------------------------------------------------------------------------
     def read(self, d: mujoco.MjData, names: Sequence[str]
              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Positions, velocities and the actuators' forces of the last step."""
+        """Positions, velocities and the targets' efforts of the last step (the actuator's
+        part and the implicit damping's, at the velocity the step ended with)."""
         aid = self.actuators(names)
-        return d.qpos[self.qadr[aid]], d.qvel[self.vadr[aid]], d.actuator_force[aid]
+        velocities = d.qvel[self.vadr[aid]]
+        efforts = d.actuator_force[aid] - self.target_damping[aid] * velocities
+        return d.qpos[self.qadr[aid]], velocities, efforts
 
     def write(self, d: mujoco.MjData, names: Sequence[str], positions: np.ndarray,
               velocities: np.ndarray | None) -> None:
@@ -111,7 +128,7 @@ class Joints:
              targets: np.ndarray, kp: np.ndarray, kd: np.ndarray,
              max_effort: np.ndarray) -> None:
         aid = self.actuators(names)
-        write_targets(m, d, aid, mode, targets, kp, kd, max_effort)
+        self.write_law(m, d, aid, mode, targets, kp, kd, max_effort)
         for row, name in enumerate(names):
             if mode == "none":
                 self.targets.pop(name, None)
@@ -123,12 +140,21 @@ class Joints:
         """Write every held target into the compiled model (after a compile), and none into
         the other actuators."""
         if m.nu:
-            write_targets(m, d, np.arange(m.nu), "none", *np.zeros((4, m.nu)))
+            self.write_law(m, d, np.arange(m.nu), "none", *np.zeros((4, m.nu)))
         for mode in {t.mode for t in self.targets.values()}:
             names = [n for n, t in self.targets.items() if t.mode == mode]
             rows = np.array([[t.target, t.kp, t.kd, t.max_effort]
                              for t in self.targets.values() if t.mode == mode])
-            write_targets(m, d, self.actuators(names), mode, *rows.T)
+            self.write_law(m, d, self.actuators(names), mode, *rows.T)
+
+    def write_law(self, m: mujoco.MjModel, d: mujoco.MjData, aid: np.ndarray, mode: str,
+              targets: np.ndarray, kp: np.ndarray, kd: np.ndarray,
+              max_effort: np.ndarray) -> None:
+        """One mode's targets into these actuators and their joints' damping."""
+        write_targets(m, d, aid, mode, targets, kp, kd, max_effort)
+        damped = kd if mode in ("position", "velocity") else np.zeros(len(aid))
+        self.target_damping[aid] = damped
+        m.dof_damping[self.vadr[aid]] = self.own_damping[aid] + damped
 
     def restore(self, m: mujoco.MjModel, d: mujoco.MjData, roots: np.ndarray) -> None:
         """Every joint of these models but a root's free one back to its as-loaded value at
@@ -147,13 +173,13 @@ class Joints:
 def write_targets(m: mujoco.MjModel, d: mujoco.MjData, aid: np.ndarray, mode: str,
                   targets: np.ndarray, kp: np.ndarray, kd: np.ndarray,
                   max_effort: np.ndarray) -> None:
-    """One mode's targets into these actuators (see the module docstring)."""
+    """One mode's targets into these actuators, but their damping (module docstring)."""
     zero = np.zeros(len(aid))
     gain = {"position": kp, "velocity": kd, "effort": np.ones(len(aid))}.get(mode, zero)
     m.actuator_gainprm[aid, 0] = gain
     m.actuator_biasprm[aid, 0] = 0.0
     m.actuator_biasprm[aid, 1] = -kp if mode == "position" else zero
-    m.actuator_biasprm[aid, 2] = -kd if mode in ("position", "velocity") else zero
+    m.actuator_biasprm[aid, 2] = 0.0  # the damping is the joint's (Joints.write_law)
     d.ctrl[aid] = zero if mode == "none" else targets
     limited = np.isfinite(max_effort)
     m.actuator_forcelimited[aid] = limited

@@ -19,6 +19,10 @@ from galton.daemon.engines.mujoco_render import HIDDEN, SHOWN, CameraRig
 if TYPE_CHECKING:
     from galton.daemon.engines.mujoco_engine import MujocoEngine
 
+# A ray leaving a shape it started in is cast again from this far past the surface, at
+# most this many times (nested shapes).
+STEP_PAST = 1e-9
+EXIT_TRIES = 8
 # Rays sharing one origin go to mj_multiRay when they are at least this many per origin.
 MULTI_RAY_MIN = 8
 _SHOWN_ONLY = np.array([1 if g == SHOWN else 0 for g in range(6)], np.uint8)
@@ -111,12 +115,38 @@ def raycast(model: mujoco.MjModel, data: mujoco.MjData, shown: np.ndarray,
     groups = model.geom_group.copy()
     model.geom_group[:] = np.where(shown, SHOWN, HIDDEN)
     try:
-        _cast(model, data, np.ascontiguousarray(origins, float),
-              np.ascontiguousarray(directions, float), geom, dist, normal)
+        origins = np.ascontiguousarray(origins, float)
+        directions = np.ascontiguousarray(directions, float)
+        _cast(model, data, origins, directions, geom, dist, normal)
+        _past_exits(model, data, origins, directions, geom, dist, normal)
     finally:
         model.geom_group[:] = groups
     geom[(dist < 0) | (dist > max_length)] = -1
     return geom, dist, normal
+
+
+def _past_exits(model: mujoco.MjModel, data: mujoco.MjData, origins: np.ndarray,
+                directions: np.ndarray, geom: np.ndarray, dist: np.ndarray,
+                normal: np.ndarray) -> None:
+    """A ray does not see a shape it starts inside (docs/protocol.md, ``raycast``), as
+    Bullet's rays do not: where MuJoCo reports a ray leaving a shape (its outward normal
+    along the ray), the ray is cast again from just past that point, at most EXIT_TRIES
+    times (then it misses)."""
+    for tries in range(EXIT_TRIES + 1):
+        leaving = np.flatnonzero((geom >= 0) & (np.sum(normal * directions, axis=1) > 0.0))
+        if not len(leaving):
+            return
+        if tries == EXIT_TRIES:
+            geom[leaving] = -1
+            return
+        past = dist[leaving] + STEP_PAST
+        ids, more, normals = np.full(len(leaving), -1, np.int32), np.full(
+            len(leaving), -1.0), np.zeros((len(leaving), 3))
+        starts = np.ascontiguousarray(origins[leaving] + directions[leaving] * past[:, None])
+        _cast(model, data, starts, np.ascontiguousarray(directions[leaving]), ids, more,
+              normals)
+        geom[leaving], normal[leaving] = ids, normals
+        dist[leaving] = np.where(more >= 0, more + past, -1.0)
 
 
 def _cast(model: mujoco.MjModel, data: mujoco.MjData, origins: np.ndarray,

@@ -197,6 +197,7 @@ def _joints(engine: MujocoEngine, infos: Any, targets: Any) -> None:
         raise InvalidArgumentError(f"snapshot.joints is malformed: {exc}") from exc
     if set(joints.infos) - set(engine._entities):
         raise InvalidArgumentError("snapshot.joints names a model the world lacks")
+    joints.own = {i.name: i.damping for rows in joints.infos.values() for i in rows if i.scalar}
     joints.targets = {}
     for name, row in targets.items():
         if not isinstance(row, list) or len(row) != 5 or row[0] not in TARGET_MODES or \

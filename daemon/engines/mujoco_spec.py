@@ -136,7 +136,8 @@ PARAMS: dict[str, ParamSpec] = {p.name: p for p in (
               "solver of separate islands run in parallel, with bit-identical results; "
               "0 = none", integer(0, 64)),
     ParamSpec("mujoco.sleep_tolerance", 0.005, "m/s",
-              "island sleeping: trees slower than this fall asleep (0 = sleeping off)",
+              "island sleeping: trees in contact and slower than this fall asleep; a "
+              "body touching nothing never sleeps (0 = sleeping off)",
               number(0.0, 10.0)),
     ParamSpec("mujoco.max_free_bodies", 12_000, "",
               "moving (free) bodies a spawn that must compile may bring the "

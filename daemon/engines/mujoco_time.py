@@ -23,6 +23,12 @@ if TYPE_CHECKING:
 
 # Steps of the world between two looks at the contact count and at balls asleep on a crown.
 LOOK_EVERY_STEPS = 50
+# Steps between two wake-ups of slow bodies that touch nothing: fewer than the slow steps
+# MuJoCo counts before a tree sleeps (MIN_AWAKE), and a divisor of LOOK_EVERY_STEPS.
+AWAKE_EVERY_STEPS = 5
+# MuJoCo's d.tree_asleep: -(MIN_AWAKE + 1) for an awake tree moving fast, counting up by one
+# per slow step to 0, when the tree sleeps (and its velocity is zeroed).
+MIN_AWAKE = 10
 
 
 def step(engine: MujocoEngine, count: int) -> None:
@@ -30,7 +36,7 @@ def step(engine: MujocoEngine, count: int) -> None:
     the world reads as diverged until cleared."""
     engine._warnings[ms.DIVERGENCE_WARNINGS] = 0
     while count > 0:
-        run = min(count, LOOK_EVERY_STEPS - engine._steps_since_look)
+        run = min(count, AWAKE_EVERY_STEPS - engine._steps_since_look % AWAKE_EVERY_STEPS)
         try:
             mujoco.mj_step(engine._model, engine._data, run)
         except mujoco.FatalError as exc:
@@ -39,9 +45,29 @@ def step(engine: MujocoEngine, count: int) -> None:
                                        "must be reset") from exc
         count -= run
         engine._steps_since_look += run
+        if engine._steps_since_look % AWAKE_EVERY_STEPS == 0:
+            keep_drifting_awake(engine._model, engine._data)
         if engine._steps_since_look == LOOK_EVERY_STEPS:
             engine._look()
     engine._diverged |= bool(engine._warnings[ms.DIVERGENCE_WARNINGS].any())
+
+
+def keep_drifting_awake(m: mujoco.MjModel, d: mujoco.MjData) -> None:
+    """Sleep only what is at rest: a slow tree that touches nothing (a ball coasting in
+    free fall or zero gravity) starts its count of slow steps again, so MuJoCo never stops
+    it. Only trees already counting are looked at, and only those that can collide (a
+    parked body collides with nothing and may sleep); a tree in contact counts on, so
+    piles sleep as before."""
+    if not m.opt.enableflags & mujoco.mjtEnableBit.mjENBL_SLEEP:
+        return
+    counting = np.flatnonzero((d.tree_asleep < 0) & (d.tree_asleep >= -MIN_AWAKE))
+    if not len(counting):
+        return
+    roots = m.tree_bodyadr[counting]
+    counting = counting[(m.body_contype[roots] | m.body_conaffinity[roots]) != 0]
+    touching = m.body_treeid[m.geom_bodyid[d.contact.geom[:d.ncon]]].ravel()
+    drifting = counting[~np.isin(counting, touching)]
+    d.tree_asleep[drifting] = -(MIN_AWAKE + 1)
 
 
 def look(engine: MujocoEngine) -> None:

@@ -68,6 +68,7 @@ from galton.daemon.engine import (
     FEATURE_UPDATE_RGBA,
     FEATURE_WRENCH,
     Engine,
+    native_output_silenced,
 )
 from galton.daemon.engines import pybullet_props as bodyprops
 from galton.daemon.engines import pybullet_rebuild as rebuild
@@ -96,7 +97,7 @@ from galton.protocol import (
     NameNotUniqueError,
     NotFoundError,
 )
-from galton.protocol.model import BODY_SHAPES, POSE_WIDTH, TWIST_WIDTH
+from galton.protocol.vocabulary import BODY_SHAPES, POSE_WIDTH, TWIST_WIDTH
 
 
 class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception, Engine):
@@ -105,7 +106,8 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
     name = "pybullet"
 
     def __init__(self) -> None:
-        self._bc = BulletClient(connection_mode=pybullet.DIRECT)
+        with native_output_silenced():  # "argv[0]=" when it connects
+            self._bc = BulletClient(connection_mode=pybullet.DIRECT)
         self._closed = False
         bc = self._bc
         # Bound once: BulletClient builds a new functools.partial on every attribute access.
@@ -300,9 +302,10 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
         self._held.clear()
         self._given.clear()
         if self._robots.busy():
-            actuate, bc, uid_of = self._robots.actuate, self._bc, self._uid_of
+            actuate, bc, uid_of, dt = self._robots.actuate, self._bc, self._uid_of, \
+                self.timestep
             for _ in range(count):
-                actuate(bc, uid_of)
+                actuate(bc, uid_of, dt)
                 step()
             return
         for _ in range(count):

@@ -17,6 +17,8 @@ from dataclasses import dataclass, field
 
 from pybullet_utils.bullet_client import BulletClient
 
+from galton.daemon.engines import pybullet_mjcf as mjcf
+
 Axis = tuple[float, float, float]
 
 
@@ -28,6 +30,7 @@ class FileFacts:
     bodies: frozenset[str] | None = None
     joints: dict[str, tuple[str, Axis | None]] = field(default_factory=dict)
     free: dict[str, str] = field(default_factory=dict)  # MJCF body -> its free joint's name
+    damping: dict[str, float] = field(default_factory=dict)  # MJCF joint -> its damping
 
     def hides_link(self, name: str) -> bool:
         return self.bodies is not None and name not in self.bodies
@@ -52,7 +55,7 @@ def facts(fmt: str, text: str) -> FileFacts:
             for body in root.iter("body") for joint in body
             if joint.get("name") and (joint.tag == "freejoint" or (
                 joint.tag == "joint" and joint.get("type") == "free"))}
-    return FileFacts(bodies, joints, free)
+    return FileFacts(bodies, joints, free, mjcf.plan(text).damping)
 
 
 def _axis(joint: ElementTree.Element) -> Axis:

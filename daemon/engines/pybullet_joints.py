@@ -7,11 +7,25 @@ plugin's. So every 1-DOF joint's default velocity motor is switched off at load 
 a joint with no target is free, as in MuJoCo), and each step the engine computes, for all
 the joints of a model at once, the affine law MuJoCo's general actuators use,
 
-    tau = clip(gain * target + bias_q * q + bias_v * qdot, -max_effort, max_effort)
+    tau = clip(gain * target + bias_q * q, -max_effort, max_effort) + bias_v * qdot
 
 (position: gain kp, bias_q -kp, bias_v -kd; velocity: gain kd, bias_v -kd; effort: gain
-1; none: all 0), and hands it to PyBullet as TORQUE_CONTROL, which lasts one step. One
-getJointStates and one setJointMotorControlArray per model per step, no loop per joint.
+1; none: all 0): max_effort bounds the drive, not the damping, on both engines. It hands
+the torque to PyBullet as TORQUE_CONTROL, which lasts one step. One getJointStates and one
+setJointMotorControlArray per model per step, no loop per joint.
+
+Explicit, damping is unstable once its c·dt exceeds about twice a joint's inertia: kd 40
+N·m·s on a kuka_iiwa's last link (6e-4 kg·m²) at 1/240 s, and even the file's own joint
+damping (0.5 there), which Bullet applies explicitly, shake the arm at its velocity limit.
+So while a model holds targets its damping (the targets' kd and the joints' own c) is
+taken at the step's end velocity, as MuJoCo's Euler integrator takes joint damping
+("stable PD"): with M the joint-space mass matrix and G the gravity and Coriolis torques
+(PyBullet's own calculateMassMatrix and calculateInverseDynamics), D = dt (Kd + C), the
+step's acceleration is a = (M + D)^-1 (tau - C qdot - G); the target applies tau - dt Kd a
+(its effort) and the joints' own damping -C (qdot + dt a), of which Bullet applies -C qdot
+itself. At rest this is the law itself, so a held pose and its effort are the law's. It
+needs a fixed base whose movable joints are all 1-DOF (an arm on a table); any other model
+keeps the explicit law.
 """
 
 from __future__ import annotations
@@ -50,8 +64,11 @@ class Articulation:
     max_effort: np.ndarray = field(init=False)
     effort: np.ndarray = field(init=False)  # what the last step applied
     active: bool = False  # whether any joint holds a target
+    fit: tuple[int, bool] = (-1, False)  # a PyBullet body, and whether it fits "stable PD"
+    own_damping: np.ndarray = field(init=False)  # each 1-DOF joint's, as the file says
 
     def __post_init__(self) -> None:
+        self.own_damping = np.array([i.damping for i in self.infos if i.scalar], float)
         self.release()
 
     def release(self) -> None:
@@ -80,15 +97,43 @@ class Articulation:
             scalar[place].mode = mode
         self.active = bool(self.gain.any() or self.bias_q.any() or self.bias_v.any())
 
-    def actuate(self, bc: BulletClient, uid: int) -> None:
+    def actuate(self, bc: BulletClient, uid: int, dt: float) -> None:
         """Apply the law for one step (TORQUE_CONTROL lasts one stepSimulation)."""
         states = bc.getJointStates(uid, self.indices)
         q = np.fromiter((s[0] for s in states), float, len(states))
         qdot = np.fromiter((s[1] for s in states), float, len(states))
-        tau = self.gain * self.target + self.bias_q * q + self.bias_v * qdot
-        self.effort = np.clip(tau, -self.max_effort, self.max_effort)
+        drive = np.clip(self.gain * self.target + self.bias_q * q, -self.max_effort,
+                        self.max_effort)
+        tau, own = drive + self.bias_v * qdot, np.zeros(len(drive))
+        if (self.bias_v.any() or self.own_damping.any()) and self.fits(bc, uid):
+            tau, own = self.damped_implicitly(bc, uid, q, qdot, tau, dt)
+        self.effort = tau
         bc.setJointMotorControlArray(uid, self.indices, pybullet.TORQUE_CONTROL,
-                                     forces=self.effort.tolist())
+                                     forces=(self.effort + own).tolist())
+
+
+    def damped_implicitly(self, bc: BulletClient, uid: int, q: np.ndarray, qdot: np.ndarray,
+                          tau: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+        """The target's torque with its damping at the step's end velocity, and what to add
+        for the joints' own damping to be so too (module docstring)."""
+        mass = np.asarray(bc.calculateMassMatrix(uid, q.tolist()), float)
+        bias = np.asarray(bc.calculateInverseDynamics(
+            uid, q.tolist(), qdot.tolist(), [0.0] * len(q)), float)
+        kd, own = -self.bias_v * dt, self.own_damping * dt
+        accel = np.linalg.solve(mass + np.diag(kd + own),
+                                tau - self.own_damping * qdot - bias)
+        return tau - kd * accel, -own * accel
+
+
+    def fits(self, bc: BulletClient, uid: int) -> bool:
+        """Whether the body's joint space is its 1-DOF joints' alone (a fixed base, no joint
+        of several DOF), looked up once per PyBullet body (a rebuild makes a new one)."""
+        if self.fit[0] != uid:
+            movable = [j for j in range(bc.getNumJoints(uid))
+                       if bc.getJointInfo(uid, j)[2] != pybullet.JOINT_FIXED]
+            floating = any(info.type == "free" for info in self.infos)
+            self.fit = (uid, not floating and movable == self.indices)
+        return self.fit[1]
 
 
 def free_motors(bc: BulletClient, uid: int) -> None:
@@ -164,7 +209,8 @@ def joint_info(bc: BulletClient, uid: int, j: int, tree: Tree, prefix: str,
         name=prefix + own, model=tree.root, type=TYPES.get(info[2], "fixed"),
         parent=tree.parent(info[16]), child=tree.child(j), axis=axis,
         lower=float(info[8]) if limited else None, upper=float(info[9]) if limited else None,
-        damping=float(info[6]), effort_limit=float(info[10]) if info[10] > 0 else None,
+        damping=file.damping.get(own, float(info[6])),
+        effort_limit=float(info[10]) if info[10] > 0 else None,
         velocity_limit=float(info[11]) if info[11] > 0 else None)
 
 

@@ -10,8 +10,13 @@ reaching into that sphere, behind the grazed one, is then missed, and a ray that
 exact test would graze misses: both need a ray within Bullet's tolerance of a surface
 (4e-4 m on a 0.1 m sphere). A ray that meets a plane from behind goes on past it.
 
-A ray that starts inside a spawned primitive does not see it (Bullet's rays see a convex
-shape from outside only), where MuJoCo's see its inside and report where they leave it.
+A ray does not see a shape it starts inside (docs/protocol.md, ``raycast``): Bullet's rays
+see a convex shape from outside only, and go on to what lies beyond. But Bullet reports the
+shape a ray starts in when a shape nested in it is hit first (its search, bounded by that
+hit, then lies wholly inside): for a spawned primitive that is found by the exact test (the
+ray meets its surface leaving it), and the ray's hits are then listed one by one
+(``_nearest_outside``). Should the exact test still find a ray leaving a primitive, the ray
+goes on from just past that point, as MuJoCo's engine does (mujoco_sensing.py).
 """
 
 from __future__ import annotations
@@ -32,6 +37,8 @@ from galton.protocol import OperationFailedError
 # short (from lists) or not at all (from arrays): one less is what it takes whole.
 BATCH = int(getattr(pybullet, "MAX_RAY_INTERSECTION_BATCH_SIZE", 256)) - 1
 REGRAZE_TRIES = 3
+MAX_HITS = 8  # hits listed for a ray Bullet answers with a shape it starts inside
+STEP_PAST = 1e-9  # m past the surface a ray leaves, where it is cast again
 BOUND_SLACK = 0.02  # wider than Bullet's shapes stand out (5e-4 m on a 0.1 m sphere)
 Primitive = tuple[str, tuple[float, ...]]  # a spawned body's shape and half sizes
 Rays = tuple[np.ndarray, list[str], np.ndarray, np.ndarray, np.ndarray]
@@ -54,6 +61,13 @@ def raycast(bc: BulletClient, codes: Mapping[int, str], primitives: Mapping[int,
             break
         hit_code, distance, point, normal = _bullet(bc, starts[todo], directions[todo],
                                                     lengths[todo])
+        # Bullet reports a shape the ray starts in at the start itself (fraction 0).
+        at_start = np.flatnonzero((hit_code >= 0) & (distance <= STEP_PAST))
+        inside = at_start[_leaves(bc, primitives, hit_code[at_start], starts[todo][at_start],
+                                  directions[todo][at_start])]
+        if len(inside):
+            _nearest_outside(bc, primitives, inside, starts[todo], directions[todo],
+                             lengths[todo], (hit_code, distance, point, normal))
         travelled = max_length - lengths[todo]
         again = _exact(bc, primitives, hit_code, starts[todo], directions[todo], lengths[todo],
                        distance, point, normal)
@@ -77,14 +91,60 @@ def _names(codes: Mapping[int, str], found: np.ndarray) -> list[str]:
     return listed
 
 
+def _leaves(bc: BulletClient, primitives: Mapping[int, Primitive], code: np.ndarray,
+            starts: np.ndarray, directions: np.ndarray) -> np.ndarray:
+    """Whether each ray starts inside the spawned primitive its code names (the exact test
+    meets that shape's surface first where the ray leaves it)."""
+    out = np.zeros(len(code), bool)
+    for c in np.unique(code).tolist():
+        if c not in primitives:
+            continue
+        rows = np.flatnonzero(code == c)
+        kind, size = primitives[c]
+        position, orientation = bc.getBasePositionAndOrientation(c)
+        turn_back = conjugate(np.tile(np.asarray(orientation, float), (len(rows), 1)))
+        o = rotate(turn_back, starts[rows] - np.asarray(position, float))
+        d = rotate(turn_back, directions[rows])
+        t, local = EXACT[kind](o, d, np.tile(np.asarray(size, float), (len(rows), 1)))
+        out[rows] = np.isfinite(t) & (np.sum(local * d, axis=1) > 0.0)
+    return out
+
+
+def _nearest_outside(bc: BulletClient, primitives: Mapping[int, Primitive], rows: np.ndarray,
+                     starts: np.ndarray, directions: np.ndarray, lengths: np.ndarray,
+                     answer: tuple[np.ndarray, ...]) -> None:
+    """Bullet reports a shape a ray starts inside when a nearer hit (a shape nested in it)
+    bounds its search within that shape: such rays have their hits listed one by one
+    (at most MAX_HITS) and keep the nearest on a shape they do not start in (``answer``,
+    Bullet's code, distance, point and normal, changed in place)."""
+    start, direction, length = starts[rows], directions[rows], lengths[rows]
+    best = np.full(len(rows), np.inf)
+    code, point, normal = np.full(len(rows), -1), np.zeros((len(rows), 3)), np.zeros(
+        (len(rows), 3))
+    for k in range(MAX_HITS):
+        c, dist, p, n = _bullet(bc, start, direction, length, report=k)
+        if not (c >= 0).any():
+            break
+        better = (c >= 0) & (dist < best)
+        better[better] = ~_leaves(bc, primitives, c[better], start[better], direction[better])
+        best[better], code[better], point[better], normal[better] = (
+            dist[better], c[better], p[better], n[better])
+    hit_code, distance, points, normals = answer
+    hit_code[rows], points[rows], normals[rows] = code, point, normal
+    distance[rows] = np.where(code >= 0, best, length)
+
+
 def _bullet(bc: BulletClient, origins: np.ndarray, directions: np.ndarray,
-            lengths: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Bullet's answer per ray: the code hit (-1: none), distance, point and normal."""
+            lengths: np.ndarray, report: int | None = None
+            ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Bullet's answer per ray: the code hit (-1: none), distance, point and normal (the
+    nearest hit, or with ``report`` the hit of that index in Bullet's list of all)."""
     ends = origins + directions * lengths[:, None]
+    extra = {} if report is None else {"reportHitNumber": report}
     results: list[Any] = []
     for first in range(0, len(origins), BATCH):
         results.extend(bc.rayTestBatch(origins[first:first + BATCH],
-                                       ends[first:first + BATCH]))
+                                       ends[first:first + BATCH], **extra))
     n = len(results)
     if n != len(origins):
         raise OperationFailedError(f"PyBullet rayTestBatch answered {n} of {len(origins)} rays")
@@ -129,6 +189,8 @@ def _exact(bc: BulletClient, primitives: Mapping[int, Primitive], hit_code: np.n
         d = rotate(turn_back, directions[rows])
         t, local = EXACT[shape](o, d, size)
         good = np.isfinite(t) & (t <= lengths[rows])
+        leaving = good & (np.sum(local * d, axis=1) > 0.0)  # it started inside: unseen
+        good &= ~leaving
         hit_rows = rows[good]
         distance[hit_rows] = t[good]
         point[hit_rows] = origins[hit_rows] + directions[hit_rows] * t[good, None]
@@ -136,6 +198,7 @@ def _exact(bc: BulletClient, primitives: Mapping[int, Primitive], hit_code: np.n
         miss_rows = rows[~good]
         again[miss_rows] = True
         distance[miss_rows] = _beyond(shape, o[~good], d[~good], size[~good])
+        distance[rows[leaving]] = t[leaving] + STEP_PAST
     return again
 
 

@@ -4,7 +4,8 @@ Bullet casts a ray at a sphere, capsule or cylinder by a convex cast that stops 
 tolerance: a ray at a 0.1 m sphere lands 4e-4 m off the surface, with a tilted normal. The
 engine contract wants the same answers as MuJoCo's exact ray tests, so a hit on a spawned
 primitive is computed again here from the body's pose and size: the first surface point at
-t >= 0 along the ray (from inside a body: where the ray leaves it), with the outward
+t >= 0 along the ray (from inside a body: where the ray leaves it, which the caller
+skips), with the outward
 normal there; a plane's hits are exact already, but Bullet's is seen from both sides.
 Each function takes local origins and unit directions (n, 3) and returns the
 distances (n,), inf where the ray misses, and local normals (n, 3).

@@ -153,11 +153,11 @@ class Robots:
         """Whether a step needs more than stepSimulation."""
         return bool(self.wrenches) or any(m.active for m in self.models.values())
 
-    def actuate(self, bc: BulletClient, uid_of: UidOf) -> None:
-        """Before one step: every model's targets, every held wrench."""
+    def actuate(self, bc: BulletClient, uid_of: UidOf, dt: float) -> None:
+        """Before one step of ``dt`` s: every model's targets, every held wrench."""
         for root, model in self.models.items():
             if model.active:
-                model.actuate(bc, uid_of(root))
+                model.actuate(bc, uid_of(root), dt)
         if self.wrenches:
             targets = [self.place(uid_of, name) for name in self.wrenches]
             force_at = centres(bc, targets).tolist()

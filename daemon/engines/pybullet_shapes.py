@@ -23,6 +23,7 @@ import numpy as np
 import pybullet
 from pybullet_utils.bullet_client import BulletClient
 
+from galton.daemon.engines import pybullet_mjcf as mjcf
 from galton.daemon.engines.pybullet_files import fix_mjcf_inertia
 from galton.daemon.engines.pybullet_meshes import shared_mesh
 from galton.protocol import InvalidArgumentError, OperationFailedError
@@ -287,14 +288,16 @@ def load_bodies(bc: BulletClient, maker: BodyMaker, fmt: str, text: str,
     daemon; ``path``, where it came from, is not read), a URDF's root welded to the world
     with ``fixed_base``; a model PyBullet refuses leaves no body behind."""
     check_xml(fmt, text)
+    wanted = mjcf.plan(text) if fmt == "mjcf" else None  # refuses before anything is made
     before = maker.known_ids()
     try:
-        with model_file(fmt, text) as file_name:
-            if fmt == "urdf":
+        with model_file(fmt, text if wanted is None else wanted.text) as file_name:
+            if wanted is None:
                 ids = [bc.loadURDF(file_name, useFixedBase=fixed_base, flags=URDF_FLAGS)]
             else:
                 ids = list(bc.loadMJCF(file_name, flags=pybullet.MJCF_COLORS_FROM_FILE))
-                fix_mjcf_inertia(bc, ids, text)
+                fix_mjcf_inertia(bc, ids, wanted.text)
+                mjcf.apply(bc, ids, wanted)
     except pybullet.error as exc:
         maker.remove(list(maker.known_ids() - before))  # what a half-done load left
         raise InvalidArgumentError(

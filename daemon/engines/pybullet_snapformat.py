@@ -33,14 +33,14 @@ from galton.daemon.engines.pybullet_shapes import unit_inertia
 from galton.daemon.params import check_updates
 from galton.protocol import BodyProperties, InvalidArgumentError, JointInfo
 from galton.protocol.errors import brief
-from galton.protocol.model import (
+from galton.protocol.model import check_type
+from galton.protocol.vocabulary import (
     BODY_SHAPES,
     JOINT_TYPES,
     POSE_WIDTH,
     SIZE_LAYOUT,
     TARGET_MODES,
     TWIST_WIDTH,
-    check_type,
 )
 
 FORMAT = 1

@@ -14,7 +14,7 @@ from galton.daemon.engines.pybullet_params import default_keys
 from galton.daemon.engines.pybullet_rebuild import Body
 from galton.daemon.engines.pybullet_shapes import DENSITY, as_rgba, unit_inertia, volume
 from galton.protocol import BodyGroup, InvalidArgumentError
-from galton.protocol.model import BODY_SHAPES
+from galton.protocol.vocabulary import BODY_SHAPES
 
 
 def check_group(group: BodyGroup) -> None:

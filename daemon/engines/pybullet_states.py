@@ -16,7 +16,7 @@ import numpy as np
 
 from galton.daemon.engines import pybullet_rebuild as rebuild
 from galton.daemon.engines.pybullet_frames import com_to_frame
-from galton.protocol.model import POSE_WIDTH, TWIST_WIDTH
+from galton.protocol.vocabulary import POSE_WIDTH, TWIST_WIDTH
 
 if TYPE_CHECKING:
     from galton.daemon.engines.pybullet_engine import PybulletEngine

@@ -160,11 +160,23 @@ def test_plots_are_png_and_no_figure_leaks(results: ExperimentResults, tmp_path:
     import matplotlib.pyplot as plt
 
     paths = plot_all(results.trials, tmp_path, draws=DRAWS)
-    assert {p.name for p in paths} == {"histogram_mujoco.png", "histogram_pybullet.png",
-                                       "rtf_vs_balls.png", "resources_vs_balls.png"}
+    curves = {"rtf_vs_balls.png", "resources_vs_balls.png"} if len(
+        {t.balls for t in results.trials}) > 1 else set()
+    assert {p.name for p in paths} == {"histogram_mujoco.png", "histogram_pybullet.png", *curves}
     for path in paths:
         assert path.read_bytes().startswith(PNG_SIGNATURE) and path.stat().st_size > 1000
     assert plt.get_fignums() == []
+
+
+def test_a_single_ball_count_draws_no_curve_and_says_why(results: ExperimentResults,
+                                                          tmp_path: Path) -> None:
+    """One ball count gives one point per engine: no RTF or footprint plot (issue 33)."""
+    single = [t for t in results.trials if t.balls == results.trials[0].balls]
+    names = {p.name for p in plot_all(single, tmp_path, draws=DRAWS)}
+    assert names == {"histogram_mujoco.png", "histogram_pybullet.png"}
+    one = ExperimentResults(trials=single, date="", host="", versions={}, command="")
+    text = render_report(one, summarise(single, DRAWS), [], sorted(names), DRAWS)
+    assert "drawn for two ball counts at least" in text
 
 
 def test_write_outputs_rerenders_identically(results: ExperimentResults, tmp_path: Path) -> None:

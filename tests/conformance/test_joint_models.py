@@ -28,7 +28,12 @@ from support_models import (
 )
 
 from galton.client import Client, EmbeddedDaemon
-from galton.protocol import InvalidArgumentError, JointInfo, NotFoundError
+from galton.protocol import (
+    FeatureUnsupportedError,
+    InvalidArgumentError,
+    JointInfo,
+    NotFoundError,
+)
 
 
 @pytest.mark.parametrize("robot", list(ROBOTS))
@@ -221,3 +226,45 @@ def test_each_top_level_mjcf_body_is_a_model_with_its_joints(sim: Client) -> Non
     sim.delete(["m/base"])
     assert [j.name for j in joints(sim)] == ["m/wrist"]
 
+
+
+# A stand welded to the world (no joint), an arm on a damped hinge, a puck whose density
+# comes from a default class: what the file says, every engine must say.
+STAND_MJCF = """<mujoco><default><geom density="500"/></default><worldbody>
+  <body name="stand" pos="0 0 1"><geom type="box" size="0.1 0.1 0.1" mass="1.8"/>
+    <body name="arm" pos="0.2 0 0"><joint name="hinge" axis="0 0 1" damping="0.1"/>
+      <geom type="sphere" size="0.05" mass="1" pos="0.2 0 0"/></body></body>
+  <body name="puck" pos="2 0 1"><freejoint/><geom type="cylinder" size="0.1 0.05"/></body>
+</worldbody></mujoco>"""
+ARM_INERTIA = 1.0 * (0.4 * 0.05**2 + 0.2**2)  # kg m² about the hinge
+
+
+def test_an_mjcf_file_says_the_same_on_every_engine(sim: Client) -> None:
+    load(sim, "mjcf", text=STAND_MJCF)
+    listed = {e.name: e for e in sim.list()}
+    assert (listed["stand"].shape, listed["stand"].static) == ("model", True)
+    assert listed["arm"].mass == pytest.approx(1.0)
+    assert listed["puck"].mass == pytest.approx(500 * np.pi * 0.1**2 * 0.1)
+    [hinge] = joints(sim, names=["hinge"])
+    assert hinge.damping == pytest.approx(0.1)
+    sim.set_params({"gravity": [0.0, 0.0, 0.0]})
+    set_joint_states(sim, ["hinge"], 0.0, velocities=2.0)
+    stand = sim.get_states(["stand"]).poses
+    steps = round(0.2 / sim.status().timestep)
+    read = step_joints(sim, steps, ["hinge"])
+    decay = np.exp(-0.1 * steps * sim.status().timestep / ARM_INERTIA)
+    assert read.velocities[0] == pytest.approx(2.0 * decay, rel=0.03)
+    np.testing.assert_array_equal(sim.get_states(["stand"]).poses, stand)
+
+
+def test_a_ball_joint_loads_or_is_refused_naming_it(sim: Client, engine: str) -> None:
+    text = STAND_MJCF.replace('<joint name="hinge" axis="0 0 1"', '<joint name="shoulder" '
+                              'type="ball"')
+    if engine == "pybullet":
+        with pytest.raises(FeatureUnsupportedError, match=r"ball joint.*shoulder"):
+            load(sim, "mjcf", text=text)
+        assert sim.list() == []
+        return
+    load(sim, "mjcf", text=text)
+    [shoulder] = joints(sim, names=["shoulder"])
+    assert (shoulder.type, shoulder.child) == ("spherical", "arm")

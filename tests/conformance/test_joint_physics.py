@@ -205,3 +205,21 @@ def test_kuka_tracks_a_sinusoid_with_position_targets(world: Client) -> None:
     print(f"kuka tracking error after 0.5 s: max {settled.max():.4f} rad, "
           f"rms {np.sqrt((settled**2).mean()):.4f} rad")
     assert settled.max() < TRACKING_TOLERANCE
+
+
+def test_kuka_holds_a_pose_at_the_gains_robot_users_type(sim: Client) -> None:
+    """kp 400 N·m/rad, kd 40 N·m·s on all seven joints, at the engine's default settings
+    (issue 33: link 7's 6e-4 kg·m² made an explicit kd shake the arm at its velocity
+    limit). After 3 s each joint is within its static sag kp^-1·τ_gravity + 1e-3 rad of the
+    target, at rest (1e-3 rad/s), its effort the law's."""
+    load_robot(sim, "kuka")
+    target = np.array([0.3, 0.5, -0.2, -1.0, 0.4, 0.6, 0.2])
+    set_targets(sim, KUKA_JOINTS, "position", target, kp=400.0, kd=40.0)
+    steps = round(3.0 / sim.get_params()["timestep"])
+    held = step_joints(sim, steps, KUKA_JOINTS)
+    sag = np.abs(held.efforts) / 400.0
+    assert np.all(np.abs(held.positions - target) <= sag + 1e-3), held.positions - target
+    assert np.abs(held.velocities).max() < 1e-3
+    np.testing.assert_allclose(held.efforts, 400.0 * (target - held.positions)
+                               - 40.0 * held.velocities, atol=1e-3)
+    assert np.abs(held.efforts).max() < 100.0  # gravity's torques, not a saturated chatter

@@ -17,6 +17,7 @@ import pytest
 from support import ball_row, companion, raw_replies, snapshot
 
 from galton.client import Client, plane, spheres
+from galton.daemon.engine_check_refusals import PROBE_MODELS
 from galton.protocol import (
     ClientClosedError,
     IncorrectStateError,
@@ -198,21 +199,28 @@ def test_run_until_far_away_is_refused_naming_its_own_field(sim: Client) -> None
     assert sim.status().step == 0
 
 
+def one_body(sim: Client) -> tuple[str, str]:
+    """A one-body model in a format the engine loads (MJCF where it can)."""
+    if "mjcf" in sim.capabilities().model_formats:
+        return "mjcf", ONE_BODY_MJCF
+    return "urdf", PROBE_MODELS["urdf"]
+
+
 @pytest.mark.parametrize("prefix", ["\x00", "a\nb", "x" * 65])
 def test_a_bad_model_prefix_is_an_invalid_argument(sim: Client, prefix: str) -> None:
-    text = ONE_BODY_MJCF
+    fmt, text = one_body(sim)
     code, message, _ = raw(sim, "load_model", request(
-        "load_model", {"format": "mjcf", "text": text, "prefix": prefix}))
+        "load_model", {"format": fmt, "text": text, "prefix": prefix}))
     assert code == ResultCode.INVALID_ARGUMENT and "prefix" in message
     assert sim.list() == []
 
 
 def test_a_taken_model_name_is_name_not_unique(sim: Client) -> None:
-    text = ONE_BODY_MJCF
-    sim.load_model("mjcf", text=text, prefix="m_")
+    fmt, text = one_body(sim)
+    sim.load_model(fmt, text=text, prefix="m_")
     before = snapshot(sim)
     code, _, _ = raw(sim, "load_model", request(
-        "load_model", {"format": "mjcf", "text": text, "prefix": "m_"}))
+        "load_model", {"format": fmt, "text": text, "prefix": "m_"}))
     assert code == ResultCode.NAME_NOT_UNIQUE
     snapshot(sim).assert_same(before)
 
@@ -221,7 +229,7 @@ def test_a_taken_model_name_is_name_not_unique(sim: Client) -> None:
 @pytest.mark.parametrize("path", ["/dev/stdin", "/dev/zero", "/tmp", "/no/such/model.urdf"])
 def test_load_model_reads_only_regular_files(sim: Client, path: str) -> None:
     code, message, _ = raw(sim, "load_model", request(
-        "load_model", {"format": "mjcf", "path": path}), timeout=5)
+        "load_model", {"format": one_body(sim)[0], "path": path}), timeout=5)
     assert code == ResultCode.INVALID_ARGUMENT and "load_model.path" in message
     assert sim.status().entity_count == 0
 

@@ -20,6 +20,7 @@ from galton.client import (
     NameNotUniqueError,
     NotFoundError,
     ResourceLimitError,
+    Telemetry,
     spheres,
 )
 
@@ -56,6 +57,26 @@ def test_side_worlds_are_listed_and_move_only_when_stepped(world: Client, engine
         side.play()
     world.delete_world("side")
     assert [w.name for w in world.list_worlds()] == ["default"]
+
+
+def test_telemetry_has_a_sample_per_world(world: Client, engine: str) -> None:
+    world.create_world("side")
+    side = world.world("side")
+    side.spawn(spheres(["ball"], [[0, 0, 1]], 0.05))
+    side.step(7)
+    seen: dict[str, Telemetry] = {}
+    with world.telemetry(timeout=5) as stream:
+        for _ in range(40):  # 2 s at 10 Hz: a period holds one sample per world
+            sample = stream.next(5)
+            seen[sample.world] = sample
+            if len(seen) == 2:
+                break
+    assert set(seen) == {"default", "side"}
+    live, other = seen["default"], seen["side"]
+    assert (live.step, live.entity_count) == (0, 0)
+    assert (other.step, other.entity_count, other.state, other.engine) == (
+        7, 1, "paused", engine)
+    assert other.rtf == other.target_rtf == 0.0
 
 
 def test_a_side_world_reply_carries_that_world_stamp(world: Client) -> None:

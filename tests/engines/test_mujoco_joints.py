@@ -118,20 +118,21 @@ def test_a_wrench_off_the_centre_turns_and_is_held_until_cleared(engine: MujocoE
 
 
 def test_targets_apply_the_pd_law_exactly_and_clip(engine: MujocoEngine) -> None:
+    """The stiffness part at the step's start, clipped; the damping implicit: at the
+    velocity the step ends with, unclipped (module docstring of mujoco_joints)."""
     names = kuka(engine)
     n = len(names)
     target, kp, kd = np.linspace(-0.5, 0.5, n), np.full(n, 300.0), np.full(n, 20.0)
     engine.set_joint_targets(names, "position", target, kp, kd, np.full(n, np.inf))
     for _ in range(3):
-        q, qd, _ = engine.get_joint_states(names)
+        q = engine.get_joint_states(names)[0]
         engine.step(1)
-        np.testing.assert_allclose(engine.get_joint_states(names)[2],
-                                   kp * (target - q) - kd * qd, rtol=1e-12, atol=1e-9)
-    q, qd, _ = engine.get_joint_states(names)
+        _, qd, effort = engine.get_joint_states(names)
+        np.testing.assert_allclose(effort, kp * (target - q) - kd * qd, rtol=1e-12, atol=1e-9)
     engine.set_joint_targets(names, "velocity", np.ones(n), kp, kd, np.full(n, 5.0))
     engine.step(1)
-    np.testing.assert_allclose(engine.get_joint_states(names)[2],
-                               np.clip(kd * (1 - qd), -5, 5), rtol=1e-12)
+    _, qd, effort = engine.get_joint_states(names)
+    np.testing.assert_allclose(effort, np.clip(kd * 1.0, -5, 5) - kd * qd, rtol=1e-12)
     engine.set_joint_targets(names, "effort", np.full(n, -7.0), kp, kd, np.full(n, 5.0))
     engine.step(1)
     np.testing.assert_array_equal(engine.get_joint_states(names)[2], -5.0)

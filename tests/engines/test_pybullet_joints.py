@@ -203,15 +203,18 @@ def test_delete_and_clear_take_links_joints_targets_and_wrenches(
 
 # -- the actuator law --------------------------------------------------------------------
 def test_the_law_is_applied_exactly_and_clipped(engine: PybulletEngine) -> None:
+    """The stiffness at the step's start, the damping at the velocity it ends with
+    (pybullet_joints' docstring: "stable PD" on a fixed base)."""
     engine.load_model("urdf", pendulum(), None, "p/")
     engine.set_joint_states(["p/swing"], one(0.2), one(-0.7))
     hold(engine, "position", 0.5, kp=30.0, kd=2.0)
     engine.step(1)
-    assert state(engine)[2] == pytest.approx(30.0 * (0.5 - 0.2) - 2.0 * -0.7, rel=1e-12)
-    qdot = state(engine)[1]
+    _, qdot, effort = state(engine)
+    assert effort == pytest.approx(30.0 * (0.5 - 0.2) - 2.0 * qdot, rel=1e-9)
     hold(engine, "velocity", 1.5, kd=3.0)
     engine.step(1)
-    assert state(engine)[2] == pytest.approx(3.0 * (1.5 - qdot), rel=1e-12)
+    _, qdot, effort = state(engine)
+    assert effort == pytest.approx(3.0 * (1.5 - qdot), rel=1e-9)
     hold(engine, "effort", 10.0, max_effort=2.0)
     engine.step(1)
     assert state(engine)[2] == 2.0

@@ -1,0 +1,54 @@
+"""The protocol's words and sizes (shapes, states, modes, engines, widths) and its one rule
+for keys: plain Python, no numpy, so that a command line lists its choices in a blink."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from enum import StrEnum
+from typing import Any
+
+from galton.protocol.errors import InvalidArgumentError, brief, did_you_mean
+
+POSE_WIDTH = 7
+TWIST_WIDTH = 6
+MAX_BATCH = 100_000
+MAX_NAME_LENGTH = 128
+
+
+class SimState(StrEnum):
+    """Where a world's clock is; a str on the wire ("stopped", "playing", "paused")."""
+
+    STOPPED = "stopped"  # at time 0 with every entity in its created state
+    PLAYING = "playing"  # advancing on its own at the target real-time factor
+    PAUSED = "paused"  # holding its time; steps only on request
+
+
+SIM_STATES = tuple(state.value for state in SimState)
+RESET_SCOPES = ("time", "state", "spawned", "all")
+BODY_SHAPES = ("sphere", "box", "cylinder", "capsule", "plane")
+# What list reports for the bodies of a loaded model: its root, and every other link.
+MODEL_SHAPES = ("model", "link")
+JOINT_TYPES = ("revolute", "prismatic", "spherical", "free", "fixed")
+SCALAR_JOINT_TYPES = ("revolute", "prismatic")  # one degree of freedom: states and targets
+TARGET_MODES = ("none", "position", "velocity", "effort")
+# The engines a daemon may host (``load_world``'s and ``create_world``'s choices).
+ENGINE_NAMES = ("mujoco", "pybullet", "ode")
+WRENCH_WIDTH = 6  # fx fy fz tx ty tz, world frame
+# How many numbers ``size`` holds per shape, and what they mean (all half sizes, metres).
+SIZE_LAYOUT: dict[str, tuple[str, ...]] = {
+    "sphere": ("radius",),
+    "box": ("half_x", "half_y", "half_z"),
+    "cylinder": ("radius", "half_length"),
+    "capsule": ("radius", "half_length"),
+    "plane": ("half_x", "half_y"),
+}
+
+
+def check_fields(body: dict[str, Any], allowed: Sequence[str], where: str) -> None:
+    """The one rule for keys: a field that is not one of ``allowed`` is refused, naming the
+    closest one (operations' arguments, spawn groups, update properties, until_rest)."""
+    for key in body:
+        if key not in allowed:
+            raise InvalidArgumentError(
+                f"{where} takes no field {brief(key)}{did_you_mean(str(key)[:64], allowed)}; "
+                f"it takes: {', '.join(allowed)}")

@@ -1,0 +1,160 @@
+"""The ODE engine on its own, in-process: what is its own beyond the engine checks
+(test_engine_check.py runs those): Webots' settings, sleeping, snapshots of sleeping worlds,
+the QuickStep option, contact reports and ray casts."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from typing import Any
+
+import numpy as np
+import pytest
+
+from galton.analysis.board import BoardSpec
+from galton.daemon.engines.ode.engine import OdeEngine
+from galton.protocol import BodyGroup
+
+RADIUS = 0.05
+WEBOTS = {"timestep": 0.002, "ode.stepper": "world", "ode.cfm": 1e-5, "ode.erp": 0.2,
+          "ode.contact_soft_cfm": 0.001, "ode.contact_soft_erp": 0.2,
+          "ode.bounce_velocity": 0.01, "ode.max_contacts": 10, "ode.auto_disable": True,
+          "ode.disable_time": 1.0, "default_friction": 1.0, "default_restitution": 0.5}
+
+
+@pytest.fixture
+def engine() -> Iterator[OdeEngine]:
+    made = OdeEngine()
+    yield made
+    made.close()
+
+
+def poses_at(positions: Any) -> np.ndarray:
+    rows = np.atleast_2d(np.asarray(positions, dtype=float))
+    return np.column_stack([rows, np.tile([0.0, 0.0, 0.0, 1.0], (len(rows), 1))])
+
+
+def balls(names: list[str], positions: Any, **options: Any) -> BodyGroup:
+    return BodyGroup("sphere", (RADIUS,), names, poses_at(positions), **options)
+
+
+def ground() -> BodyGroup:
+    return BodyGroup("plane", (5.0, 5.0), ["ground"], poses_at([0, 0, 0]), static=True)
+
+
+def seconds(engine: OdeEngine, duration: float) -> None:
+    engine.step(round(duration / engine.timestep))
+
+
+def test_the_defaults_are_webots_settings(engine: OdeEngine) -> None:
+    params = engine.capabilities().params
+    assert {name: params[name]["default"] for name in WEBOTS} == WEBOTS
+    assert BoardSpec.load("paper-webots").contacts["ode"].params["timestep"] == 0.032
+
+
+def test_a_ball_bounces_back_half_as_fast_at_any_step(engine: OdeEngine) -> None:
+    """Webots' bounce 0.5 (0.48 with its soft contact), at 2 ms as at Webots' 32 ms: the
+    soft CFM follows the step (params.py, ode.soft_cfm_step)."""
+    for timestep in (0.002, 0.032):
+        engine.clear()
+        engine.set_params({"timestep": timestep})
+        engine.spawn([ground(), balls(["ball"], [0, 0, 0.2], twists=[[0, 0, -3.0, 0, 0, 0]])])
+        down = up = 0.0
+        for _ in range(round(0.3 / timestep)):
+            engine.step(1)
+            speed = float(engine.get_states(["ball"])[1][0, 2])
+            down, up = min(down, speed), max(up, speed)
+        assert up / -down == pytest.approx(0.48, abs=0.02)
+
+
+def test_bodies_at_rest_sleep_leave_the_callback_and_wake_when_hit(engine: OdeEngine) -> None:
+    engine.spawn([ground(), balls(["resting"], [0, 0, RADIUS])])
+    seconds(engine, 1.5)
+    assert not engine._bodies["resting"].awake
+    before = engine._collider.pairs
+    engine.step(10)
+    assert engine._collider.pairs == before  # a sleeping ball on the floor costs no call
+    engine.spawn([balls(["falling"], [0.0, 0.0, 0.5])])
+    seconds(engine, 0.5)
+    assert engine._bodies["resting"].awake
+
+
+def _pile(engine: OdeEngine) -> None:
+    positions = [[0.02 * (i % 2), 0.01 * (i % 3), 0.1 + 0.11 * i] for i in range(6)]
+    engine.spawn([ground(), balls([f"s{i}" for i in range(6)], positions)])
+
+
+def test_a_snapshot_of_a_sleeping_pile_replays_bit_for_bit(engine: OdeEngine) -> None:
+    """Sleep flags travel; idle counters restart on both sides (canonical), so a ball
+    dropped on the pile wakes it the same way in the source and in the restored world."""
+    engine.spawn([ground(), balls([f"s{i}" for i in range(6)],
+                                  [[0.2 * i, 0.0, RADIUS + 0.01] for i in range(6)])])
+    seconds(engine, 2.0)
+    assert not any(b.awake for b in engine._moving)
+    copy = OdeEngine()
+    try:
+        copy.restore(engine.snapshot())
+        for world in (engine, copy):
+            world.spawn([balls(["dropped"], [0.01, 0.0, 1.2])])
+            seconds(world, 1.5)
+        names = [f"s{i}" for i in range(6)] + ["dropped"]
+        for mine, theirs in zip(engine.get_states(names), copy.get_states(names), strict=True):
+            assert np.array_equal(mine, theirs)
+    finally:
+        copy.close()
+
+
+def test_quickstep_replays_bit_for_bit() -> None:
+    runs = []
+    for _ in range(2):
+        engine = OdeEngine()
+        engine.set_params({"ode.stepper": "quick", "solver_iterations": 10})
+        _pile(engine)
+        seconds(engine, 0.5)
+        runs.append(engine.get_states([f"s{i}" for i in range(6)])[0])
+        engine.close()
+    assert np.array_equal(runs[0], runs[1])
+
+
+def test_a_resting_ball_reports_its_weight_pushing_down(engine: OdeEngine) -> None:
+    engine.spawn([ground(), balls(["ball"], [0, 0, RADIUS], mass=2.0)])
+    engine.set_params({"ode.auto_disable": False})
+    seconds(engine, 0.5)
+    firsts, seconds_, points, normals, forces, depths = engine.contacts(["ball"])
+    assert len(firsts) == 1 and {firsts[0], seconds_[0]} == {"ball", "ground"}
+    down = np.array([0.0, 0.0, -1.0 if firsts[0] == "ball" else 1.0])
+    np.testing.assert_allclose(normals[0], down, atol=1e-9)
+    assert forces[0] == pytest.approx(2.0 * 9.81, rel=0.02)
+    assert abs(points[0, 2]) < 0.005 and 0 <= depths[0] < 0.005
+
+
+def test_a_ray_hits_the_nearest_ball(engine: OdeEngine) -> None:
+    engine.spawn([ground(), balls(["near", "far"], [[1, 0, 1], [2, 0, 1]])])
+    hits, names, points, normals, distances = engine.raycast(
+        np.array([[0.0, 0, 1], [0.0, 0, 3]]), np.array([[1.0, 0, 0], [0, 1.0, 0]]), 10.0)
+    assert hits.tolist() == [True, False] and names == ["near", ""]
+    np.testing.assert_allclose(points[0], [1 - RADIUS, 0, 1], atol=1e-9)
+    np.testing.assert_allclose(normals[0], [-1, 0, 0], atol=1e-9)
+    assert distances[0] == pytest.approx(1 - RADIUS) and np.isnan(distances[1])
+
+
+def test_a_robot_with_targets_and_a_wrench_replays_after_a_restore(engine: OdeEngine) -> None:
+    from galton.daemon.engine_check_joints import DRIVEN, RIG
+
+    engine.load_model("urdf", RIG, None, "r_", fixed_base=True)
+    engine.spawn([ground(), balls(["ball"], [0.3, 0.0, 2.0])])
+    engine.set_joint_targets(DRIVEN, "position", np.array([0.4, 0.1]), np.array([40.0, 30.0]),
+                             np.array([2.0, 1.0]), np.array([np.inf, 5.0]))
+    engine.set_wrenches(["r_tip"], np.array([[0.0, 0.0, 3.0, 0.0, 0.0, 0.0]]), None)
+    engine.step(50)
+    copy = OdeEngine()
+    try:
+        copy.restore(engine.snapshot())
+        names = ["r_base", "r_arm", "r_carriage", "r_tip", "ball"]
+        for world in (engine, copy):
+            world.step(200)
+        for mine, theirs in zip(engine.get_states(names), copy.get_states(names), strict=True):
+            assert np.array_equal(mine, theirs)
+        assert np.array_equal(engine.get_joint_states(DRIVEN)[2], copy.get_joint_states(
+            DRIVEN)[2])
+    finally:
+        copy.close()
