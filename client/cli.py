@@ -84,14 +84,14 @@ class Target:
         self.credentials = credentials
         self.zmq_keys = zmq_keys
 
-    def client(self) -> Client:
+    def client(self, client_id: str | None = None) -> Client:
         from galton.client.sdk import Client
         from galton.client.transport import zmq_endpoint
 
         over_zmq = zmq_endpoint(self.connect) is not None
         return Client(self.instance, self.connect, timeout=self.timeout,
                       credentials=None if over_zmq else self.credentials,
-                      zmq_keys=self.zmq_keys if over_zmq else None)
+                      zmq_keys=self.zmq_keys if over_zmq else None, client_id=client_id)
 
 
 def package_version() -> str:
@@ -292,6 +292,7 @@ from galton.client import (  # noqa: E402,F401
     cli_states,
     cli_streams,
     cli_time,
+    cli_view,
     cli_world,
     cli_worlds,
     cli_zmq_keys,

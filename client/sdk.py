@@ -30,6 +30,7 @@ from galton.client.credentials import Credentials
 from galton.client.sdk_control import ControlMethods
 from galton.client.sdk_joints import SearchPath
 from galton.client.sdk_perception import PerceptionMethods
+from galton.client.sdk_streams import StateSample, StateStream, StreamMethods
 from galton.client.sdk_worlds import WorldMethods
 from galton.client.session import checked_timeout
 from galton.client.telemetry import Subscription, TelemetryStream, subscribe_events
@@ -54,11 +55,11 @@ from galton.protocol.operations import OPERATIONS
 
 DEFAULT_TIMEOUT_S = 5.0
 
-__all__ = ["DEFAULT_TIMEOUT_S", "Client", "JointStates", "Stamp", "States", "body_group",
-           "boxes", "plane", "spheres"]
+__all__ = ["DEFAULT_TIMEOUT_S", "Client", "JointStates", "Stamp", "StateSample", "StateStream",
+           "States", "body_group", "boxes", "plane", "spheres"]
 
 
-class Client(WorldMethods, PerceptionMethods, ControlMethods):
+class Client(WorldMethods, PerceptionMethods, ControlMethods, StreamMethods):
     """A connection to one daemon instance (the session may be shared with others).
 
     ``timeout``: seconds a quick operation waits for its reply; operations that rebuild a
@@ -70,7 +71,7 @@ class Client(WorldMethods, PerceptionMethods, ControlMethods):
                  *, timeout: float = DEFAULT_TIMEOUT_S, session: zenoh.Session | None = None,
                  config_file: str | None = None,
                  credentials: Credentials | None = None,
-                 zmq_keys: ZmqKeys | None = None) -> None:
+                 zmq_keys: ZmqKeys | None = None, client_id: str | None = None) -> None:
         self.keys = Keys(instance)
         self.timeout = checked_timeout(timeout)
         self._closed = False
@@ -78,7 +79,9 @@ class Client(WorldMethods, PerceptionMethods, ControlMethods):
         self._parent: WorldMethods | None = None
         # A daemon ends a step request whose client has vanished: this client's liveliness
         # token says so over Zenoh, the connection itself over ZeroMQ.
-        self.client_id = uuid.uuid4().hex
+        # ``client_id``: one of the caller's choosing (galton-client view names a viewer's
+        # VIEWER_ID_PREFIX + hex, the token a viewer may hold under --users).
+        self.client_id = client_id or uuid.uuid4().hex
         self._own_transport = True
         self.transport = _transport(self.keys, self.client_id, connect, session, config_file,
                                     credentials, zmq_keys)

@@ -24,7 +24,7 @@ from galton.protocol.errors import ClientClosedError, brief
 from galton.protocol.keys import client_token_key
 
 ZMQ_SCHEME = "zmq+"
-Topic = str  # "telemetry" or "events"
+Topic = str  # "telemetry", "events", or a state stream's "states/<id>"
 
 
 class Transport(Protocol):
@@ -39,7 +39,11 @@ class Transport(Protocol):
         """Every reply to a request sent as these exact bytes (tests and the fuzzer)."""
         ...
 
-    def subscribe(self, topic: Topic, callback: Callable[[bytes], None]) -> Declared: ...
+    def subscribe(self, topic: Topic, callback: Callable[[bytes], None],
+                  key: str | None = None) -> Declared:
+        """Subscribe to a topic of the instance; ``key``: the whole key a daemon named (a
+        state stream's), else the topic under this client's instance."""
+        ...
 
     def close(self) -> None: ...
 
@@ -90,8 +94,10 @@ class ZenohTransport:
         replies = self.session.get(self.keys.control(op), payload=payload, timeout=timeout)
         return [r.ok.payload.to_bytes() if r.ok is not None else b"" for r in replies]
 
-    def subscribe(self, topic: Topic, callback: Callable[[bytes], None]) -> Declared:
-        key = self.keys.telemetry if topic == "telemetry" else self.keys.events
+    def subscribe(self, topic: Topic, callback: Callable[[bytes], None],
+                  key: str | None = None) -> Declared:
+        if key is None:
+            key = f"{self.keys.prefix}/{topic}"
 
         def on_sample(sample: zenoh.Sample) -> None:
             callback(sample.payload.to_bytes())

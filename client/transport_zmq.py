@@ -179,9 +179,14 @@ class ZmqTransport:
             self._telemetry_endpoint = str(telemetry[min(index, len(telemetry) - 1)])
         return self._telemetry_endpoint
 
-    def subscribe(self, topic: Topic, callback: Callable[[bytes], None]) -> ZmqSubscription:
+    def subscribe(self, topic: Topic, callback: Callable[[bytes], None],
+                  key: str | None = None) -> ZmqSubscription:
+        """``key`` (a state stream's): only that key's messages and the greeting are
+        subscribed to, not every topic, so that the daemon sends this socket no others."""
+        filters = ((key.encode(), key.rsplit("/", 2)[0].encode() + b"/hello")
+                   if key is not None else (b"galton/",))
         subscription = ZmqSubscription(self.context, self.telemetry_endpoint(), topic,
-                                       callback, self.keys)
+                                       callback, self.keys, filters)
         with self._lock:  # those undeclared since are let go
             self._subscriptions = [*(s for s in self._subscriptions if s.live), subscription]
         return subscription
@@ -203,7 +208,8 @@ class ZmqSubscription:
     the daemon's "hello" has arrived: from then on nothing published is missed."""
 
     def __init__(self, context: zmq.Context[zmq.Socket[bytes]], endpoint: str, topic: Topic,
-                 callback: Callable[[bytes], None], keys: ZmqKeys | None = None) -> None:
+                 callback: Callable[[bytes], None], keys: ZmqKeys | None = None,
+                 filters: tuple[bytes, ...] = (b"galton/",)) -> None:
         self._suffix = b"/" + topic.encode()
         self._callback = callback
         self._stop = threading.Event()
@@ -212,7 +218,8 @@ class ZmqSubscription:
         if keys is not None:
             keys.apply(self._socket)
         self._socket.connect(endpoint)
-        self._socket.subscribe(b"galton/")
+        for prefix in filters:
+            self._socket.subscribe(prefix)
         self._ready = threading.Event()
         self._thread = threading.Thread(target=self._run, name="galton-zmq-sub", daemon=True)
         self._thread.start()

@@ -21,6 +21,7 @@ from galton.daemon import (
     ops_joints,
     ops_perception,
     predict,
+    state_streams,
     time_control,
     worlds,
 )
@@ -43,8 +44,11 @@ def _scene(name: str, apply: ops.SceneOp) -> Handler:
         world = loop.world_for(args)
         result = apply(world, args)
         if mutates:
-            loop.emit({"kind": "scene", "op": name, "world": world.name,
-                       "step": world.step_index})
+            event = {"kind": "scene", "op": name, "world": world.name,
+                     "step": world.step_index}
+            if name == "compare" and result is not None:  # the view charts the score
+                event.update(score=result["score"], sim_time=world.sim_time)
+            loop.emit(event)
             loop.check_job_reads()
         return result
     return handle
@@ -99,6 +103,8 @@ HANDLERS: dict[str, Handler] = {
     "set_params": _scene("set_params", ops.set_params),
     "take_control": lease.take_control,
     "release_control": lease.release_control,
+    "stream_states": state_streams.stream_states,
+    "close_stream": state_streams.close_stream,
 }
 
 

@@ -22,6 +22,7 @@ from galton.daemon.handlers import HANDLERS
 from galton.daemon.limits import DEFAULT_LIMITS, Limits
 from galton.daemon.monitor import Pacer, ProcessMonitor, RtfWindow
 from galton.daemon.snapshot_slots import SnapshotSlots
+from galton.daemon.state_streams import StateStreams
 from galton.daemon.world import World
 from galton.daemon.zmq_auth import refuse_by_role
 from galton.protocol import (
@@ -92,6 +93,7 @@ class SimLoop:
         self.monitor = ProcessMonitor()
         self.publish_telemetry = publish_telemetry
         self.publish_event = publish_event
+        self.streams = StateStreams()  # stream_states (daemon/state_streams.py)
         self.telemetry_period = 1.0 / telemetry_rate_hz if telemetry_rate_hz > 0 else math.inf
         self.engine_factory = engine_factory
         self.side: dict[str, World] = {}  # side worlds by name (daemon/worlds.py)
@@ -155,6 +157,8 @@ class SimLoop:
         if now >= next_telemetry:
             loop_status.publish_telemetry(self, now)
             next_telemetry = max(next_telemetry + self.telemetry_period, now)
+        if now >= self.streams.next_due:
+            self.streams.publish_due(self, now)
         if self.checkpoint is not None and now >= self._next_checkpoint:
             self._next_checkpoint = now + self.checkpoint_period
             self.checkpoint()
@@ -177,7 +181,7 @@ class SimLoop:
 
     def _idle_timeout(self, next_telemetry: float) -> float:
         now = time.monotonic()
-        until_telemetry = max(0.0, next_telemetry - now)
+        until_telemetry = max(0.0, min(next_telemetry, self.streams.next_due) - now)
         if self.job is not None:
             return 0.0
         if self.state == SimState.PLAYING:
@@ -269,6 +273,7 @@ class SimLoop:
     def client_gone(self, client: str) -> None:
         """A client's liveliness token vanished (called from a Task on this thread)."""
         time_control.client_gone(self, client)
+        self.streams.owner_gone(client)
 
     def check_job_reads(self) -> None:
         """A step job whose read entities are gone is answered now, not after its steps."""

@@ -117,6 +117,7 @@ class Daemon:
                             self._publish_telemetry, self._publish_event,
                             options.telemetry_rate_hz, create_engine, options.limits)
         self.front = _zmq_front(options, self.loop)
+        self.loop.streams.publish = self._publish_states
         self.loop.client_alive = self._client_alive
         self._thread: threading.Thread | None = None
         self._queryable: Any = None
@@ -232,6 +233,14 @@ class Daemon:
         self._telemetry_pub.put(data)
         if self.front is not None:
             self.front.publish("telemetry", data)
+
+    def _publish_states(self, topic: str, data: bytes) -> None:
+        """A state stream's sample (daemon/state_streams.py), dropped rather than queued
+        when the network is congested, as telemetry is."""
+        self.session.put(f"{self.keys.prefix}/{topic}", data,
+                         congestion_control=zenoh.CongestionControl.DROP)
+        if self.front is not None:
+            self.front.publish(topic, data)
 
     def _publish_event(self, event: dict[str, Any]) -> None:
         data = msgpack.packb({"instance": self.options.instance, **event})

@@ -36,10 +36,18 @@ from typing import Any
 from galton.daemon.users import OPERATOR, ROLES, VIEWER, User, by_role
 from galton.protocol import Keys
 from galton.protocol.errors import InvalidArgumentError
-from galton.protocol.keys import CLIENTS_PATTERN, LIVELINESS_PATTERN
+from galton.protocol.keys import (
+    CLIENTS_PATTERN,
+    LIVELINESS_PATTERN,
+    STREAMS_CHUNK,
+    VIEWER_ID_PREFIX,
+    client_token_key,
+)
 
-# Read-only operations a viewer may ask: discovery (`galton-client daemons`) asks both.
-VIEWER_OPERATIONS = ("status", "capabilities")
+# Read-only operations a viewer may ask: discovery (`galton-client daemons`) asks the
+# first two; `galton-client view` the others (a state stream changes no world).
+VIEWER_OPERATIONS = ("status", "capabilities", "list", "list_worlds", "contacts",
+                     "stream_states", "close_stream")
 TLS_SCHEME = "tls/"
 USRPWD = "transport/auth/usrpwd/dictionary_file"
 
@@ -84,7 +92,7 @@ def _rule(rule_id: str, flow: str, messages: list[str], keys: list[str]) -> dict
 def acl_rules(instance: str) -> list[dict[str, Any]]:
     """Every rule any role uses, for the daemon of ``instance``."""
     keys = Keys(instance)
-    watched = [keys.telemetry, keys.events]
+    watched = [keys.telemetry, keys.events, f"{keys.prefix}/{STREAMS_CHUNK}/*"]
     readonly = [keys.control(op) for op in VIEWER_OPERATIONS]
     return [
         _rule("watch", "ingress", ["declare_subscriber"], watched),
@@ -93,6 +101,10 @@ def acl_rules(instance: str) -> list[dict[str, Any]]:
         _rule("ask-readonly", "ingress", ["query"], readonly),
         _rule("ask-control", "ingress", ["query"], [keys.control_all]),
         _rule("client-token", "ingress", ["liveliness_token"], [CLIENTS_PATTERN]),
+        # A viewer's token says when its state streams end; named apart from any operator's
+        # (an SDK id is hex), it can keep no operator's lease alive.
+        _rule("viewer-token", "ingress", ["liveliness_token"],
+              [client_token_key(f"{VIEWER_ID_PREFIX}$*")]),
         _rule("publish", "egress", ["put"], watched),
         _rule("announce", "egress", ["liveliness_token"], [LIVELINESS_PATTERN]),
         # A Zenoh querier sends nothing once it believes no queryable matches its key.
@@ -105,8 +117,8 @@ def acl_rules(instance: str) -> list[dict[str, Any]]:
 ROLE_RULES = {
     OPERATOR: ["watch", "discover", "ask-control", "client-token", "publish", "announce",
                "route-control", "answer-control"],
-    VIEWER: ["watch", "discover", "ask-readonly", "publish", "announce", "route-control",
-             "answer-readonly"],
+    VIEWER: ["watch", "discover", "ask-readonly", "viewer-token", "publish", "announce",
+             "route-control", "answer-readonly"],
 }
 
 

@@ -20,6 +20,10 @@ LIVELINESS_PATTERN = f"{ROOT}/*/{ALIVE_CHUNK}"
 # asked by a client that has gone is not run to its end for nobody.
 CLIENTS_CHUNK = "_clients"
 CLIENTS_PATTERN = f"{ROOT}/{CLIENTS_CHUNK}/*"
+# A viewer's client id starts so (galton-client view): under --users a viewer may hold such a
+# token, and only such, so that its state streams end when it goes (docs/SECURITY.md).
+VIEWER_ID_PREFIX = "viewer-"
+STREAMS_CHUNK = "states"  # state streams publish on galton/<instance>/states/<stream id>
 
 
 def client_token_key(client_id: str) -> str:

@@ -166,6 +166,9 @@ OPERATIONS: dict[str, Operation] = {op.name: op for op in (
     # The control lease (daemon/lease.py): they change who may mutate, not the world.
     Operation("take_control"),
     Operation("release_control"),
+    # State streams (daemon/state_streams.py): poses published at a client's rate.
+    Operation("stream_states", (Arg("rate", "number"), Arg("names", "names"))),
+    Operation("close_stream", (Arg("stream", "string", required=True),)),
 )}
 
 

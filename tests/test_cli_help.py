@@ -13,7 +13,8 @@ from galton.client.cli import app, help_text
 from galton.protocol.operations import OPERATIONS
 
 # Operations whose command is not the operation's name with dashes (README, "CLI").
-COMMAND_OF_OPERATION = {"list": "entities", "get_params": "params", "set_params": "params"}
+COMMAND_OF_OPERATION = {"list": "entities", "get_params": "params", "set_params": "params",
+                        "close_stream": "stream-states"}
 RST_MARKUP = re.compile(r"``|:[a-z]+:`")
 
 

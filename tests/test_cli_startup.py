@@ -22,7 +22,8 @@ print(json.dumps([code, [m for m in {heavy!r} if m in sys.modules]]))
 
 
 @pytest.mark.parametrize("args", [["--help"], ["bench", "--help"], ["spawn", "--help"],
-                                  ["load-model", "--help"]])
+                                  ["load-model", "--help"], ["view", "--help"],
+                                  ["stream-states", "--help"]])
 def test_help_imports_none_of_the_heavy_libraries(args: list[str]) -> None:
     done = subprocess.run([sys.executable, "-c", PROBE.format(args=args, heavy=HEAVY)],
                           capture_output=True, text=True, timeout=60, check=True)

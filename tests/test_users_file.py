@@ -142,8 +142,11 @@ def test_a_viewer_may_ask_only_read_only_operations() -> None:
     by_id = {rule["id"]: rule for rule in acl_rules("robot")}
     asked = {key for rule_id in ROLE_RULES["viewer"] for key in by_id[rule_id]["key_exprs"]
              if "query" in by_id[rule_id]["messages"] and by_id[rule_id]["flows"] == ["ingress"]}
-    assert asked == {"galton/robot/@ctl/status", "galton/robot/@ctl/capabilities"}
+    assert asked == {f"galton/robot/@ctl/{op}" for op in (
+        "status", "capabilities", "list", "list_worlds", "contacts", "stream_states",
+        "close_stream")}
     assert "client-token" not in ROLE_RULES["viewer"]
+    assert by_id["viewer-token"]["key_exprs"] == ["galton/_clients/viewer-$*"]
 
 
 def test_subjects_by_certificate_only_with_mutual_tls() -> None:

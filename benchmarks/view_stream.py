@@ -1,0 +1,136 @@
+"""The state stream and the live view: what they cost a playing world (issue 41).
+
+Usage: python benchmarks/view_stream.py [--seconds 10] [--rounds 3] [--engine mujoco]
+       [--json FILE]
+
+1. The view: 500 spheres resting on a plane, ``play(1.0)``, and the page of
+   ``galton-client view`` (LiveView, in this process, its viser server serving no browser)
+   following the world at 20 Hz for ``--seconds``. Reported: the achieved RTF (Δsim / Δwall
+   between the first and last telemetry samples, the daemon's clocks) and the page's draws
+   per second. Targets: RTF within ±2 % of 1.0, 20 draws a second.
+2. The stream's cost: 1,000 spheres resting on a plane, ``play(0)`` (as fast as the engine
+   goes); sim seconds per wall second without a stream and with a 60 Hz stream of all
+   1,000 bodies read by a client, in alternating windows (``--rounds`` of each), so that
+   the ratio is taken within one run. Target: the stream costs ≤ 2 %.
+"""
+
+from __future__ import annotations
+
+import argparse
+import socket
+import statistics
+import threading
+import time
+
+import numpy as np
+from common import daemon_client, machine, write_json
+
+from galton.client import Client, plane, spheres
+
+RADIUS = 0.05
+
+
+def _grid(count: int) -> np.ndarray:
+    side = int(np.ceil(np.sqrt(count)))
+    index = np.arange(count)
+    return np.stack([(index % side) * 3 * RADIUS, (index // side) * 3 * RADIUS,
+                     np.full(count, RADIUS)], axis=1)
+
+
+def _scene(sim: Client, count: int) -> None:
+    sim.spawn(plane(), spheres([f"b{i:04d}" for i in range(count)], _grid(count),
+                               radius=RADIUS, tags=["red"]))
+    sim.run_until(0.5)  # settled on the plane
+
+
+def _free_port() -> int:
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        return int(probe.getsockname()[1])
+
+
+def view_at_rtf_one(engine: str, seconds: float) -> dict[str, float]:
+    import viser
+
+    from galton.client.view.live import LiveView
+    with daemon_client(engine) as (daemon, sim):
+        _scene(sim, 500)
+        server = viser.ViserServer(host="127.0.0.1", port=_free_port(), verbose=False)
+        with Client(daemon.instance, daemon.endpoint) as client:
+            page = LiveView(client, server, rate=20.0, operator=False)
+            draws = [0]
+            drawing = page.live.draw
+
+            def counted() -> object:
+                sample = drawing()
+                draws[0] += sample is not None
+                return sample
+            page.live.draw = counted  # type: ignore[method-assign]
+            stop = threading.Event()
+            runner = threading.Thread(target=page.run, args=(stop,))
+            runner.start()
+            with sim.telemetry(timeout=5) as stream:
+                sim.play(1.0)
+                first = next(s for s in stream if s.state == "playing" and s.sim_time > 0.5)
+                drawn_before = draws[0]
+                for last in stream:
+                    if last.wall_time - first.wall_time >= seconds:
+                        break
+                drawn = draws[0] - drawn_before
+            sim.pause()
+            stop.set()
+            runner.join()
+            page.close()
+        server.stop()
+    wall = last.wall_time - first.wall_time
+    return {"achieved_rtf": (last.sim_time - first.sim_time) / wall,
+            "draws_per_s": drawn / wall, "seconds": wall}
+
+
+def _speed(sim: Client, seconds: float) -> float:
+    """Sim seconds per wall second over a window of a world playing flat out."""
+    start, started = sim.status().sim_time, time.monotonic()
+    threading.Event().wait(seconds)  # a measurement window, not a synchronisation
+    return (sim.status().sim_time - start) / (time.monotonic() - started)
+
+
+def stream_cost(engine: str, seconds: float, rounds: int) -> dict[str, float]:
+    without, with_stream, received = [], [], []
+    with daemon_client(engine) as (_, sim):
+        _scene(sim, 1000)
+        sim.play(0.0)
+        try:
+            for _ in range(rounds):
+                without.append(_speed(sim, seconds))
+                samples: list[object] = []
+                with sim.stream_states(rate=60.0, callback=samples.append):
+                    with_stream.append(_speed(sim, seconds))
+                received.append(len(samples) / seconds)
+        finally:
+            sim.pause()
+    base, streamed = statistics.median(without), statistics.median(with_stream)
+    return {"speed_without": base, "speed_with": streamed,
+            "cost_percent": 100 * (1 - streamed / base),
+            "samples_per_s": statistics.median(received)}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seconds", type=float, default=10.0)
+    parser.add_argument("--rounds", type=int, default=3)
+    parser.add_argument("--engine", default="mujoco")
+    parser.add_argument("--json")
+    args = parser.parse_args()
+    view = view_at_rtf_one(args.engine, args.seconds)
+    cost = stream_cost(args.engine, args.seconds, args.rounds)
+    print(f"# view and state stream on {machine()}, {args.engine}")
+    print(f"500 bodies at RTF 1.0 with the page at 20 Hz: achieved RTF "
+          f"{view['achieved_rtf']:.4f}, {view['draws_per_s']:.1f} draws/s")
+    print(f"1,000 bodies flat out: {cost['speed_without']:.3f} sim s/s without a stream, "
+          f"{cost['speed_with']:.3f} with 60 Hz ({cost['samples_per_s']:.1f} samples/s "
+          f"received): cost {cost['cost_percent']:.2f} %")
+    write_json(args.json, {"view": view, "stream_cost": cost, "engine": args.engine})
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,98 @@
+"""A real browser for the view's tests: Debian's headless Chromium (software WebGL),
+driven over the DevTools protocol, so that one page stays open and is photographed as often
+as a test asks (a ``--screenshot`` run opens a new page each time and guesses when the
+page is drawn)."""
+
+from __future__ import annotations
+
+import base64
+import io
+import json
+import re
+import shutil
+import subprocess
+import tempfile
+import time
+import urllib.request
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+from websockets.sync.client import ClientConnection, connect
+
+CHROMIUM = shutil.which("chromium-headless-shell")
+FLAGS = ("--no-sandbox", "--enable-unsafe-swiftshader", "--use-gl=angle",
+         "--use-angle=swiftshader", "--remote-debugging-port=0",
+         "--force-device-scale-factor=0.5")  # a quarter of the pixels: software GL is slow
+START_TIMEOUT_S = 60.0
+CALL_TIMEOUT_S = 150.0  # a screenshot waits for a frame: seconds on a loaded machine
+DEVTOOLS_LINE = re.compile(r"DevTools listening on (ws://\S+)")
+
+
+class Browser:
+    """One headless Chromium showing one page; ``close`` ends it."""
+
+    def __init__(self, url: str, width: int, height: int) -> None:
+        assert CHROMIUM is not None, "chromium-headless-shell is not installed"
+        self._profile = tempfile.TemporaryDirectory(prefix="galton-chromium-")
+        self._process = subprocess.Popen(
+            [CHROMIUM, *FLAGS, f"--window-size={width},{height}",
+             f"--user-data-dir={self._profile.name}", url],
+            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        self._page = connect(self._page_socket(), max_size=None)
+        self._ids = 0
+
+    def _page_socket(self) -> str:
+        """The DevTools address of the page, from the line Chromium prints when it starts."""
+        assert self._process.stderr is not None
+        for line in self._process.stderr:
+            found = DEVTOOLS_LINE.search(line)
+            if found:
+                port = found.group(1).split(":")[2].split("/")[0]
+                break
+        else:
+            raise RuntimeError("chromium-headless-shell ended without serving DevTools")
+        with urllib.request.urlopen(f"http://127.0.0.1:{port}/json/list", timeout=10) as r:
+            pages = [t for t in json.load(r) if t.get("type") == "page"]
+        return str(pages[0]["webSocketDebuggerUrl"])
+
+    def _call(self, socket: ClientConnection, method: str, **params: Any) -> dict[str, Any]:
+        self._ids += 1
+        socket.send(json.dumps({"id": self._ids, "method": method, "params": params}))
+        while True:
+            message = json.loads(socket.recv(timeout=CALL_TIMEOUT_S))
+            if message.get("id") == self._ids:
+                if "error" in message:
+                    raise RuntimeError(f"{method}: {message['error']}")
+                return dict(message.get("result", {}))
+
+    def screenshot(self) -> np.ndarray:
+        """The page as drawn now: RGB, height x width x 3."""
+        from PIL import Image
+        result = self._call(self._page, "Page.captureScreenshot", format="png")
+        image = Image.open(io.BytesIO(base64.b64decode(result["data"])))
+        return np.asarray(image.convert("RGB")).astype(int)
+
+    def wait_for(self, drawn: Callable[[np.ndarray], bool], timeout: float) -> np.ndarray:
+        """Screenshots until one satisfies ``drawn`` (the page has drawn what is awaited);
+        AssertionError with the last one's look after ``timeout`` seconds."""
+        deadline = time.monotonic() + timeout
+        while True:
+            image = self.screenshot()
+            if drawn(image) or time.monotonic() > deadline:
+                assert drawn(image), f"the page did not draw what was awaited in {timeout} s"
+                return image
+
+    def close(self) -> None:
+        self._page.close()
+        self._process.terminate()
+        self._process.wait(30)
+        assert self._process.stderr is not None
+        self._process.stderr.close()
+        self._profile.cleanup()
+
+    def __enter__(self) -> Browser:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
