@@ -115,6 +115,9 @@ class MujocoEngine(Engine):
 
     name: ClassVar[str] = "mujoco"
     releases_gil_while_stepping: ClassVar[bool] = True  # mj_step runs without the GIL
+    # What the last step left, frozen before an edit until the next step (a class default:
+    # a clone is made without __init__).
+    _observed: observing.Observed | None = None
 
     def __init__(self) -> None:
         ms.route_warnings()
@@ -125,7 +128,6 @@ class MujocoEngine(Engine):
         self._workers = 0
         self._steps_since_look = 0
         self._cameras: rendering.CameraRig | None = None  # made by the first render
-        self._observed: observing.Observed | None = None  # frozen until the next step
         self._build_empty()
 
     # -- compile & index ----------------------------------------------------------------
