@@ -16,6 +16,7 @@ from typing import Any
 import msgpack
 import numpy as np
 
+from galton.daemon import world_snapshot_checks as checks
 from galton.daemon.engine import Engine
 from galton.daemon.limits import Limits
 from galton.daemon.world import Entity, World
@@ -124,6 +125,7 @@ def world_from(data: dict[str, Any], make_engine: Callable[[str], Engine], name:
         engine.restore(state)
         world = World(engine, name, limits)
         _restore_registry(world, data)
+        checks.check_agrees(world)
     except Exception:
         engine.close()
         raise
@@ -142,6 +144,7 @@ def _restore_registry(world: World, data: dict[str, Any]) -> None:
     except (KeyError, TypeError, ValueError, AttributeError) as exc:
         raise InvalidArgumentError(f"the snapshot's registry is malformed: {brief(exc)}"
                                    ) from exc
+    checks.check_infos(infos)
     if len(poses) != len(infos) or len(twists) != len(infos):
         raise InvalidArgumentError("the snapshot's registry and initial states disagree")
     world.entities = {info.name: Entity(info, poses[i].copy(), twists[i].copy())

@@ -350,6 +350,9 @@ class MujocoEngine(Engine):
     def restore(self, data: dict[str, Any]) -> None:
         snapshots.restore(self, data)
 
+    def entity_names(self) -> list[str]:
+        return list(self._entities)
+
     def clone(self) -> MujocoEngine:
         """A copy of the compiled world, no MJCF and no compile (``mujoco_clone``): it goes
         on exactly as this one, which it leaves untouched."""
