@@ -192,7 +192,8 @@ class SimLoop:
         """Answer requests until the next step is due, waiting up to ``timeout`` s for the
         first (for ever when infinite: nothing due). With steps due now, requests get
         REQUEST_SLICE_S, and at least one is answered."""
-        deadline = time.monotonic() + max(timeout, REQUEST_SLICE_S)
+        started = time.monotonic()
+        deadline = started + max(timeout, REQUEST_SLICE_S)
         try:
             if timeout <= 0:
                 item = self.inbox.get_nowait()
@@ -202,7 +203,10 @@ class SimLoop:
             return
         while item is not None:
             self._take(item)
-            if time.monotonic() >= deadline:
+            now = time.monotonic()
+            # A step job a request started is due now: back to the physics after the slice
+            # (else a crowd of step(1) callers is refused until the next telemetry).
+            if now >= deadline or (self.job is not None and now >= started + REQUEST_SLICE_S):
                 return
             try:
                 item = self.inbox.get_nowait()
