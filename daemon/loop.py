@@ -103,6 +103,7 @@ class SimLoop:
         self.checkpoint_period = 10.0
         self._next_checkpoint = time.monotonic() + self.checkpoint_period
         self.slots = SnapshotSlots(limits)
+        self.snapshot_key: bytes | None = None  # galton-daemon --snapshot-key: blobs' seal
         self._step_cost = 1e-4
         self._last_verify = 0.0
         self.telemetry_seq = 0

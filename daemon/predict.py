@@ -81,7 +81,8 @@ def predict(loop: SimLoop, call: Call, args: dict[str, Any]) -> None:
         source.verify()
         copy = clone_of(source, name, loop.limits)
     else:
-        data = decode(loop.slots.get(check_type(slot, str, "predict.slot")).blob, loop.limits)
+        blob = loop.slots.get(check_type(slot, str, "predict.slot")).blob
+        data = decode(blob, loop.limits, loop.snapshot_key)
         copy = world_from(data, loop.engine_factory, name, loop.limits)
     try:
         job = _job(loop, call, copy, horizon, args)
