@@ -10,7 +10,7 @@ from galton.client import Client, EmbeddedDaemon
 from galton.client.fuzz import run_campaign
 
 SHORT_CAMPAIGN = 1500
-RESEALED = 15  # re-sealed corrupt snapshots after the requests (issue 35)
+RESEALED = 10  # re-sealed corrupt snapshots after the requests (issue 35)
 
 
 @pytest.mark.parametrize("engine", ["mujoco", "pybullet"])

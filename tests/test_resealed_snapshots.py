@@ -15,7 +15,7 @@ from galton.client import Client, plane, spheres
 from galton.client.fuzz_snapshots import open_blob, reseal, resealed_campaign
 from galton.protocol import InvalidArgumentError
 
-CAMPAIGN = 40
+CAMPAIGN = 20
 
 
 def _scene(sim: Client) -> bytes:
