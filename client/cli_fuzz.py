@@ -20,6 +20,8 @@ def fuzz(
     ctx: typer.Context,
     requests: Annotated[int, typer.Option(help="Requests to send.", min=1)] = 2000,
     seed: Annotated[int, typer.Option(help="Seed of the request generator.")] = 0,
+    resealed: Annotated[int, typer.Option(
+        help="Re-sealed corrupt snapshots to restore after the requests.", min=0)] = 100,
     engine: Annotated[str | None, typer.Option(
         help="Fuzz a fresh embedded daemon of this engine instead of --connect/--instance.")
     ] = None,
@@ -44,7 +46,8 @@ def fuzz(
             progress = stack.enter_context(Progress(console=console, disable=as_json))
             task = progress.add_task(f"fuzz (seed {seed})", total=requests)
             report = run_campaign(client, requests, seed,
-                                  lambda done: progress.update(task, completed=done))
+                                  lambda done: progress.update(task, completed=done),
+                                  resealed=resealed)
             if daemon is not None and daemon.process is not None and \
                     daemon.process.poll() is not None:
                 report.missing_replies.append(f"the daemon exited ({daemon.process.poll()})")
@@ -63,7 +66,8 @@ def _render(report: FuzzReport) -> None:
                   f"{codes}")
     for title, found in (("missing replies", report.missing_replies),
                          ("untyped replies", report.untyped_replies),
-                         ("side effects of rejected requests", report.side_effects)):
+                         ("side effects of rejected requests", report.side_effects),
+                         ("bad restores of re-sealed snapshots", report.bad_restores)):
         console.print(f"{title}: {len(found)}")
         for line in found[:10]:
             console.print(f"  {line}", markup=False)

@@ -24,6 +24,7 @@ import msgpack
 import numpy as np
 
 from galton.client.fuzz_requests import RequestMaker
+from galton.client.fuzz_snapshots import resealed_campaign
 from galton.client.sdk import Client
 from galton.protocol import GaltonError, PhysicsError, ResultCode, decode_reply
 from galton.protocol.operations import OPERATIONS
@@ -42,11 +43,14 @@ class FuzzReport:
     missing_replies: list[str] = field(default_factory=list)
     untyped_replies: list[str] = field(default_factory=list)
     side_effects: list[str] = field(default_factory=list)
+    # Re-sealed corrupt snapshots refused yet applied, or accepted inconsistent (fuzz_snapshots)
+    bad_restores: list[str] = field(default_factory=list)
     seconds: float = 0.0
 
     @property
     def ok(self) -> bool:
-        return not (self.missing_replies or self.untyped_replies or self.side_effects)
+        return not (self.missing_replies or self.untyped_replies or self.side_effects
+                    or self.bad_restores)
 
     def to_dict(self) -> dict[str, Any]:
         return {"seed": self.seed, "requests": self.requests, "codes": dict(self.codes),
@@ -55,7 +59,8 @@ class FuzzReport:
                 "untyped_replies": self.untyped_replies[:20],
                 "untyped_count": len(self.untyped_replies),
                 "side_effects": self.side_effects[:20],
-                "side_effect_count": len(self.side_effects), "seconds": self.seconds, "ok": self.ok}
+                "side_effect_count": len(self.side_effects),
+                "bad_restores": self.bad_restores[:20], "seconds": self.seconds, "ok": self.ok}
 
 
 @dataclass
@@ -96,8 +101,10 @@ def send(client: Client, key_op: str, payload: bytes, timeout: float) -> list[by
 
 def run_campaign(client: Client, requests: int, seed: int = 0,
                  progress: Callable[[int], None] | None = None,
-                 timeout: float = REPLY_TIMEOUT_S) -> FuzzReport:
-    """Send ``requests`` fuzz requests one after the other and check each (see above)."""
+                 timeout: float = REPLY_TIMEOUT_S, resealed: int = 0) -> FuzzReport:
+    """Send ``requests`` fuzz requests one after the other and check each (see above);
+    then restore ``resealed`` re-sealed corrupt snapshots of the world it left
+    (``fuzz_snapshots``)."""
     report = FuzzReport(seed=seed)
     maker = RequestMaker(np.random.default_rng(seed))
     started = time.monotonic()
@@ -116,6 +123,11 @@ def run_campaign(client: Client, requests: int, seed: int = 0,
         report.requests += 1
         if progress is not None:
             progress(index + 1)
+    if resealed:
+        client.call("pause")
+        client.call("reset", {"scope": "state"})  # a faulted world takes no snapshot
+        report.bad_restores = resealed_campaign(client, resealed, maker.rng,
+                                                lambda: look(client).digest)
     client.call("status")  # still serving
     report.seconds = time.monotonic() - started
     return report

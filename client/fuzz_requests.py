@@ -123,7 +123,14 @@ def deep(depth: int) -> Any:
     return value
 
 
+# Numbers at the ends of float64: a horizon of 5e-324 s or 1e308 s once raised Python's own
+# errors inside the daemon (issue 35).
+EXTREME_NUMBERS = (5e-324, 1e-300, 1e308, -1e308)
+
+
 def _number(maker: RequestMaker, arg: Arg) -> Any:
+    if maker.chance(0.05):
+        return maker.pick(EXTREME_NUMBERS)
     return float(maker.rng.uniform(0, 3))
 
 

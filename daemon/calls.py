@@ -66,6 +66,7 @@ class StepJob:
     sampler: Sampler | None = None  # a prediction's sampling
     step_cost: float = 1e-4  # seconds per step, for chunks of a side world's steps
     scratch: bool = False  # its world is a prediction's copy, closed when the job ends
+    source: World | None = None  # the world a prediction copied: pausing it ends the job
 
     @property
     def done(self) -> int:

@@ -15,6 +15,10 @@ from galton.protocol.errors import brief
 from galton.protocol.model import check_name, check_type, finite_number, integer_in
 from galton.protocol.vocabulary import check_fields
 
+# A frustum every renderer draws: a nearer plane (MuJoCo fails on 1e-300), or a far plane
+# farther than this many near planes, leaves a depth buffer with no usable precision.
+MIN_NEAR = 1e-6
+MAX_DEPTH_RATIO = 1e9
 CAMERA_FIELDS = ("eye", "target", "up", "fov", "width", "height", "near", "far", "outputs",
                  "attach")
 MAX_SIDE = 8192  # pixels along one side of an image
@@ -66,8 +70,9 @@ def parse_camera(raw: Any, where: str) -> Camera:
     scale = float(np.linalg.norm(view)) * float(np.linalg.norm(up))
     if scale == 0.0 or float(np.linalg.norm(np.cross(view, up))) < 1e-9 * scale:
         raise InvalidArgumentError(f"{where}.up is zero or along the view (eye to target)")
-    near = finite_number(values["near"], f"{where}.near", low=0.0, low_open=True)
-    far = finite_number(values["far"], f"{where}.far", low=near, low_open=True)
+    near = finite_number(values["near"], f"{where}.near", low=MIN_NEAR)
+    far = finite_number(values["far"], f"{where}.far", low=near, low_open=True,
+                        high=near * MAX_DEPTH_RATIO)
     outputs = check_type(values["outputs"], (list, tuple), f"{where}.outputs")
     if not outputs or any(o not in IMAGE_OUTPUTS for o in outputs):
         raise InvalidArgumentError(f"{where}.outputs must be a non-empty list among "

@@ -29,9 +29,10 @@ def checkpoint_path(state_dir: Path, instance: str) -> Path:
     return state_dir / f"{instance}.snapshot"
 
 
-def save(world: World, path: Path) -> int:
-    """Write the world's snapshot atomically; returns its size in bytes."""
-    blob = encode(snapshot_of(world, canonical=False))
+def save(world: World, path: Path, key: bytes | None = None) -> int:
+    """Write the world's snapshot atomically (sealed with ``key``, --snapshot-key);
+    returns its size in bytes."""
+    blob = encode(snapshot_of(world, canonical=False), key)
     temporary = path.with_name(path.name + ".tmp")
     temporary.write_bytes(blob)
     os.replace(temporary, path)
@@ -39,12 +40,13 @@ def save(world: World, path: Path) -> int:
 
 
 def load(path: Path, make_engine: Callable[[str], Engine], name: str,
-         limits: Limits) -> World | None:
+         limits: Limits, key: bytes | None = None) -> World | None:
     """The world a checkpoint holds, or None (no checkpoint, or one set aside as bad)."""
     if not path.is_file():
         return None
     try:
-        return world_from(decode(path.read_bytes(), limits), make_engine, name, limits)
+        return world_from(decode(path.read_bytes(), limits, key), make_engine, name,
+                          limits)
     except (GaltonError, OSError) as error:
         bad = path.with_name(path.name + ".bad")
         os.replace(path, bad)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import json
 import logging
 from pathlib import Path
@@ -17,6 +18,8 @@ from galton.daemon.users import User, load_users, readable_by_others
 from galton.daemon.zenoh_merge import DEFAULT_LISTEN, DEFAULT_TLS_LISTEN
 from galton.daemon.zenoh_security import TlsFiles
 from galton.protocol import GaltonError, InvalidArgumentError, validate_instance_name
+
+MIN_SNAPSHOT_KEY_BYTES = 16
 
 app = typer.Typer(add_completion=False, help=__doc__)
 
@@ -131,6 +134,10 @@ def serve(
     ros2_mirror: Annotated[list[str] | None, typer.Option(
         help="MODEL=TOPIC (repeatable): with --ros2, set the loaded model's joints from "
              "each sensor_msgs/JointState on TOPIC, e.g. arm=/joint_states.")] = None,
+    snapshot_key: Annotated[Path | None, typer.Option(
+        help="A file of secret bytes (16 at least) that seals snapshot blobs: the daemon "
+             "then restores only blobs a daemon with the same file sealed.",
+        dir_okay=False)] = None,
     log_level: Annotated[str, typer.Option(help="Logging level.")] = "warning",
 ) -> None:
     """Serve one world on ENGINE as INSTANCE until SIGINT or SIGTERM."""
@@ -146,7 +153,8 @@ def serve(
             checkpoint_period_s=checkpoint_every, zmq=zmq or [],
             users=_users(users), zmq_key=zmq_key,
             tls=_tls_files(tls_cert, tls_key, tls_ca),
-            ros2=_ros2(ros2, ros_domain_id, ros_namespace, ros2_mirror or []))
+            ros2=_ros2(ros2, ros_domain_id, ros_namespace, ros2_mirror or []),
+            snapshot_key=_snapshot_key(snapshot_key))
         code = run_daemon(options, announce=lambda line: print(line, flush=True))
     except GaltonError as error:
         typer.echo(f"galton-daemon: {error}", err=True)
@@ -155,6 +163,20 @@ def serve(
         typer.echo(f"galton-daemon: zenoh could not start: {error}", err=True)
         raise typer.Exit(2) from error
     raise typer.Exit(code)
+
+
+def _snapshot_key(path: Path | None) -> bytes | None:
+    """The --snapshot-key file's bytes, hashed to a BLAKE2b key (any length of 16 up)."""
+    if path is None:
+        return None
+    try:
+        secret = path.read_bytes()
+    except OSError as error:
+        raise InvalidArgumentError(f"--snapshot-key {path}: {error.strerror}") from error
+    if len(secret) < MIN_SNAPSHOT_KEY_BYTES:
+        raise InvalidArgumentError(f"--snapshot-key {path} holds {len(secret)} bytes; give at "
+                                   f"least {MIN_SNAPSHOT_KEY_BYTES} secret ones")
+    return hashlib.blake2b(secret, digest_size=32).digest()
 
 
 def main() -> None:

@@ -268,6 +268,11 @@ class Engine(ABC):
         forces (n,) N, penetrations (n,) m."""
         raise self._unsupported("contact queries")
 
+    def entity_names(self) -> list[str] | None:
+        """Every entity the engine holds (bodies, model roots, links), for the check of a
+        restored world against its registry; None where the engine cannot say."""
+        return None
+
     def clone(self) -> Engine:
         """A new engine holding a copy of this world, in this process, for a fork or a
         prediction: as ``restore(snapshot(canonical=False))`` into a fresh engine (this

@@ -59,6 +59,9 @@ VERIFY_PERIOD_S = 0.05  # the state is checked finite at least this often while 
 # clock), requests get at most this much of the physics thread between two chunks of steps
 # (a chunk is CHUNK_WALL_S), and always at least one request, so neither side starves.
 REQUEST_SLICE_S = 0.001
+# A playing world behind its clock runs chunks of due steps back to back for up to this
+# long before the next request (see SimLoop._play_due).
+CATCH_UP_S = 0.05
 
 
 class SimLoop:
@@ -102,6 +105,7 @@ class SimLoop:
         self.checkpoint_period = 10.0
         self._next_checkpoint = time.monotonic() + self.checkpoint_period
         self.slots = SnapshotSlots(limits)
+        self.snapshot_key: bytes | None = None  # galton-daemon --snapshot-key: blobs' seal
         self._step_cost = 1e-4
         self._last_verify = 0.0
         self.telemetry_seq = 0
@@ -193,7 +197,8 @@ class SimLoop:
         """Answer requests until the next step is due, waiting up to ``timeout`` s for the
         first (for ever when infinite: nothing due). With steps due now, requests get
         REQUEST_SLICE_S, and at least one is answered."""
-        deadline = time.monotonic() + max(timeout, REQUEST_SLICE_S)
+        started = time.monotonic()
+        deadline = started + max(timeout, REQUEST_SLICE_S)
         try:
             if timeout <= 0:
                 item = self.inbox.get_nowait()
@@ -203,7 +208,10 @@ class SimLoop:
             return
         while item is not None:
             self._take(item)
-            if time.monotonic() >= deadline:
+            now = time.monotonic()
+            # A step job a request started is due now: back to the physics after the slice
+            # (else a crowd of step(1) callers is refused until the next telemetry).
+            if now >= deadline or (self.job is not None and now >= started + REQUEST_SLICE_S):
                 return
             try:
                 item = self.inbox.get_nowait()
@@ -344,13 +352,25 @@ class SimLoop:
             self._run_steps(min(job.steps_to_next_check(), self._chunk_size()))
             return
         if self.state == SimState.PLAYING:
-            due = self.pacer.steps_due(time.monotonic(), self.world.sim_time,
-                                       self.world.engine.timestep)
+            self._play_due()
+        if job is not None and self.job is job:
+            side_jobs.run_chunk(self, job)
+
+    def _play_due(self) -> None:
+        """The steps the playing clock owes now, chunk after chunk until it has caught up
+        (for at most CATCH_UP_S): a request that held the thread for 20 ms (a render) is
+        followed by all the steps it delayed, not by one chunk, or a steady load of such
+        requests would slow the clock (issue 35, item 9). At RTF 0, one chunk."""
+        started = time.monotonic()
+        dt = self.world.engine.timestep
+        while self.state == SimState.PLAYING:
+            now = time.monotonic()
+            due = self.pacer.steps_due(now, self.world.sim_time, dt)
             count = self._chunk_size() if due < 0 else min(due, self._chunk_size())
             if count:
                 self._run_steps(count)
-        if job is not None and self.job is job:
-            side_jobs.run_chunk(self, job)
+            if due < 0 or count == due or now - started >= CATCH_UP_S:
+                return
 
     def _chunk_size(self) -> int:
         return max(1, min(10_000, int(CHUNK_WALL_S / self._step_cost)))

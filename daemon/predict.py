@@ -12,9 +12,17 @@ import numpy as np
 
 from galton.daemon import ops, ops_joints
 from galton.daemon.calls import Call, StepJob
+from galton.daemon.limits import MIB
 from galton.daemon.world import World
 from galton.daemon.world_snapshot import clone_of, decode, world_from
-from galton.protocol import IncorrectStateError, InvalidArgumentError, OperationFailedError
+from galton.protocol import (
+    POSE_WIDTH,
+    TWIST_WIDTH,
+    IncorrectStateError,
+    InvalidArgumentError,
+    OperationFailedError,
+    ResourceLimitError,
+)
 from galton.protocol.arrays import pack_f64
 from galton.protocol.model import check_names, check_type, finite_number
 
@@ -73,36 +81,68 @@ def predict(loop: SimLoop, call: Call, args: dict[str, Any]) -> None:
         source.verify()
         copy = clone_of(source, name, loop.limits)
     else:
-        data = decode(loop.slots.get(check_type(slot, str, "predict.slot")).blob, loop.limits)
+        blob = loop.slots.get(check_type(slot, str, "predict.slot")).blob
+        data = decode(blob, loop.limits, loop.snapshot_key)
         copy = world_from(data, loop.engine_factory, name, loop.limits)
     try:
         job = _job(loop, call, copy, horizon, args)
     except Exception:
         copy.engine.close()
         raise
+    job.source = source
     loop.job = job
 
 
 def _job(loop: SimLoop, call: Call, copy: World, horizon: float,
          args: dict[str, Any]) -> StepJob:
     dt = copy.engine.timestep
-    steps = math.ceil(horizon / dt - 1e-9)
-    if steps > loop.limits.max_steps:
-        raise InvalidArgumentError(f"predict.horizon {horizon:g} s is {steps} steps; at most "
-                                   f"{loop.limits.max_steps}", {"max_steps": loop.limits.max_steps})
+    steps = horizon_steps(horizon, dt, loop.limits.max_steps)
     every_s = args.get("every")
-    every = 1 if every_s is None else max(1, round(finite_number(
-        every_s, "predict.every", low=0.0, low_open=True) / dt))
+    every = 1 if every_s is None else sample_period(
+        finite_number(every_s, "predict.every", low=0.0, low_open=True), dt, steps)
     read = _names(args, "read")
     joints = _names(args, "read_joints")
     if read is not None:
         copy.require_known(read)
     if joints is not None:
         copy.joints.require_scalar(joints, "predict.read_joints")
+    _require_reply_room(loop.limits.max_reply_bytes, steps // every + 1,
+                        0 if read is None else len(read), 0 if joints is None else len(joints))
     _apply_changes(copy, args)
     sampler = PredictSampler(min(every, steps), read, joints)
     sampler.take(copy)
     return StepJob(call, steps, steps, world=copy, sampler=sampler, scratch=True)
+
+
+def _require_reply_room(limit: int, samples: int, bodies: int, joints: int) -> None:
+    """Refuse, before a step, a prediction whose reply would pass ``max_reply_bytes``:
+    each sample is its time, a pose and a twist per body, two values per joint."""
+    size = samples * 8 * (1 + bodies * (POSE_WIDTH + TWIST_WIDTH) + joints * 2)
+    if size > limit:
+        raise ResourceLimitError(
+            f"this prediction's reply would carry {samples} samples, about {size / MIB:.0f} "
+            f"MiB; at most {limit / MIB:.0f} MiB (sample less often with 'every', read "
+            "fewer bodies, or galton-daemon --limit max_reply_bytes=N)",
+            {"limit": "max_reply_bytes", "max": limit, "size": size})
+
+
+def horizon_steps(horizon: float, dt: float, max_steps: int) -> int:
+    """A horizon as whole steps (rounded up), refused when under one step or over the limit
+    (compared as floats first: an absurd horizon must not overflow the rounding)."""
+    exact = horizon / dt - 1e-9
+    if exact > max_steps:
+        raise InvalidArgumentError(f"predict.horizon {horizon:g} s is {exact:.3g} steps; at "
+                                   f"most {max_steps}", {"max_steps": max_steps})
+    if exact <= 0:
+        raise InvalidArgumentError(f"predict.horizon {horizon:g} s is less than one step of "
+                                   f"{dt:g} s")
+    return math.ceil(exact)
+
+
+def sample_period(every_s: float, dt: float, steps: int) -> int:
+    """``every`` seconds as whole steps: at least one, at most the whole horizon."""
+    exact = every_s / dt
+    return steps if exact >= steps else max(1, round(exact))
 
 
 def _names(args: dict[str, Any], key: str) -> list[str] | None:

@@ -72,6 +72,7 @@ class DaemonOptions:
     zmq_key: Path | None = None  # --zmq-key: the ZeroMQ front's CURVE key pair
     tls: TlsFiles | None = None  # --tls-cert/--tls-key/--tls-ca
     ros2: Ros2Options | None = None  # --ros2: the ROS 2 front (daemon/ros2, docs/ROS2.md)
+    snapshot_key: bytes | None = None  # --snapshot-key: the secret that seals snapshot blobs
 
 
 def zenoh_config(options: DaemonOptions) -> zenoh.Config:
@@ -116,6 +117,7 @@ class Daemon:
         self.loop = SimLoop(self._first_world(engine), options.instance,
                             self._publish_telemetry, self._publish_event,
                             options.telemetry_rate_hz, create_engine, options.limits)
+        self.loop.snapshot_key = options.snapshot_key
         self.front = _zmq_front(options, self.loop)
         self.loop.streams.publish = self._publish_states
         self.loop.client_alive = self._client_alive
@@ -134,7 +136,8 @@ class Daemon:
         options = self.options
         if options.state_dir is not None:
             path = checkpoint.checkpoint_path(options.state_dir, options.instance)
-            restored = checkpoint.load(path, create_engine, "default", options.limits)
+            restored = checkpoint.load(path, create_engine, "default", options.limits,
+                                       options.snapshot_key)
             if restored is not None:
                 engine.close()
                 log.warning("restored the world of %s: %d entities at step %d", path,
@@ -148,7 +151,7 @@ class Daemon:
             return
         path = checkpoint.checkpoint_path(self.options.state_dir, self.options.instance)
         try:
-            checkpoint.save(self.loop.world, path)
+            checkpoint.save(self.loop.world, path, self.options.snapshot_key)
         except Exception:
             log.exception("could not save a checkpoint to %s", path)
 

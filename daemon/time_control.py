@@ -241,8 +241,10 @@ def client_gone(loop: SimLoop, client: str) -> None:
 
 
 def _cancel_job_on(loop: SimLoop, world: World, reason: str) -> None:
-    """Cancel the running step request if it steps this world."""
-    if loop.job is not None and (loop.job.world or loop.world) is world:
+    """Cancel the running step request if it steps this world, or predicts from it (a
+    prediction is long work on the world's behalf: pause, stop and reset end it too)."""
+    job = loop.job
+    if job is not None and world in ((job.world or loop.world), job.source):
         cancel_job(loop, reason)
 
 

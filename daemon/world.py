@@ -10,7 +10,7 @@ import contextlib
 import dataclasses
 import fnmatch
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -127,6 +127,8 @@ class World:
         if len(set(names)) != len(names):
             raise InvalidArgumentError("the request names the same entity in two groups")
         self.require_new(names)
+        for group in (g for g in groups if not g.static):  # a static body cannot diverge
+            check_state_values(self.limits, group.poses, group.twists, "spawn")
         self.engine.spawn(groups)
         for group in groups:
             twists = group.twists if group.twists is not None else np.zeros(
@@ -200,15 +202,41 @@ class World:
             if static:
                 raise InvalidArgumentError(
                     f"entity {static[0]!r} is static: it cannot be given a non-zero twist")
+        moving = np.array([not self.entities[n].info.static for n in names], dtype=bool)
+        check_state_values(self.limits, None if poses is None else poses[moving],
+                           None if twists is None else twists[moving], "set_states")
+        if self.faulted:  # nothing is read from it until a reset
+            self.engine.set_states(names, poses, twists)
+            return
+        self.verify()  # steps not yet checked are checked first: their fault is theirs
+        old_poses, old_twists = self.engine.get_states(names)
         self.engine.set_states(names, poses, twists)
-        self.teleported = True  # checked before anything reads or steps from it
+        self._keep_or_undo("set_states", lambda: self.engine.set_states(
+            names, None if poses is None else old_poses, None if twists is None else old_twists))
 
     def set_joint_states(self, names: Sequence[str], positions: np.ndarray,
                          velocities: np.ndarray | None) -> None:
-        """Set checked 1-DOF joints' positions (and velocities) of a valid world."""
-        self.require_valid()
+        """Set checked 1-DOF joints' positions (and velocities) of a valid world; a state
+        beyond the world's limits is refused and put back (never served, never faulting)."""
+        self.verify()
+        if velocities is not None:
+            check_state_values(self.limits, None, np.repeat(velocities[:, None], 6, axis=1),
+                               "set_joint_states.velocities")
+        old_positions, old_velocities, _ = self.engine.get_joint_states(names)
         self.engine.set_joint_states(names, positions, velocities)
-        self.teleported = True  # checked before anything reads or steps from it
+        self._keep_or_undo("set_joint_states", lambda: self.engine.set_joint_states(
+            names, old_positions, old_velocities))
+
+    def _keep_or_undo(self, where: str, undo: Callable[[], None]) -> None:
+        """Keep the states a request just set when they are within the world's limits;
+        else put the old ones back and refuse: a read never faults the world."""
+        if self.engine.state_within(self.limits.max_position, self.limits.max_speed):
+            return
+        undo()
+        raise InvalidArgumentError(
+            f"{where}: the states it sets put a body beyond {self.limits.max_position:g} m "
+            f"or {self.limits.max_speed:g} m/s (the world's limits); nothing was changed",
+            {"max_position": self.limits.max_position, "max_speed": self.limits.max_speed})
 
     def update(self, names: Sequence[str], props: BodyProperties) -> None:
         self.require_known(names)
@@ -323,6 +351,24 @@ def check_scope(value: Any) -> str:
             f"reset.scope {brief(scope)} is not one of {', '.join(RESET_SCOPES)}"
             f"{did_you_mean(scope[:64], RESET_SCOPES)}")
     return scope
+
+
+def check_state_values(limits: Limits, poses: np.ndarray | None, twists: np.ndarray | None,
+                       where: str) -> None:
+    """Refuse, up front, a pose beyond ``max_position`` or a twist component beyond
+    ``max_speed``: a world set there would read as diverged."""
+    for values, limit, what, unit in ((poses, limits.max_position, "position", "m"),
+                                      (twists, limits.max_speed, "speed", "m/s or rad/s")):
+        if values is None:
+            continue
+        part = values[:, :3] if what == "position" else values
+        beyond = np.abs(part) > limit
+        if beyond.any():
+            row, col = np.argwhere(beyond)[0].tolist()
+            raise InvalidArgumentError(
+                f"{where}: {float(part[row, col]):g} (row {row}) is beyond the world's "
+                f"{what} limit of {limit:g} {unit}: it would read as diverged",
+                {"limit": f"max_{what}", "max": limit})
 
 
 def canonical_quaternions(poses: np.ndarray) -> np.ndarray:

@@ -16,6 +16,7 @@ from typing import Any
 import msgpack
 import numpy as np
 
+from galton.daemon import world_snapshot_checks as checks
 from galton.daemon.engine import Engine
 from galton.daemon.limits import Limits
 from galton.daemon.world import Entity, World
@@ -69,34 +70,52 @@ def registry_of(world: World) -> dict[str, Any]:
     }
 
 
-def encode(data: dict[str, Any]) -> bytes:
+def encode(data: dict[str, Any], key: bytes | None = None) -> bytes:
     """The blob: the snapshot in msgpack, wrapped with its BLAKE2b digest, so that a blob
     damaged anywhere (a flipped bit in a number included) is refused, not restored as
-    another state."""
+    another state. With ``key`` (galton-daemon --snapshot-key) the digest is keyed: only a
+    daemon holding the key can seal a blob another one accepts."""
     body = msgpack.packb(data, use_bin_type=True)
-    blob: bytes = msgpack.packb({"galton_snapshot": FORMAT, "blake2b": _digest(body),
+    seal = "blake2b" if key is None else "keyed_blake2b"
+    blob: bytes = msgpack.packb({"galton_snapshot": FORMAT, seal: _digest(body, key),
                                  "body": body}, use_bin_type=True)
     return blob
 
 
-def _digest(body: bytes) -> bytes:
-    return hashlib.blake2b(body, digest_size=32).digest()
+def _digest(body: bytes, key: bytes | None = None) -> bytes:
+    return hashlib.blake2b(body, digest_size=32, key=key or b"").digest()
 
 
-def decode(blob: Any, limits: Limits) -> dict[str, Any]:
-    """A snapshot blob's data, or InvalidArgumentError saying why it is not one."""
+def decode(blob: Any, limits: Limits, key: bytes | None = None) -> dict[str, Any]:
+    """A snapshot blob's data, or InvalidArgumentError saying why it is not one (``key``:
+    the daemon's --snapshot-key; blobs must then be sealed with it)."""
     if not isinstance(blob, bytes | bytearray):
         raise InvalidArgumentError(f"restore.blob must be msgpack bin, got {brief(blob)}")
     outer = _unpack(bytes(blob), limits)
     if not isinstance(outer, dict) or outer.get("galton_snapshot") != FORMAT:
         raise InvalidArgumentError(f"restore.blob is not a snapshot of format {FORMAT}")
-    body = outer.get("body")
-    if not isinstance(body, bytes) or outer.get("blake2b") != _digest(body):
-        raise InvalidArgumentError("restore.blob is corrupt: its digest does not match")
+    body = _sealed_body(outer, key)
     data = _unpack(body, limits)
     if not isinstance(data, dict) or data.get("format") != FORMAT:
         raise InvalidArgumentError(f"restore.blob holds no snapshot of format {FORMAT}")
     return data
+
+
+def _sealed_body(outer: dict[Any, Any], key: bytes | None) -> bytes:
+    """The blob's body once its seal matches (keyed with this daemon's key, if it has one)."""
+    body = outer.get("body")
+    keyed = "keyed_blake2b" in outer
+    if key is not None and not keyed:
+        raise InvalidArgumentError("restore.blob is not sealed with this daemon's "
+                                   "--snapshot-key: it takes only blobs its key sealed")
+    if key is None and keyed:
+        raise InvalidArgumentError("restore.blob is sealed with a --snapshot-key; this daemon "
+                                   "has none (start it with the same key)")
+    seal = outer.get("keyed_blake2b" if keyed else "blake2b")
+    if not isinstance(body, bytes) or seal != _digest(body, key):
+        raise InvalidArgumentError("restore.blob is corrupt, or sealed with another key: its "
+                                   "digest does not match")
+    return body
 
 
 def _unpack(raw: bytes, limits: Limits) -> Any:
@@ -124,6 +143,7 @@ def world_from(data: dict[str, Any], make_engine: Callable[[str], Engine], name:
         engine.restore(state)
         world = World(engine, name, limits)
         _restore_registry(world, data)
+        checks.check_agrees(world)
     except Exception:
         engine.close()
         raise
@@ -142,6 +162,7 @@ def _restore_registry(world: World, data: dict[str, Any]) -> None:
     except (KeyError, TypeError, ValueError, AttributeError) as exc:
         raise InvalidArgumentError(f"the snapshot's registry is malformed: {brief(exc)}"
                                    ) from exc
+    checks.check_infos(infos)
     if len(poses) != len(infos) or len(twists) != len(infos):
         raise InvalidArgumentError("the snapshot's registry and initial states disagree")
     world.entities = {info.name: Entity(info, poses[i].copy(), twists[i].copy())

@@ -59,9 +59,19 @@ class WrenchSchedule:
             self.clear(engine, ended)
 
 
+# A duration longer than this many steps is refused (it would overflow an int's rounding).
+MAX_WRENCH_STEPS = 1e15
+
+
 def steps_for(duration: float, timestep: float) -> int:
     """A wrench's duration as whole steps: rounded, at least one."""
     if not math.isfinite(duration) or duration <= 0:
         raise InvalidArgumentError(f"apply_wrench.duration must be a number of seconds > 0, "
                                    f"got {duration}")
-    return max(1, round(duration / timestep))
+    steps = duration / timestep
+    if steps > MAX_WRENCH_STEPS:
+        raise InvalidArgumentError(
+            f"apply_wrench.duration {duration:g} s is {steps:.3g} steps; at most "
+            f"{MAX_WRENCH_STEPS:g} (leave duration out to hold the wrench until cleared)",
+            {"max_steps": MAX_WRENCH_STEPS})
+    return max(1, round(steps))

@@ -120,7 +120,7 @@ def snapshot(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
             raise InvalidArgumentError(f"snapshot.slot {brief(slot_name)} must be "
                                        f"1-{MAX_WORLD_NAME} printable characters")
     world.verify()
-    blob = encode(snapshot_of(world))
+    blob = encode(snapshot_of(world), loop.snapshot_key)
     kept = Slot(slot_name or "", world.name, world.engine.name, blob, world.step_index,
                 world.sim_time, len(world.entities))
     if slot_name is not None:
@@ -138,7 +138,7 @@ def restore(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
         raise InvalidArgumentError("restore needs exactly one of 'slot' or 'blob'")
     if slot_name is not None:
         blob = loop.slots.get(check_type(slot_name, str, "restore.slot")).blob
-    data = decode(blob, loop.limits)
+    data = decode(blob, loop.limits, loop.snapshot_key)
     new = world_from(data, _factory(loop), world.name, loop.limits, world.engine.name)
     if loop.job is not None and (loop.job.world or loop.world) is world:
         time_control.cancel_job(loop, "its world was restored")

@@ -46,6 +46,12 @@ MONITOR_PERIOD_S = 0.05  # closed connections and subscribers are looked for thi
 # (the ROUTER's identity frame in front is not counted: protocol.md speaks of the client's).
 MAX_FRAMES = 8
 MAX_ROUTING_FRAME_BYTES = 256
+# Per connection, in each direction: requests ZeroMQ holds for the daemon before it stops
+# reading that connection (the client's sends then wait: back-pressure on it alone), and
+# replies it holds for a client that does not read them before it drops the newest (a client
+# that never reads cannot grow the daemon). Fairness: ``receive`` takes one request per
+# ROUTER per call, which ZeroMQ deals out fairly between connections (issue 35, item 8).
+MAX_QUEUED_PER_CONNECTION = 64
 LOOPBACK = "127.0.0.1"
 
 
@@ -134,6 +140,8 @@ class ZmqFront:
 
     def _bind_router(self, router: zmq.Socket[bytes], endpoint: str) -> None:
         router.setsockopt(zmq.LINGER, 0)
+        router.setsockopt(zmq.RCVHWM, MAX_QUEUED_PER_CONNECTION)
+        router.setsockopt(zmq.SNDHWM, MAX_QUEUED_PER_CONNECTION)
         if self.security is not None:
             self.security.secure(router)
         _refuse_if_served(endpoint)
@@ -193,8 +201,10 @@ class ZmqFront:
             self._next_side_check = 0.0  # a connection closed or a subscriber came: look now
 
     def receive(self, gone: Callable[[str], Task]) -> list[Call | Task]:
-        """Everything readable now, without blocking: closed connections first (as Tasks
-        made by ``gone``), then requests as Calls answered on this thread."""
+        """What is readable now, without blocking: closed connections first (as Tasks
+        made by ``gone``), then at most one request per ROUTER as a Call answered on this
+        thread (ZeroMQ queues each connection's apart and hands them out in turn: one
+        client's pipelined flood waits behind every other client's next request)."""
         items: list[Call | Task] = []
         now = time.monotonic()
         if now >= self._next_side_check:  # off the hot path: neither is urgent
@@ -207,6 +217,7 @@ class ZmqFront:
                 call = self._call(index, router, gone, items)
                 if call is not None:
                     items.append(call)
+                    break
         return items
 
     def _take_closed(self, index: int, gone: Callable[[str], Task],
@@ -358,15 +369,24 @@ class PolledInbox:
         self.gone = gone
         self.queue: queue.SimpleQueue[Call | Task | None] = queue.SimpleQueue()
         self.pending: deque[Call | Task] = deque()
+        self._zmq_first = False  # whose turn it is: Zenoh's queue or the ZeroMQ sockets
 
     def put(self, item: Call | Task | None) -> None:
         self.queue.put(item)
         self.front.wake()
 
     def _take(self) -> object:  # a Call, a Task, None (stop) or NOTHING
-        """The next item, or NOTHING; Zenoh's queue first (only this thread takes from it)."""
+        """The next item, or NOTHING: Zenoh's queue and the ZeroMQ sockets take turns, so
+        that neither front's load starves the other (only this thread takes from either)."""
+        self._zmq_first = not self._zmq_first
+        if self._zmq_first:
+            item = self._from_zmq()
+            return item if item is not NOTHING or self.queue.empty() else self.queue.get_nowait()
         if not self.queue.empty():
             return self.queue.get_nowait()
+        return self._from_zmq()
+
+    def _from_zmq(self) -> object:
         if not self.pending:
             self.pending.extend(self.front.receive(self.gone))
         return self.pending.popleft() if self.pending else NOTHING

@@ -70,3 +70,15 @@ def companion(sim: Client, timeout: float = 10.0) -> Client:
 def raw_replies(sim: Client, op: str, payload: bytes, timeout: float = 10.0) -> list[bytes]:
     """Every reply to a request sent as these exact bytes, over the client's transport."""
     return sim.transport.send_raw(op, payload, timeout)
+
+
+# A state within the world's limits whose next steps carry it beyond them (9e4 m/s at a
+# metre short of the 1e6 m edge): how a client makes a world diverge, now that a state
+# beyond the limits is refused where it is set (issue 35).
+EDGE_POSE = np.array([[999_999.0, 0, 0.5, 0, 0, 0, 1]])
+EDGE_TWIST = np.array([[9e4, 0, 0, 0, 0, 0]])
+
+
+def send_over_the_edge(sim: Client, name: str = "ball") -> None:
+    """Set ``name`` where its next step takes the world past its limits."""
+    sim.set_states([name], poses=EDGE_POSE, twists=EDGE_TWIST)

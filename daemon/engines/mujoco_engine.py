@@ -70,6 +70,7 @@ from galton.daemon.engine import (
 from galton.daemon.engines import mujoco_clone as cloning
 from galton.daemon.engines import mujoco_compile as compiling
 from galton.daemon.engines import mujoco_models as models
+from galton.daemon.engines import mujoco_observed as observing
 from galton.daemon.engines import mujoco_pool as mp
 from galton.daemon.engines import mujoco_props as mpr
 from galton.daemon.engines import mujoco_removal as removal
@@ -114,6 +115,9 @@ class MujocoEngine(Engine):
 
     name: ClassVar[str] = "mujoco"
     releases_gil_while_stepping: ClassVar[bool] = True  # mj_step runs without the GIL
+    # What the last step left, frozen before an edit until the next step (a class default:
+    # a clone is made without __init__).
+    _observed: observing.Observed | None = None
 
     def __init__(self) -> None:
         ms.route_warnings()
@@ -226,6 +230,7 @@ class MujocoEngine(Engine):
 
     def set_params(self, params: dict[str, Any]) -> None:
         clean = check_updates(self.name, ms.PARAMS, params)
+        observing.freeze(self)
         self._xml = None
         self._values.update(clean)
         ms.write_options(self._spec.option, self._values)
@@ -253,13 +258,16 @@ class MujocoEngine(Engine):
 
     # -- Engine: create & delete ---------------------------------------------------------
     def spawn(self, groups: Sequence[BodyGroup]) -> None:
+        observing.freeze(self)
         adding.spawn(self, groups)
 
     def load_model(self, fmt: str, text: str | None, path: str | None,
                    prefix: str, *, fixed_base: bool = True) -> list[EntityInfo]:
+        observing.freeze(self)
         return models.load_model(self, fmt, text, path, prefix, fixed_base)
 
     def delete(self, names: Sequence[str]) -> None:
+        observing.freeze(self)
         removal.delete(self, names)
 
     def clear(self) -> None:
@@ -271,9 +279,11 @@ class MujocoEngine(Engine):
 
     def set_states(self, names: Sequence[str], poses: np.ndarray | None,
                    twists: np.ndarray | None) -> None:
+        observing.freeze(self)
         teleport.set_states(self, names, poses, twists)
 
     def update(self, names: Sequence[str], props: BodyProperties) -> None:
+        observing.freeze(self)
         self._xml = None
         mpr.update(self, names, props)
 
@@ -299,12 +309,14 @@ class MujocoEngine(Engine):
 
     def get_joint_states(self, names: Sequence[str]
                          ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        return self._joints.read(self._data, names)
+        positions, velocities, efforts = self._joints.read(self._data, names)
+        return positions, velocities, observing.efforts(self, names, efforts)
 
     def set_joint_states(self, names: Sequence[str], positions: np.ndarray,
                          velocities: np.ndarray | None) -> None:
         """Written into qpos/qvel; a model's trees never sleep (their actuators keep them
         awake), so nothing needs waking."""
+        observing.freeze(self)
         self._joints.write(self._data, names, positions, velocities)
 
     def set_joint_targets(self, names: Sequence[str], mode: str, targets: np.ndarray,
@@ -338,6 +350,9 @@ class MujocoEngine(Engine):
     def restore(self, data: dict[str, Any]) -> None:
         snapshots.restore(self, data)
 
+    def entity_names(self) -> list[str]:
+        return list(self._entities)
+
     def clone(self) -> MujocoEngine:
         """A copy of the compiled world, no MJCF and no compile (``mujoco_clone``): it goes
         on exactly as this one, which it leaves untouched."""
@@ -355,7 +370,7 @@ class MujocoEngine(Engine):
     def contacts(self, names: Sequence[str] | None
                  ) -> tuple[list[str], list[str], np.ndarray, np.ndarray, np.ndarray,
                             np.ndarray]:
-        return sensing.touching(self, names)
+        return observing.contacts(self, names)
 
     def close(self) -> None:
         self._entities.clear()

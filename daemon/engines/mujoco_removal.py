@@ -67,6 +67,7 @@ def clear(engine: MujocoEngine) -> None:
     engine._entities.clear()
     engine._wrenches.drop(None)
     engine._diverged = False
+    engine._observed = None
     if engine._models or engine._broken:
         engine._build_empty()  # a model may bring more than bodies: start afresh
         return

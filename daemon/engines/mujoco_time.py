@@ -35,6 +35,7 @@ def step(engine: MujocoEngine, count: int) -> None:
     """MuJoCo's own errors in a step (its arena overflowing) leave the data unusable:
     the world reads as diverged until cleared."""
     engine._warnings[ms.DIVERGENCE_WARNINGS] = 0
+    engine._observed = None  # the step makes what is observed anew (mujoco_observed)
     while count > 0:
         run = min(count, AWAKE_EVERY_STEPS - engine._steps_since_look % AWAKE_EVERY_STEPS)
         try:
@@ -96,6 +97,7 @@ def reset_dynamics(engine: MujocoEngine) -> None:
     d.qacc_warmstart[:] = 0.0
     d.qacc[:] = 0.0
     mst.wake_all(m, d)
+    engine._observed = None
     engine._diverged = False
     restart_looks(engine)
 

@@ -357,6 +357,9 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
         InvalidArgumentError naming the field for anything malformed)."""
         self._restore(data)
 
+    def entity_names(self) -> list[str]:
+        return [*self._bodies, *self._robots.links]
+
     @engine_call
     def clone(self) -> PybulletEngine:
         """As ``restore(snapshot(canonical=False))`` into a fresh engine, without the plain

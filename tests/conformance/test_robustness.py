@@ -14,13 +14,14 @@ from typing import Any
 import msgpack
 import numpy as np
 import pytest
-from support import ball_row, companion, raw_replies, snapshot
+from support import ball_row, companion, raw_replies, send_over_the_edge, snapshot
 
 from galton.client import Client, plane, spheres
 from galton.daemon.engine_check_refusals import PROBE_MODELS
 from galton.protocol import (
     ClientClosedError,
     IncorrectStateError,
+    InvalidArgumentError,
     NotFoundError,
     OperationFailedError,
     PhysicsError,
@@ -51,7 +52,7 @@ def request(op: str, args: Any) -> dict[str, Any]:
 def diverge(sim: Client) -> None:
     """Drive the world to PHYSICS_ERROR, as a client can."""
     sim.spawn(plane(), spheres(["ball"], [[0, 0, 0.5]], 0.05))
-    sim.set_states(["ball"], twists=np.array([[1e300, 1e300, -1e300, 1e300, 1e300, 1e300]]))
+    send_over_the_edge(sim)
     with pytest.raises(PhysicsError):
         sim.step(5)
 
@@ -111,8 +112,9 @@ def test_a_world_diverging_while_playing_pauses_and_the_daemon_serves_on(sim: Cl
     """get_states notices the divergence before the loop's own check does: the world must
     pause then too, not step on (the daemon used to exit here)."""
     sim.spawn(plane(), spheres(["ball"], [[0, 0, 0.5]], 0.05))
-    sim.set_states(["ball"], twists=np.array([[1e300, 1e300, -1e300, 1e300, 1e300, 1e300]]))
+    send_over_the_edge(sim)
     sim.play(rtf=0)
+    wait_for(lambda: sim.status().step > 0)  # its first step carries it past the limits
     with pytest.raises(PhysicsError):
         sim.get_states(["ball"])
     status = sim.status()
@@ -125,16 +127,14 @@ def test_a_world_diverging_while_playing_pauses_and_the_daemon_serves_on(sim: Cl
     assert sim.step(2).step == 2
 
 
-def test_a_diverged_state_set_by_a_request_is_never_served(sim: Client) -> None:
-    """The states a request sets are checked before anything reads them, steps or not."""
+def test_a_diverged_state_set_by_a_request_is_refused_where_it_is_set(sim: Client) -> None:
+    """A state beyond the world's limits is refused by the request that sets it (issue 35:
+    a read never faults the world)."""
     sim.spawn(plane(), spheres(["ball"], [[0, 0, 0.5]], 0.05))
-    sim.set_states(["ball"], poses=np.array([[4e299, 0, 0.5, 0, 0, 0, 1]]))
-    assert sim.status().step == 0
-    with pytest.raises(PhysicsError, match="by the states a request set"):
-        sim.get_states(["ball"])
-    assert sim.status().faulted
-    sim.reset("state")
+    with pytest.raises(InvalidArgumentError, match="limit"):
+        sim.set_states(["ball"], poses=np.array([[4e299, 0, 0.5, 0, 0, 0, 1]]))
     np.testing.assert_array_equal(sim.get_states(["ball"]).positions, [[0, 0, 0.5]])
+    assert not sim.status().faulted
 
 
 # -- rejected yet applied --------------------------------------------------------------------
