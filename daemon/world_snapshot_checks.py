@@ -20,7 +20,8 @@ import numpy as np
 from galton.daemon.world import World
 from galton.protocol import BODY_SHAPES, EntityInfo, InvalidArgumentError, RemoteError
 from galton.protocol.errors import brief
-from galton.protocol.model import SIZE_LAYOUT, check_name
+from galton.protocol.model import check_name
+from galton.protocol.vocabulary import SIZE_LAYOUT
 
 MODEL_SHAPES = ("model", "link")
 SOURCES = ("spawn", "model")
