@@ -19,7 +19,7 @@ from galton.protocol.errors import (
 )
 from galton.protocol.model import finite_number, integer_in
 
-KNOWN_ENGINES = ("mujoco", "pybullet")
+KNOWN_ENGINES = ("mujoco", "pybullet", "dart")
 
 
 @dataclass(frozen=True)

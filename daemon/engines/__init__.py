@@ -11,6 +11,7 @@ from galton.protocol.errors import did_you_mean
 ENGINE_CLASSES: dict[str, str] = {
     "mujoco": "galton.daemon.engines.mujoco_engine:MujocoEngine",
     "pybullet": "galton.daemon.engines.pybullet_engine:PybulletEngine",
+    "dart": "galton.daemon.engines.dart.engine:DartEngine",
 }
 
 
