@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from galton.client import Client, EmbeddedDaemon, wait_for_daemon
 
-ENGINES = ("mujoco", "pybullet")
+ENGINES = ("mujoco", "pybullet", "dart")
 START_TIMEOUT_S = 60.0
 
 
