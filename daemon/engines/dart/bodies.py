@@ -138,6 +138,9 @@ def configure(world: Any, values: dict[str, Any]) -> None:
     """Hand the world-level values to DART (the others reach bodies)."""
     world.setTimeStep(float(values["timestep"]))
     world.setGravity(np.asarray(values["gravity"], dtype=float))
+    sleep = world.getDeactivationOptions()
+    sleep.mEnabled = bool(values["dart.sleep"])
+    world.setDeactivationOptions(sleep)
     solver = world.getConstraintSolver()
     detector = getattr(dart.collision, DETECTOR_CLASSES[values["dart.collision_detector"]])
     if solver.getCollisionDetector().getType() != detector.getStaticType():

@@ -10,7 +10,7 @@ under SDF's gravity (0, 0, -9.8).
 
 from __future__ import annotations
 
-from galton.daemon.params import ParamSpec, choice, number, vector
+from galton.daemon.params import ParamSpec, choice, flag, number, vector
 
 DETECTORS = ("ode", "fcl", "bullet", "dart")
 
@@ -32,4 +32,7 @@ SPECS: dict[str, ParamSpec] = {spec.name: spec for spec in (
     ParamSpec("dart.collision_detector", "ode", "", "Collision detector: ode (what "
               "gz-physics installs in every world), fcl (DART's own default, which turns "
               "capsules into spheres), bullet or dart.", choice(*DETECTORS)),
+    ParamSpec("dart.sleep", False, "", "Put bodies at rest to sleep (DART 6.20's "
+              "deactivation, on in DART by default). Off, as in Gazebo Harmonic's DART 6.13, "
+              "which has none; a sleeping body's rest timer is not in snapshots.", flag),
 )}

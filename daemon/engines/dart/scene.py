@@ -144,7 +144,7 @@ class Scene:
         skeleton.setName(books.MODEL + root)
         if static:
             skeleton.setMobile(False)
-        link_names = models.link_names(skeleton, model.prefix)
+        link_names = [root, *models.link_names(skeleton, model.prefix)[1:]]
         nodes = skeleton.getBodyNodes()
         friction, restitution = self._values["default_friction"], self._values[
             "default_restitution"]

@@ -55,24 +55,36 @@ def node_state(node: Any) -> tuple[np.ndarray, np.ndarray]:
 
 def write(bodies: Sequence[Body], poses: np.ndarray | None, twists: np.ndarray | None
           ) -> None:
-    """Set poses and/or twists (None keeps that part, in the world frame)."""
+    """Set poses and/or twists (None keeps that part, in the world frame; a twist alone
+    leaves the free joint's positions untouched, so the pose stays bit for bit)."""
     if poses is None and twists is None:
         return
-    old_poses, old_twists = read(bodies)
-    poses = old_poses if poses is None else np.asarray(poses, dtype=float)
-    twists = old_twists if twists is None else np.asarray(twists, dtype=float)
     spawned = [k for k, b in enumerate(bodies) if b.model is None]
     if spawned:
-        positions = frames.poses_to_free(poses[spawned])
-        velocities = frames.twists_to_free(positions, twists[spawned])
-        for row, k in enumerate(spawned):
-            body = bodies[k]
+        _write_spawned([bodies[k] for k in spawned],
+                       None if poses is None else np.asarray(poses, dtype=float)[spawned],
+                       None if twists is None else np.asarray(twists, dtype=float)[spawned])
+    others = [k for k, b in enumerate(bodies) if b.model is not None]
+    if others:
+        old_poses, old_twists = read([bodies[k] for k in others])
+        for row, k in enumerate(others):
+            place_root(bodies[k], old_poses[row] if poses is None else np.asarray(poses[k]),
+                       old_twists[row] if twists is None else np.asarray(twists[k]))
+
+
+def _write_spawned(bodies: Sequence[Body], poses: np.ndarray | None,
+                   twists: np.ndarray | None) -> None:
+    positions, velocities = free_state(bodies)
+    if twists is None:
+        twists = frames.free_to_states(positions, velocities)[1]
+    if poses is not None:
+        positions = frames.poses_to_free(poses)
+    velocities = frames.twists_to_free(positions, twists)
+    for row, body in enumerate(bodies):
+        if poses is not None:
             body.skeleton.setPositions(positions[row])
-            if not body.static:
-                body.skeleton.setVelocities(velocities[row])
-    for k, body in enumerate(bodies):
-        if body.model is not None:
-            place_root(body, poses[k], twists[k])
+        if not body.static:
+            body.skeleton.setVelocities(velocities[row])
 
 
 def place_root(body: Body, pose: np.ndarray, twist: np.ndarray) -> None:
