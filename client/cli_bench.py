@@ -72,7 +72,8 @@ def bench(
     ] = None,
     instances: Annotated[str | None, typer.Option(
         help="Comma-separated daemon instances to use, in engine order.")] = None,
-    board: Annotated[str, typer.Option(help="Preset (paper, small) or a TOML/JSON file.")
+    board: Annotated[str, typer.Option(
+        help="Preset (paper, paper-webots, paper-gazebo, small) or a TOML/JSON file.")
                      ] = "paper",
     balls: Annotated[str, typer.Option(help="Ball count(s), e.g. 1,25,100.")] = ",".join(
         map(str, DEFAULT_BALLS)),

@@ -143,6 +143,9 @@ def configure(world: Any, values: dict[str, Any]) -> None:
     world.setDeactivationOptions(sleep)
     solver = world.getConstraintSolver()
     detector = getattr(dart.collision, DETECTOR_CLASSES[values["dart.collision_detector"]])
+    fallback = dart.constraint.PgsBoxedLcpSolverOption()
+    fallback.mMaxIteration = int(values["solver_iterations"])
+    solver.getSecondaryBoxedLcpSolver().setOption(fallback)
     if solver.getCollisionDetector().getType() != detector.getStaticType():
         solver.setCollisionDetector(detector())
 

@@ -120,7 +120,7 @@ class DartEngine(Scene, Snapshots, Engine):
         twists = np.zeros((len(poses), TWIST_WIDTH)) if group.twists is None else (
             np.asarray(group.twists, dtype=float).reshape(-1, TWIST_WIDTH))
         positions = frames.poses_to_free(poses)
-        velocities = frames.twists_to_free(positions, twists)
+        velocities = frames.twists_to_free(twists)
         if group.static:
             velocities[:] = 0.0
         for k, name in enumerate(group.names):

@@ -1,9 +1,10 @@
 """Poses and twists between the protocol's form and DART's free joint.
 
 A free joint's six positions are the rotation vector (log map) of its child's orientation,
-then its position in the world; its six velocities are the child's spatial velocity in its
-own frame, angular first. Converting them with numpy for a whole batch costs two DART calls
-per body (positions, velocities) instead of one per quantity.
+then its position in the world; its six velocities are the child's angular and linear
+velocity in the world frame (dartpy 6.20; tests/engines/test_dart_engine.py checks it).
+Converting them with numpy for a whole batch costs two DART calls per body (positions,
+velocities) instead of one per quantity.
 """
 
 from __future__ import annotations
@@ -54,11 +55,8 @@ def free_to_states(positions: np.ndarray, velocities: np.ndarray
                    ) -> tuple[np.ndarray, np.ndarray]:
     """(n, 6) free-joint positions and velocities to (n, 7) poses and (n, 6) world twists
     (linear first, as the protocol has them)."""
-    rot = rotations(positions[:, :3])
     poses = np.column_stack([positions[:, 3:], rotvecs_to_quats(positions[:, :3])])
-    angular = np.einsum("nij,nj->ni", rot, velocities[:, :3])
-    linear = np.einsum("nij,nj->ni", rot, velocities[:, 3:])
-    return poses, np.column_stack([linear, angular])
+    return poses, np.column_stack([velocities[:, 3:], velocities[:, :3]])
 
 
 def poses_to_free(poses: np.ndarray) -> np.ndarray:
@@ -66,12 +64,9 @@ def poses_to_free(poses: np.ndarray) -> np.ndarray:
     return np.column_stack([quats_to_rotvecs(poses[:, 3:]), poses[:, :3]])
 
 
-def twists_to_free(positions: np.ndarray, twists: np.ndarray) -> np.ndarray:
-    """(n, 6) world twists to (n, 6) free-joint velocities at these positions."""
-    rot_t = np.transpose(rotations(positions[:, :3]), (0, 2, 1))
-    angular = np.einsum("nij,nj->ni", rot_t, twists[:, 3:])
-    linear = np.einsum("nij,nj->ni", rot_t, twists[:, :3])
-    return np.column_stack([angular, linear])
+def twists_to_free(twists: np.ndarray) -> np.ndarray:
+    """(n, 6) world twists to (n, 6) free-joint velocities."""
+    return np.column_stack([twists[:, 3:], twists[:, :3]])
 
 
 def matrix_to_quat(rot: np.ndarray) -> np.ndarray:

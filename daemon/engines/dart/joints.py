@@ -78,8 +78,9 @@ class Robots:
             if joint is None:
                 raise NotFoundError(f"no joint named {name!r} in the DART world")
             if not joint.info.scalar:
-                raise InvalidArgumentError(f"joint {name!r} is {joint.info.type}: only "
-                                           "revolute and prismatic joints take states")
+                raise InvalidArgumentError(
+                    f"joint {name!r} is {joint.info.type}: only revolute and prismatic "
+                    "joints have joint states (a free joint's body: use get_states)")
             found.append(joint)
         return found
 
@@ -98,16 +99,18 @@ def target_law(target: Target, q: float, qdot: float) -> float:
 
 
 def describe(skeleton: Any, prefix: str, model: str, links: dict[int, str]) -> list[Joint]:
-    """The skeleton's joints, the root's own weld left out (a URDF's fixed base)."""
+    """The skeleton's joints: a welded root left out, a URDF's free root named
+    ``root:free`` as on the other engines."""
     found = []
     for joint in skeleton.getJoints():
         kind = JOINT_TYPES.get(joint.getType())
         parent = joint.getParentBodyNode()
-        if kind is None or (parent is None and (kind == "fixed" or
-                                                joint.getName() == URDF_ROOT_JOINT)):
+        if kind is None or (parent is None and kind == "fixed"):
             continue
         child = links[id_of(joint.getChildBodyNode())]
-        info = JointInfo(name=prefix + joint.getName(), model=model, type=kind,
+        name = f"{model}:free" if joint.getName() == URDF_ROOT_JOINT else (
+            prefix + joint.getName())
+        info = JointInfo(name=name, model=model, type=kind,
                          parent="" if parent is None else links[id_of(parent)], child=child,
                          **_axis_and_limits(joint, kind))
         found.append(Joint(info, joint, [float(v) for v in joint.getPositions()]))
@@ -121,8 +124,11 @@ def id_of(node: Any) -> int:
 def _axis_and_limits(joint: Any, kind: str) -> dict[str, Any]:
     if kind not in ("revolute", "prismatic"):
         return {}
-    axis = np.asarray(joint.getAxis(), dtype=float)
+    turn = np.asarray(joint.getTransformFromChildBodyNode().rotation(), dtype=float)
+    axis = turn @ np.asarray(joint.getAxis(), dtype=float)  # in the child link's frame
     lower, upper = joint.getPositionLowerLimit(0), joint.getPositionUpperLimit(0)
+    if not lower < upper:  # unlimited (dartpy reads MJCF's as 0..0)
+        lower, upper = -np.inf, np.inf
     effort, speed = joint.getForceUpperLimit(0), joint.getVelocityUpperLimit(0)
     return {"axis": (float(axis[0]), float(axis[1]), float(axis[2])),
             "lower": float(lower) if np.isfinite(lower) else None,

@@ -2,14 +2,15 @@
 
 A URDF is one skeleton (DartLoader; its root welded to the world or free). An MJCF is
 one skeleton per top-level body plus one, named ``world``, for the world's own geoms
-(MjcfParser); dartpy's parser reads ``<joint type="free"/>`` but not the ``<freejoint/>``
-shorthand, which it welds. Joint limits are enforced, as gz-physics enforces every SDF
-axis limit (``dartsim/src/SDFFeatures.cc``).
+(MjcfParser); dartpy's parser reads ``<joint type="free"/>`` but welds the ``<freejoint/>``
+shorthand, which is therefore rewritten as the former before parsing. Joint limits are
+enforced, as gz-physics enforces every SDF axis limit (``dartsim/src/SDFFeatures.cc``).
 """
 
 from __future__ import annotations
 
 import os
+import re
 import tempfile
 from dataclasses import dataclass, field
 from typing import Any
@@ -22,7 +23,12 @@ from galton.protocol import (
 )
 
 MODEL_FORMATS = ("urdf", "mjcf")
-MJCF_WORLD_BODIES = "__geom_skel__"  # the skeleton dartpy makes of an MJCF's world geoms
+MJCF_WORLD_BODIES = "__geom_skel__"
+# DartLoader drops a URDF link named "world" (it welds the next link to the world): such a
+# link is renamed before parsing, so it stays an entity named "world", as on other engines.
+URDF_WORLD = re.compile(r'((?:link|name)\s*=\s*)(["\'])world\2')
+WORLD_ALIAS = "world__galton"
+FREEJOINT = re.compile(r"<freejoint\b")  # the skeleton dartpy makes of an MJCF's world geoms
 
 
 @dataclass
@@ -65,7 +71,9 @@ def parse(fmt: str, text: str, fixed_base: bool) -> list[Any]:
                                          if fixed_base else
                                          dart.utils.DartLoader.RootJointType.FLOATING)
         loader.setOptions(options)
-        skeleton = loader.parseSkeletonString(text, dart.common.Uri("file:///model.urdf"))
+        renamed = URDF_WORLD.sub(lambda m: f"{m.group(1)}{m.group(2)}{WORLD_ALIAS}{m.group(2)}",
+                                 text)
+        skeleton = loader.parseSkeletonString(renamed, dart.common.Uri("file:///model.urdf"))
         skeletons = [] if skeleton is None else [skeleton]
     else:
         skeletons = _parse_mjcf(text)
@@ -74,7 +82,7 @@ def parse(fmt: str, text: str, fixed_base: bool) -> list[Any]:
                                    "refused it)")
     for skeleton in skeletons:
         for joint in skeleton.getJoints():
-            if joint.getNumDofs() == 1:
+            if joint.getNumDofs() == 1 and limited(joint):
                 joint.setLimitEnforcement(True)
     return skeletons
 
@@ -84,7 +92,7 @@ def _parse_mjcf(text: str) -> list[Any]:
     handle, path = tempfile.mkstemp(suffix=".xml")
     try:
         with os.fdopen(handle, "w", encoding="utf-8") as out:
-            out.write(text)
+            out.write(FREEJOINT.sub('<joint type="free"', text))
         world = dart.utils.MjcfParser.readWorld(dart.common.Uri(path))
     finally:
         os.unlink(path)
@@ -96,15 +104,25 @@ def _parse_mjcf(text: str) -> list[Any]:
     return skeletons
 
 
+def limited(joint: Any) -> bool:
+    """Whether a 1-DOF joint has limits (MJCF's unlimited joints read 0..0 in dartpy)."""
+    return bool(joint.getPositionLowerLimit(0) < joint.getPositionUpperLimit(0))
+
+
+def node_name(node: Any) -> str:
+    name = str(node.getName())
+    return "world" if name == WORLD_ALIAS else name
+
+
 def root_name(skeleton: Any, prefix: str) -> str:
     """The root entity's name: prefix + the root body's name (``world`` for an MJCF's
     world geoms)."""
     if skeleton.getName() == MJCF_WORLD_BODIES:
         return prefix + "world"
-    return prefix + str(skeleton.getRootBodyNode().getName())
+    return prefix + node_name(skeleton.getRootBodyNode())
 
 
 def link_names(skeleton: Any, prefix: str) -> list[str]:
     """Every body node's entity name, the root first."""
     root = root_name(skeleton, prefix)
-    return [root] + [prefix + node.getName() for node in skeleton.getBodyNodes()[1:]]
+    return [root] + [prefix + node_name(node) for node in skeleton.getBodyNodes()[1:]]

@@ -10,7 +10,7 @@ under SDF's gravity (0, 0, -9.8).
 
 from __future__ import annotations
 
-from galton.daemon.params import ParamSpec, choice, flag, number, vector
+from galton.daemon.params import ParamSpec, choice, flag, integer, number, vector
 
 DETECTORS = ("ode", "fcl", "bullet", "dart")
 
@@ -19,6 +19,9 @@ SPECS: dict[str, ParamSpec] = {spec.name: spec for spec in (
               "Gazebo's default).", number(0, 1, low_open=True)),
     ParamSpec("gravity", (0.0, 0.0, -9.8), "m/s²", "Gravity vector, world frame (SDF's "
               "default).", vector(3, -1000, 1000)),
+    ParamSpec("solver_iterations", 30, "", "Iterations of the PGS solver DART falls back on "
+              "when its Dantzig solver fails (DART's default 30; Dantzig itself is a direct "
+              "method).", integer(1, 10_000)),
     ParamSpec("default_friction", 1.0, "", "Friction coefficient of moving bodies that set "
               "none (SDF <ode><mu>, default 1). DART takes the smaller of a pair's two.",
               number(0, 100)),

@@ -140,9 +140,11 @@ class Scene:
     def _add_model(self, model: models.Model) -> list[EntityInfo]:
         """Books for a parsed skeleton's root and links, its joints, and the world."""
         skeleton, root = model.skeleton, model.root
-        static = skeleton.getName() == models.MJCF_WORLD_BODIES  # the world's own geoms
+        # The world's own geoms, and a root welded to the world, do not move.
+        scenery = skeleton.getName() == models.MJCF_WORLD_BODIES
+        static = scenery or skeleton.getRootJoint().getType() == "WeldJoint"
         skeleton.setName(books.MODEL + root)
-        if static:
+        if scenery:
             skeleton.setMobile(False)
         link_names = [root, *models.link_names(skeleton, model.prefix)[1:]]
         nodes = skeleton.getBodyNodes()
@@ -151,13 +153,14 @@ class Scene:
         infos = []
         for k, (name, node) in enumerate(zip(link_names, nodes, strict=True)):
             surface = node_surface(node, friction, restitution)
-            body = books.Body(name, "model" if k == 0 else "link", (), static,
-                              math.nan if static else float(node.getMass()), *surface,
+            fixed = static if k == 0 else scenery  # a fixed base's links move
+            body = books.Body(name, "model" if k == 0 else "link", (), fixed,
+                              math.nan if fixed else float(node.getMass()), *surface,
                               False, False, skeleton, node, None, root,
                               link_names[1:] if k == 0 else [])
             self._bodies[name] = body
             mass = self._properties(body)[0]
-            infos.append(EntityInfo(name=name, shape=body.shape, static=static,
+            infos.append(EntityInfo(name=name, shape=body.shape, static=fixed,
                                     mass=None if math.isnan(mass) else mass,
                                     friction=surface[0], restitution=surface[1],
                                     source="model", model=root))

@@ -74,16 +74,13 @@ def write(bodies: Sequence[Body], poses: np.ndarray | None, twists: np.ndarray |
 
 def _write_spawned(bodies: Sequence[Body], poses: np.ndarray | None,
                    twists: np.ndarray | None) -> None:
-    positions, velocities = free_state(bodies)
-    if twists is None:
-        twists = frames.free_to_states(positions, velocities)[1]
-    if poses is not None:
-        positions = frames.poses_to_free(poses)
-    velocities = frames.twists_to_free(positions, twists)
+    """Free-joint velocities are in the world frame: a pose alone keeps the twist as is."""
+    positions = None if poses is None else frames.poses_to_free(poses)
+    velocities = None if twists is None else frames.twists_to_free(twists)
     for row, body in enumerate(bodies):
-        if poses is not None:
+        if positions is not None:
             body.skeleton.setPositions(positions[row])
-        if not body.static:
+        if velocities is not None and not body.static:
             body.skeleton.setVelocities(velocities[row])
 
 
@@ -106,10 +103,18 @@ def _rotation(quat: np.ndarray) -> np.ndarray:
     return matrix
 
 
+def moves(body: Body) -> bool:
+    """A spawned moving body, or the root of a model that can move (a fixed base's links
+    do)."""
+    if body.model is None:
+        return not body.static
+    return body.name == body.model and bool(body.skeleton.isMobile())
+
+
 def within(bodies: Sequence[Body], max_position: float, max_speed: float) -> bool:
     """Every moving entity finite, within ``max_position`` of the origin and below
     ``max_speed`` in every twist component."""
-    moving = [b for b in bodies if not b.static and (b.model is None or b.name == b.model)]
+    moving = [b for b in bodies if moves(b)]
     spawned = [b for b in moving if b.model is None]
     if spawned:
         positions, velocities = free_state(spawned)
@@ -139,7 +144,7 @@ def safe_to_step(bodies: Sequence[Body]) -> bool:
     and within ``SAFE_POSITION`` of the origin. ODE asserts (and so aborts the whole
     daemon) on a NaN or astronomically far bounding box, so a world set to one is not
     stepped: it has diverged."""
-    roots = [b for b in bodies if not b.static and (b.model is None or b.name == b.model)]
+    roots = [b for b in bodies if moves(b)]
     for body in roots:
         q, qdot = body.skeleton.getPositions(), body.skeleton.getVelocities()
         if not (np.isfinite(q).all() and np.isfinite(qdot).all()):
