@@ -1,6 +1,7 @@
 """What the bridge costs: the same Galton trial through a daemon and in-process.
 
-Usage: python benchmarks/bridge_overhead.py [--balls 100] [--rounds 3] [--json FILE]
+Usage: python benchmarks/bridge_overhead.py [--balls 100] [--rounds 3] [--engines mujoco,pybullet]
+       [--json FILE]
 
 The in-process side drives the daemon's own ``World`` over the same engine with exactly the
 requests a trial sends (spawn, then run until the balls rest, checked every 0.5 s), so the only
@@ -62,9 +63,11 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--balls", type=int, default=100)
     parser.add_argument("--rounds", type=int, default=3)
+    parser.add_argument("--engines", default=",".join(ENGINES),
+                        help="comma-separated, e.g. dart")
     parser.add_argument("--json")
     args = parser.parse_args()
-    results = [measure(engine, args.balls, args.rounds) for engine in ENGINES]
+    results = [measure(engine, args.balls, args.rounds) for engine in args.engines.split(",")]
     print(f"# bridge overhead on {machine()}: paper board, {args.balls} balls, "
           f"{args.rounds} alternating rounds")
     print("| engine | in-process median / min (s) | through the bridge median / min (s) | "
