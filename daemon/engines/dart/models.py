@@ -14,8 +14,10 @@ import re
 import tempfile
 from dataclasses import dataclass, field
 from typing import Any
+from xml.etree import ElementTree
 
 import dartpy as dart
+import numpy as np
 
 from galton.protocol import (
     FeatureUnsupportedError,
@@ -101,7 +103,52 @@ def _parse_mjcf(text: str) -> list[Any]:
     skeletons = [world.getSkeleton(k) for k in range(world.getNumSkeletons())]
     for skeleton in skeletons:
         world.removeSkeleton(skeleton)
+    apply_inertials(skeletons, text)
     return skeletons
+
+
+def apply_inertials(skeletons: list[Any], text: str) -> None:
+    """Each body's ``<inertial>`` as the file gives it: dartpy 6.20's MJCF parser leaves a
+    body's inertia at the identity and drops the centre of mass of a body with no geom."""
+    nodes = {str(node.getName()): node for skeleton in skeletons
+             for node in skeleton.getBodyNodes()}
+    try:
+        root = ElementTree.fromstring(text)
+    except ElementTree.ParseError as exc:
+        raise InvalidArgumentError(f"the mjcf model does not parse: {exc}") from None
+    for body in root.iter("body"):
+        inertial, node = body.find("inertial"), nodes.get(body.get("name", ""))
+        if inertial is None or node is None:
+            continue
+        node.setMass(float(inertial.get("mass", "0")))
+        node.setLocalCOM(_numbers(inertial.get("pos", "0 0 0")))
+        moment = _moment(inertial)
+        turn = _rotation(inertial.get("quat"))
+        moment = turn @ moment @ turn.T
+        node.setMomentOfInertia(moment[0, 0], moment[1, 1], moment[2, 2], moment[0, 1],
+                                moment[0, 2], moment[1, 2])
+
+
+def _numbers(text: str) -> np.ndarray:
+    return np.array([float(v) for v in text.split()], dtype=float)
+
+
+def _moment(inertial: Any) -> np.ndarray:
+    full = inertial.get("fullinertia")
+    if full is not None:
+        xx, yy, zz, xy, xz, yz = _numbers(full)
+        return np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
+    return np.diag(_numbers(inertial.get("diaginertia", "0 0 0")))
+
+
+def _rotation(quat: str | None) -> np.ndarray:
+    """MJCF's quaternion (w x y z) as a rotation matrix (identity when absent)."""
+    if quat is None:
+        return np.eye(3)
+    w, x, y, z = _numbers(quat) / np.linalg.norm(_numbers(quat))
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
 
 
 def limited(joint: Any) -> bool:
