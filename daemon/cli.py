@@ -64,7 +64,8 @@ def _users(path: Path | None) -> dict[str, User] | None:
 
 @app.command()
 def serve(
-    engine: Annotated[str, typer.Option(help="Physics engine: mujoco, pybullet or dart.")] = "mujoco",
+    engine: Annotated[str, typer.Option(
+        help="Physics engine: mujoco, pybullet or dart.")] = "mujoco",
     instance: Annotated[str, typer.Option(help="Instance name, one key chunk.")] = "galton",
     listen: Annotated[list[str] | None, typer.Option(
         help=f"Zenoh endpoint to listen on (repeatable). Default: the --zenoh-config "

@@ -16,6 +16,7 @@ headless renderer: ``raycast`` and ``render`` are FEATURE_UNSUPPORTED.
 
 from __future__ import annotations
 
+import dataclasses
 import importlib.metadata
 from collections.abc import Sequence
 from typing import Any
@@ -200,13 +201,10 @@ class DartEngine(Scene, Snapshots, Engine):
         return self._load(fmt, text, path, prefix, fixed_base)
 
     def joints(self) -> list[JointInfo]:
-        out = []
-        for name, joint in self._robots.joints.items():
-            target = self._robots.targets.get(name)
-            info = joint.info
-            out.append(JointInfo(**{**info.__dict__,
-                                    "mode": target.mode if target else "none"}))
-        return out
+        targets = self._robots.targets
+        return [dataclasses.replace(joint.info, mode=targets[name].mode if name in targets
+                                    else "none")
+                for name, joint in self._robots.joints.items()]
 
     def get_joint_states(self, names: Sequence[str]
                          ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
