@@ -294,10 +294,26 @@ def paper_webots_board() -> BoardSpec:
         "mujoco": EngineContacts(params=webots_params(0.5)),
         "pybullet": EngineContacts(params=webots_params(0.707)),
         "ode": EngineContacts(params={**webots_params(0.5), "timestep": WEBOTS_TIMESTEP}),
+        "dart": EngineContacts(params=webots_params(0.707)),
     })
 
 
 WEBOTS_TIMESTEP = 0.032  # s: Webots' default basicTimeStep, which ODE runs here as Webots does
+
+
+def paper_gazebo_board() -> BoardSpec:
+    """The paper's Gazebo scene (msegoferre/pruebas_Gz_Wbt): the paper board, all balls at
+    once, balls of r 0.045 m and 1 kg, restitution 0 and friction 1 (SDF's defaults), a
+    1 ms step on every engine. DART (``--engine dart``) runs it as Gazebo Harmonic does;
+    DART takes a pair's smaller friction and the product of restitutions, so 0 and 1 on
+    every body are 0 and 1 for every pair, as on MuJoCo and PyBullet. The draft's ball
+    inertia 0.1 kg m² (a copy error: a solid ball has 0.00081) is not reproduced: spawned
+    bodies take their solid shape's inertia.
+    """
+    params = {**webots_params(0.0), "timestep": 0.001}
+    return BoardSpec(name="paper-gazebo", ball=BallSpec(mass=1.0), contacts={
+        engine: EngineContacts(params=dict(params)) for engine in ("mujoco", "pybullet",
+                                                                    "dart")})
 
 
 def webots_params(restitution: float) -> dict[str, float]:
@@ -307,7 +323,8 @@ def webots_params(restitution: float) -> dict[str, float]:
 
 
 PRESETS: dict[str, Callable[[], BoardSpec]] = {
-    "paper": paper_board, "paper-webots": paper_webots_board, "small": small_board}
+    "paper": paper_board, "paper-webots": paper_webots_board,
+    "paper-gazebo": paper_gazebo_board, "small": small_board}
 
 
 # --- (de)serialisation ---------------------------------------------------------------------

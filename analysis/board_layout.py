@@ -35,7 +35,7 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:
     from galton.analysis.board import BoardSpec
 
-ENGINES = ("mujoco", "pybullet", "ode")
+ENGINES = ("mujoco", "pybullet", "ode", "dart")
 BODY_ROLES = ("ball", "pin", "funnel", "divider", "wall", "glass", "floor")
 RELEASE_MODES = ("all-at-once", "stream")
 GRAVITY = 9.81

@@ -63,7 +63,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--balls", type=int, default=100)
     parser.add_argument("--rounds", type=int, default=3)
-    parser.add_argument("--engines", default=",".join(ENGINES), help="e.g. mujoco,pybullet,ode")
+    parser.add_argument("--engines", default=",".join(ENGINES),
+                        help="e.g. mujoco,pybullet,ode,dart")
     parser.add_argument("--json")
     args = parser.parse_args()
     results = [measure(engine, args.balls, args.rounds) for engine in args.engines.split(",")]

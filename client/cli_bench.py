@@ -92,7 +92,8 @@ def bench(
         help="Run on the daemons already answering on the default endpoint. A trial "
              "replaces a daemon's world, so without this (or --connect/--instances) the "
              "bench starts daemons of its own and touches no running one.")] = False,
-    board: Annotated[str, typer.Option(help="Preset (paper, small) or a TOML/JSON file.")
+    board: Annotated[str, typer.Option(
+        help="Preset (paper, paper-webots, paper-gazebo, small) or a TOML/JSON file.")
                      ] = "paper",
     balls: Annotated[str, typer.Option(help="Ball count(s), e.g. 1,25,100.")] = ",".join(
         map(str, DEFAULT_BALLS)),

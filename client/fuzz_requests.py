@@ -289,5 +289,5 @@ SPECIAL: dict[tuple[str, str], Callable[[RequestMaker], Any]] = {
     ("load_model", "prefix"): _prefix,
     ("play", "rtf"): lambda m: m.pick([0.0, 1.0, 5.0, -1.0]),
     ("load_world", "engine"): lambda m: m.engine if m.chance(0.9) else m.pick(
-        ["mujoco", "pybullet", "ode", "bullet"]),
+        ["mujoco", "pybullet", "ode", "dart", "bullet"]),
 }

@@ -78,7 +78,8 @@ def _ros2(on: bool, domain: int, namespace: str, mirrors: list[str]) -> Ros2Opti
 
 @app.command()
 def serve(
-    engine: Annotated[str, typer.Option(help="Physics engine (mujoco, pybullet, ode).")] = "mujoco",
+    engine: Annotated[str, typer.Option(
+        help="Physics engine: mujoco, pybullet, ode or dart.")] = "mujoco",
     instance: Annotated[str, typer.Option(help="Instance name, one key chunk.")] = "galton",
     listen: Annotated[list[str] | None, typer.Option(
         help=f"Zenoh endpoint to listen on (repeatable). Default: the --zenoh-config "

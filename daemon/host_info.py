@@ -17,7 +17,7 @@ from typing import Any
 
 import psutil
 
-ENGINE_PACKAGES = ("mujoco", "pybullet")
+ENGINE_PACKAGES = ("mujoco", "pybullet", "dartpy")
 CPUINFO = Path("/proc/cpuinfo")
 
 

@@ -32,7 +32,7 @@ JOINT_TYPES = ("revolute", "prismatic", "spherical", "free", "fixed")
 SCALAR_JOINT_TYPES = ("revolute", "prismatic")  # one degree of freedom: states and targets
 TARGET_MODES = ("none", "position", "velocity", "effort")
 # The engines a daemon may host (``load_world``'s and ``create_world``'s choices).
-ENGINE_NAMES = ("mujoco", "pybullet", "ode")
+ENGINE_NAMES = ("mujoco", "pybullet", "ode", "dart")
 WRENCH_WIDTH = 6  # fx fy fz tx ty tz, world frame
 # How many numbers ``size`` holds per shape, and what they mean (all half sizes, metres).
 SIZE_LAYOUT: dict[str, tuple[str, ...]] = {

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from galton.client import Client, EmbeddedDaemon, wait_for_daemon
 
-ENGINES = ("mujoco", "pybullet", "ode")
+ENGINES = ("mujoco", "pybullet", "ode", "dart")
 # What an engine states it does not do (FEATURE_UNSUPPORTED, and left out of its
 # capabilities): a conformance test that meets one of these refusals is skipped, saying so;
 # any other refusal fails (tests/conformance/conftest.py).

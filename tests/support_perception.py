@@ -8,6 +8,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+import pytest
 
 from galton.client import Client, boxes, camera, plane, spheres
 
@@ -71,3 +72,10 @@ def expected_depth(pixel: Pixel) -> tuple[str, float]:
         found.append(("ball", -b - math.sqrt(b * b - c)))
     name, distance = min(found, key=lambda item: item[1])
     return name, distance * -ray[2]
+
+
+def skip_without(sim: Client, feature: str) -> None:
+    """Skip a test of ``feature`` on an engine that does not list it (DART has no ray casts
+    and no headless renderer; tests/conformance/test_perception.py checks the refusal)."""
+    if feature not in sim.capabilities().features:
+        pytest.skip(f"the {sim.status().engine} engine lists no {feature!r} feature")

@@ -18,7 +18,7 @@ def test_a_daemon_names_its_host(sim: Client) -> None:
     assert set(host) == HOST_KEYS
     assert host["logical_cores"] == os.cpu_count()
     assert host["memory_bytes"] > 2**28 and host["cpu_model"]
-    assert set(host["engines"]) == {"mujoco", "pybullet", "ode"}
+    assert set(host["engines"]) == {"mujoco", "pybullet", "ode", "dartpy"}
     assert all(v != "not installed" for v in host["engines"].values())
 
 

@@ -18,7 +18,7 @@ from galton.client import EmbeddedDaemon
 from galton.client.embedded import free_loopback_port
 
 ROOT = Path(__file__).resolve().parents[1]
-ENGINES = ("mujoco", "pybullet", "pybullet_data", "pybullet_utils")
+ENGINES = ("mujoco", "pybullet", "pybullet_data", "pybullet_utils", "dartpy")
 BENCH_ONLY = ("matplotlib", "scipy")
 DAEMON_ONLY = ("psutil",)
 BLOCKER = textwrap.dedent('''
@@ -69,14 +69,15 @@ def test_the_blocker_blocks(tmp_path: Path) -> None:
 def test_the_base_install_names_no_engine_and_no_plotting() -> None:
     project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
     base = " ".join(project["dependencies"])
-    for left_out in ("mujoco", "pybullet", "matplotlib", "scipy", "psutil"):
+    for left_out in ("mujoco", "pybullet", "dartpy", "matplotlib", "scipy", "psutil"):
         assert left_out not in base
     extras = project["optional-dependencies"]
     assert {"mujoco", "pybullet", "psutil"} <= {d.split(">")[0] for d in extras["daemon"]}
     assert {"scipy", "matplotlib"} <= {d.split(">")[0] for d in extras["bench"]}
     assert "matplotlib" not in " ".join(extras["daemon"])
-    assert extras["all"] == ["galton-bridge[daemon,bench,ode]"]
+    assert extras["all"] == ["galton-bridge[daemon,bench,ode,dart,view]"]
     assert {"yourdfpy"} <= {d.split(">")[0] for d in extras["ode"]}
+    assert extras["dart"] == ["dartpy>=6.20"]
 
 
 @pytest.mark.parametrize("engine", ["pybullet"])

@@ -11,7 +11,7 @@ from collections.abc import Iterator
 
 import numpy as np
 import pytest
-from support_perception import ALL_OUTPUTS, known_scene, top_camera
+from support_perception import ALL_OUTPUTS, known_scene, skip_without, top_camera
 
 from galton.client import (
     Client,
@@ -47,6 +47,7 @@ def test_camera_builds_a_camera_map() -> None:
 
 
 def test_render_returns_numpy_images(scene: Client) -> None:
+    skip_without(scene, "render")
     (image,) = scene.render(top_camera())
     assert isinstance(image, Image)
     assert image.rgb is not None and image.rgb.shape == (48, 64, 3)
@@ -64,6 +65,7 @@ def test_render_returns_numpy_images(scene: Client) -> None:
 
 
 def test_png_gives_the_raw_pixels(scene: Client) -> None:
+    skip_without(scene, "render")
     raw, = scene.render(top_camera())
     png, = scene.render(top_camera(), format="png")
     assert png.rgb is not None and raw.depth is not None and png.depth is not None
@@ -75,6 +77,7 @@ def test_png_gives_the_raw_pixels(scene: Client) -> None:
 
 
 def test_named_cameras_round_trip(scene: Client) -> None:
+    skip_without(scene, "render")
     kept = scene.add_camera("top", camera((0, 0, 3), (0, 0, 0), up=(0, 1, 0)))
     assert (kept["width"], kept["height"], kept["fov"], kept["outputs"]) == (
         320, 240, 45.0, ["rgb"])
@@ -86,6 +89,7 @@ def test_named_cameras_round_trip(scene: Client) -> None:
 
 
 def test_raycast_takes_one_row_or_many(scene: Client) -> None:
+    skip_without(scene, "raycast")
     one = scene.raycast([0.5, 0, 1], directions=[0, 0, -1])
     assert isinstance(one, RayHits) and len(one) == 1 and one.entities == ["box"]
     rng = np.random.default_rng(SEED)

@@ -147,7 +147,8 @@ def host_description() -> str:
 
 def versions() -> dict[str, str]:
     found = {"python": platform.python_version()}
-    for package in ("galton-bridge", "eclipse-zenoh", "mujoco", "pybullet", "numpy", "scipy"):
+    for package in ("galton-bridge", "eclipse-zenoh", "mujoco", "pybullet", "dartpy", "numpy",
+                    "scipy"):
         try:
             found[package] = importlib.metadata.version(package)
         except importlib.metadata.PackageNotFoundError:

@@ -12,6 +12,7 @@ ENGINE_CLASSES: dict[str, str] = {
     "mujoco": "galton.daemon.engines.mujoco_engine:MujocoEngine",
     "pybullet": "galton.daemon.engines.pybullet_engine:PybulletEngine",
     "ode": "galton.daemon.engines.ode.engine:OdeEngine",
+    "dart": "galton.daemon.engines.dart.engine:DartEngine",
 }
 
 

@@ -31,6 +31,7 @@ from support_perception import (
 from galton.client import (
     Client,
     EmbeddedDaemon,
+    FeatureUnsupportedError,
     Image,
     InvalidArgumentError,
     NotFoundError,
@@ -41,6 +42,7 @@ from galton.client import (
     spheres,
     wait_for_daemon,
 )
+from galton.daemon.engines import create_engine
 
 PLANE_DEPTH_TOL = 2e-3  # m: a flat surface's depth, float32 and the depth buffer's precision
 # m: a rendered sphere is a tessellated mesh, its facets inside the sphere (5-7 mm near the
@@ -52,6 +54,51 @@ AGREE_TOL = 1e-6  # m: the two engines' answers for the same rays
 SEED = 26
 MASS = 2.0
 G = 9.81
+
+
+# Tests that need an engine feature; an engine that does not list it (DART: no ray casts,
+# no headless renderer) skips them and refuses the request instead (the last test here).
+NEEDS = {"test_depth_and_labels_at_known_pixels": "render",
+         "test_segmentation_agrees_with_geometry_nearly_everywhere": "render",
+         "test_rgb_shows_each_entitys_colour": "render",
+         "test_png_carries_the_same_images": "render",
+         "test_nothing_within_far_is_inf_and_unlabelled": "render",
+         "test_several_cameras_in_one_request": "render",
+         "test_named_cameras_persist_and_render": "render",
+         "test_an_attached_camera_moves_with_its_body": "render",
+         "test_rays_hit_where_the_geometry_is": "raycast",
+         "test_rays_stop_at_their_ends_and_max_length": "raycast",
+         "test_too_many_rays_is_refused_with_the_limit_named": "raycast"}
+
+
+def features(engine: str) -> tuple[str, ...]:
+    made = create_engine(engine)
+    try:
+        return made.capabilities().features
+    finally:
+        made.close()
+
+
+@pytest.fixture(autouse=True)
+def needed_feature(request: pytest.FixtureRequest) -> None:
+    feature = NEEDS.get(request.node.originalname)
+    engine = getattr(request.node, "callspec", None) and request.node.callspec.params.get(
+        "engine")
+    if feature and engine and feature not in features(engine):
+        pytest.skip(f"the {engine} engine lists no {feature!r} feature")
+
+
+def test_an_engine_without_a_feature_refuses_it_and_keeps_serving(sim: Client) -> None:
+    listed = sim.capabilities().features
+    calls = {"render": lambda: sim.render(top_camera()),
+             "raycast": lambda: sim.raycast([[0, 0, 1]], directions=[[0, 0, -1]])}
+    missing = [f for f in calls if f not in listed]
+    if not missing:
+        pytest.skip("the engine lists every perception feature")
+    for feature in missing:
+        with pytest.raises(FeatureUnsupportedError):
+            calls[feature]()
+    assert sim.status().engine
 
 
 @pytest.fixture

@@ -26,7 +26,7 @@ from galton.client import (
 )
 
 STEPS = 150
-OTHER_ENGINE = {"mujoco": "pybullet", "pybullet": "mujoco", "ode": "mujoco"}
+OTHER_ENGINE = {"mujoco": "pybullet", "pybullet": "mujoco", "ode": "mujoco", "dart": "mujoco"}
 DEFAULT_MAX_SNAPSHOTS = 16  # docs/protocol.md, "Limits"
 
 

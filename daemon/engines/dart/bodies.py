@@ -1,0 +1,154 @@
+"""A DART world's bodies: what the engine keeps of each (its books), how a spawned body
+becomes a one-link skeleton, and how a world is set up as gz-physics sets one up.
+
+Every spawned body is its own skeleton: a free joint holding one body node with one shape
+node (collision, visual and dynamics aspects), made immobile when static. A loaded model is
+one skeleton whose root and links are entities too (models.py).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import dartpy as dart
+import numpy as np
+
+from galton.daemon.engines.dart.params import SPECS
+from galton.protocol import BodyGroup, InvalidArgumentError
+from galton.protocol.vocabulary import BODY_SHAPES
+
+SPAWNED, MODEL = "b:", "m:"  # skeleton name prefixes: unique, whatever entities are named
+DENSITY = 1000.0  # kg/m³: the interface's mass for a body spawned with mass None
+
+
+@dataclass
+class Body:
+    """One entity: a spawned body (its own skeleton) or a model's root or link."""
+
+    name: str
+    shape: str
+    size: tuple[float, ...]
+    static: bool
+    mass: float
+    friction: float
+    restitution: float
+    follows_friction: bool  # set none: follows the default parameter
+    follows_restitution: bool
+    skeleton: Any  # dart.dynamics.Skeleton
+    node: Any  # dart.dynamics.BodyNode
+    rgba: tuple[float, ...] | None = None
+    model: str | None = None  # the root's name, for a model's root and links
+    links: list[str] = field(default_factory=list)  # a root's other links
+
+
+def make_shape(shape: str, size: tuple[float, ...]) -> Any:
+    """The DART shape of a protocol shape (half sizes; cylinders and capsules along z)."""
+    if shape == "sphere":
+        return dart.dynamics.SphereShape(size[0])
+    if shape == "box":
+        return dart.dynamics.BoxShape([2.0 * s for s in size])
+    if shape == "cylinder":
+        return dart.dynamics.CylinderShape(size[0], 2.0 * size[1])
+    if shape == "capsule":
+        return dart.dynamics.CapsuleShape(size[0], 2.0 * size[1])
+    return dart.dynamics.PlaneShape(np.array([0.0, 0.0, 1.0]), 0.0)
+
+
+def volume(shape: str, size: tuple[float, ...]) -> float:
+    """Volume (m³) of a solid shape from its half sizes."""
+    ball = 4.0 / 3.0 * math.pi * size[0] ** 3
+    if shape == "sphere":
+        return ball
+    if shape == "box":
+        return 8.0 * size[0] * size[1] * size[2]
+    cylinder = math.pi * size[0] ** 2 * 2.0 * size[1]
+    return cylinder + (ball if shape == "capsule" else 0.0)
+
+
+def check_group(group: BodyGroup) -> None:
+    """Refuse a shape the engine does not know, and a plane that would move."""
+    if group.shape not in BODY_SHAPES:
+        raise InvalidArgumentError(f"unknown shape {group.shape!r}")
+    if group.shape == "plane" and not group.static:
+        raise InvalidArgumentError("a plane must be static")
+
+
+def group_values(group: BodyGroup, values: dict[str, Any]) -> tuple[float, float, float]:
+    """Each body's mass (NaN when static), friction and restitution."""
+    size = tuple(float(s) for s in group.size)
+    mass = math.nan if group.static else (
+        float(group.mass) if group.mass is not None else DENSITY * volume(group.shape, size))
+    kind = "default_static_" if group.static else "default_"
+    friction = group.friction if group.friction is not None else values[kind + "friction"]
+    restitution = group.restitution if group.restitution is not None else (
+        values[kind + "restitution"])
+    return mass, float(friction), float(restitution)
+
+
+def build(body: Body, positions: np.ndarray, velocities: np.ndarray) -> None:
+    """Make a spawned body's skeleton (its books already filled) at this free-joint state."""
+    skeleton = dart.dynamics.Skeleton(SPAWNED + body.name)
+    _, node = skeleton.createFreeJointAndBodyNodePair()
+    node.setName(body.name)
+    shape_node = node.createShapeNode(make_shape(body.shape, body.size))
+    shape_node.createCollisionAspect()
+    shape_node.createDynamicsAspect()
+    body.skeleton, body.node = skeleton, node
+    set_surface(body)
+    if not body.static:
+        set_mass(body, body.mass)
+    skeleton.setPositions(positions)
+    skeleton.setVelocities(velocities)
+    if body.static:
+        skeleton.setMobile(False)
+
+
+def set_surface(body: Body) -> None:
+    """Friction and restitution on every shape of the body's node."""
+    for k in range(body.node.getNumShapeNodes()):
+        aspect = body.node.getShapeNode(k).getDynamicsAspect()
+        if aspect is not None:
+            aspect.setFrictionCoeff(body.friction)
+            aspect.setRestitutionCoeff(body.restitution)
+
+
+def set_mass(body: Body, mass: float) -> None:
+    """A spawned body's mass and the inertia of its solid shape at that mass."""
+    shape = body.node.getShapeNode(0).getShape()
+    inertia = dart.dynamics.Inertia(mass, np.zeros(3), shape.computeInertia(mass))
+    body.node.setInertia(inertia)
+    body.mass = mass
+
+
+def new_world(values: dict[str, Any]) -> Any:
+    """An empty DART world set up as gz-physics' ConstructEmptyWorld sets one up: the ODE
+    collision detector (dartsim/src/EntityManagementFeatures.cc), then these values."""
+    world = dart.simulation.World()
+    configure(world, values)
+    return world
+
+
+DETECTOR_CLASSES = {"ode": "OdeCollisionDetector", "fcl": "FCLCollisionDetector",
+                    "bullet": "BulletCollisionDetector", "dart": "DARTCollisionDetector"}
+
+
+def configure(world: Any, values: dict[str, Any]) -> None:
+    """Hand the world-level values to DART (the others reach bodies)."""
+    world.setTimeStep(float(values["timestep"]))
+    world.setGravity(np.asarray(values["gravity"], dtype=float))
+    sleep = world.getDeactivationOptions()
+    sleep.mEnabled = bool(values["dart.sleep"])
+    world.setDeactivationOptions(sleep)
+    solver = world.getConstraintSolver()
+    detector = getattr(dart.collision, DETECTOR_CLASSES[values["dart.collision_detector"]])
+    fallback = dart.constraint.PgsBoxedLcpSolverOption()
+    fallback.mMaxIteration = int(values["solver_iterations"])
+    solver.getSecondaryBoxedLcpSolver().setOption(fallback)
+    if solver.getCollisionDetector().getType() != detector.getStaticType():
+        solver.setCollisionDetector(detector())
+
+
+def defaults() -> dict[str, Any]:
+    return {name: spec.default for name, spec in SPECS.items()}

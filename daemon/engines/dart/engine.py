@@ -1,0 +1,269 @@
+"""The DART engine, set up as Gazebo Harmonic runs it through gz-physics' dartsim plugin:
+DART's world with ODE's collision detector, a 1 ms step, SDF's surface defaults
+(friction 1, restitution 0). docs/ENGINES.md names the gz-physics file behind each setting.
+
+What differs from Gazebo, and why: gz-physics raises DART's contact limit per step to
+10,000 and caps each pair at SDF's ``max_contacts`` (20); dartpy hands out only a copy of
+the constraint solver's collision option, so this engine runs DART's own limit (1,000
+contacts a step, shared between colliding pairs) and no per-pair cap. Past 1,000
+touching pairs the pairs found last get no contact (DART warns once).
+
+The engine's parts: bodies.py (books, spawned skeletons, the world's set-up), state.py
+(states and divergence), models.py (URDF and MJCF), joints.py (joints, targets, wrenches),
+snapshot.py (snapshots, rebuilds) and contacts.py. dartpy has no ray casts and no
+headless renderer: ``raycast`` and ``render`` are FEATURE_UNSUPPORTED.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import importlib.metadata
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from galton.daemon.engine import (
+    FEATURE_CONTACTS,
+    FEATURE_DELETE,
+    FEATURE_JOINT_TARGETS,
+    FEATURE_JOINTS,
+    FEATURE_LOAD_MODEL,
+    FEATURE_SET_STATE,
+    FEATURE_SNAPSHOT,
+    FEATURE_SPAWN,
+    FEATURE_STATIC_POSE,
+    FEATURE_TARGET_EFFORT,
+    FEATURE_TARGET_POSITION,
+    FEATURE_TARGET_VELOCITY,
+    FEATURE_UPDATE_FRICTION,
+    FEATURE_UPDATE_MASS,
+    FEATURE_UPDATE_RESTITUTION,
+    FEATURE_UPDATE_RGBA,
+    FEATURE_WRENCH,
+    Engine,
+)
+from galton.daemon.engines.dart import bodies as books
+from galton.daemon.engines.dart import contacts as contact_points
+from galton.daemon.engines.dart import frames, state
+from galton.daemon.engines.dart.joints import Robots, Target
+from galton.daemon.engines.dart.models import MODEL_FORMATS
+from galton.daemon.engines.dart.params import SPECS
+from galton.daemon.engines.dart.scene import Scene
+from galton.daemon.engines.dart.snapshot import Snapshots
+from galton.daemon.params import check_updates
+from galton.protocol import (
+    PROTOCOL_VERSION,
+    BodyGroup,
+    BodyProperties,
+    Capabilities,
+    EntityInfo,
+    InvalidArgumentError,
+    JointInfo,
+)
+from galton.protocol.vocabulary import BODY_SHAPES, POSE_WIDTH, TWIST_WIDTH
+
+FEATURES = (FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDATE_MASS,
+            FEATURE_UPDATE_FRICTION, FEATURE_UPDATE_RESTITUTION, FEATURE_UPDATE_RGBA,
+            FEATURE_LOAD_MODEL, FEATURE_STATIC_POSE, FEATURE_JOINTS, FEATURE_JOINT_TARGETS,
+            FEATURE_TARGET_POSITION, FEATURE_TARGET_VELOCITY, FEATURE_TARGET_EFFORT,
+            FEATURE_WRENCH, FEATURE_SNAPSHOT, FEATURE_CONTACTS)
+
+
+class DartEngine(Scene, Snapshots, Engine):
+    """Named rigid bodies and models in a DART world."""
+
+    name = "dart"
+
+    def __init__(self) -> None:
+        self._values: dict[str, Any] = books.defaults()
+        self._world = books.new_world(self._values)
+        self._bodies: dict[str, books.Body] = {}
+        self._robots = Robots()
+        self._init_scene()
+        self._unchecked = False  # states were set from outside since the last step
+        self._diverged = False
+
+    # -- description ----------------------------------------------------------------------
+    def capabilities(self) -> Capabilities:
+        return Capabilities(
+            engine=self.name, engine_version=importlib.metadata.version("dartpy"),
+            protocol_version=PROTOCOL_VERSION, body_shapes=BODY_SHAPES,
+            model_formats=MODEL_FORMATS, features=FEATURES,
+            params={name: spec.describe() for name, spec in SPECS.items()})
+
+    @property
+    def timestep(self) -> float:
+        return float(self._values["timestep"])
+
+    def get_params(self) -> dict[str, Any]:
+        return {k: list(v) if isinstance(v, tuple) else v for k, v in self._values.items()}
+
+    def set_params(self, params: dict[str, Any]) -> None:
+        clean = check_updates(self.name, SPECS, params)
+        self._values.update(clean)
+        books.configure(self._world, self._values)
+        self._follow_defaults(clean)
+
+    # -- bodies ---------------------------------------------------------------------------
+    def spawn(self, groups: Sequence[BodyGroup]) -> None:
+        self._check_new([n for g in groups for n in g.names])
+        for group in groups:
+            books.check_group(group)
+        for group in groups:
+            if group.names:
+                self._spawn_group(group)
+
+    def _spawn_group(self, group: BodyGroup) -> None:
+        mass, friction, restitution = books.group_values(group, self._values)
+        size = tuple(float(s) for s in group.size)
+        poses = np.asarray(group.poses, dtype=float).reshape(-1, POSE_WIDTH)
+        twists = np.zeros((len(poses), TWIST_WIDTH)) if group.twists is None else (
+            np.asarray(group.twists, dtype=float).reshape(-1, TWIST_WIDTH))
+        positions = frames.poses_to_free(poses)
+        velocities = frames.twists_to_free(twists)
+        if group.static:
+            velocities[:] = 0.0
+        for k, name in enumerate(group.names):
+            body = books.Body(name, group.shape, size, group.static, mass, friction,
+                              restitution, group.friction is None, group.restitution is None,
+                              None, None, group.rgba)
+            books.build(body, positions[k], velocities[k])
+            self._add(body)
+
+    def delete(self, names: Sequence[str]) -> None:
+        found = self._lookup(names)
+        for body in found:
+            self._remove(body)
+
+    def clear(self) -> None:
+        self._world = books.new_world(self._values)
+        self._bodies.clear()
+        self._robots = Robots()
+        self._init_scene()
+        self._diverged = False
+
+    def reset_dynamics(self) -> None:
+        """A new world holding the same skeletons, in the order they were made: the
+        collision detector's spaces start afresh, so a rewound world replays its first run."""
+        self._rebuild()
+        self._diverged = False
+        self._unchecked = True
+
+    def update(self, names: Sequence[str], props: BodyProperties) -> None:
+        found = self._lookup(names)
+        if props.mass is not None:
+            static = [b.name for b in found if b.static]
+            if static:
+                raise InvalidArgumentError(f"entity {static[0]!r} is static: it has no mass")
+        for body in found:
+            self._edit(body, props)
+
+    def properties(self, names: Sequence[str]) -> np.ndarray:
+        rows = [self._properties(body) for body in self._lookup(names)]
+        return np.array(rows, dtype=float).reshape(len(rows), 3)
+
+    # -- states ---------------------------------------------------------------------------
+    def get_states(self, names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
+        return state.read(self._lookup(names))
+
+    def set_states(self, names: Sequence[str], poses: np.ndarray | None,
+                   twists: np.ndarray | None) -> None:
+        state.write(self._lookup(names), poses, twists)
+        self._unchecked = True
+
+    def step(self, count: int) -> None:
+        """World.step, after each held target and wrench is applied where any are (DART
+        clears forces after every step). States set from outside are checked first: ODE
+        aborts the process on a NaN or far-off body, so such a world is not stepped."""
+        if self._unchecked:
+            self._unchecked = False
+            if not state.safe_to_step(list(self._bodies.values())):
+                self._diverged = True
+        if self._diverged:
+            return
+        world, robots = self._world, self._robots
+        if robots.busy():
+            for _ in range(count):
+                robots.actuate()
+                world.step()
+            return
+        for _ in range(count):
+            world.step()
+
+    def state_within(self, max_position: float, max_speed: float) -> bool:
+        return not self._diverged and state.within(list(self._bodies.values()),
+                                                   max_position, max_speed)
+
+    # -- models and joints ----------------------------------------------------------------
+    def load_model(self, fmt: str, text: str | None, path: str | None,
+                   prefix: str, *, fixed_base: bool = True) -> list[EntityInfo]:
+        return self._load(fmt, text, path, prefix, fixed_base)
+
+    def joints(self) -> list[JointInfo]:
+        targets = self._robots.targets
+        return [dataclasses.replace(joint.info, mode=targets[name].mode if name in targets
+                                    else "none")
+                for name, joint in self._robots.joints.items()]
+
+    def get_joint_states(self, names: Sequence[str]
+                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        found = self._robots.scalar(names)
+        positions = np.array([j.joint.getPosition(0) for j in found], dtype=float)
+        velocities = np.array([j.joint.getVelocity(0) for j in found], dtype=float)
+        efforts = np.array([self._robots.efforts.get(n, 0.0) for n in names], dtype=float)
+        return positions, velocities, efforts
+
+    def set_joint_states(self, names: Sequence[str], positions: np.ndarray,
+                         velocities: np.ndarray | None) -> None:
+        found = self._robots.scalar(names)
+        for k, joint in enumerate(found):
+            joint.joint.setPosition(0, float(positions[k]))
+            if velocities is not None:
+                joint.joint.setVelocity(0, float(velocities[k]))
+        self._unchecked = True
+
+    def set_joint_targets(self, names: Sequence[str], mode: str, targets: np.ndarray,
+                          kp: np.ndarray, kd: np.ndarray, max_effort: np.ndarray) -> None:
+        self._robots.scalar(names)
+        for k, name in enumerate(names):
+            if mode == "none":
+                self._robots.targets.pop(name, None)
+                self._robots.efforts.pop(name, None)
+            else:
+                self._robots.targets[name] = Target(mode, float(targets[k]), float(kp[k]),
+                                                    float(kd[k]), float(max_effort[k]))
+
+    def set_wrenches(self, names: Sequence[str], wrenches: np.ndarray,
+                     points: np.ndarray | None) -> None:
+        found = self._lookup(names)
+        for k, body in enumerate(found):
+            force = np.asarray(wrenches[k, :3], dtype=float).copy()
+            torque = np.asarray(wrenches[k, 3:], dtype=float).copy()
+            if points is not None:
+                centre = np.asarray(body.node.getCOM(), dtype=float)
+                torque = torque + np.cross(np.asarray(points[k], dtype=float) - centre, force)
+            self._robots.wrenches[body.name] = (body.node, force, torque)
+
+    def clear_wrenches(self, names: Sequence[str] | None) -> None:
+        if names is None:
+            self._robots.wrenches.clear()
+            return
+        for name in names:
+            self._robots.wrenches.pop(name, None)
+
+    def restore_joints(self) -> None:
+        for joint in self._robots.joints.values():
+            if joint.info.type != "free":
+                joint.joint.setPositions(np.asarray(joint.loaded, dtype=float))
+                joint.joint.setVelocities(np.zeros(len(joint.loaded)))
+        self._robots.targets.clear()
+        self._robots.efforts.clear()
+        self._robots.wrenches.clear()
+
+    # -- perception -----------------------------------------------------------------------
+    def contacts(self, names: Sequence[str] | None
+                 ) -> tuple[list[str], list[str], np.ndarray, np.ndarray, np.ndarray,
+                            np.ndarray]:
+        return contact_points.contacts(self._world, self._entity_keys(),
+                                       None if names is None else set(names))

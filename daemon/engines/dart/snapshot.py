@@ -1,0 +1,137 @@
+"""Snapshots of a DART world as plain data, and their restore into a fresh engine.
+
+DART keeps no contact state between steps (each step detects contacts and solves them
+anew), so a world is its skeletons, in the order they were added, their generalized
+positions and velocities, and what the engine holds (targets, wrenches, parameters).
+Positions and velocities travel as the float64 numbers DART holds, so a restored world
+goes on bit for bit as its source, provided the source's collision detector holds its
+skeletons in the same order: ``canonical`` first rebuilds the source world (as
+``reset_dynamics`` does), after which both are worlds made afresh in the same order.
+"""
+
+from __future__ import annotations
+
+import importlib.metadata
+import math
+from typing import Any
+
+import numpy as np
+
+from galton.daemon.engines.dart import bodies as books
+from galton.daemon.engines.dart import models
+from galton.daemon.engines.dart.joints import Robots, Target
+from galton.daemon.engines.dart.params import SPECS
+from galton.daemon.params import check_updates
+from galton.protocol import BodyProperties, InvalidArgumentError
+
+FORMAT = "galton-dart-1"
+
+
+class Snapshots:
+    """The engine's part that writes and reads snapshots (DartEngine sets the attributes)."""
+
+    _world: Any
+    _values: dict[str, Any]
+    _bodies: dict[str, books.Body]
+    _robots: Robots
+    _owners: list[str]
+    _models: dict[str, models.Model]
+    _edits: dict[str, list[tuple[str, BodyProperties]]]
+
+    def snapshot(self, *, canonical: bool = True) -> dict[str, Any]:
+        if canonical:
+            self._rebuild()  # type: ignore[attr-defined]
+        return {"format": FORMAT, "engine": "dart",
+                "dartpy": importlib.metadata.version("dartpy"),
+                "params": {k: list(v) if isinstance(v, tuple) else v
+                           for k, v in self._values.items()},
+                "time": float(self._world.getTime()),
+                "items": [self._item(owner) for owner in self._owners],
+                "targets": {n: [t.mode, t.target, t.kp, t.kd, t.max_effort]
+                            for n, t in self._robots.targets.items()},
+                "efforts": dict(self._robots.efforts),
+                "wrenches": {n: [f.tolist(), t.tolist()]
+                             for n, (_, f, t) in self._robots.wrenches.items()}}
+
+    def _item(self, owner: str) -> dict[str, Any]:
+        body = self._bodies[owner]
+        dynamic = {"positions": [float(v) for v in body.skeleton.getPositions()],
+                   "velocities": [float(v) for v in body.skeleton.getVelocities()]}
+        if body.model is None:
+            return {"kind": "body", "name": body.name, "shape": body.shape,
+                    "size": list(body.size), "static": body.static,
+                    "mass": None if body.static else body.mass, "friction": body.friction,
+                    "restitution": body.restitution,
+                    "follows": [body.follows_friction, body.follows_restitution],
+                    "rgba": None if body.rgba is None else list(body.rgba), **dynamic}
+        model = self._models[owner]
+        return {"kind": "model", "root": owner, "fmt": model.fmt, "text": model.text,
+                "prefix": model.prefix, "fixed_base": model.fixed_base,
+                "index": model.index,
+                "edits": [[name, props.to_wire()] for name, props in
+                          self._edits.get(owner, [])], **dynamic}
+
+    def restore(self, data: dict[str, Any]) -> None:
+        if not isinstance(data, dict) or data.get("format") != FORMAT:
+            raise InvalidArgumentError(f"not a DART snapshot (format {FORMAT!r} expected)")
+        try:
+            self._restore(data)
+        except (KeyError, TypeError, ValueError, IndexError, AttributeError) as exc:
+            raise InvalidArgumentError(f"malformed DART snapshot: {type(exc).__name__}: "
+                                       f"{exc}") from None
+
+    def _restore(self, data: dict[str, Any]) -> None:
+        self.set_params(check_updates("dart", SPECS, data["params"]))  # type: ignore[attr-defined]
+        for item in data["items"]:
+            if item["kind"] == "body":
+                self._restore_body(item)
+            elif item["kind"] == "model":
+                self._restore_model(item)
+            else:
+                raise ValueError(f"unknown item kind {item['kind']!r}")
+        self._world.setTime(float(data["time"]))
+        for name, (mode, target, kp, kd, effort) in data["targets"].items():
+            self._robots.scalar([name])
+            self._robots.targets[name] = Target(str(mode), float(target), float(kp),
+                                                float(kd), float(effort))
+        self._robots.efforts.update({str(k): float(v) for k, v in data["efforts"].items()})
+        for name, (force, torque) in data["wrenches"].items():
+            self._robots.wrenches[name] = (self._bodies[name].node,
+                                           _vector(force), _vector(torque))
+
+    def _restore_body(self, item: dict[str, Any]) -> None:
+        shape, size = str(item["shape"]), tuple(float(s) for s in item["size"])
+        static = bool(item["static"])
+        mass = math.nan if static else float(item["mass"])
+        follows = item["follows"]
+        rgba = None if item["rgba"] is None else tuple(float(c) for c in item["rgba"])
+        body = books.Body(str(item["name"]), shape, size, static, mass,
+                          float(item["friction"]), float(item["restitution"]),
+                          bool(follows[0]), bool(follows[1]), None, None, rgba)
+        self._check_new([body.name])  # type: ignore[attr-defined]
+        if shape not in ("sphere", "box", "cylinder", "capsule", "plane"):
+            raise ValueError(f"unknown shape {shape!r}")
+        books.build(body, _vector(item["positions"], 6), _vector(item["velocities"], 6))
+        self._add(body)  # type: ignore[attr-defined]
+
+    def _restore_model(self, item: dict[str, Any]) -> None:
+        skeletons = models.parse(str(item["fmt"]), str(item["text"]), bool(item["fixed_base"]))
+        index = int(item["index"])
+        skeleton = skeletons[index]
+        prefix = str(item["prefix"])
+        self._check_new(models.link_names(skeleton, prefix))  # type: ignore[attr-defined]
+        self._add_model(models.Model(  # type: ignore[attr-defined]
+            models.root_name(skeleton, prefix), skeleton, str(item["fmt"]), str(item["text"]),
+            prefix, bool(item["fixed_base"]), index))
+        for name, wire in item["edits"]:
+            self._edit(self._bodies[name], BodyProperties(**wire))  # type: ignore[attr-defined]
+        count = skeleton.getNumDofs()
+        skeleton.setPositions(_vector(item["positions"], count))
+        skeleton.setVelocities(_vector(item["velocities"], count))
+
+
+def _vector(values: Any, length: int = 3) -> np.ndarray:
+    array = np.asarray(values, dtype=float).reshape(-1)
+    if array.shape != (length,):
+        raise ValueError(f"expected {length} numbers, got {array.shape[0]}")
+    return array
