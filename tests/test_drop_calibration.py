@@ -17,16 +17,19 @@ from galton.client import Client, plane, spheres
 RADIUS = 0.045
 DROP_HEIGHT = 0.5  # m between the ball's bottom and the plane
 # Documented drop-test bounce of the daemon defaults (docs/PHYSICS.md), and its tolerance.
-DEFAULT_BOUNCE = {"mujoco": 0.70, "pybullet": 0.72, "dart": 0.0}  # DART: SDF's restitution 0
+DEFAULT_BOUNCE = {"mujoco": 0.70, "pybullet": 0.72,
+                  "dart": 0.0,  # SDF's restitution 0
+                  "ode": 0.48}  # Webots' bounce 0.5
 # Documented bounce of two balls meeting head-on at 1 m/s with the defaults (MuJoCo: the
 # moving bodies' own surface; PyBullet: the product of both, like any contact).
-DEFAULT_BALL_BOUNCE = {"mujoco": 0.38, "pybullet": 0.73, "dart": 0.0}
+DEFAULT_BALL_BOUNCE = {"mujoco": 0.38, "pybullet": 0.73, "dart": 0.0, "ode": 0.49}
 TOLERANCE = 0.05
 # The paper-webots preset's contact: a Webots-like bounce of 0.5 on both engines.
 WEBOTS_PARAMS = {"mujoco": {"default_restitution": 0.5, "default_static_restitution": 0.5},
                  "pybullet": {"default_restitution": 0.707,
                               "default_static_restitution": 0.707},
-                 "dart": {"default_restitution": 0.707, "default_static_restitution": 0.707}}
+                 "dart": {"default_restitution": 0.707, "default_static_restitution": 0.707},
+                 "ode": {"default_restitution": 0.5, "default_static_restitution": 0.5}}
 WEBOTS_BOUNCE = 0.5
 
 

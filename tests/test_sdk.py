@@ -265,6 +265,7 @@ CALLS: dict[str, Callable[[Client], object]] = {
     "take_control": Client.take_control,
     "release_control": Client.release_control,
     "control": lambda c: c.control().__enter__(),
+    "stream_states": lambda c: c.stream_states(10.0),
 }
 
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 import time
 
 import msgpack
+import pytest
 import zmq
 from support_daemons import start_daemon
 
@@ -47,6 +48,7 @@ def steps_per_second(endpoint: str, clients: int, seconds: float) -> tuple[float
         context.destroy(linger=0)
 
 
+@pytest.mark.slow  # a throughput ratio: on demand, on a quiet machine (-m slow)
 def test_a_crowd_of_single_steps_keeps_the_stepping_going(
         daemons: dict[str, EmbeddedDaemon], engine: str) -> None:
     daemon = start_daemon(daemons, engine)

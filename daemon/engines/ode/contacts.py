@@ -134,6 +134,13 @@ class Collider:
         LIB.dJointGroupEmpty(self.group)
         self.recorded = []
 
+    def let_go(self, gone: set[str]) -> None:
+        """Before bodies are destroyed: their contact joints go (all of the step's: ODE
+        empties a group whole), the last step's reports of the others stay until the next
+        step (a contact read between steps does not change)."""
+        LIB.dJointGroupEmpty(self.group)
+        self.recorded = [r for r in self.recorded if r[0] not in gone and r[1] not in gone]
+
     def close(self) -> None:
         LIB.dJointGroupDestroy(self.group)
 

@@ -179,7 +179,7 @@ class OdeEngine(Snapshots, Engine):
             bodies.extend(b for b in self._robots.links_of(root.name, self._bodies)
                           if b not in bodies)
             self._robots.forget(root.name)
-        self._collider.forget()
+        self._collider.let_go({body.name for body in bodies})
         for body in bodies:
             del self._bodies[body.name]
             for geom in body.geoms():
