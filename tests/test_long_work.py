@@ -90,7 +90,8 @@ def test_a_long_prediction_ends_at_pause_stop_or_reset(sim: Client, ender: str) 
     sim.spawn(plane(), spheres(["ball"], [[0, 0, 0.5]], 0.05))
     other = companion(sim)
     try:
-        answer = _in_background(lambda: other.call("predict", {"horizon": 1e4}, timeout=60))
+        answer = _in_background(lambda: other.call(  # a sample every 10 s: a small reply
+            "predict", {"horizon": 1e4, "every": 10.0}, timeout=60))
         while not _predicting(sim):
             assert answer.empty(), f"the prediction ended early: {answer.get()}"
         sim.call(ender)

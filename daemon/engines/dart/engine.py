@@ -183,6 +183,7 @@ class DartEngine(Scene, Snapshots, Engine):
         if self._diverged:
             return
         world, robots = self._world, self._robots
+        robots.sync_damping()
         if robots.busy():
             for _ in range(count):
                 robots.actuate()
@@ -211,7 +212,7 @@ class DartEngine(Scene, Snapshots, Engine):
         found = self._robots.scalar(names)
         positions = np.array([j.joint.getPosition(0) for j in found], dtype=float)
         velocities = np.array([j.joint.getVelocity(0) for j in found], dtype=float)
-        efforts = np.array([self._robots.efforts.get(n, 0.0) for n in names], dtype=float)
+        efforts = np.array([self._robots.effort(n) for n in names], dtype=float)
         return positions, velocities, efforts
 
     def set_joint_states(self, names: Sequence[str], positions: np.ndarray,

@@ -1,9 +1,12 @@
 """Models' joints, the targets held on them and the wrenches held on bodies.
 
 DART clears every joint force and external force after each step, so a held target or
-wrench is applied again before every step: tau from the target law on the joint's
-generalized force, a wrench as an external force at the node's centre of mass plus an
-external torque, both in the world frame.
+wrench is applied again before every step: the target's drive (kp (target - q), kd target
+or the effort, clipped to max_effort) on the joint's generalized force, a wrench as an
+external force at the node's centre of mass plus an external torque, both in the world
+frame. The target's damping kd goes into the joint's damping coefficient, which DART
+integrates implicitly (at the step's end velocity), as the interface's law asks: an
+explicit kd shakes a light link (docs/protocol.md, set_joint_targets).
 """
 
 from __future__ import annotations
@@ -51,12 +54,33 @@ class Robots:
     def busy(self) -> bool:
         return bool(self.targets or self.wrenches)
 
+    def sync_damping(self) -> None:
+        """Each 1-DOF joint's damping: its own, plus a held position or velocity target's kd."""
+        for name, joint in self.joints.items():
+            if not joint.info.scalar:
+                continue
+            target = self.targets.get(name)
+            damped = target is not None and target.mode in ("position", "velocity")
+            wanted = joint.info.damping + (target.kd if damped and target else 0.0)
+            if joint.joint.getDampingCoefficient(0) != wanted:
+                joint.joint.setDampingCoefficient(0, wanted)
+
+    def effort(self, name: str) -> float:
+        """What the joint's target applied in the last step: its drive and its damping at
+        the velocity the step ended with."""
+        target = self.targets.get(name)
+        if target is None:
+            return 0.0
+        drive = self.efforts.get(name, 0.0)
+        if target.mode in ("position", "velocity"):
+            return drive - target.kd * float(self.joints[name].joint.getVelocity(0))
+        return drive
+
     def actuate(self) -> None:
-        """Apply every held target and wrench for the coming step."""
+        """Apply every held target's drive and every wrench for the coming step."""
         for name, target in self.targets.items():
             joint = self.joints[name].joint
-            q, qdot = joint.getPosition(0), joint.getVelocity(0)
-            tau = target_law(target, q, qdot)
+            tau = target_drive(target, joint.getPosition(0))
             joint.setForce(0, tau)
             self.efforts[name] = tau
         for node, force, torque in self.wrenches.values():
@@ -85,12 +109,12 @@ class Robots:
         return found
 
 
-def target_law(target: Target, q: float, qdot: float) -> float:
-    """The interface's law: position, velocity, effort or none, clipped."""
+def target_drive(target: Target, q: float) -> float:
+    """The law's drive (its damping is the joint's: Robots.sync_damping), clipped."""
     if target.mode == "position":
-        tau = target.kp * (target.target - q) - target.kd * qdot
+        tau = target.kp * (target.target - q)
     elif target.mode == "velocity":
-        tau = target.kd * (target.target - qdot)
+        tau = target.kd * target.target
     elif target.mode == "effort":
         tau = target.target
     else:
