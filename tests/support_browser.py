@@ -6,10 +6,13 @@ page is drawn)."""
 from __future__ import annotations
 
 import base64
+import contextlib
 import io
 import json
+import os
 import re
 import shutil
+import signal
 import subprocess
 import tempfile
 import time
@@ -38,7 +41,8 @@ class Browser:
         self._process = subprocess.Popen(
             [CHROMIUM, *FLAGS, f"--window-size={width},{height}",
              f"--user-data-dir={self._profile.name}", url],
-            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+            start_new_session=True)  # its GPU and renderer processes end with its group
         self._page = connect(self._page_socket(), max_size=None)
         self._ids = 0
 
@@ -84,9 +88,16 @@ class Browser:
                 return image
 
     def close(self) -> None:
+        """End the browser and every process it started (a GPU process left behind kept
+        a core busy after the test)."""
         self._page.close()
-        self._process.terminate()
-        self._process.wait(30)
+        group = os.getpgid(self._process.pid)
+        os.killpg(group, signal.SIGTERM)
+        try:
+            self._process.wait(30)
+        finally:
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(group, signal.SIGKILL)
         assert self._process.stderr is not None
         self._process.stderr.close()
         self._profile.cleanup()
