@@ -17,7 +17,7 @@ from matplotlib.figure import Figure
 
 from galton.analysis import stats
 from galton.analysis.formatting import balls_text, p_equals
-from galton.analysis.records import TrialRecord
+from galton.analysis.records import TrialRecord, has_curve
 from galton.analysis.summary import config_key, config_labels, trial_seed
 
 DPI = 110
@@ -171,7 +171,3 @@ def plot_all(trials: Sequence[TrialRecord], out_dir: str | Path,
         return histograms
     return [*histograms, plot_rtf(trials, out_dir), plot_resources(trials, out_dir)]
 
-
-def has_curve(trials: Sequence[TrialRecord]) -> bool:
-    """Whether the trials ran at two ball counts at least (a curve versus balls)."""
-    return len({t.balls for t in trials}) >= 2

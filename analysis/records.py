@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import math
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 from typing import Any
@@ -168,3 +169,9 @@ class ExperimentResults:
         except (OSError, json.JSONDecodeError) as exc:
             raise RecordError(f"cannot read results from {path}: {exc}") from exc
         return cls.from_dict(data)
+
+
+def has_curve(trials: Sequence[TrialRecord]) -> bool:
+    """Whether the trials ran at two ball counts at least (a curve versus balls: the RTF
+    and footprint plots; one count would draw one point)."""
+    return len({t.balls for t in trials}) >= 2

@@ -19,7 +19,7 @@ from galton.analysis.published import (
     PUBLISHED_TABLE2,
     SOURCE,
 )
-from galton.analysis.records import LOSS_REASONS, ExperimentResults, TrialRecord
+from galton.analysis.records import LOSS_REASONS, ExperimentResults, TrialRecord, has_curve
 from galton.analysis.summary import EngineSummary, GroupSummary
 from galton.analysis.verdict import THRESHOLDS_TEXT, Verdict
 
@@ -197,7 +197,7 @@ def render_report(results: ExperimentResults, summaries: Sequence[EngineSummary]
 
 def _plots(results: ExperimentResults, plot_files: Sequence[str]) -> list[str]:
     lines = ["## Plots", ""] + [f"- [{name}]({name})" for name in plot_files]
-    if len({t.balls for t in results.trials}) < 2:
+    if not has_curve(results.trials):
         lines += ["", "The real-time factor and footprint versus balls are drawn for two ball "
                   "counts at least (e.g. `--balls 1,25,100`); this run has one."]
     return lines

@@ -21,9 +21,8 @@ from galton.daemon.world import World
 from galton.protocol import BODY_SHAPES, EntityInfo, InvalidArgumentError, RemoteError
 from galton.protocol.errors import brief
 from galton.protocol.model import check_name
-from galton.protocol.vocabulary import SIZE_LAYOUT
+from galton.protocol.vocabulary import MODEL_SHAPES, SIZE_LAYOUT
 
-MODEL_SHAPES = ("model", "link")
 SOURCES = ("spawn", "model")
 
 
