@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from galton.daemon.engine import IMAGE_OUTPUTS, CameraView
+from galton.daemon.engines.base import IMAGE_OUTPUTS, CameraView
 from galton.daemon.world import World
 from galton.protocol import InvalidArgumentError
 from galton.protocol.errors import brief

@@ -15,7 +15,7 @@ import os
 from collections.abc import Callable
 from pathlib import Path
 
-from galton.daemon.engine import Engine
+from galton.daemon.engines.base import Engine
 from galton.daemon.limits import Limits
 from galton.daemon.world import World
 from galton.daemon.world_snapshot import decode, encode, snapshot_of, world_from

@@ -18,8 +18,8 @@ import zenoh
 
 from galton.daemon import checkpoint
 from galton.daemon.calls import Call, Task
-from galton.daemon.engine import Engine
 from galton.daemon.engines import ENGINE_CLASSES, create_engine
+from galton.daemon.engines.base import Engine
 from galton.daemon.limits import DEFAULT_LIMITS, Limits
 from galton.daemon.loop import SimLoop
 from galton.daemon.ros2.options import Ros2Options

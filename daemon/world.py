@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from galton.daemon.engine import Engine
+from galton.daemon.engines.base import Engine
 from galton.daemon.limits import DEFAULT_LIMITS, Limits
 from galton.daemon.model_files import resolve_model
 from galton.daemon.world_joints import JointTable

@@ -14,7 +14,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from galton.daemon.engine import (
+from galton.daemon.engines.base import (
     FEATURE_TARGET_EFFORT,
     FEATURE_TARGET_POSITION,
     FEATURE_TARGET_VELOCITY,

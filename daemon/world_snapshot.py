@@ -17,7 +17,7 @@ import msgpack
 import numpy as np
 
 from galton.daemon import world_snapshot_checks as checks
-from galton.daemon.engine import Engine
+from galton.daemon.engines.base import Engine
 from galton.daemon.limits import Limits
 from galton.daemon.world import Entity, World
 from galton.protocol import (

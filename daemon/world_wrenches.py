@@ -13,7 +13,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from galton.daemon.engine import Engine
+from galton.daemon.engines.base import Engine
 from galton.protocol import InvalidArgumentError
 
 

@@ -27,7 +27,7 @@ from galton.protocol.errors import brief
 from galton.protocol.model import check_type, require
 
 if TYPE_CHECKING:
-    from galton.daemon.engine import Engine
+    from galton.daemon.engines.base import Engine
     from galton.daemon.loop import SimLoop
 
 MAX_WORLD_NAME = 64
