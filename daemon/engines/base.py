@@ -105,7 +105,7 @@ class Engine(ABC):
         """Load a model (format from capabilities().model_formats) given as text or path.
 
         The daemon hands over text whose file references (meshes, textures) are already
-        absolute (daemon/model_files.py), so an engine never resolves files itself.
+        absolute (daemon/world/model_files.py), so an engine never resolves files itself.
 
         Every top-level body is a model: its root becomes an entity named ``prefix + body
         name`` with ``shape="model"``, and every other body (link) of its subtree an entity

@@ -16,7 +16,7 @@ import pybullet_data
 import pytest
 
 from galton.daemon.engines.mujoco.engine import MujocoEngine
-from galton.daemon.model_files import resolve_model
+from galton.daemon.world.model_files import resolve_model
 from galton.protocol import (
     BodyGroup,
     FeatureUnsupportedError,

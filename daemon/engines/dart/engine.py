@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from galton.daemon.core.params import check_updates
 from galton.daemon.engines.base import (
     FEATURE_CONTACTS,
     FEATURE_DELETE,
@@ -51,7 +52,6 @@ from galton.daemon.engines.dart.models import MODEL_FORMATS
 from galton.daemon.engines.dart.params import SPECS
 from galton.daemon.engines.dart.scene import Scene
 from galton.daemon.engines.dart.snapshot import Snapshots
-from galton.daemon.params import check_updates
 from galton.protocol import (
     PROTOCOL_VERSION,
     BodyGroup,

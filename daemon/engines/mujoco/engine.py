@@ -44,6 +44,7 @@ from typing import Any, ClassVar
 import mujoco
 import numpy as np
 
+from galton.daemon.core.params import check_updates
 from galton.daemon.engines.base import (
     FEATURE_CONTACTS,
     FEATURE_DELETE,
@@ -84,7 +85,6 @@ from galton.daemon.engines.mujoco.balance import BalanceGuard
 from galton.daemon.engines.mujoco.entities import HOME, Entity
 from galton.daemon.engines.mujoco.joints import Joints
 from galton.daemon.engines.mujoco.wrench import Wrenches
-from galton.daemon.params import check_updates
 from galton.protocol import (
     BODY_SHAPES,
     PROTOCOL_VERSION,

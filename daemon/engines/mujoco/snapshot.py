@@ -21,11 +21,11 @@ from typing import TYPE_CHECKING, Any
 
 import mujoco
 
+from galton.daemon.core.params import check_updates
 from galton.daemon.engines.mujoco import snapshot_arrays as arrays
 from galton.daemon.engines.mujoco import spec as ms
 from galton.daemon.engines.mujoco.entities import HOME, MUJOCO_ERRORS, Entity
 from galton.daemon.engines.mujoco.snapshot_books import read_books
-from galton.daemon.params import check_updates
 from galton.protocol import InvalidArgumentError, OperationFailedError
 from galton.protocol.errors import brief
 

@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from galton.daemon.core.params import check_updates
 from galton.daemon.engines.base import (
     FEATURE_CONTACTS,
     FEATURE_DELETE,
@@ -52,7 +53,6 @@ from galton.daemon.engines.ode.rays import RayCaster
 from galton.daemon.engines.ode.snapshot import Snapshots
 from galton.daemon.engines.ode.spawn import Body
 from galton.daemon.engines.ode.urdf import MODEL_FORMATS, load_urdf
-from galton.daemon.params import check_updates
 from galton.protocol import (
     BODY_SHAPES,
     PROTOCOL_VERSION,

@@ -47,6 +47,7 @@ import numpy as np
 import pybullet
 from pybullet_utils.bullet_client import BulletClient
 
+from galton.daemon.core.params import check_updates
 from galton.daemon.engines.base import (
     FEATURE_CONTACTS,
     FEATURE_DELETE,
@@ -86,7 +87,6 @@ from galton.daemon.engines.pybullet.render import RENDER_BACKEND
 from galton.daemon.engines.pybullet.robots import Robots
 from galton.daemon.engines.pybullet.shapes import BodyMaker, ShapeCache
 from galton.daemon.engines.pybullet.snapshot import Snapshots
-from galton.daemon.params import check_updates
 from galton.protocol import (
     PROTOCOL_VERSION,
     BodyGroup,

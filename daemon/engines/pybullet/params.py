@@ -13,8 +13,8 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
+from galton.daemon.core.params import ParamSpec, flag, integer, number, vector
 from galton.daemon.engines.pybullet.shapes import margin_for
-from galton.daemon.params import ParamSpec, flag, integer, number, vector
 
 if TYPE_CHECKING:
     from pybullet_utils.bullet_client import BulletClient

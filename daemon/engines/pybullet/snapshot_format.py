@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from galton.daemon.core.params import check_updates
 from galton.daemon.engines.pybullet import snapshot_data as sd
 from galton.daemon.engines.pybullet.joints import Articulation
 from galton.daemon.engines.pybullet.models import MODEL_FORMATS
@@ -30,7 +31,6 @@ from galton.daemon.engines.pybullet.params import SPECS
 from galton.daemon.engines.pybullet.rebuild import Body, Model, Plan, batches
 from galton.daemon.engines.pybullet.robots import JointStates, Robots
 from galton.daemon.engines.pybullet.shapes import unit_inertia
-from galton.daemon.params import check_updates
 from galton.protocol import BodyProperties, InvalidArgumentError, JointInfo
 from galton.protocol.errors import brief
 from galton.protocol.model import check_type
