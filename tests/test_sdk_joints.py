@@ -21,7 +21,7 @@ from galton.client import (
     spheres,
 )
 from galton.client.sdk.joints import body_rows, joint_values, search_path_arg
-from galton.daemon.engine_check_joints import RIG  # the checker's rig: base, hinge, slider, tip
+from galton.daemon.engines.check.joints import RIG  # the checker's rig: base, hinge, slider, tip
 from galton.protocol import unpack_f64
 
 KUKA = Path(pybullet_data.getDataPath()) / "kuka_iiwa" / "model.urdf"
