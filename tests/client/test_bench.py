@@ -13,7 +13,7 @@ from galton.analysis.board import BoardSpec
 from galton.analysis.records import ExperimentResults
 from galton.client import Client, EmbeddedDaemon
 from galton.client.bench.trial import TrialConfig, run_trial
-from galton.client.cli.common import app
+from galton.client.cli.app import app
 from galton.protocol import InvalidArgumentError
 
 runner = CliRunner()

@@ -14,7 +14,7 @@ HEAVY = ("numpy", "zenoh", "zmq", "scipy", "matplotlib", "galton.client.sdk.clie
          "galton.analysis.board")
 PROBE = """
 import contextlib, io, json, sys
-from galton.client.cli.common import app
+from galton.client.cli.app import app
 with contextlib.redirect_stdout(io.StringIO()):
     code = app({args!r}, standalone_mode=False)
 print(json.dumps([code, [m for m in {heavy!r} if m in sys.modules]]))
@@ -34,7 +34,7 @@ def test_help_imports_none_of_the_heavy_libraries(args: list[str]) -> None:
 def test_version_answers_before_the_cli_is_imported() -> None:
     probe = ("import sys; sys.argv = ['galton-client', '--version']\n"
              "from galton.client.cli.console import main; main()\n"
-             "print('typer' in sys.modules, 'galton.client.cli.common' in sys.modules)")
+             "print('typer' in sys.modules, 'galton.client.cli.app' in sys.modules)")
     done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
                           timeout=60, check=True)
     first, second = done.stdout.splitlines()

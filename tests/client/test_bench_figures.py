@@ -14,7 +14,7 @@ from galton.client import Client, EmbeddedDaemon
 from galton.client.bench.experiment import ExperimentConfig
 from galton.client.bench.trial import run_trial
 
-BENCH_DEFAULTS = Path(__file__).resolve().parents[1] / "docs" / "data" / "bench-defaults"
+BENCH_DEFAULTS = Path(__file__).resolve().parents[2] / "docs" / "data" / "bench-defaults"
 
 
 @pytest.mark.slow

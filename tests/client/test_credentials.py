@@ -10,7 +10,7 @@ from cli_support import run
 from typer.testing import CliRunner
 
 from galton.client import Credentials
-from galton.client.cli.common import app
+from galton.client.cli.app import app
 from galton.client.transport.credentials import resolve_credentials
 from galton.protocol.auth import wire_password
 from galton.protocol.errors import InvalidArgumentError
