@@ -31,6 +31,7 @@ from galton.client.sdk.embedded import free_loopback_port
 from galton.daemon import server
 from galton.daemon.core import loop
 from galton.daemon.engines import ENGINE_CLASSES
+from galton.daemon.fronts.zenoh import ZenohFront
 from galton.daemon.server import Daemon, DaemonOptions
 from galton.daemon.world.scene import World
 
@@ -54,7 +55,7 @@ def timed(owner: Any, name: str, label: str) -> None:
 
 
 def instrument(engine: str) -> None:
-    timed(Daemon, "_on_query", "callback")
+    timed(ZenohFront, "_on_query", "callback")
     timed(loop.SimLoop, "handle", "handle")
     timed(loop.SimLoop, "_run_steps", "run_steps")
     timed(World, "step", "world_step")

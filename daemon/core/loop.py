@@ -19,7 +19,15 @@ from typing import Any
 from galton.daemon.access import lease
 from galton.daemon.access.zmq_auth import refuse_by_role
 from galton.daemon.core import job_results, loop_status, side_jobs, time_control
-from galton.daemon.core.calls import Call, Inbox, StepJob, Task, smoothed_step_cost
+from galton.daemon.core.calls import (
+    Call,
+    Inbox,
+    PolledSource,
+    StepJob,
+    Task,
+    smoothed_step_cost,
+)
+from galton.daemon.core.inbox import PolledInbox
 from galton.daemon.core.limits import DEFAULT_LIMITS, Limits
 from galton.daemon.core.monitor import Pacer, ProcessMonitor, RtfWindow
 from galton.daemon.ops.handlers import HANDLERS
@@ -73,7 +81,8 @@ class SimLoop:
                  publish_event: Callable[[dict[str, Any]], None],
                  telemetry_rate_hz: float = 10.0,
                  engine_factory: Callable[[str], Any] | None = None,
-                 limits: Limits = DEFAULT_LIMITS) -> None:
+                 limits: Limits = DEFAULT_LIMITS,
+                 polled: PolledSource | None = None) -> None:
         self.world = world
         self.instance = instance
         self.limits = limits
@@ -82,8 +91,9 @@ class SimLoop:
             max_string=limits.max_string_bytes,
             long_text_keys=frozenset(a.name for op in OPERATIONS.values() for a in op.args
                                      if a.long_text))
-        queued: queue.SimpleQueue[Call | Task | None] = queue.SimpleQueue()
-        self.inbox: Inbox = queued  # galton-daemon --zmq: a PolledInbox
+        # A polled front (galton-daemon --zmq) is read on this thread: the core's PolledInbox.
+        self.inbox: Inbox = (PolledInbox(polled, self._gone_task) if polled is not None
+                             else queue.SimpleQueue())
         self.advertised: dict[str, Any] = {}  # what capabilities adds (ZeroMQ endpoints)
         # Whether a Zenoh client's liveliness token is there (the daemon asks Zenoh; None
         # when embedded without a session): take_control ties the lease to that token.
@@ -136,6 +146,23 @@ class SimLoop:
     def submit(self, call: Call | Task) -> None:
         """Called from Zenoh's threads: hand a request (or a task) to the physics thread."""
         self.inbox.put(call)
+
+    def dispatch(self, call: Call) -> None:
+        """The core's call interface (``CallPort``): hand a request to the physics thread,
+        or answer a fast one on the caller's thread -- the one path of every front."""
+        declared = OPERATIONS.get(call.op)
+        if declared is not None and declared.fast:
+            self.handle_readonly(call)
+        else:
+            self.submit(call)
+
+    def lose_client(self, client: str) -> None:
+        """The core's call interface: a client has gone; its step job and lease end on the
+        physics thread."""
+        self.submit(Task(lambda: self.client_gone(client)))
+
+    def _gone_task(self, client: str) -> Task:
+        return Task(lambda: self.client_gone(client))
 
     def stop(self) -> None:
         self._stopping = True
