@@ -84,7 +84,7 @@ from galton.daemon.engines import mujoco_teleport as teleport
 from galton.daemon.engines import mujoco_time as timing
 from galton.daemon.engines import mujoco_wrench as wrench
 from galton.daemon.engines.mujoco_balance import BalanceGuard
-from galton.daemon.engines.mujoco_entity import HOME, Entity
+from galton.daemon.engines.mujoco_entity import Entity
 from galton.daemon.engines.mujoco_joints import Joints
 from galton.daemon.engines.mujoco_wrench import Wrenches
 from galton.daemon.params import check_updates
@@ -136,8 +136,6 @@ class MujocoEngine(Engine):
         self._spec = mujoco.MjSpec()
         self._spec.modelname = "galton"
         self._spec.copy_during_attach = True  # see mujoco_spec.add_group
-        self._home = self._spec.worldbody.add_frame()  # where big spawned groups live
-        self._home.name = HOME
         self._litter: list[Any] = []  # empty frames, deleted with the next bodies removed
         self._builders = mp.Builders()
         self._spec.memory = ms.arena_bytes(1, 0)
