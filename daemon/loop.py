@@ -21,6 +21,7 @@ from galton.daemon.calls import Call, Inbox, StepJob, Task, smoothed_step_cost
 from galton.daemon.handlers import HANDLERS
 from galton.daemon.limits import DEFAULT_LIMITS, Limits
 from galton.daemon.monitor import Pacer, ProcessMonitor, RtfWindow
+from galton.daemon.reply_limit import too_big
 from galton.daemon.snapshot_slots import SnapshotSlots
 from galton.daemon.state_streams import StateStreams
 from galton.daemon.world import World
@@ -322,7 +323,13 @@ class SimLoop:
         world = self._stamping(call)
         reply = Reply(ResultCode.OK, result=result, step=world.step_index,
                       sim_time=world.sim_time)
-        self.send(call, encode_reply(reply))
+        data = encode_reply(reply)
+        if len(data) > self.limits.max_reply_bytes:  # never sent (daemon/reply_limit.py)
+            self.reply_error(call, too_big(f"the reply to {call.op or 'this request'}",
+                                           len(data), self.limits.max_reply_bytes,
+                                           "ask for less"))
+            return
+        self.send(call, data)
 
     def reply_error(self, call: Call, error: RemoteError) -> None:
         self.refresh_clock()
