@@ -36,7 +36,7 @@ class SampleSender:
         self._queue.put((topic, data))
 
     def close(self) -> None:
-        """Stop the thread; samples not yet sent are dropped, as on a congested network."""
+        """Stop the thread once the latest samples handed over before this are put."""
         self._queue.put(None)
         self._thread.join(timeout=5)
 
