@@ -1,7 +1,7 @@
 """The state stream and the live view: what they cost a playing world (issue 41).
 
 Usage: python benchmarks/view_stream.py [--seconds 10] [--rounds 3] [--engine mujoco]
-       [--json FILE]
+       [--json FILE] [--sample-only]
 
 1. The view: 500 spheres resting on a plane, ``play(1.0)``, and the page of
    ``galton-client view`` (LiveView, in this process, its viser server serving no browser)
