@@ -206,8 +206,8 @@ class SimLoop:
         log.exception("the physics loop caught an unexpected error; the world is paused")
         error = OperationFailedError(f"the engine failed: {type(exc).__name__}: "
                                      f"{brief(str(exc))}")
-        if self.job is not None:
-            job, self.job = self.job, None
+        job = self.end_job()
+        if job is not None:
             self.reply_error(job.call, error)
         self.set_state(SimState.PAUSED)
         self.emit({"kind": "error", "message": error.message})
@@ -258,9 +258,9 @@ class SimLoop:
 
     def _answer_leftovers(self) -> None:
         closing = OperationFailedError("the daemon is shutting down")
-        if self.job is not None:
-            self.reply_error(self.job.call, closing)
-            self.job = None
+        job = self.end_job()
+        if job is not None:
+            self.reply_error(job.call, closing)
         while True:
             try:
                 call = self.inbox.get_nowait()
@@ -428,8 +428,18 @@ class SimLoop:
         if job is not None:
             job.remaining -= count
             if job_done or (checking and job_results.at_rest(self.world, job)):
-                self.job = None
+                self.end_job()
                 self.finish_job(job)
+
+    def start_job(self, job: StepJob) -> None:
+        """Make ``job`` the step job: the one place it is set (``OpContext``)."""
+        self.job = job
+
+    def end_job(self) -> StepJob | None:
+        """End the step job, if any, and return it for its caller to answer: the one place
+        it is cleared."""
+        job, self.job = self.job, None
+        return job
 
     def finish_job(self, job: StepJob) -> None:
         """Answer a finished step request: {steps}, and the states it asked to read (after
@@ -461,8 +471,9 @@ class SimLoop:
         self.set_state(SimState.PAUSED)
         self.emit({"kind": "physics_error", "message": error.message,
                    "step": self.world.step_index, "sim_time": self.world.sim_time})
-        if self.job is not None and self.job.world is None:
-            job, self.job = self.job, None
+        job = self.job
+        if job is not None and job.world is None:
+            self.end_job()
             self.reply_error(job.call, error)
 
     # -- status & telemetry -------------------------------------------------------------

@@ -1,7 +1,8 @@
-"""A front reaches the core only through its call interface: each module under
-daemon/fronts/ imports, of the daemon, nothing but ``core.calls`` (``Call``, ``CallPort``),
-``access`` and other fronts' modules (the protocol and third parties are free). Read from
-the source, imports inside functions and under TYPE_CHECKING included."""
+"""The core's two faces. A front reaches the core only through its call interface: each
+module under daemon/fronts/ imports, of the daemon, nothing but ``core.calls`` (``Call``,
+``CallPort``), ``access`` and other fronts' modules (the protocol and third parties are
+free). A handler sees the loop only as an ``OpContext``: only the composition root imports
+the loop. Read from the source, imports inside functions and under TYPE_CHECKING included."""
 
 from __future__ import annotations
 
@@ -48,3 +49,29 @@ def test_a_breach_is_seen(tmp_path: Path) -> None:
     assert breaches(tmp_path / "fronts") == [
         "fronts/bad.py imports galton.daemon.core.loop.SimLoop",
         "fronts/bad.py imports galton.daemon.world.scene"]
+
+
+# The loop itself: built by the composition root; loop_status.py is the loop's own telemetry
+# and status half. Handlers and helpers see it as an OpContext (daemon/core/context.py).
+MAY_IMPORT_THE_LOOP = {"server.py", "core/loop.py", "core/loop_status.py"}
+
+
+def loop_importers(root: Path) -> set[str]:
+    return {str(path.relative_to(root)) for path in root.rglob("*.py")
+            if any(module == "galton.daemon.core.loop"
+                   or module.startswith("galton.daemon.core.loop.")
+                   for module in daemon_imports(path))}
+
+
+def test_only_the_composition_root_imports_the_loop() -> None:
+    assert loop_importers(DAEMON) <= MAY_IMPORT_THE_LOOP
+
+
+def test_a_handler_importing_the_loop_is_seen(tmp_path: Path) -> None:
+    (tmp_path / "ops").mkdir()
+    (tmp_path / "ops" / "late.py").write_text("from galton.daemon.core import loop\n")
+    (tmp_path / "ops" / "typed.py").write_text(
+        "from galton.daemon.core.loop import SimLoop\n")
+    (tmp_path / "ops" / "fine.py").write_text(
+        "from galton.daemon.core.context import OpContext\n")
+    assert loop_importers(tmp_path) == {"ops/late.py", "ops/typed.py"}
