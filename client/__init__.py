@@ -32,6 +32,7 @@ if TYPE_CHECKING:
         Client,
         body_group,
         boxes,
+        meshes,
         plane,
         spheres,
     )
@@ -98,7 +99,7 @@ _SOURCES: dict[str, tuple[str, ...]] = {
     "galton.client.discovery": (
         "DaemonInfo", "discover", "discover_at", "instances", "wait_for_daemon"),
     "galton.client.embedded": ("EmbeddedDaemon",),
-    "galton.client.sdk": ("Client", "body_group", "boxes", "plane", "spheres"),
+    "galton.client.sdk": ("Client", "body_group", "boxes", "meshes", "plane", "spheres"),
     "galton.client.sdk_perception": ("camera",),
     "galton.client.sdk_worlds": ("lockstep",),
     "galton.client.telemetry": ("Subscription", "TelemetryStream"),
@@ -172,6 +173,7 @@ __all__ = [
     "discover_at",
     "instances",
     "lockstep",
+    "meshes",
     "plane",
     "spheres",
     "wait_for_daemon",

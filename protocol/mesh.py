@@ -116,16 +116,16 @@ _BOX_FACES = np.array([[0, 2, 3], [0, 3, 1], [4, 5, 7], [4, 7, 6], [0, 1, 5], [0
 
 
 def volume(vertices: np.ndarray, faces: np.ndarray) -> float:
-    """The enclosed volume (m³) of a closed, outward-wound mesh; its convex hull's where the
-    winding or closure is off (a body's default mass is its density times this)."""
+    """The enclosed volume (m³) of a closed, outward-wound mesh; its bounding box's where
+    the winding or closure gives none (a body's default mass is its density times this)."""
     a, b, c = (vertices[faces[:, k]] for k in range(3))
     signed = float(np.einsum("ij,ij->i", a, np.cross(b, c)).sum()) / 6
     if signed > 0:
         return signed
-    return _hull_volume(vertices)
+    return _box_volume(vertices)
 
 
-def _hull_volume(vertices: np.ndarray) -> float:
-    """A bounding box's volume: an upper bound where the mesh gives no enclosed volume."""
+def _box_volume(vertices: np.ndarray) -> float:
+    """The bounding box's volume: an upper bound where the mesh encloses none."""
     extent = vertices.max(axis=0) - vertices.min(axis=0)
     return float(np.prod(extent))

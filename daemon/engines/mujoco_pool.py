@@ -40,6 +40,7 @@ import numpy as np
 from galton.daemon.engines import mujoco_spec as ms
 from galton.daemon.engines import mujoco_state as mst
 from galton.protocol import BodyGroup, ResourceLimitError
+from galton.protocol import mesh as mesh_wire
 
 _SLEEP = int(mujoco.mjtEnableBit.mjENBL_SLEEP)
 # Where parked bodies wait: a wire pose [x y z qx qy qz qw].
@@ -57,8 +58,11 @@ PREFIX = "galton.parked."  # parked bodies' names; no entity may take one
 Key = tuple[Any, ...]
 
 
-def key_of(group: BodyGroup, material: ms.Material) -> Key:
-    """What makes two spawned bodies interchangeable once compiled."""
+def key_of(group: BodyGroup, material: ms.Material) -> Key | None:
+    """What makes two spawned bodies interchangeable once compiled; None for bodies never
+    parked: meshes (each group its own mesh asset) and bodies with their own inertia."""
+    if group.vertices is not None or group.inertia is not None:
+        return None
     return (group.shape, tuple(float(s) for s in group.size), bool(group.static), material)
 
 
@@ -67,7 +71,7 @@ class Planned(NamedTuple):
 
     group: BodyGroup
     material: ms.Material
-    key: Key
+    key: Key | None
     spares: int
 
 
@@ -104,7 +108,7 @@ class Pool:
         for group in groups:
             material = ms.material(group, values)
             key = key_of(group, material)
-            if self.available(key) >= wanted.get(key, 0) + len(group):
+            if key is not None and self.available(key) >= wanted.get(key, 0) + len(group):
                 wanted[key] = wanted.get(key, 0) + len(group)
                 pooled.append((group, key))
             else:
@@ -123,6 +127,8 @@ class Pool:
                               values["mujoco.max_free_bodies"])
         spares = 0
         for i, planned in enumerate(compiled):
+            if planned.key is None:
+                continue  # never parked: no spare twins
             count = min(self.spares(len(planned.group), spares), ms.MAX_BODIES - nbody - spares)
             if not planned.group.static:  # spare twins of moving bodies are free bodies too
                 count = min(count, free_room)
@@ -209,6 +215,7 @@ class Additions:
         self._groups: list[tuple[BodyGroup, list[Any] | None]] = []  # None: attached
         self._frames: list[Any] = []
         self._direct: list[Any] = []
+        self._meshes: list[Any] = []
         self._attached = 0
 
     def add(self, group: BodyGroup, material: ms.Material, parked: bool = False) -> None:
@@ -219,9 +226,12 @@ class Additions:
         touching one, so a board of mocap bodies would never let its piles sleep. A static
         body still moves without a compile: its pose lives in the model (body_pos, body_quat).
         """
-        if len(group) < ATTACH_MIN:
+        if len(group) < ATTACH_MIN or group.vertices is not None:
+            mesh = _add_mesh(self._spec, group)
+            if mesh is not None:
+                self._meshes.append(mesh)
             bodies = _add_bodies(self._spec.worldbody, group, material, range(len(group)),
-                                 parked, group.names)
+                                 parked, group.names, mesh)
             self._direct += bodies
             self._groups.append((group, bodies))
             return
@@ -243,8 +253,10 @@ class Additions:
         self._groups.append((group, None))
 
     def undo(self) -> None:
-        """Take every added body out of the spec again."""
+        """Take every added body (and mesh) out of the spec again."""
         _delete(self._spec, self._direct, self._frames)
+        for mesh in self._meshes:
+            self._spec.delete(mesh)
 
     def bodies(self) -> list[list[Any]]:
         """Once compiled: each added group's bodies, named, attached ones gathered in the
@@ -279,7 +291,24 @@ def _attach(spec: mujoco.MjSpec, child: mujoco.MjSpec, frame: Any) -> None:
     _delete(child, [], child.worldbody.frames)  # they hold every body once attached
 
 
-def _geom(group: BodyGroup, material: ms.Material) -> dict[str, Any]:
+def _add_mesh(spec: mujoco.MjSpec, group: BodyGroup) -> str | None:
+    """A mesh group's asset, named for it; its geoms collide with its convex hull."""
+    if group.vertices is None or group.faces is None:
+        return None
+    serial = len(spec.meshes)
+    while spec.mesh(f"{MESH_PREFIX}{serial}") is not None:
+        serial += 1
+    mesh = spec.add_mesh(name=f"{MESH_PREFIX}{serial}")
+    mesh.uservert = np.asarray(group.vertices, dtype=float).reshape(-1).tolist()
+    mesh.userface = np.asarray(group.faces, dtype=int).reshape(-1).tolist()
+    return str(mesh.name)
+
+
+MESH_PREFIX = "galton.mesh."
+
+
+def _geom(group: BodyGroup, material: ms.Material, mesh: str | None = None
+          ) -> dict[str, Any]:
     geom: dict[str, Any] = {
         "type": ms.GEOM_TYPES[group.shape], "size": ms.geom_size(group.shape, group.size),
         "friction": [material.friction, *material.spin], "condim": material.condim,
@@ -287,6 +316,8 @@ def _geom(group: BodyGroup, material: ms.Material) -> dict[str, Any]:
         "priority": ms.STATIC_PRIORITY if group.static else 0}
     if material.rgba is not None:
         geom["rgba"] = list(material.rgba)
+    if mesh is not None:
+        geom["meshname"] = mesh
     if material.mass is not None and not group.static:
         geom["mass"] = material.mass
     else:
@@ -294,14 +325,41 @@ def _geom(group: BodyGroup, material: ms.Material) -> dict[str, Any]:
     return geom
 
 
+def _inertial(group: BodyGroup, material: ms.Material) -> dict[str, Any]:
+    """A body's own inertia (spawn's ``inertia``) about its origin, with its mass: the
+    group's, or the shape's volume at the default density."""
+    if group.inertia is None:
+        return {}
+    mass = material.mass
+    if mass is None:
+        mass = ms.DENSITY * shape_volume(group)
+    return {"explicitinertial": True, "mass": mass, "inertia": list(group.inertia),
+            "ipos": [0.0, 0.0, 0.0]}
+
+
+def shape_volume(group: BodyGroup) -> float:
+    """A spawned shape's volume (m³), from its half sizes or its mesh."""
+    size = group.size
+    if group.vertices is not None and group.faces is not None:
+        return mesh_wire.volume(group.vertices, group.faces)
+    if group.shape == "sphere":
+        return 4 / 3 * np.pi * size[0] ** 3
+    if group.shape == "cylinder":
+        return 2 * np.pi * size[0] ** 2 * size[1]
+    if group.shape == "capsule":
+        return np.pi * size[0] ** 2 * (2 * size[1] + 4 / 3 * size[0])
+    return 8 * size[0] * size[1] * size[2]
+
+
 def _add_bodies(parent: Any, group: BodyGroup, material: ms.Material, rows: range,
-                parked: bool, names: Sequence[str]) -> list[Any]:
-    geom = _geom(group, material)
+                parked: bool, names: Sequence[str], mesh: str | None = None) -> list[Any]:
+    geom = _geom(group, material, mesh)
+    inertial = _inertial(group, material)
     poses = np.asarray(group.poses, dtype=float)[rows.start:rows.stop]
     quats = mst.to_wxyz(poses[:, 3:7])
     bodies = []
     for i, name in enumerate(names):
-        body = parent.add_body(name=name, pos=poses[i, :3], quat=quats[i])
+        body = parent.add_body(name=name, pos=poses[i, :3], quat=quats[i], **inertial)
         bodies.append(body)
         if not group.static:
             body.add_freejoint()
