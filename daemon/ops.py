@@ -12,6 +12,7 @@ import stat
 from collections.abc import Callable
 from typing import Any
 
+from galton.daemon.engine import FEATURE_SPAWN_INERTIA
 from galton.daemon.engines import ENGINE_CLASSES
 from galton.daemon.host_info import host_info
 from galton.daemon.model_files import search_folders
@@ -48,11 +49,14 @@ def spawn(world: World, args: dict[str, Any]) -> dict[str, Any]:
 
 
 def _require_shapes(world: World, groups: list[BodyGroup]) -> None:
-    supported = world.engine.capabilities().body_shapes
+    caps = world.engine.capabilities()
     for group in groups:
-        if group.shape not in supported:
+        if group.shape not in caps.body_shapes:
             raise FeatureUnsupportedError(
                 f"the {world.engine.name} engine cannot spawn a {group.shape}")
+        if group.inertia is not None and not caps.supports(FEATURE_SPAWN_INERTIA):
+            raise FeatureUnsupportedError(
+                f"the {world.engine.name} engine cannot set a spawned body's inertia")
 
 
 def load_model(world: World, args: dict[str, Any]) -> dict[str, Any]:

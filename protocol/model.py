@@ -12,8 +12,8 @@ from typing import Any, TypeVar, overload
 
 import numpy as np
 
-from galton.protocol.arrays import pack_f64, unpack_f64
 from galton.protocol import mesh as mesh_wire
+from galton.protocol.arrays import pack_f64, unpack_f64
 from galton.protocol.errors import InvalidArgumentError, brief
 from galton.protocol.vocabulary import (
     BODY_SHAPES,
@@ -267,6 +267,7 @@ class BodyGroup:
             raise InvalidArgumentError(
                 f"{where}.shape {brief(shape)} is not one of {', '.join(BODY_SHAPES)}")
         vertices, faces = _check_mesh(shape, body, where)
+        size: tuple[float, ...]
         if vertices is not None:
             size = mesh_wire.half_extents(vertices)
         else:

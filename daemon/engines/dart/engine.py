@@ -70,6 +70,10 @@ FEATURES = (FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDATE_MAS
             FEATURE_WRENCH, FEATURE_SNAPSHOT, FEATURE_CONTACTS)
 
 
+# No mesh shape: FEATURE_UNSUPPORTED at spawn (docs/ENGINES.md, "Meshes").
+SHAPES = tuple(shape for shape in BODY_SHAPES if shape != "mesh")
+
+
 class DartEngine(Scene, Snapshots, Engine):
     """Named rigid bodies and models in a DART world."""
 
@@ -88,7 +92,7 @@ class DartEngine(Scene, Snapshots, Engine):
     def capabilities(self) -> Capabilities:
         return Capabilities(
             engine=self.name, engine_version=importlib.metadata.version("dartpy"),
-            protocol_version=PROTOCOL_VERSION, body_shapes=BODY_SHAPES,
+            protocol_version=PROTOCOL_VERSION, body_shapes=SHAPES,
             model_formats=MODEL_FORMATS, features=FEATURES,
             params={name: spec.describe() for name, spec in SPECS.items()})
 

@@ -75,6 +75,10 @@ FEATURES = (FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDATE_MAS
             FEATURE_CONTACTS)
 
 
+# No mesh shape: FEATURE_UNSUPPORTED at spawn (docs/ENGINES.md, "Meshes").
+SHAPES = tuple(shape for shape in BODY_SHAPES if shape != "mesh")
+
+
 class OdeEngine(Snapshots, Engine):
     """Named rigid bodies in an ODE world stepped as Webots steps it."""
 
@@ -104,7 +108,7 @@ class OdeEngine(Snapshots, Engine):
     # -- description and parameters ---------------------------------------------------------
     def capabilities(self) -> Capabilities:
         return Capabilities(engine=self.name, engine_version=version(),
-                            protocol_version=PROTOCOL_VERSION, body_shapes=BODY_SHAPES,
+                            protocol_version=PROTOCOL_VERSION, body_shapes=SHAPES,
                             model_formats=MODEL_FORMATS, features=FEATURES,
                             params={n: s.describe() for n, s in SPECS.items()})
 
