@@ -10,7 +10,7 @@ from galton.analysis.report_card import CRITERIA, CardResults, value_text
 from galton.client.report_card import CardPlan, run_card, write_report_card
 
 TINY = CardPlan(fidelity_balls=20, repetitions=1, curve=(1,), footprint_s=0.5, round_trips=5,
-                world_ops=1, laws=("free-fall",))
+                world_ops=1, laws=("free-fall",), mesh_balls=10, mesh_repetitions=1)
 
 
 def test_a_tiny_card_measures_every_criterion(tmp_path: Path) -> None:

@@ -34,14 +34,17 @@ class CardPlan:
     round_trips: int = 500
     world_ops: int = 20
     laws: tuple[str, ...] | None = None  # None: the whole suite
+    mesh_balls: int = 100  # the paper-mesh board's trials
+    mesh_repetitions: int = 10
 
     @classmethod
     def quick(cls) -> CardPlan:
         return cls(repetitions=5, curve=(1, 10, 300), footprint_s=3.0, round_trips=100,
-                   world_ops=6)
+                   world_ops=6, mesh_balls=25, mesh_repetitions=2)
 
     def describe(self) -> str:
         return (f"paper, {self.fidelity_balls} balls × {self.repetitions}, all at once; "
+                f"paper-mesh, {self.mesh_balls} balls × {self.mesh_repetitions}; "
                 f"RTF curve at {', '.join(map(str, sorted({*self.curve, self.fidelity_balls})))} "
                 "balls")
 
@@ -82,6 +85,19 @@ def board_measures(sim: Client, engine: str, plan: CardPlan, seed: int
             means, sum(t.lost_by_reason.get("nan", 0) for t in trials))
 
 
+def mesh_measures(sim: Client, engine: str, plan: CardPlan, seed: int
+                  ) -> dict[str, float | None]:
+    """The paper-mesh board's median χ² and balls lost, beside the primitives'."""
+    from galton.analysis.summary import summarise_group  # scipy: the [bench] extra
+
+    config = ExperimentConfig(board=BoardSpec.load("paper-mesh"), engines=(engine,),
+                              balls=(plan.mesh_balls,), repetitions=plan.mesh_repetitions,
+                              seed=seed)
+    group = summarise_group(run_experiment({engine: sim}, config).trials, plan.mesh_balls)
+    return {"mesh_chi2_median": group.chi2_median,
+            "mesh_lost_percent": group.lost_percent_pooled}
+
+
 def run_card(engines: Sequence[str], plan: CardPlan, seed: int = 0, timeout: float = 30.0,
              say: Say | None = None) -> tuple[CardResults, LawResults]:
     """Every measure of every engine, each engine on a daemon of its own."""
@@ -114,6 +130,9 @@ def run_card(engines: Sequence[str], plan: CardPlan, seed: int = 0, timeout: flo
             board_values, curve, diverged = board_measures(zmq_client, engine, plan, seed)
             measures |= board_values
             card.curves[engine] = curve
+            if "mesh" in caps.body_shapes:
+                tell(f"{engine}: the Galton board as meshes")
+                measures |= mesh_measures(zmq_client, engine, plan, seed)
             failed = [c for c in laws.checks if c.value is None]
             measures["physics_errors"] = float(len(failed) + diverged + restore_errors)
             notes = card.config.setdefault("notes", [])
