@@ -211,6 +211,8 @@ def about_lines(card: CardResults) -> list[str]:
             f"{int(host.get('memory_bytes', 0)) / 2**30:.0f} GiB, {host.get('os', '')}; "
             f"{config.get('machine_note', '')}",
             f"- command: `{config.get('command', 'galton-client report-card')}`",
+            *([f"- the Galton trials ran on a pool of {len(config['pool'])} daemons: "
+               f"{', '.join(config['pool'])}"] if config.get("pool") else []),
             "- the Galton board is built from primitives (paper) and, as the paper imported "
             "it, from triangle meshes (paper-mesh; not measured on engines without meshes)"]
 
