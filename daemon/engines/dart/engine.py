@@ -32,6 +32,7 @@ from galton.daemon.engine import (
     FEATURE_SET_STATE,
     FEATURE_SNAPSHOT,
     FEATURE_SPAWN,
+    FEATURE_SPAWN_INERTIA,
     FEATURE_STATIC_POSE,
     FEATURE_TARGET_EFFORT,
     FEATURE_TARGET_POSITION,
@@ -67,7 +68,7 @@ FEATURES = (FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDATE_MAS
             FEATURE_UPDATE_FRICTION, FEATURE_UPDATE_RESTITUTION, FEATURE_UPDATE_RGBA,
             FEATURE_LOAD_MODEL, FEATURE_STATIC_POSE, FEATURE_JOINTS, FEATURE_JOINT_TARGETS,
             FEATURE_TARGET_POSITION, FEATURE_TARGET_VELOCITY, FEATURE_TARGET_EFFORT,
-            FEATURE_WRENCH, FEATURE_SNAPSHOT, FEATURE_CONTACTS)
+            FEATURE_WRENCH, FEATURE_SNAPSHOT, FEATURE_CONTACTS, FEATURE_SPAWN_INERTIA)
 
 
 # No mesh shape: FEATURE_UNSUPPORTED at spawn (docs/ENGINES.md, "Meshes").
@@ -131,7 +132,8 @@ class DartEngine(Scene, Snapshots, Engine):
         for k, name in enumerate(group.names):
             body = books.Body(name, group.shape, size, group.static, mass, friction,
                               restitution, group.friction is None, group.restitution is None,
-                              None, None, group.rgba)
+                              None, None, group.rgba, unit_inertia=None if group.inertia is None
+                              else tuple(i / mass for i in group.inertia))
             books.build(body, positions[k], velocities[k])
             self._add(body)
 
