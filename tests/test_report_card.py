@@ -9,9 +9,9 @@ from pathlib import Path
 from galton.analysis.board import BoardSpec
 from galton.analysis.report_card import CRITERIA, CardResults, value_text
 from galton.client.bench.experiment import ExperimentConfig
-from galton.client.embedded import EmbeddedDaemon, free_loopback_port
 from galton.client.report_card import CardPlan, run_card, write_report_card
 from galton.client.report_card.pooled import local_trials, pooled_trials
+from galton.client.sdk.embedded import EmbeddedDaemon, free_loopback_port
 
 TINY = CardPlan(fidelity_balls=20, repetitions=1, curve=(1,), footprint_s=0.5, round_trips=5,
                 world_ops=1, laws=("free-fall",), mesh_balls=10, mesh_repetitions=1)

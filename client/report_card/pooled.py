@@ -12,7 +12,7 @@ from galton.analysis.records import TrialRecord
 from galton.client.bench.daemons import names_running, pool_clients
 from galton.client.bench.experiment import ExperimentConfig, run_experiment
 from galton.client.bench.pool import run_pool
-from galton.client.sdk import Client
+from galton.client.sdk.client import Client
 from galton.protocol import GaltonError
 
 # A Galton plan run for one engine: (that engine's own client, engine, plan) -> records.
