@@ -314,7 +314,7 @@ def paper_gazebo_board() -> BoardSpec:
     DART takes a pair's smaller friction and the product of restitutions, so 0 and 1 on
     every body are 0 and 1 for every pair, as on MuJoCo and PyBullet. The draft's ball
     inertia 0.1 kg m² (a copy error: a solid ball has 0.00081) is an option, ``[ball]
-    inertia = 0.1`` in a board file (MuJoCo, PyBullet and DART set it; ODE refuses it).
+    inertia = 0.1`` in a board file (every engine sets it).
     """
     params = {**webots_params(0.0), "timestep": 0.001}
     return BoardSpec(name="paper-gazebo", ball=BallSpec(mass=1.0), contacts={
