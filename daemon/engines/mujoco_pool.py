@@ -37,10 +37,10 @@ from typing import Any, NamedTuple
 import mujoco
 import numpy as np
 
+from galton.daemon.engines import mujoco_shapes as shapes
 from galton.daemon.engines import mujoco_spec as ms
 from galton.daemon.engines import mujoco_state as mst
 from galton.protocol import BodyGroup, ResourceLimitError
-from galton.protocol import mesh as mesh_wire
 
 _SLEEP = int(mujoco.mjtEnableBit.mjENBL_SLEEP)
 # Where parked bodies wait: a wire pose [x y z qx qy qz qw].
@@ -227,7 +227,7 @@ class Additions:
         body still moves without a compile: its pose lives in the model (body_pos, body_quat).
         """
         if len(group) < ATTACH_MIN or group.vertices is not None:
-            mesh = _add_mesh(self._spec, group)
+            mesh = shapes.add_mesh(self._spec, group)
             if mesh is not None:
                 self._meshes.append(mesh)
             bodies = _add_bodies(self._spec.worldbody, group, material, range(len(group)),
@@ -291,22 +291,6 @@ def _attach(spec: mujoco.MjSpec, child: mujoco.MjSpec, frame: Any) -> None:
     _delete(child, [], child.worldbody.frames)  # they hold every body once attached
 
 
-def _add_mesh(spec: mujoco.MjSpec, group: BodyGroup) -> str | None:
-    """A mesh group's asset, named for it; its geoms collide with its convex hull."""
-    if group.vertices is None or group.faces is None:
-        return None
-    serial = len(spec.meshes)
-    while spec.mesh(f"{MESH_PREFIX}{serial}") is not None:
-        serial += 1
-    mesh = spec.add_mesh(name=f"{MESH_PREFIX}{serial}")
-    mesh.uservert = np.asarray(group.vertices, dtype=float).reshape(-1).tolist()
-    mesh.userface = np.asarray(group.faces, dtype=int).reshape(-1).tolist()
-    return str(mesh.name)
-
-
-MESH_PREFIX = "galton.mesh."
-
-
 def _geom(group: BodyGroup, material: ms.Material, mesh: str | None = None
           ) -> dict[str, Any]:
     geom: dict[str, Any] = {
@@ -325,36 +309,10 @@ def _geom(group: BodyGroup, material: ms.Material, mesh: str | None = None
     return geom
 
 
-def _inertial(group: BodyGroup, material: ms.Material) -> dict[str, Any]:
-    """A body's own inertia (spawn's ``inertia``) about its origin, with its mass: the
-    group's, or the shape's volume at the default density."""
-    if group.inertia is None:
-        return {}
-    mass = material.mass
-    if mass is None:
-        mass = ms.DENSITY * shape_volume(group)
-    return {"explicitinertial": True, "mass": mass, "inertia": list(group.inertia),
-            "ipos": [0.0, 0.0, 0.0]}
-
-
-def shape_volume(group: BodyGroup) -> float:
-    """A spawned shape's volume (m³), from its half sizes or its mesh."""
-    size = group.size
-    if group.vertices is not None and group.faces is not None:
-        return mesh_wire.volume(group.vertices, group.faces)
-    if group.shape == "sphere":
-        return 4 / 3 * np.pi * size[0] ** 3
-    if group.shape == "cylinder":
-        return 2 * np.pi * size[0] ** 2 * size[1]
-    if group.shape == "capsule":
-        return np.pi * size[0] ** 2 * (2 * size[1] + 4 / 3 * size[0])
-    return 8 * size[0] * size[1] * size[2]
-
-
 def _add_bodies(parent: Any, group: BodyGroup, material: ms.Material, rows: range,
                 parked: bool, names: Sequence[str], mesh: str | None = None) -> list[Any]:
     geom = _geom(group, material, mesh)
-    inertial = _inertial(group, material)
+    inertial = shapes.inertial(group, material.mass)
     poses = np.asarray(group.poses, dtype=float)[rows.start:rows.stop]
     quats = mst.to_wxyz(poses[:, 3:7])
     bodies = []
