@@ -163,10 +163,10 @@ OPERATIONS: dict[str, Operation] = {op.name: op for op in (
     Operation("contacts", (Arg("names", "names"),)),
     Operation("get_params"),
     Operation("set_params", (Arg("params", "map", required=True),), mutates=True),
-    # The control lease (daemon/lease.py): they change who may mutate, not the world.
+    # The control lease (daemon/access/lease.py): they change who may mutate, not the world.
     Operation("take_control"),
     Operation("release_control"),
-    # State streams (daemon/state_streams.py): poses published at a client's rate.
+    # State streams (daemon/world/state_streams.py): poses published at a client's rate.
     Operation("stream_states", (Arg("rate", "number"), Arg("names", "names"))),
     Operation("close_stream", (Arg("stream", "string", required=True),)),
 )}
