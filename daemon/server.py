@@ -34,6 +34,7 @@ from galton.daemon.fronts.zenoh_config import file_says, listen_endpoints, merge
 from galton.daemon.fronts.zmq import PolledInbox, ZmqFront, parse_endpoint
 from galton.daemon.world import checkpoint
 from galton.daemon.world.scene import World
+from galton.daemon.world.stream_sender import SampleSender
 from galton.protocol import InvalidArgumentError, Keys, Telemetry
 from galton.protocol.keys import (
     CLIENTS_PATTERN,
@@ -119,7 +120,10 @@ class Daemon:
                             options.telemetry_rate_hz, create_engine, options.limits)
         self.loop.snapshot_key = options.snapshot_key
         self.front = _zmq_front(options, self.loop)
-        self.loop.streams.publish = self._publish_states
+        # A state stream's samples: Zenoh's put off the physics thread, the ZeroMQ front's
+        # send on it (its sockets are that thread's).
+        self.loop.streams.sender = SampleSender(self._publish_states)
+        self.loop.streams.publish = self.front.publish if self.front is not None else None
         self.loop.client_alive = self._client_alive
         self._thread: threading.Thread | None = None
         self._queryable: Any = None
@@ -214,6 +218,7 @@ class Daemon:
             self._clients.undeclare()
         if self.ros2 is not None:
             self.ros2.close()
+        self.loop.streams.stop_sender()
         self.loop.world.engine.close()
         if self.front is not None:
             self.front.close()
@@ -241,11 +246,9 @@ class Daemon:
 
     def _publish_states(self, topic: str, data: bytes) -> None:
         """A state stream's sample (daemon/world/state_streams.py), dropped rather than queued
-        when the network is congested, as telemetry is."""
+        when the network is congested, as telemetry is; on the sender's thread."""
         self.session.put(f"{self.keys.prefix}/{topic}", data,
                          congestion_control=zenoh.CongestionControl.DROP)
-        if self.front is not None:
-            self.front.publish(topic, data)
 
     def _publish_event(self, event: dict[str, Any]) -> None:
         data = msgpack.packb({"instance": self.options.instance, **event})

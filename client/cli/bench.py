@@ -110,6 +110,9 @@ def bench(
     animation: Annotated[bool, typer.Option(
         help="Also replay each engine's first trial as an animated PNG for the report.")
     ] = False,
+    record: Annotated[bool, typer.Option(
+        help="Also record each trial (OUT/recordings/*.npz) for `galton-client view OUT`.")
+    ] = False,
     pool: Annotated[bool, typer.Option(
         help="Spread the trials over every daemon found at --connect (or --instances), a "
              "dead daemon's trial re-run on the others; with no --connect and none running, "
@@ -129,7 +132,7 @@ def bench(
     config = checked(lambda: ExperimentConfig(
         board=load_board(board), engines=tuple(_csv(engines, "--engines")),
         balls=_ints(balls, "--balls"), repetitions=repetitions, release=release, seed=seed,
-        max_sim_time=max_sim_time))
+        max_sim_time=max_sim_time, recordings=out / "recordings" if record else None))
     endpoints = connect.split(",") if connect else ctx.obj.connect
     names = _csv(instances, "--instances") if instances else None
     shown = Animation() if animation else None

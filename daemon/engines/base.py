@@ -16,7 +16,7 @@ import contextlib
 import os
 import sys
 from abc import ABC, abstractmethod
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -125,6 +125,13 @@ class Engine(ABC):
     @abstractmethod
     def get_states(self, names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
         """Poses (n, 7: x y z qx qy qz qw) and world twists (n, 6: v, ω) of these bodies."""
+
+    def pose_reader(self, names: Sequence[str]) -> Callable[[], np.ndarray]:
+        """A function that reads these bodies' poses (n, 7), for a state stream that reads
+        the same names 60 times a second: an engine may work out once where they live. Valid
+        until the next spawn, load_model, delete or clear; by default, get_states."""
+        fixed = list(names)
+        return lambda: self.get_states(fixed)[0]
 
     @abstractmethod
     def set_states(self, names: Sequence[str], poses: np.ndarray | None,

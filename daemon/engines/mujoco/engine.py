@@ -38,7 +38,7 @@ twice as many. Everything else here is linear in the bodies a call touches.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any, ClassVar
 
 import mujoco
@@ -85,6 +85,7 @@ from galton.daemon.engines.mujoco import stepping as timing
 from galton.daemon.engines.mujoco.balance import BalanceGuard
 from galton.daemon.engines.mujoco.entities import HOME, Entity
 from galton.daemon.engines.mujoco.joints import Joints
+from galton.daemon.engines.mujoco.poses import PoseReader
 from galton.daemon.engines.mujoco.wrench import Wrenches
 from galton.protocol import (
     BODY_SHAPES,
@@ -274,6 +275,9 @@ class MujocoEngine(Engine):
     # -- Engine: state --------------------------------------------------------------------
     def get_states(self, names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
         return mst.read_states(self._model, self._data, self._index, self._body_ids(names))
+
+    def pose_reader(self, names: Sequence[str]) -> Callable[[], np.ndarray]:
+        return PoseReader(self, names)
 
     def set_states(self, names: Sequence[str], poses: np.ndarray | None,
                    twists: np.ndarray | None) -> None:

@@ -40,7 +40,7 @@ from __future__ import annotations
 
 import importlib.metadata
 import itertools
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -295,6 +295,9 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
     def get_states(self, names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
         """Link frames, not PyBullet's centres of mass (frames.py)."""
         return states.get_states(self, names)
+
+    def pose_reader(self, names: Sequence[str]) -> Callable[[], np.ndarray]:
+        return engine_call(states.PoseReader(self, names).__call__)
 
     def _read(self, ids: list[int]) -> tuple[np.ndarray, np.ndarray]:
         return states.read(self, ids)
