@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import logging
 import os
+import select
 import signal
 import threading
 from collections.abc import Callable, Iterator, Mapping
@@ -35,7 +36,7 @@ from galton.daemon.fronts.zmq import PolledInbox, ZmqFront, parse_endpoint
 from galton.daemon.world import checkpoint
 from galton.daemon.world.scene import World
 from galton.daemon.world.stream_sender import SampleSender
-from galton.protocol import InvalidArgumentError, Keys, Telemetry
+from galton.protocol import InvalidArgumentError, Keys, OperationFailedError, Telemetry
 from galton.protocol.keys import (
     CLIENTS_PATTERN,
     client_from_token_key,
@@ -296,14 +297,37 @@ def signal_wakeup_pipe() -> int:
     return wake_read
 
 
+class StopSignals:
+    """SIGINT and SIGTERM as the wakeup pipe delivers them: a watcher thread ``wait``s for
+    one, and a request about to hold the interpreter for seconds asks first whether one
+    came (``received``: also one still in the pipe, which the watcher has not read yet)."""
+
+    def __init__(self) -> None:
+        self._read = signal_wakeup_pipe()
+        self._received = threading.Event()
+
+    def wait(self) -> None:
+        os.read(self._read, 1)
+        self._received.set()
+
+    def received(self) -> bool:
+        return self._received.is_set() or bool(select.select([self._read], [], [], 0)[0])
+
+
 @contextmanager
-def sigterm_ends_at_once() -> Iterator[None]:
+def sigterm_ends_at_once(signals: StopSignals) -> Iterator[None]:
     """Inside a scene-changing request, SIGTERM takes its default action: the process ends
     at once. An engine call (a 100,000-body spawn, a compile) may hold the GIL for seconds,
     so no Python handler or watcher could run until it returns; outside such requests the
-    stop is graceful. Costs two signal() calls, about 3 µs."""
+    stop is graceful. A request that comes to its work after a stop signal (one that landed
+    while its payload was decoded) is refused, not begun: begun, it would hold the GIL past
+    SHUTDOWN_GRACE_S (5.8 s for a 100,000-body PyBullet spawn). Costs two signal() calls
+    and a poll of the pipe, about 5 µs."""
     previous = signal.signal(signal.SIGTERM, signal.SIG_DFL)
     try:
+        if signals.received():
+            raise OperationFailedError("the daemon is shutting down (SIGTERM or SIGINT); "
+                                       "the request was not begun")
         yield
     finally:
         signal.signal(signal.SIGTERM, previous)
@@ -319,16 +343,16 @@ def run_daemon(options: DaemonOptions, announce: Callable[[str], None] = print) 
     whichever thread the kernel chose, and a watcher thread waiting on that pipe stops the
     loop. No Python code runs inside a lock, so a second signal cannot deadlock shutdown.
     """
-    wake_read = signal_wakeup_pipe()
+    signals = StopSignals()
     daemon = Daemon(options)
-    daemon.loop.work_guard = sigterm_ends_at_once
+    daemon.loop.work_guard = lambda: sigterm_ends_at_once(signals)
     if options.state_dir is not None:
         options.state_dir.mkdir(parents=True, exist_ok=True)
         daemon.loop.schedule_checkpoints(daemon.save_checkpoint, options.checkpoint_period_s)
     daemon.open()
 
     def stop_on_signal() -> None:
-        os.read(wake_read, 1)
+        signals.wait()
         daemon.withdraw()
         if not daemon.finished.wait(SHUTDOWN_GRACE_S):
             log.warning("a request still held the physics thread %.1f s after the signal: "

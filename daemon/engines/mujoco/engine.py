@@ -83,7 +83,7 @@ from galton.daemon.engines.mujoco import spec as ms
 from galton.daemon.engines.mujoco import state as mst
 from galton.daemon.engines.mujoco import stepping as timing
 from galton.daemon.engines.mujoco.balance import BalanceGuard
-from galton.daemon.engines.mujoco.entities import HOME, Entity
+from galton.daemon.engines.mujoco.entities import Entity
 from galton.daemon.engines.mujoco.joints import Joints
 from galton.daemon.engines.mujoco.poses import PoseReader
 from galton.daemon.engines.mujoco.wrench import Wrenches
@@ -135,8 +135,6 @@ class MujocoEngine(Engine):
         self._spec = mujoco.MjSpec()
         self._spec.modelname = "galton"
         self._spec.copy_during_attach = True  # see spec.add_group
-        self._home = self._spec.worldbody.add_frame()  # where big spawned groups live
-        self._home.name = HOME
         self._litter: list[Any] = []  # empty frames, deleted with the next bodies removed
         self._builders = mp.Builders()
         self._spec.memory = ms.arena_bytes(1, 0)

@@ -210,12 +210,13 @@ class Additions:
     """Bodies added to a spec for one compile: ``add`` groups, compile, then ``bodies``
     (or ``undo`` if the compile failed)."""
 
-    def __init__(self, spec: mujoco.MjSpec, home: Any, builders: Builders) -> None:
-        self._spec, self._home, self._builders = spec, home, builders
+    def __init__(self, spec: mujoco.MjSpec, builders: Builders) -> None:
+        self._spec, self._builders = spec, builders
         self._groups: list[tuple[BodyGroup, list[Any] | None]] = []  # None: attached
         self._frames: list[Any] = []
+        self._homes: list[Any] = []  # a frame per attached group, made before the compile
         self._direct: list[Any] = []
-        self._meshes: list[Any] = []
+        self._meshes: list[str] = []  # mesh assets' names
         self._attached = 0
 
     def add(self, group: BodyGroup, material: ms.Material, parked: bool = False) -> None:
@@ -236,6 +237,7 @@ class Additions:
             self._groups.append((group, bodies))
             return
         block, chunks = self._builders.block, self._builders.chunks
+        self._homes.append(self._spec.worldbody.add_frame())
         try:
             for start in range(0, len(group), BLOCK):
                 for chunk, first in zip(chunks, range(start, min(start + BLOCK, len(group)),
@@ -253,25 +255,33 @@ class Additions:
         self._groups.append((group, None))
 
     def undo(self) -> None:
-        """Take every added body (and mesh) out of the spec again."""
-        _delete(self._spec, self._direct, self._frames)
-        for mesh in self._meshes:
-            self._spec.delete(mesh)
+        """Take every added body (and mesh asset) out of the spec again."""
+        _delete(self._spec, self._direct, [*self._frames, *self._homes])
+        for name in self._meshes:
+            self._spec.delete(self._spec.mesh(name))
 
     def bodies(self) -> list[list[Any]]:
-        """Once compiled: each added group's bodies, named, attached ones gathered in the
-        home frame. All are found before any is renamed: a rename may drop MuJoCo's index of
-        names. The frames they leave empty are ``litter``: a delete costs a walk of the spec
-        (0.6 s at 60,000 bodies, 1.8 s right after a compile), so they go with the next
-        bodies deleted."""
+        """Once compiled: each added group's bodies, named, each attached group gathered in
+        a frame of its own. All are found before any is renamed: a rename may drop MuJoCo's
+        index of names. The frames they leave empty are ``litter``: a delete costs a walk of
+        the spec (0.6 s at 60,000 bodies, 1.8 s right after a compile), so they go with the
+        next bodies deleted. (The groups' frames were made before the compile: adding any
+        element to a spec drops the ids of its compiled bodies.)
+
+        One frame per group, not one for all: MJCF writes a frame's bodies together, where
+        its first body is, while a compile keeps the bodies' order; a frame shared by groups
+        spawned apart would make a snapshot's MJCF compile its bodies in another order than
+        the world's (whose arrays the snapshot holds by position)."""
         found = iter([self._spec.body(f"{_TEMPORARY * 2}{i}") for i in range(self._attached)])
+        homes = iter(self._homes)
         out = []
         for group, bodies in self._groups:
             if bodies is None:
                 bodies = [next(found) for _ in group.names]
+                frame = next(homes)
                 for body, name in zip(bodies, group.names, strict=True):
                     body.name = name
-                    body.set_frame(self._home)
+                    body.set_frame(frame)
             out.append(bodies)
         return out
 
