@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import datetime as dt
 import importlib.metadata
 import os
@@ -12,7 +13,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from galton.analysis.board import BallSpec, BoardSpec, ReleaseSpec
+from galton.analysis.board import BoardSpec, ReleaseSpec
 from galton.analysis.board_release import nominal_positions
 from galton.analysis.errors import AnalysisError
 from galton.analysis.records import ExperimentResults, TrialRecord
@@ -67,7 +68,7 @@ class ExperimentConfig:
 
     def board_for(self, balls: int) -> BoardSpec:
         """The board with this ball count and the release mode asked for."""
-        ball = BallSpec(self.board.ball.radius, self.board.ball.mass, balls)
+        ball = dataclasses.replace(self.board.ball, count=balls)
         release = self.board.release
         if self.release is not None:
             release = ReleaseSpec(self.release, release.interval, release.stream_height,

@@ -96,7 +96,7 @@ def bench(
              "replaces a daemon's world, so without this (or --connect/--instances) the "
              "bench starts daemons of its own and touches no running one.")] = False,
     board: Annotated[str, typer.Option(
-        help="Preset (paper, paper-webots, paper-gazebo, small) or a TOML/JSON file.")
+        help="Preset (paper, paper-mesh, paper-webots, paper-gazebo, small) or a TOML/JSON file.")
                      ] = "paper",
     balls: Annotated[str, typer.Option(help="Ball count(s), e.g. 1,25,100.")] = ",".join(
         map(str, DEFAULT_BALLS)),

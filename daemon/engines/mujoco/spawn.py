@@ -74,7 +74,7 @@ def compile_groups(engine: MujocoEngine, compiled: Sequence[mp.Planned]) -> None
         for name, body in zip(group.names, next(made), strict=True):
             engine._entities[name] = Entity(body, group.static, friction=group.friction,
                                             restitution=group.restitution, key=key)
-        if spares:
+        if spares and key is not None:
             engine._pool.adopt(key, next(made))
     engine._reindex()
 
