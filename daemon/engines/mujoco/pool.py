@@ -205,7 +205,7 @@ class Additions:
     (or ``undo`` if the compile failed)."""
 
     def __init__(self, spec: mujoco.MjSpec, home: Any, builders: Builders) -> None:
-        self._spec, self._home, self._builders = spec, home, builders
+        self.spec, self.home, self.builders = spec, home, builders
         self._groups: list[tuple[BodyGroup, list[Any] | None]] = []  # None: attached
         self._frames: list[Any] = []
         self._direct: list[Any] = []
@@ -220,12 +220,12 @@ class Additions:
         body still moves without a compile: its pose lives in the model (body_pos, body_quat).
         """
         if len(group) < ATTACH_MIN:
-            bodies = _add_bodies(self._spec.worldbody, group, material, range(len(group)),
+            bodies = _add_bodies(self.spec.worldbody, group, material, range(len(group)),
                                  parked, group.names)
             self._direct += bodies
             self._groups.append((group, bodies))
             return
-        block, chunks = self._builders.block, self._builders.chunks
+        block, chunks = self.builders.block, self.builders.chunks
         try:
             for start in range(0, len(group), BLOCK):
                 for chunk, first in zip(chunks, range(start, min(start + BLOCK, len(group)),
@@ -235,16 +235,16 @@ class Additions:
                                 [str(self._attached + row - rows.start) for row in rows])
                     self._attached += len(rows)
                     _attach(block, chunk, block.worldbody.add_frame())
-                self._frames.append(self._spec.worldbody.add_frame())
-                _attach(self._spec, block, self._frames[-1])
+                self._frames.append(self.spec.worldbody.add_frame())
+                _attach(self.spec, block, self._frames[-1])
         except BaseException:
-            self._builders.reset()
+            self.builders.reset()
             raise
         self._groups.append((group, None))
 
     def undo(self) -> None:
         """Take every added body out of the spec again."""
-        _delete(self._spec, self._direct, self._frames)
+        _delete(self.spec, self._direct, self._frames)
 
     def bodies(self) -> list[list[Any]]:
         """Once compiled: each added group's bodies, named, attached ones gathered in the
@@ -252,14 +252,14 @@ class Additions:
         names. The frames they leave empty are ``litter``: a delete costs a walk of the spec
         (0.6 s at 60,000 bodies, 1.8 s right after a compile), so they go with the next
         bodies deleted."""
-        found = iter([self._spec.body(f"{_TEMPORARY * 2}{i}") for i in range(self._attached)])
+        found = iter([self.spec.body(f"{_TEMPORARY * 2}{i}") for i in range(self._attached)])
         out = []
         for group, bodies in self._groups:
             if bodies is None:
                 bodies = [next(found) for _ in group.names]
                 for body, name in zip(bodies, group.names, strict=True):
                     body.name = name
-                    body.set_frame(self._home)
+                    body.set_frame(self.home)
             out.append(bodies)
         return out
 
