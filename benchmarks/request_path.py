@@ -27,7 +27,7 @@ import numpy as np
 from common import write_json
 
 from galton.client import Client, plane, spheres
-from galton.client.embedded import free_loopback_port
+from galton.client.sdk.embedded import free_loopback_port
 from galton.daemon import server
 from galton.daemon.core import loop
 from galton.daemon.engines import ENGINE_CLASSES

@@ -14,6 +14,7 @@ from typing import Any
 
 from galton.daemon.core.host_info import host_info
 from galton.daemon.engines import ENGINE_CLASSES
+from galton.daemon.engines.base import FEATURE_SPAWN_INERTIA
 from galton.daemon.world.model_files import search_folders
 from galton.daemon.world.scene import World
 from galton.protocol import (
@@ -48,11 +49,14 @@ def spawn(world: World, args: dict[str, Any]) -> dict[str, Any]:
 
 
 def _require_shapes(world: World, groups: list[BodyGroup]) -> None:
-    supported = world.engine.capabilities().body_shapes
+    caps = world.engine.capabilities()
     for group in groups:
-        if group.shape not in supported:
+        if group.shape not in caps.body_shapes:
             raise FeatureUnsupportedError(
                 f"the {world.engine.name} engine cannot spawn a {group.shape}")
+        if group.inertia is not None and not caps.supports(FEATURE_SPAWN_INERTIA):
+            raise FeatureUnsupportedError(
+                f"the {world.engine.name} engine cannot set a spawned body's inertia")
 
 
 def load_model(world: World, args: dict[str, Any]) -> dict[str, Any]:

@@ -54,7 +54,7 @@ def check_new(engine: MujocoEngine, names: Sequence[str]) -> None:
 def compile_groups(engine: MujocoEngine, compiled: Sequence[mp.Planned]) -> None:
     """Add the groups' bodies and spares, recompile; on any failure take them out."""
     snapshot = engine.pool.snapshot()
-    additions = mp.Additions(engine.spec, engine.home, engine.builders)
+    additions = mp.Additions(engine.spec, engine.builders)
     nbody, nv = engine.model.nbody, engine.model.nv
     try:
         for group, material, _, spares in compiled:
@@ -74,7 +74,7 @@ def compile_groups(engine: MujocoEngine, compiled: Sequence[mp.Planned]) -> None
         for name, body in zip(group.names, next(made), strict=True):
             engine.entities[name] = Entity(body, group.static, friction=group.friction,
                                             restitution=group.restitution, key=key)
-        if spares:
+        if spares and key is not None:
             engine.pool.adopt(key, next(made))
     engine.reindex()
 
