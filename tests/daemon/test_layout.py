@@ -17,10 +17,11 @@ SOURCES = ("daemon", "client", "protocol", "analysis")
 MAX_TOP_LEVEL_MODULES = 10
 ENGINE_PACKAGES = sorted(p.name for p in ENGINES.iterdir()
                          if (p / "engine.py").is_file())
-# What an engine package may import of ours besides itself: the contract and its parameter
-# specs (engines/base.py, engines/params.py) and the protocol.
-ENGINE_MAY_IMPORT = ("galton.daemon.engines.base", "galton.daemon.engines.params",
-                     "galton.protocol")
+# What an engine package may import of ours besides itself: the engine base (the modules at
+# the top of engines/: the contract base.py, its parameter specs params.py, what engines
+# share) and the protocol; never the registry, the checker, another engine or the daemon.
+ENGINE_MAY_IMPORT = (*(f"galton.daemon.engines.{p.stem}" for p in sorted(ENGINES.glob("*.py"))
+                       if p.stem != "__init__"), "galton.protocol")
 PRIVATE_REACH = re.compile(r"\bengine\._[a-z]")
 
 
@@ -54,8 +55,9 @@ def owner(path: Path) -> str | None:
     return parts[0] if len(parts) > 1 and parts[0] in ENGINE_PACKAGES else None
 
 
-def test_the_engine_packages_are_found() -> None:
+def test_the_engine_packages_and_base_are_found() -> None:
     assert set(ENGINE_PACKAGES) >= {"mujoco", "pybullet", "dart", "ode"}
+    assert {"galton.daemon.engines.base", "galton.protocol"} <= set(ENGINE_MAY_IMPORT)
 
 
 def test_the_daemon_top_level_stays_small() -> None:
