@@ -108,7 +108,8 @@ def main() -> None:
         decoder = msgspec.msgpack.Decoder(_envelope(args_type))
         is_spawn = args_type is SpawnArgs
 
-        def whole(decoder: Any = decoder, spawn: bool = is_spawn) -> None:
+        def whole(decoder: Any = decoder, spawn: bool = is_spawn,
+                  payload: bytes = payload) -> None:
             body = decoder.decode(payload)
             if spawn:  # the numeric checks msgspec cannot make (rows, quaternions)
                 for group in body.args.groups:
@@ -116,7 +117,8 @@ def main() -> None:
             elif hasattr(body.args, "poses") and body.args.poses is not None:
                 decode_poses(body.args.poses, len(body.args.names), "p")
 
-        def converted(args_type: type = args_type, spawn: bool = is_spawn) -> None:
+        def converted(args_type: type = args_type, spawn: bool = is_spawn,
+                      payload: bytes = payload) -> None:
             request = decode_request(payload, None, LIMITS)
             args = msgspec.convert(request.args, args_type)
             if spawn:
