@@ -36,7 +36,7 @@ from galton.client.session import checked_timeout
 from galton.client.telemetry import Subscription, TelemetryStream, subscribe_events
 from galton.client.transport import Transport, ZenohTransport, zmq_endpoint
 from galton.client.transport_zmq import ZmqTransport
-from galton.client.values import JointStates, Stamp, States
+from galton.client.values import FloatArray, JointStates, Stamp, States
 from galton.client.zmq_keys import ZmqKeys
 from galton.protocol import (
     POSE_WIDTH,
@@ -50,8 +50,10 @@ from galton.protocol import (
     SimStatus,
     Telemetry,
 )
+from galton.protocol.arrays import unpack_f64
 from galton.protocol.errors import ClientClosedError, InvalidArgumentError
 from galton.protocol.operations import OPERATIONS
+from galton.protocol.requests import BoundsReply, decode_result
 
 DEFAULT_TIMEOUT_S = 5.0
 
@@ -275,6 +277,14 @@ class Client(WorldMethods, PerceptionMethods, ControlMethods, StreamMethods):
         """States of these bodies (all when None) in one request."""
         return States.from_reply(
             self._ok("get_states", sdk_joints.names_arg(names)))
+
+    def get_bounds(self, names: Sequence[str] | None = None) -> dict[str, FloatArray]:
+        """Each entity's world-frame axis-aligned bounds (all when None), as a row
+        ``min_x min_y min_z max_x max_y max_z``."""
+        reply = decode_result(BoundsReply, self._ok("get_bounds",
+                                                    sdk_joints.names_arg(names)).result)
+        rows = unpack_f64(reply.bounds, 6, "bounds")
+        return dict(zip(reply.names, rows, strict=True))
 
     def set_states(self, names: Sequence[str], poses: ArrayLike | None = None,
                    twists: ArrayLike | None = None) -> Stamp:

@@ -23,6 +23,7 @@ from galton.protocol import (
     OperationFailedError,
     ResourceLimitError,
 )
+from galton.protocol import requests as rq
 from galton.protocol.arrays import pack_f64
 from galton.protocol.model import check_names, check_type, finite_number
 
@@ -152,8 +153,11 @@ def _names(args: dict[str, Any], key: str) -> list[str] | None:
 
 def _apply_changes(copy: World, args: dict[str, Any]) -> None:
     """The changes a prediction starts from, each checked as its own request would be."""
-    for key, apply in (("set_states", ops.set_states),
-                       ("joint_targets", ops_joints.set_joint_targets),
+    change = args.get("set_states")
+    if change is not None:  # a set_states request of its own, decoded as one
+        body = check_type(change, dict, "predict.set_states")
+        ops.set_states(copy, rq.decode_args("set_states", rq.SetStates, body))
+    for key, apply in (("joint_targets", ops_joints.set_joint_targets),
                        ("wrenches", ops_joints.apply_wrench)):
         change = args.get(key)
         if change is not None:
