@@ -164,6 +164,20 @@ OPERATIONS: dict[str, Operation] = {op.name: op for op in (
 )}
 
 
+def json_schema() -> dict[str, Any]:
+    """Every operation's request (its ``args`` map) and declared reply (its ``result``
+    map) as JSON Schema (2020-12), for clients in other languages: msgpack bins appear as
+    base64 strings, as a JSON rendering of the wire would carry them."""
+    types = [t for op in OPERATIONS.values() for t in (op.request, op.reply) if t is not None]
+    refs, defs = msgspec.json.schema_components(types, ref_template="#/$defs/{name}")
+    by_type = dict(zip(types, refs, strict=True))
+    operations = {name: {"request": by_type[op.request],
+                         "reply": by_type[op.reply] if op.reply is not None else {}}
+                  for name, op in OPERATIONS.items()}
+    return {"$schema": "https://json-schema.org/draft/2020-12/schema", "$defs": defs,
+            "operations": operations}
+
+
 def operation(name: str) -> Operation:
     """The operation of that name, or UnknownOperationError with the closest names."""
     found = OPERATIONS.get(name)

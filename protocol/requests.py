@@ -328,8 +328,10 @@ def explain(op: str, declared: type[Args], error: str, args: dict[str, Any]) -> 
         choices = field_kind(declared, str(steps[0]))[1] if steps else ()
         return (f"{where} {brief(value)} is not one of {', '.join(choices)}"
                 f"{did_you_mean(str(value)[:64], choices)}")
-    expected = what.removeprefix("Expected ").replace("`", "")
-    return f"{where} must be {expected}, got {brief(value)}"
+    if what.startswith("Expected `"):  # "Expected `int | null`, got `str`"
+        expected = what.split("`")[1].removesuffix(" | null")  # None means "not sent"
+        return f"{where} must be {expected}, got {brief(value)}"
+    return f"{where}: {what[:1].lower()}{what[1:]}, got {brief(value)}"  # ranges, lengths
 
 
 def _path_steps(path: str) -> list[str | int]:
