@@ -73,16 +73,16 @@ def _capabilities(loop: SimLoop, call: Call, request: Args) -> Result:
 
 
 HANDLERS: dict[str, Handler] = {
-    "status": _raw(time_control.status),
+    "status": time_control.status,
     "capabilities": _capabilities,
-    "play": _raw(time_control.play),
-    "set_rtf": _raw(time_control.set_rtf),
-    "pause": _raw(time_control.pause),
-    "stop": _raw(time_control.stop),
-    "step": _raw(time_control.step),
-    "run_until": _raw(time_control.run_until),
-    "reset": _raw(time_control.reset),
-    "load_world": _raw(time_control.load_world),
+    "play": time_control.play,
+    "set_rtf": time_control.set_rtf,
+    "pause": time_control.pause,
+    "stop": time_control.stop,
+    "step": time_control.step,
+    "run_until": time_control.run_until,
+    "reset": time_control.reset,
+    "load_world": time_control.load_world,
     "spawn": _scene("spawn", ops.spawn),
     "load_model": _scene("load_model", ops.load_model),
     "list": _scene("list", ops.list_entities),
@@ -115,10 +115,10 @@ HANDLERS: dict[str, Handler] = {
     "contacts": _scene("contacts", ops_perception.contacts, raw=True),
     "get_params": _scene("get_params", ops.get_params),
     "set_params": _scene("set_params", ops.set_params),
-    "take_control": _raw(lease.take_control),
-    "release_control": _raw(lease.release_control),
-    "stream_states": _raw(state_streams.stream_states),
-    "close_stream": _raw(state_streams.close_stream),
+    "take_control": lease.take_control,
+    "release_control": lease.release_control,
+    "stream_states": state_streams.stream_states,
+    "close_stream": state_streams.close_stream,
 }
 
 

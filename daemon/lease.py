@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING, Any
 
 from galton.daemon.calls import Call
 from galton.protocol import ControlHeldError, InvalidArgumentError
+from galton.protocol import requests as rq
 from galton.protocol.operations import Operation
 
 if TYPE_CHECKING:
@@ -87,7 +88,7 @@ def check(loop: SimLoop, call: Call, op: Operation) -> None:
     raise _held(holder, f"{op.name} from {_asker(call)} would change the world and is refused")
 
 
-def take_control(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+def take_control(loop: SimLoop, call: Call, request: rq.NoArgs) -> dict[str, Any]:
     """Take the lease, or keep it (taking it again is no change); refused while another
     client holds it."""
     if call.client is None and call.peer is None:
@@ -114,7 +115,7 @@ def take_control(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, A
     return {"controller": taker.name, "taken": True}
 
 
-def release_control(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+def release_control(loop: SimLoop, call: Call, request: rq.NoArgs) -> dict[str, Any]:
     """Give the lease back (its holder only); with nobody holding it, nothing to do."""
     holder = loop.lease.holder
     if holder is None:
