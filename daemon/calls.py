@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Protocol
 
 if TYPE_CHECKING:
@@ -33,9 +33,6 @@ class Call:
     # is tied to it as to a Zenoh client's token. ``op`` is "" until decoded there.
     peer: str | None = None
     role: str | None = None  # the sender's role where the transport knows it (ZeroMQ)
-    # Its args map once decoded and checked against its declaration (protocol/requests.py),
-    # for the handlers not yet converted to the typed request.
-    args: dict[str, Any] = field(default_factory=dict)
 
 
 @dataclass

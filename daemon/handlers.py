@@ -36,26 +36,16 @@ Result = dict[str, Any] | None  # None: the reply comes later (a step job)
 # A handler receives its operation's declared request (protocol/requests.py), decoded and
 # checked before it runs.
 Handler = Callable[["SimLoop", Call, Any], Result]
-RawHandler = Callable[["SimLoop", Call, dict[str, Any]], Result]
 
 
-def _raw(handler: RawHandler) -> Handler:
-    """A handler not yet converted to its typed request: it reads the args map, already
-    checked against the operation's declaration."""
-    def handle(loop: SimLoop, call: Call, request: Args) -> Result:
-        return handler(loop, call, call.args)
-    return handle
-
-
-def _scene(name: str, apply: ops.SceneOp, *, raw: bool = False) -> Handler:
+def _scene(name: str, apply: ops.SceneOp) -> Handler:
     """A scene operation as a handler: applied to the loop's world; a success that changes
-    the scene is announced, and a step job reading a deleted entity is answered now.
-    ``raw``: ``apply`` still reads the args map rather than the typed request."""
+    the scene is announced, and a step job reading a deleted entity is answered now."""
     mutates = OPERATIONS[name].mutates
 
     def handle(loop: SimLoop, call: Call, request: Args) -> Result:
         world = loop.world_for(request)
-        result = apply(world, call.args if raw else request)
+        result = apply(world, request)
         if mutates:
             event = {"kind": "scene", "op": name, "world": world.name,
                      "step": world.step_index}
@@ -91,28 +81,28 @@ HANDLERS: dict[str, Handler] = {
     "set_states": _scene("set_states", ops.set_states),
     "update": _scene("update", ops.update),
     "delete": _scene("delete", ops.delete),
-    "joints": _scene("joints", ops_joints.joints, raw=True),
-    "get_joint_states": _scene("get_joint_states", ops_joints.get_joint_states, raw=True),
-    "set_joint_states": _scene("set_joint_states", ops_joints.set_joint_states, raw=True),
-    "set_joint_targets": _scene("set_joint_targets", ops_joints.set_joint_targets, raw=True),
-    "apply_wrench": _scene("apply_wrench", ops_joints.apply_wrench, raw=True),
-    "clear_wrenches": _scene("clear_wrenches", ops_joints.clear_wrenches, raw=True),
-    "snapshot": _raw(worlds.snapshot),
-    "restore": _raw(worlds.restore),
-    "snapshots": _raw(worlds.snapshots),
-    "delete_snapshot": _raw(worlds.delete_snapshot),
-    "list_worlds": _raw(worlds.list_worlds),
-    "create_world": _raw(worlds.create_world),
-    "fork_world": _raw(worlds.fork_world),
-    "delete_world": _raw(worlds.delete_world),
-    "predict": _raw(predict.predict),
-    "compare": _scene("compare", compare.compare, raw=True),
-    "render": _scene("render", ops_perception.render, raw=True),
-    "add_camera": _scene("add_camera", ops_perception.add_camera, raw=True),
-    "remove_camera": _scene("remove_camera", ops_perception.remove_camera, raw=True),
-    "cameras": _scene("cameras", ops_perception.cameras, raw=True),
-    "raycast": _scene("raycast", ops_perception.raycast, raw=True),
-    "contacts": _scene("contacts", ops_perception.contacts, raw=True),
+    "joints": _scene("joints", ops_joints.joints),
+    "get_joint_states": _scene("get_joint_states", ops_joints.get_joint_states),
+    "set_joint_states": _scene("set_joint_states", ops_joints.set_joint_states),
+    "set_joint_targets": _scene("set_joint_targets", ops_joints.set_joint_targets),
+    "apply_wrench": _scene("apply_wrench", ops_joints.apply_wrench),
+    "clear_wrenches": _scene("clear_wrenches", ops_joints.clear_wrenches),
+    "snapshot": worlds.snapshot,
+    "restore": worlds.restore,
+    "snapshots": worlds.snapshots,
+    "delete_snapshot": worlds.delete_snapshot,
+    "list_worlds": worlds.list_worlds,
+    "create_world": worlds.create_world,
+    "fork_world": worlds.fork_world,
+    "delete_world": worlds.delete_world,
+    "predict": predict.predict,
+    "compare": _scene("compare", compare.compare),
+    "render": _scene("render", ops_perception.render),
+    "add_camera": _scene("add_camera", ops_perception.add_camera),
+    "remove_camera": _scene("remove_camera", ops_perception.remove_camera),
+    "cameras": _scene("cameras", ops_perception.cameras),
+    "raycast": _scene("raycast", ops_perception.raycast),
+    "contacts": _scene("contacts", ops_perception.contacts),
     "get_params": _scene("get_params", ops.get_params),
     "set_params": _scene("set_params", ops.set_params),
     "take_control": lease.take_control,

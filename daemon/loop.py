@@ -251,7 +251,6 @@ class SimLoop:
             op = operation(request.op)
             refuse_by_role(call.role, op.name)
             typed = op.decode(request.args)  # the declared request, or INVALID_ARGUMENT
-            call.args = request.args
             self.world_for(typed)  # an unknown world is refused before anything
             call.client = request.client
             call.world = typed.world if isinstance(typed.world, str) else None
