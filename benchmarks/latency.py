@@ -25,8 +25,8 @@ import zenoh
 from common import ENGINES, daemon_client, machine, percentiles_ms, write_json
 
 from galton.client import plane, spheres
-from galton.client.embedded import free_loopback_port
-from galton.client.session import open_session
+from galton.client.sdk.embedded import free_loopback_port
+from galton.client.transport.session import open_session
 from galton.daemon.engine import Engine
 from galton.daemon.engines import create_engine
 from galton.protocol import BodyGroup, encode_request

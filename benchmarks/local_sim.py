@@ -13,7 +13,7 @@ import math
 from collections.abc import Iterator
 from typing import Any
 
-from galton.client.sdk import Stamp, States
+from galton.client.sdk.client import Stamp, States
 from galton.daemon.engines import create_engine
 from galton.daemon.world import World
 from galton.protocol import BodyGroup, Capabilities, SimStatus

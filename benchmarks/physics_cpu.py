@@ -35,7 +35,7 @@ from common import machine, write_json
 from local_sim import LocalSim
 
 from galton.client import Client
-from galton.client.embedded import free_loopback_port
+from galton.client.sdk.embedded import free_loopback_port
 
 INSTANCE = "physics-cpu"
 

@@ -27,7 +27,7 @@ import numpy as np
 from common import write_json
 
 from galton.client import Client, plane, spheres
-from galton.client.embedded import free_loopback_port
+from galton.client.sdk.embedded import free_loopback_port
 from galton.daemon import loop, server
 from galton.daemon.engines import ENGINE_CLASSES
 from galton.daemon.server import Daemon, DaemonOptions

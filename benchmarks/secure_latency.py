@@ -28,8 +28,8 @@ from common import machine, percentiles_ms, write_json
 from latency import WARM_UP_ROUNDS, interleaved, scene_groups
 
 from galton.client import Client, Credentials, EmbeddedDaemon, wait_for_daemon
-from galton.client.embedded import free_loopback_port
-from galton.client.zmq_keys import ZmqKeys
+from galton.client.sdk.embedded import free_loopback_port
+from galton.client.transport.zmq_keys import ZmqKeys
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 from support_certs import Certificates, make_certificates

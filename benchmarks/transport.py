@@ -37,7 +37,7 @@ from latency import (
 )
 
 from galton.client import Client
-from galton.client.session import open_session
+from galton.client.transport.session import open_session
 from galton.protocol import encode_request
 
 

@@ -15,37 +15,24 @@ from typing import TYPE_CHECKING
 from galton.protocol.lazy import lazy_exports
 
 if TYPE_CHECKING:
-    from galton.client.credentials import (
-        Credentials,
-    )
-    from galton.client.discovery import (
-        DaemonInfo,
-        discover,
-        discover_at,
-        instances,
-        wait_for_daemon,
-    )
-    from galton.client.embedded import (
-        EmbeddedDaemon,
-    )
-    from galton.client.sdk import (
+    from galton.client.sdk.client import (
         Client,
         body_group,
         boxes,
         plane,
         spheres,
     )
-    from galton.client.sdk_perception import (
+    from galton.client.sdk.embedded import (
+        EmbeddedDaemon,
+    )
+    from galton.client.sdk.perception import (
         camera,
     )
-    from galton.client.sdk_worlds import (
-        lockstep,
-    )
-    from galton.client.telemetry import (
+    from galton.client.sdk.telemetry import (
         Subscription,
         TelemetryStream,
     )
-    from galton.client.values import (
+    from galton.client.sdk.values import (
         Comparison,
         Contacts,
         Image,
@@ -57,7 +44,20 @@ if TYPE_CHECKING:
         States,
         WorldInfo,
     )
-    from galton.client.zmq_keys import (
+    from galton.client.sdk.worlds import (
+        lockstep,
+    )
+    from galton.client.transport.credentials import (
+        Credentials,
+    )
+    from galton.client.transport.discovery import (
+        DaemonInfo,
+        discover,
+        discover_at,
+        instances,
+        wait_for_daemon,
+    )
+    from galton.client.transport.zmq_keys import (
         ZmqKeys,
     )
     from galton.protocol import (
@@ -94,18 +94,18 @@ if TYPE_CHECKING:
 
 # Where each public name lives, imported when first asked for.
 _SOURCES: dict[str, tuple[str, ...]] = {
-    "galton.client.credentials": ("Credentials",),
-    "galton.client.discovery": (
+    "galton.client.transport.credentials": ("Credentials",),
+    "galton.client.transport.discovery": (
         "DaemonInfo", "discover", "discover_at", "instances", "wait_for_daemon"),
-    "galton.client.embedded": ("EmbeddedDaemon",),
-    "galton.client.sdk": ("Client", "body_group", "boxes", "plane", "spheres"),
-    "galton.client.sdk_perception": ("camera",),
-    "galton.client.sdk_worlds": ("lockstep",),
-    "galton.client.telemetry": ("Subscription", "TelemetryStream"),
-    "galton.client.values": (
+    "galton.client.sdk.embedded": ("EmbeddedDaemon",),
+    "galton.client.sdk.client": ("Client", "body_group", "boxes", "plane", "spheres"),
+    "galton.client.sdk.perception": ("camera",),
+    "galton.client.sdk.worlds": ("lockstep",),
+    "galton.client.sdk.telemetry": ("Subscription", "TelemetryStream"),
+    "galton.client.sdk.values": (
         "Comparison", "Contacts", "Image", "JointStates", "Prediction", "RayHits",
         "SnapshotInfo", "Stamp", "States", "WorldInfo"),
-    "galton.client.zmq_keys": ("ZmqKeys",),
+    "galton.client.transport.zmq_keys": ("ZmqKeys",),
     "galton.protocol": (
         "AccessDeniedError", "BodyGroup", "BodyProperties", "Capabilities",
         "ClientClosedError", "ControlHeldError", "DaemonUnreachableError", "EntityInfo",

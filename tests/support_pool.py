@@ -9,8 +9,8 @@ from typing import IO
 
 from cli_support import CONSOLE_COMMAND
 
-from galton.client.cli_router import READY_PREFIX
-from galton.client.embedded import free_loopback_port
+from galton.client.cli.router import READY_PREFIX
+from galton.client.sdk.embedded import free_loopback_port
 
 START_TIMEOUT_S = 30.0
 

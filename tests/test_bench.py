@@ -13,7 +13,7 @@ from galton.analysis.board import BoardSpec
 from galton.analysis.records import ExperimentResults
 from galton.client import Client, EmbeddedDaemon
 from galton.client.bench.trial import TrialConfig, run_trial
-from galton.client.cli import app
+from galton.client.cli.common import app
 from galton.protocol import InvalidArgumentError
 
 runner = CliRunner()
@@ -97,7 +97,7 @@ def test_bench_never_replaces_the_world_of_a_daemon_it_was_not_pointed_at(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """A user's daemon answering on the default endpoint keeps its scene: with no --connect,
     --instances or --use-running the bench starts daemons of its own."""
-    import galton.client.session as session_module
+    import galton.client.transport.session as session_module
     from galton.client import plane, spheres
 
     with EmbeddedDaemon("mujoco", instance="users-robot") as daemon, \

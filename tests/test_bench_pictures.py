@@ -27,7 +27,7 @@ from galton.client.bench.picture import (
     first_trials,
 )
 from galton.client.bench.trial import TrialConfig
-from galton.client.cli import app
+from galton.client.cli.common import app
 from galton.protocol.png import decode_png
 
 runner = CliRunner()

@@ -16,7 +16,7 @@ from synthetic_runs import law_trials, write_results
 from typer.testing import CliRunner
 
 from galton.analysis import stats
-from galton.client.cli import app
+from galton.client.cli.common import app
 
 runner = CliRunner()
 BENCH_DEFAULTS = Path(__file__).resolve().parents[1] / "docs" / "data" / "bench-defaults"

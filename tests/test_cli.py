@@ -9,7 +9,7 @@ import pytest
 from cli_support import NOWHERE, flat, invoke, run, target_of
 
 from galton.client import Client, EmbeddedDaemon, wait_for_daemon
-from galton.client.cli import package_version
+from galton.client.cli.common import package_version
 from galton.protocol import BODY_SHAPES, RESET_SCOPES
 from galton.protocol.operations import OPERATIONS
 

@@ -13,8 +13,8 @@ import pytest
 from cli_support import CONSOLE_COMMAND, flat, invoke, run, target_of
 
 from galton.client import Client, EmbeddedDaemon, spheres
-from galton.client.cli import package_version
-from galton.client.cli_call import unpacked
+from galton.client.cli.call import unpacked
+from galton.client.cli.common import package_version
 from galton.protocol import pack_f64
 
 EVENT_WAIT_S = 1.0  # per try: the subscription may take a moment to reach the daemon

@@ -9,7 +9,7 @@ import pytest
 import typer.main
 from cli_support import run
 
-from galton.client.cli import app, help_text
+from galton.client.cli.common import app, help_text
 from galton.protocol.operations import OPERATIONS
 
 # Operations whose command is not the operation's name with dashes (README, "CLI").

@@ -11,7 +11,7 @@ import pytest
 from cli_support import NOWHERE, flat, invoke, run, target_of
 
 from galton.client import Client, EmbeddedDaemon
-from galton.client.cli import console
+from galton.client.cli.common import console
 from galton.protocol.operations import OPERATIONS
 
 KUKA = Path(pybullet_data.getDataPath()) / "kuka_iiwa" / "model.urdf"

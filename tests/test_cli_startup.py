@@ -10,11 +10,11 @@ import sys
 
 import pytest
 
-HEAVY = ("numpy", "zenoh", "zmq", "scipy", "matplotlib", "galton.client.sdk",
+HEAVY = ("numpy", "zenoh", "zmq", "scipy", "matplotlib", "galton.client.sdk.client",
          "galton.analysis.board")
 PROBE = """
 import contextlib, io, json, sys
-from galton.client.cli import app
+from galton.client.cli.common import app
 with contextlib.redirect_stdout(io.StringIO()):
     code = app({args!r}, standalone_mode=False)
 print(json.dumps([code, [m for m in {heavy!r} if m in sys.modules]]))
@@ -33,8 +33,8 @@ def test_help_imports_none_of_the_heavy_libraries(args: list[str]) -> None:
 
 def test_version_answers_before_the_cli_is_imported() -> None:
     probe = ("import sys; sys.argv = ['galton-client', '--version']\n"
-             "from galton.client.console import main; main()\n"
-             "print('typer' in sys.modules, 'galton.client.cli' in sys.modules)")
+             "from galton.client.cli.console import main; main()\n"
+             "print('typer' in sys.modules, 'galton.client.cli.common' in sys.modules)")
     done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
                           timeout=60, check=True)
     first, second = done.stdout.splitlines()

@@ -1,4 +1,4 @@
-"""Client credentials (client/credentials.py): where they come from, what reaches Zenoh,
+"""Client credentials (client/transport/credentials.py): where they come from, what reaches Zenoh,
 and that a password is never echoed; ``galton-client hash-password``."""
 
 from __future__ import annotations
@@ -10,8 +10,8 @@ from cli_support import run
 from typer.testing import CliRunner
 
 from galton.client import Credentials
-from galton.client.cli import app
-from galton.client.credentials import resolve_credentials
+from galton.client.cli.common import app
+from galton.client.transport.credentials import resolve_credentials
 from galton.protocol.auth import wire_password
 from galton.protocol.errors import InvalidArgumentError
 

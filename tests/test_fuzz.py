@@ -1,13 +1,13 @@
 """The short fuzz campaign of the test command: a few thousand seeded requests per engine
-against a real daemon of its own, each checked by ``galton.client.fuzz`` (one typed reply in
-time; a rejected request changes nothing), and the daemon still up at the end."""
+against a real daemon of its own, each checked by ``galton.client.fuzz`` (one typed reply in time;
+a rejected request changes nothing), and the daemon still up at the end."""
 
 from __future__ import annotations
 
 import pytest
 
 from galton.client import Client, EmbeddedDaemon
-from galton.client.fuzz import run_campaign
+from galton.client.fuzz.campaign import run_campaign
 
 SHORT_CAMPAIGN = 1500
 RESEALED = 10  # re-sealed corrupt snapshots after the requests (issue 35)

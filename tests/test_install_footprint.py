@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 
 from galton.client import EmbeddedDaemon
-from galton.client.embedded import free_loopback_port
+from galton.client.sdk.embedded import free_loopback_port
 
 ROOT = Path(__file__).resolve().parents[1]
 ENGINES = ("mujoco", "pybullet", "pybullet_data", "pybullet_utils", "dartpy")

@@ -22,9 +22,9 @@ from galton.client.bench.daemons import pool_clients
 from galton.client.bench.experiment import ExperimentConfig
 from galton.client.bench.pool import PoolHooks, TrialQueue, run_pool
 from galton.client.bench.trial import run_trial
-from galton.client.cli_router import DEFAULT_ROUTER_LISTEN, router_config
-from galton.client.discovery import discover_at
-from galton.client.session import close_session, open_session
+from galton.client.cli.router import DEFAULT_ROUTER_LISTEN, router_config
+from galton.client.transport.discovery import discover_at
+from galton.client.transport.session import close_session, open_session
 from galton.protocol import DaemonUnreachableError
 
 START_TIMEOUT_S = 60.0

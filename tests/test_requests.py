@@ -13,7 +13,7 @@ import pytest
 from typer.testing import CliRunner
 
 from galton.client import spheres
-from galton.client.cli import app
+from galton.client.cli.common import app
 from galton.protocol import InvalidArgumentError, pack_f64
 from galton.protocol import requests as rq
 from galton.protocol.operations import OPERATIONS

@@ -12,7 +12,7 @@ from support import snapshot
 from support_urdf import ARM_URDF
 
 from galton.client import Client, plane, spheres
-from galton.client.fuzz_snapshots import open_blob, reseal, resealed_campaign
+from galton.client.fuzz.snapshots import open_blob, reseal, resealed_campaign
 from galton.protocol import InvalidArgumentError
 
 CAMPAIGN = 20

@@ -20,7 +20,7 @@ from galton.client import (
     Stamp,
     spheres,
 )
-from galton.client.sdk_joints import body_rows, joint_values, search_path_arg
+from galton.client.sdk.joints import body_rows, joint_values, search_path_arg
 from galton.daemon.engine_check_joints import RIG  # the checker's rig: base, hinge, slider, tip
 from galton.protocol import unpack_f64
 

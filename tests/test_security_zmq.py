@@ -23,8 +23,8 @@ from galton.client import (
     RoleDeniedError,
     spheres,
 )
-from galton.client.embedded import daemon_command, free_loopback_port
-from galton.client.zmq_keys import ZmqKeys
+from galton.client.sdk.embedded import daemon_command, free_loopback_port
+from galton.client.transport.zmq_keys import ZmqKeys
 
 USERS = """
 [users.alice]

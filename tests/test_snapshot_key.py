@@ -12,8 +12,8 @@ from support import snapshot
 from support_daemons import start_daemon
 
 from galton.client import Client, EmbeddedDaemon, plane, spheres, wait_for_daemon
-from galton.client.embedded import daemon_command
-from galton.client.fuzz_snapshots import open_blob, reseal
+from galton.client.fuzz.snapshots import open_blob, reseal
+from galton.client.sdk.embedded import daemon_command
 from galton.protocol import InvalidArgumentError
 
 

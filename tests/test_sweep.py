@@ -13,7 +13,7 @@ from galton.analysis.records import ExperimentResults, TrialRecord
 from galton.analysis.sweep import SweepAxis, sweep_cells
 from galton.client import EmbeddedDaemon
 from galton.client.bench.sweep import parse_axis
-from galton.client.cli import app
+from galton.client.cli.common import app
 from galton.protocol import InvalidArgumentError
 
 

@@ -12,8 +12,8 @@ import pytest
 import zenoh
 from typer.testing import CliRunner
 
-from galton.client.embedded import free_loopback_port
-from galton.client.session import close_session, open_session
+from galton.client.sdk.embedded import free_loopback_port
+from galton.client.transport.session import close_session, open_session
 from galton.daemon.cli import app as daemon_app
 from galton.daemon.server import DaemonOptions, listening_on, zenoh_config
 from galton.daemon.zenoh_merge import (

@@ -18,7 +18,7 @@ import zmq
 from support_daemons import start_daemon
 
 from galton.client import Client, EmbeddedDaemon, discover_at
-from galton.client.embedded import daemon_command, free_loopback_port
+from galton.client.sdk.embedded import daemon_command, free_loopback_port
 from galton.daemon.zmq_front import telemetry_endpoint
 from galton.protocol import DaemonUnreachableError, InvalidArgumentError
 

@@ -10,11 +10,11 @@ from typing import Any
 
 import zenoh
 
-from galton.client.credentials import Credentials
-from galton.client.discovery import DaemonInfo, discover, wait_for_daemon
-from galton.client.embedded import EmbeddedDaemon
-from galton.client.sdk import Client
-from galton.client.session import close_session, open_session
+from galton.client.sdk.client import Client
+from galton.client.sdk.embedded import EmbeddedDaemon
+from galton.client.transport.credentials import Credentials
+from galton.client.transport.discovery import DaemonInfo, discover, wait_for_daemon
+from galton.client.transport.session import close_session, open_session
 from galton.protocol import DaemonUnreachableError
 
 START_TIMEOUT_S = 60.0

@@ -28,7 +28,7 @@ from galton.client.bench.trial import (
     TrialConfig,
     run_trial,
 )
-from galton.client.sdk import Client
+from galton.client.sdk.client import Client
 from galton.protocol import ENGINE_NAMES, GaltonError, InvalidArgumentError
 from galton.protocol.errors import did_you_mean
 

@@ -20,8 +20,8 @@ import numpy as np
 from galton.analysis.board import BoardSpec
 from galton.client.bench.build import ball_group
 from galton.client.bench.trial import TrialConfig, prepare_world
-from galton.client.sdk import Client
-from galton.client.sdk_perception import camera
+from galton.client.sdk.client import Client
+from galton.client.sdk.perception import camera
 from galton.protocol import OperationFailedError
 from galton.protocol.png import SIGNATURE, chunk, encode_png
 

@@ -23,7 +23,7 @@ from galton.analysis.records import ExperimentResults, TrialRecord
 from galton.client.bench.experiment import ExperimentConfig, experiment_results, take_pictures
 from galton.client.bench.picture import Animation, first_trials
 from galton.client.bench.trial import TrialConfig, run_trial
-from galton.client.sdk import Client
+from galton.client.sdk.client import Client
 from galton.protocol import (
     AccessDeniedError,
     ControlHeldError,

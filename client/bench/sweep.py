@@ -13,7 +13,7 @@ from galton.analysis.records import ExperimentResults, TrialRecord
 from galton.analysis.sweep import SweepAxis
 from galton.client.bench.experiment import ExperimentConfig, run_experiment
 from galton.client.bench.trial import TrialConfig
-from galton.client.sdk import Client
+from galton.client.sdk.client import Client
 from galton.protocol import InvalidArgumentError
 
 

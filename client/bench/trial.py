@@ -16,7 +16,7 @@ from galton.analysis.board_scoring import DEFAULT_SETTLE_SPEED, BallOutcomes, cl
 from galton.analysis.records import TrialRecord
 from galton.client.bench.build import ball_group, ball_names, board_groups
 from galton.client.bench.defaults import DEFAULT_MAX_SIM_TIME_S
-from galton.client.sdk import Client, States
+from galton.client.sdk.client import Client, States
 from galton.protocol import Telemetry
 
 DEFAULT_CHECK_INTERVAL_S = 0.5

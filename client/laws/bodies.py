@@ -14,7 +14,7 @@ import numpy as np
 from galton.analysis import laws_theory as theory
 from galton.analysis.laws import Check
 from galton.client.laws.context import LawContext, trace
-from galton.client.sdk import Client, body_group, boxes, plane
+from galton.client.sdk.client import Client, body_group, boxes, plane
 
 MOMENTUM_TOLERANCE = 1e-3  # relative
 MOMENTUM_WHY = ("contact forces act in equal and opposite pairs, so momentum is kept to "

@@ -17,7 +17,7 @@ import numpy as np
 from galton.analysis import laws_theory as theory
 from galton.analysis.laws import Check
 from galton.client.laws.context import LawContext, trace
-from galton.client.sdk import Client, body_group, plane
+from galton.client.sdk.client import Client, body_group, plane
 from galton.protocol import BodyGroup
 
 SLOPE_FRICTION = 0.5  # the incline's μ: a friction angle of 26.6°

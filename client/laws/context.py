@@ -9,7 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from galton.analysis.laws import Check
-from galton.client.sdk import Client
+from galton.client.sdk.client import Client
 from galton.protocol import Capabilities
 
 STANDARD_GRAVITY = 9.81  # m/s², assumed where an engine's world has no "gravity" parameter

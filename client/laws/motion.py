@@ -10,7 +10,7 @@ import numpy as np
 from galton.analysis import laws_theory as theory
 from galton.analysis.laws import Check
 from galton.client.laws.context import LawContext, joint_trace, unsupported
-from galton.client.sdk import Client, spheres
+from galton.client.sdk.client import Client, spheres
 
 INTEGRATOR = ("a first-order integrator (semi-implicit Euler) leads or lags the exact fall "
               "by g·t·dt/2; twice that")

@@ -11,7 +11,7 @@ import numpy as np
 from galton.analysis.laws import Check
 from galton.client.laws import bodies, contact, motion
 from galton.client.laws.context import LawContext
-from galton.client.sdk import Client
+from galton.client.sdk.client import Client
 
 Outcome = Union[list[Check], tuple[list[Check], dict[str, np.ndarray]]]  # noqa: UP007
 

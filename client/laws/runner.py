@@ -12,7 +12,7 @@ import numpy as np
 from galton.analysis.laws import Check, EngineLaws, LawResults
 from galton.client.laws.context import STANDARD_GRAVITY, LawContext
 from galton.client.laws.registry import BY_KEY, EXPERIMENTS, KEYS, Experiment
-from galton.client.sdk import Client
+from galton.client.sdk.client import Client
 from galton.protocol import GaltonError, InvalidArgumentError
 
 Progress = Callable[[str, str], None]  # (engine, experiment key), called before each run

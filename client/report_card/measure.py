@@ -12,7 +12,7 @@ import numpy as np
 
 from galton.analysis.board import BoardSpec
 from galton.client.bench.build import board_groups
-from galton.client.sdk import Client, body_group, spheres
+from galton.client.sdk.client import Client, body_group, spheres
 from galton.protocol import PhysicsError
 
 BALLS = 100  # resting beside the board, so each step has contacts to solve

@@ -15,10 +15,10 @@ from galton.analysis.board import BoardSpec
 from galton.analysis.laws import LawResults
 from galton.analysis.report_card import CardResults
 from galton.client.bench.experiment import ExperimentConfig, run_experiment
-from galton.client.embedded import EmbeddedDaemon
 from galton.client.laws import choose, run_engine
 from galton.client.report_card import measure
-from galton.client.sdk import Client
+from galton.client.sdk.client import Client
+from galton.client.sdk.embedded import EmbeddedDaemon
 
 Say = Callable[[str], None]
 

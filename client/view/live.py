@@ -19,8 +19,8 @@ import numpy as np
 import viser
 import viser.uplot
 
-from galton.client.sdk import Client
-from galton.client.sdk_streams import StateSample, StateStream
+from galton.client.sdk.client import Client
+from galton.client.sdk.streams import StateSample, StateStream
 from galton.client.view.scene import WorldDrawing, framing
 from galton.protocol import AccessDeniedError, GaltonError, RequestTimeoutError
 

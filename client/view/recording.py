@@ -19,14 +19,14 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from galton.client.sdk_streams import StateSample
+from galton.client.sdk.streams import StateSample
 from galton.protocol import POSE_WIDTH, EntityInfo, InvalidArgumentError
 
 if TYPE_CHECKING:
-    from galton.client.sdk import Client
-    from galton.client.sdk_streams import StateStream
+    from galton.client.sdk.client import Client
+    from galton.client.sdk.streams import StateStream
 
-SUFFIX = ".npz"  # galton.client.cli_view.RECORDING_SUFFIX
+SUFFIX = ".npz"  # galton.client.cli.view.RECORDING_SUFFIX
 
 
 @dataclass

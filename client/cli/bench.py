@@ -1,0 +1,344 @@
+"""``galton-client bench``, ``report`` and ``sweep``: the Galton-board benchmark.
+
+Scoring and plotting (scipy, matplotlib: the ``[bench]`` extra) are imported inside the
+commands, so that a client installed without them still has every other command.
+"""
+
+from __future__ import annotations
+
+import itertools
+import json
+from collections.abc import Callable
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated, Any
+
+import typer
+from rich.table import Table
+
+from galton.analysis.errors import AnalysisError
+from galton.analysis.published import PUBLISHED_LABEL, PUBLISHED_TABLE2
+from galton.client.bench.defaults import (
+    DEFAULT_BALLS,
+    DEFAULT_ENGINES,
+    DEFAULT_MAX_SIM_TIME_S,
+    DEFAULT_REPETITIONS,
+    default_pool_size,
+)
+from galton.client.cli.common import JsonOpt, app, console, fail, run_guarded
+from galton.protocol import GaltonError
+
+if TYPE_CHECKING:
+    from rich.progress import Progress
+
+    from galton.analysis.board import BoardSpec
+    from galton.analysis.records import ExperimentResults, TrialRecord
+    from galton.client.bench.experiment import ExperimentConfig
+    from galton.client.bench.journal import Journal
+    from galton.client.bench.picture import Animation
+    from galton.client.bench.pool import Failover
+    from galton.client.bench.trial import TrialConfig
+    from galton.client.transport.credentials import Credentials
+
+if TYPE_CHECKING:
+    from galton.analysis.summary import EngineSummary
+
+DEFAULT_OUT = Path("galton-results")
+
+
+def _csv(text: str, where: str) -> list[str]:
+    items = [part.strip() for part in text.split(",") if part.strip()]
+    if not items:
+        raise typer.BadParameter(f"{where} needs at least one value")
+    return items
+
+
+def _ints(text: str, where: str) -> tuple[int, ...]:
+    try:
+        return tuple(int(v) for v in _csv(text, where))
+    except ValueError:
+        raise typer.BadParameter(f"{where} must be comma-separated integers, got {text!r}") \
+            from None
+
+
+def checked(make: Callable[[], ExperimentConfig]) -> ExperimentConfig:
+    """The run's configuration, or a command-line error (exit 2) before anything starts."""
+    try:
+        return make()
+    except GaltonError as error:
+        raise typer.BadParameter(str(error)) from error
+
+
+def load_board(source: str) -> BoardSpec:
+    from galton.analysis.board import BoardSpec
+    try:
+        return BoardSpec.load(source)
+    except (AnalysisError, OSError) as error:
+        raise typer.BadParameter(f"--board {source!r}: {error}") from error
+
+
+@app.command()
+def bench(
+    ctx: typer.Context,
+    engines: Annotated[str, typer.Option(help="Comma-separated engines.")] = ",".join(
+        DEFAULT_ENGINES),
+    connect: Annotated[str | None, typer.Option(
+        help="Endpoint(s) of daemons to run on, whose worlds the trials replace (else the "
+             "global --connect; with neither, nor --instances or --use-running, the bench "
+             "starts daemons of its own).")
+    ] = None,
+    instances: Annotated[str | None, typer.Option(
+        help="Comma-separated daemon instances to use, in engine order.")] = None,
+    use_running: Annotated[bool, typer.Option(
+        help="Run on the daemons already answering on the default endpoint. A trial "
+             "replaces a daemon's world, so without this (or --connect/--instances) the "
+             "bench starts daemons of its own and touches no running one.")] = False,
+    board: Annotated[str, typer.Option(
+        help="Preset (paper, paper-webots, paper-gazebo, small) or a TOML/JSON file.")
+                     ] = "paper",
+    balls: Annotated[str, typer.Option(help="Ball count(s), e.g. 1,25,100.")] = ",".join(
+        map(str, DEFAULT_BALLS)),
+    repetitions: Annotated[int, typer.Option(min=1)] = DEFAULT_REPETITIONS,
+    release: Annotated[str | None, typer.Option(
+        help="all-at-once or stream (default: the board's).")] = None,
+    seed: Annotated[int, typer.Option(min=0)] = 0,
+    max_sim_time: Annotated[float, typer.Option(help="Sim-time cap per trial, s.", min=0.1)
+                            ] = DEFAULT_MAX_SIM_TIME_S,
+    out: Annotated[Path, typer.Option(help="Output folder.")] = DEFAULT_OUT,
+    animation: Annotated[bool, typer.Option(
+        help="Also replay each engine's first trial as an animated PNG for the report.")
+    ] = False,
+    pool: Annotated[bool, typer.Option(
+        help="Spread the trials over every daemon found at --connect (or --instances), a "
+             "dead daemon's trial re-run on the others; with no --connect and none running, "
+             "start --pool-size daemons here.")] = False,
+    pool_size: Annotated[int, typer.Option(
+        help="Embedded daemons for --pool when none runs (default: cores, at most 4).",
+        min=1)] = default_pool_size(),
+    as_json: JsonOpt = False,
+) -> None:
+    """Run the paper's Galton-board experiment through the bridge and report it, with a
+    picture of the board after each engine's first trial."""
+    from galton.client.bench.experiment import ExperimentConfig
+    from galton.client.bench.journal import Journal
+    from galton.client.bench.picture import Animation
+    if release is not None and release not in ("all-at-once", "stream"):
+        raise typer.BadParameter(f"--release must be all-at-once or stream, got {release!r}")
+    config = checked(lambda: ExperimentConfig(
+        board=load_board(board), engines=tuple(_csv(engines, "--engines")),
+        balls=_ints(balls, "--balls"), repetitions=repetitions, release=release, seed=seed,
+        max_sim_time=max_sim_time))
+    endpoints = connect.split(",") if connect else ctx.obj.connect
+    names = _csv(instances, "--instances") if instances else None
+    shown = Animation() if animation else None
+    journal = Journal(config, out)
+    if pool:
+        results = _kept(journal, lambda: _run_pool(
+            config, endpoints, names, ctx.obj.timeout, pool_size, as_json, out, shown,
+            ctx.obj.credentials, use_running, journal))
+    else:
+        results = _kept(journal, lambda: _run(
+            config, endpoints, names, ctx.obj.timeout, as_json, out, shown,
+            ctx.obj.credentials, use_running, journal))
+    _finish(results, out, as_json)
+
+
+def _kept(journal: Journal, action: Callable[[], ExperimentResults]) -> ExperimentResults:
+    """Run the trials; on a failure, say which trials were kept (journal) and exit 1."""
+    try:
+        return action()
+    except GaltonError as error:
+        if journal.count:
+            typer.echo(f"galton-client: {journal.count} trial(s) finished before the failure "
+                       f"are kept in {journal.path} (`galton-client report {journal.path}` "
+                       "reports them)", err=True)
+        raise fail(error) from error
+
+
+def _run(config: ExperimentConfig, connect: list[str] | None, instances: list[str] | None,
+         timeout: float, quiet: bool, pictures: Path | None = None,
+         animation: Animation | None = None, credentials: Credentials | None = None,
+         use_running: bool = False, journal: Journal | None = None) -> ExperimentResults:
+    from galton.client.bench.daemons import bench_clients
+    from galton.client.bench.experiment import run_experiment
+    plan = config.trials()
+    with bench_clients(config.engines, connect, instances, max(timeout, 30.0),
+                       credentials, use_running) as clients, \
+            _progress(quiet) as progress:
+        task = progress.add_task("Galton trials", total=len(plan))
+
+        def advance(trial: TrialConfig, record: TrialRecord) -> None:
+            if journal is not None:
+                journal.add(trial, record)
+            progress.update(task, advance=1, description=(
+                f"{trial.engine} {trial.balls} balls rep {trial.repetition + 1}: "
+                f"lost {record.lost}, RTF {record.rtf or 0:.2f}"))
+        return run_experiment(clients, config, advance, pictures, animation)
+
+
+def _run_pool(config: ExperimentConfig, connect: list[str] | None,
+              instances: list[str] | None, timeout: float, size: int, quiet: bool,
+              pictures: Path, animation: Animation | None,
+              credentials: Credentials | None = None, use_running: bool = False,
+              journal: Journal | None = None) -> ExperimentResults:
+    """The plan over a pool of daemons: a progress row per daemon and one for the whole."""
+    from galton.client.bench.daemons import pool_clients
+    from galton.client.bench.pool import PoolHooks, run_pool
+    with pool_clients(connect, instances, max(timeout, 30.0), size, config.engines[0],
+                      credentials, use_running) as \
+            daemons, _progress(quiet) as progress:
+        overall = progress.add_task(f"Galton trials on {len(daemons.clients)} daemons",
+                                    total=len(config.trials()))
+        rows = {name: progress.add_task(f"{name}: starting", total=None)
+                for name in daemons.clients}
+
+        def start(name: str, trial: TrialConfig) -> None:
+            progress.update(rows[name], description=(
+                f"{name}: {trial.engine} {trial.balls} balls rep {trial.repetition + 1}"))
+
+        def advance(name: str, trial: TrialConfig, record: TrialRecord) -> None:
+            if journal is not None:
+                journal.add(trial, record)
+            progress.update(rows[name], advance=1, description=(
+                f"{name}: {trial.engine} {trial.balls} balls rep {trial.repetition + 1}: "
+                f"lost {record.lost}, RTF {record.rtf or 0:.2f}"))
+            progress.update(overall, advance=1)
+
+        def dropped(failover: Failover) -> None:
+            progress.update(rows[failover.daemon], description=(
+                f"{failover.daemon}: dropped, trial {failover.trial + 1} re-queued "
+                f"({failover.error})"))
+        hooks = PoolHooks(on_start=start, on_trial=advance, on_drop=dropped)
+        return run_pool(daemons.clients, config, daemons.hosts, hooks, pictures, animation)
+
+
+def _finish(results: ExperimentResults, out: Path, as_json: bool) -> None:
+    from galton.analysis.outputs import write_outputs
+    from galton.analysis.records import ExperimentResults
+    from galton.analysis.summary import summarise
+    try:
+        written = write_outputs(results, out)
+        saved = ExperimentResults.from_json(written["results_json"])
+        summaries = summarise(saved.trials)
+    except AnalysisError as error:
+        typer.echo(f"galton-client: {type(error).__name__}: {error}", err=True)
+        raise typer.Exit(1) from error
+    if as_json:
+        typer.echo(json.dumps({"files": {k: str(v) for k, v in written.items()},
+                               "engines": [_headline(s) for s in summaries]}, indent=2))
+        return
+    console.print(table2(summaries, saved.trials[0].rows if saved.trials else 11))
+    console.print(f"Report, results and plots in {out}/ (report.md, results.json, results.csv, "
+                  "*.png)")
+
+
+def _headline(summary: EngineSummary) -> dict[str, Any]:
+    group = summary.overall
+    return {"engine": summary.label, "chi2_median": group.chi2_median,
+            "chi2_pooled": group.pooled.chi2 if group.pooled else None,
+            "p_monte_carlo_pooled": group.pooled.p_monte_carlo if group.pooled else None,
+            "effect_size_pooled": group.pooled.effect_size if group.pooled else None,
+            "lost_percent": group.lost_percent_pooled, "rtf_mean": group.rtf_mean,
+            "rtf_min": group.rtf_min, "rtf_max": group.rtf_max}
+
+
+def table2(summaries: list[EngineSummary], rows: int = 11) -> Table:
+    """Our engines beside the paper's published rows, as in its Table 2."""
+    from galton.analysis.stats import critical_value
+    title = (f"Galton board, {rows} d.o.f., critical value {critical_value(dof=rows):.2f} at 5 %"
+             " (published rows: the paper's 11-row board)")
+    table = Table("simulator", "chi-squared (median per trial)", "chi-squared pooled (MC p)",
+                  "lost balls (%)", "real-time factor", title=title)
+    for s in summaries:
+        h = _headline(s)
+        pooled = "–" if h["chi2_pooled"] is None else (
+            f"{h['chi2_pooled']:.2f} (p={h['p_monte_carlo_pooled']:.3f})")
+        rtf = "–" if h["rtf_mean"] is None else (
+            f"{h['rtf_mean']:.2f} [{h['rtf_min']:.2f}–{h['rtf_max']:.2f}]")
+        median = "–" if h["chi2_median"] is None else f"{h['chi2_median']:.2f}"
+        table.add_row(f"{s.label} {s.engine_version} (this run)", median, pooled,
+                      f"{h['lost_percent']:.1f}", rtf)
+    for row in PUBLISHED_TABLE2:
+        table.add_row(f"{row.simulator} ({PUBLISHED_LABEL})", f"{row.chi2:.2f}", "–",
+                      f"{row.lost_percent:.1f}", row.rtf_text, style="dim")
+    return table
+
+
+@app.command()
+def report(
+    results_json: Annotated[Path, typer.Argument(help="A results.json written by bench.",
+                                                 exists=True, dir_okay=False)],
+    out: Annotated[Path | None, typer.Option(help="Output folder (default: beside it).")
+                   ] = None,
+    as_json: JsonOpt = False,
+) -> None:
+    """Re-render the report, CSV and plots from saved results."""
+    from galton.analysis.records import ExperimentResults
+    def load() -> ExperimentResults:
+        try:
+            return ExperimentResults.from_json(results_json)
+        except (AnalysisError, ValueError) as error:
+            raise typer.BadParameter(f"{results_json}: {error}") from error
+    _finish(load(), out or results_json.parent, as_json)
+
+
+@app.command()
+def sweep(
+    ctx: typer.Context,
+    param: Annotated[list[str], typer.Option(
+        help="NAME=V1,V2,... engine parameter values (one or two --param); e.g. "
+             "default_restitution=0.3,0.5,0.7 or 'mujoco.solref=[0.02,0.3];[0.02,0.5]'.")],
+    engines: Annotated[str, typer.Option(help="Comma-separated engines.")] = ",".join(
+        DEFAULT_ENGINES),
+    connect: Annotated[str | None, typer.Option(help="Endpoint(s) of remote daemons.")] = None,
+    instances: Annotated[str | None, typer.Option(help="Daemon instances to use.")] = None,
+    use_running: Annotated[bool, typer.Option(
+        help="Run on the daemons already answering on the default endpoint (their worlds "
+             "are replaced); else the sweep starts its own.")] = False,
+    board: Annotated[str, typer.Option(help="Preset or TOML/JSON file.")] = "paper",
+    balls: Annotated[int, typer.Option(min=1)] = 100,
+    repetitions: Annotated[int, typer.Option(min=1)] = 3,
+    release: Annotated[str | None, typer.Option(help="all-at-once or stream.")] = None,
+    seed: Annotated[int, typer.Option(min=0)] = 0,
+    max_sim_time: Annotated[float, typer.Option(min=0.1)] = DEFAULT_MAX_SIM_TIME_S,
+    out: Annotated[Path, typer.Option(help="Output folder.")] = Path("galton-sweep"),
+    as_json: JsonOpt = False,
+) -> None:
+    """The benchmark over a grid of one or two parameters: a fidelity map per engine."""
+    from galton.analysis.sweep import plot_sweep, sweep_cells, sweep_table
+    from galton.client.bench.daemons import bench_clients
+    from galton.client.bench.experiment import ExperimentConfig
+    from galton.client.bench.sweep import parse_axis, run_sweep
+    axes = run_guarded(lambda: [parse_axis(p) for p in param])
+    config = checked(lambda: ExperimentConfig(
+        board=load_board(board), engines=tuple(_csv(engines, "--engines")), balls=(balls,),
+        repetitions=repetitions, release=release, seed=seed, max_sim_time=max_sim_time))
+    endpoints = connect.split(",") if connect else ctx.obj.connect
+    names = _csv(instances, "--instances") if instances else None
+    total = len(config.trials()) * len(list(itertools.product(*(a.values for a in axes))))
+
+    def go() -> ExperimentResults:
+        with bench_clients(config.engines, endpoints, names, max(ctx.obj.timeout, 30.0),
+                           ctx.obj.credentials, use_running) as \
+                clients, _progress(as_json) as progress:
+            task = progress.add_task("sweep", total=total)
+            return run_sweep(clients, config, axes,
+                             lambda t, r: progress.update(task, advance=1))
+    results = run_guarded(go)
+    out.mkdir(parents=True, exist_ok=True)
+    results.to_json(out / "results.json")
+    cells = sweep_cells(results.trials, axes)
+    table = sweep_table(cells, axes)
+    (out / "sweep.md").write_text(f"# Fidelity sweep\n\n{table}", encoding="utf-8")
+    plots = [plot_sweep(cells, axes, engine, out) for engine in config.engines]
+    if as_json:
+        typer.echo(json.dumps({"cells": [c.to_dict() for c in cells],
+                               "files": [str(p) for p in plots]}, indent=2))
+    else:
+        console.print(table)
+        console.print(f"Fidelity maps and results in {out}/")
+
+
+def _progress(quiet: bool) -> Progress:
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+    return Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
+                    TimeElapsedColumn(), console=console, disable=quiet)

@@ -1,0 +1,417 @@
+"""The Python SDK: one typed method per daemon operation.
+
+>>> with Client("galton") as sim:
+...     sim.spawn(spheres(["ball"], [[0, 0, 1]], radius=0.05))
+...     sim.step(500)
+...     states = sim.get_states(["ball"])
+
+Joints and wrenches (issue 24) take numpy arrays or scalars; their wire arguments are built
+in ``galton.client.sdk.joints``.
+
+A Client holds no per-request state: each result is built from its own reply (stamps
+included), so one Client may serve several threads. Timeouts come from the operation
+registry (``galton.protocol.operations``) unless the caller names one.
+"""
+
+from __future__ import annotations
+
+import builtins
+import os
+import uuid
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+import zenoh
+from numpy.typing import ArrayLike
+
+from galton.client.sdk import joints as sdk_joints
+from galton.client.sdk.control import ControlMethods
+from galton.client.sdk.joints import SearchPath
+from galton.client.sdk.perception import PerceptionMethods
+from galton.client.sdk.streams import StateSample, StateStream, StreamMethods
+from galton.client.sdk.telemetry import Subscription, TelemetryStream, subscribe_events
+from galton.client.sdk.values import FloatArray, JointStates, Stamp, States
+from galton.client.sdk.worlds import WorldMethods
+from galton.client.transport.base import Transport, ZenohTransport, zmq_endpoint
+from galton.client.transport.credentials import Credentials
+from galton.client.transport.session import checked_timeout
+from galton.client.transport.zmq import ZmqTransport
+from galton.client.transport.zmq_keys import ZmqKeys
+from galton.protocol import (
+    POSE_WIDTH,
+    BodyGroup,
+    BodyProperties,
+    Capabilities,
+    EntityInfo,
+    JointInfo,
+    Keys,
+    Reply,
+    SimStatus,
+    Telemetry,
+)
+from galton.protocol.arrays import unpack_f64
+from galton.protocol.errors import ClientClosedError, InvalidArgumentError
+from galton.protocol.operations import OPERATIONS
+from galton.protocol.requests import BoundsReply, decode_result
+
+DEFAULT_TIMEOUT_S = 5.0
+
+__all__ = ["DEFAULT_TIMEOUT_S", "Client", "JointStates", "Stamp", "StateSample", "StateStream",
+           "States", "body_group", "boxes", "plane", "spheres"]
+
+
+class Client(WorldMethods, PerceptionMethods, ControlMethods, StreamMethods):
+    """A connection to one daemon instance (the session may be shared with others).
+
+    ``timeout``: seconds a quick operation waits for its reply; operations that rebuild a
+    world wait at least their registry floor, stepping ones ``LONG_RUNNING_TIMEOUT_S``.
+    Requests are for the daemon's live world; ``world(name)`` gives a view for another.
+    """
+
+    def __init__(self, instance: str = "galton", connect: str | Sequence[str] | None = None,
+                 *, timeout: float = DEFAULT_TIMEOUT_S, session: zenoh.Session | None = None,
+                 config_file: str | None = None,
+                 credentials: Credentials | None = None,
+                 zmq_keys: ZmqKeys | None = None, client_id: str | None = None) -> None:
+        self.keys = Keys(instance)
+        self.timeout = checked_timeout(timeout)
+        self._closed = False
+        self._world: str | None = None  # None: the live world (views name theirs)
+        self._parent: WorldMethods | None = None
+        # A daemon ends a step request whose client has vanished: this client's liveliness
+        # token says so over Zenoh, the connection itself over ZeroMQ.
+        # ``client_id``: one of the caller's choosing (galton-client view names a viewer's
+        # VIEWER_ID_PREFIX + hex, the token a viewer may hold under --users).
+        self.client_id = client_id or uuid.uuid4().hex
+        self._own_transport = True
+        self.transport = _transport(self.keys, self.client_id, connect, session, config_file,
+                                    credentials, zmq_keys)
+
+    @property
+    def session(self) -> zenoh.Session:
+        """The Zenoh session (a client connected over ZeroMQ has none)."""
+        if not isinstance(self.transport, ZenohTransport):
+            raise InvalidArgumentError(
+                f"this client speaks {self.transport.kind}, not Zenoh: it has no Zenoh session")
+        return self.transport.session
+
+    @property
+    def instance(self) -> str:
+        return self.keys.instance
+
+    @property
+    def closed(self) -> bool:
+        """Closed itself, or a view of a client that was closed."""
+        parent = self._parent
+        return self._closed or (isinstance(parent, Client) and parent.closed)
+
+    def close(self) -> None:
+        """Withdraw this client's token and close its own connection; closing twice is
+        fine (a view leaves its parent's open)."""
+        if self._closed:
+            return
+        self._closed = True
+        if self._own_transport:
+            self.transport.close()
+
+    def __enter__(self) -> Client:
+        self._check_open()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def _check_open(self) -> None:
+        if self.closed:
+            raise ClientClosedError(
+                f"this Client (instance {self.instance!r}) was closed; open a new one")
+
+    # -- plumbing -----------------------------------------------------------------------
+    def timeout_for(self, op: str, timeout: float | None = None) -> float:
+        """The seconds a request for ``op`` waits: ``timeout`` if given (finite, above 0),
+        else the registry's for the operation (unknown operations: this client's)."""
+        if timeout is not None:
+            return checked_timeout(timeout)
+        known = OPERATIONS.get(op)
+        return self.timeout if known is None else known.client_timeout(self.timeout)
+
+    def request(self, op: str, args: dict[str, Any] | None = None,
+                timeout: float | None = None) -> Reply:
+        """Send any operation and return the raw reply, failures included; the reply holds
+        the step and sim time the request took effect at."""
+        self._check_open()
+        wait = self.timeout_for(op, timeout)
+        if self._world is not None:
+            args = {"world": self._world, **(args or {})}
+        # Every request names its client: a long step is tied to it, and so is control.
+        return self.transport.request(op, args, wait, self.client_id)
+
+    def call(self, op: str, args: dict[str, Any] | None = None,
+             timeout: float | None = None) -> dict[str, Any]:
+        """Send any operation; return its result map or raise the error its code means."""
+        return self._ok(op, args, timeout).result
+
+    def _ok(self, op: str, args: dict[str, Any] | None = None,
+            timeout: float | None = None) -> Reply:
+        """The reply to a request that succeeded (a failure raises its typed error)."""
+        reply = self.request(op, args, timeout)
+        reply.raise_for_code()
+        return reply
+
+    def _status(self, op: str, args: dict[str, Any] | None = None) -> SimStatus:
+        return SimStatus.from_wire(self.call(op, args))
+
+    # -- discovery & clock --------------------------------------------------------------
+    def capabilities(self) -> Capabilities:
+        return Capabilities.from_wire(self.call("capabilities"))
+
+    def status(self) -> SimStatus:
+        return self._status("status")
+
+    def play(self, rtf: float | None = None) -> SimStatus:
+        """Run continuously at ``rtf`` × real time (0 = as fast as possible)."""
+        return self._status("play", {} if rtf is None else {"rtf": rtf})
+
+    def set_rtf(self, rtf: float) -> SimStatus:
+        return self._status("set_rtf", {"rtf": rtf})
+
+    def pause(self) -> SimStatus:
+        return self._status("pause")
+
+    def stop(self) -> SimStatus:
+        """Pause and rewind: time to 0, every entity back to its created state."""
+        return self._status("stop")
+
+    def step(self, count: int = 1, timeout: float | None = None) -> Stamp:
+        """Advance exactly ``count`` steps; returns when they are done."""
+        return Stamp.of(self._ok("step", {"count": count}, timeout))
+
+    def run_until(self, sim_time: float, timeout: float | None = None) -> Stamp:
+        return Stamp.of(self._ok("run_until", {"sim_time": sim_time}, timeout))
+
+    def step_and_read(self, count: int, names: Sequence[str],
+                      timeout: float | None = None) -> States:
+        """Advance ``count`` steps and return these bodies' states after the last one: one
+        round trip, as a control loop wants (step, then observe)."""
+        return States.from_reply(
+            self._ok("step", sdk_joints.step_args(count, names, None), timeout))
+
+    def step_and_read_joints(self, count: int, joints: Sequence[str],
+                             timeout: float | None = None) -> JointStates:
+        """Advance ``count`` steps and return these joints' states after the last one: with
+        ``set_joint_targets`` before it, a lockstep control cycle."""
+        return JointStates.from_step_reply(
+            self._ok("step", sdk_joints.step_args(count, None, joints), timeout))
+
+    def step_and_read_both(self, count: int, names: Sequence[str], joints: Sequence[str],
+                           timeout: float | None = None) -> tuple[States, JointStates]:
+        """Advance ``count`` steps; return bodies' (or links') and joints' states after the
+        last one, both from one reply (one round trip)."""
+        reply = self._ok("step", sdk_joints.step_args(count, names, joints), timeout)
+        return States.from_reply(reply), JointStates.from_step_reply(reply)
+
+    def run_until_and_read(self, sim_time: float, names: Sequence[str],
+                           timeout: float | None = None) -> States:
+        """``run_until`` and ``get_states(names)`` in one round trip."""
+        return States.from_reply(
+            self._ok("run_until", {"sim_time": sim_time, "read": list(names)}, timeout))
+
+    def run_until_and_read_joints(self, sim_time: float, joints: Sequence[str],
+                                  timeout: float | None = None) -> JointStates:
+        """``run_until`` and ``get_joint_states(joints)`` in one round trip."""
+        return JointStates.from_step_reply(
+            self._ok("run_until", {"sim_time": sim_time, "read_joints": list(joints)}, timeout))
+
+    def run_until_rest(self, sim_time: float, names: Sequence[str], speed: float,
+                       every: float, timeout: float | None = None) -> tuple[States, bool]:
+        """Run until every named body moves slower than ``speed`` m/s (looked at every
+        ``every`` s of sim time) or until ``sim_time``; return their states and whether they
+        came to rest. One round trip for a whole settling phase."""
+        reply = self._ok("run_until", {"sim_time": sim_time, "read": list(names),
+                                       "until_rest": {"speed": speed, "every": every}},
+                         timeout)
+        return States.from_reply(reply), bool(reply.result["at_rest"])
+
+    def reset(self, scope: str = "all") -> SimStatus:
+        """Scopes: time, state (entities to their created state), spawned, all."""
+        return self._status("reset", {"scope": scope})
+
+    def load_world(self, engine: str, params: dict[str, Any] | None = None) -> SimStatus:
+        """Replace the world with an empty one on another engine, without a restart."""
+        args: dict[str, Any] = {"engine": engine}
+        if params:
+            args["params"] = params
+        return self._status("load_world", args)
+
+    def get_params(self) -> dict[str, Any]:
+        return _map(self.call("get_params"), "params")
+
+    def set_params(self, params: dict[str, Any]) -> dict[str, Any]:
+        return _map(self.call("set_params", {"params": params}), "params")
+
+    # -- scene --------------------------------------------------------------------------
+    def spawn(self, *groups: BodyGroup, timeout: float | None = None) -> list[str]:
+        """Create every body of every group in one request (one engine rebuild)."""
+        args = {"groups": [g.to_wire() for g in groups]}
+        return _names(self.call("spawn", args, timeout))
+
+    def load_model(self, fmt: str, *, text: str | None = None,
+                   path: str | os.PathLike[str] | None = None, prefix: str = "",
+                   fixed_base: bool | None = None,
+                   search_path: SearchPath | None = None) -> list[str]:
+        """Load an MJCF or URDF model from ``text`` or a ``path`` on the daemon's machine;
+        return its entities, each root before its links. ``fixed_base`` (URDF; daemon's
+        default True) welds the root to the world; ``search_path``: folders (a list, or one
+        str joined by ':') where the files the model names are looked for."""
+        return _names(self.call("load_model", sdk_joints.load_model_args(
+            fmt, text, path, prefix, fixed_base, search_path)))
+
+    def list(self, name: str | None = None, tag: str | None = None,
+             kind: str | None = None) -> list[EntityInfo]:
+        """Entities matching a name glob, a tag and/or a kind ("static"/"dynamic")."""
+        args = sdk_joints.given(name=name, tag=tag, kind=kind)
+        return [EntityInfo.from_wire(e) for e in self.call("list", args)["entities"]]
+
+    def get_states(self, names: Sequence[str] | None = None) -> States:
+        """States of these bodies (all when None) in one request."""
+        return States.from_reply(
+            self._ok("get_states", sdk_joints.names_arg(names)))
+
+    def get_bounds(self, names: Sequence[str] | None = None) -> dict[str, FloatArray]:
+        """Each entity's world-frame axis-aligned bounds (all when None), as a row
+        ``min_x min_y min_z max_x max_y max_z``."""
+        reply = decode_result(BoundsReply, self._ok("get_bounds",
+                                                    sdk_joints.names_arg(names)).result)
+        rows = unpack_f64(reply.bounds, 6, "bounds")
+        return dict(zip(reply.names, rows, strict=True))
+
+    def set_states(self, names: Sequence[str], poses: ArrayLike | None = None,
+                   twists: ArrayLike | None = None) -> Stamp:
+        """Poses (rows of 7) and/or twists (rows of 6); a single row is given to every body."""
+        return Stamp.of(self._ok("set_states",
+                                 sdk_joints.set_states_args(names, poses, twists)))
+
+    def update(self, names: Sequence[str], **properties: Any) -> Stamp:
+        """Change mass, friction, restitution, rgba or tags of these entities."""
+        props = BodyProperties(**properties)
+        return Stamp.of(self._ok("update", {"names": list(names),
+                                            "properties": props.to_wire()}))
+
+    def delete(self, names: Sequence[str]) -> Stamp:
+        return Stamp.of(self._ok("delete", {"names": list(names)}))
+
+    # -- joints and wrenches ------------------------------------------------------------
+    def joints(self, model: str | None = None,
+               names: Sequence[str] | None = None) -> builtins.list[JointInfo]:
+        """Every joint of every loaded model, or of one ``model`` (its root entity), or
+        these ``names``; in load order."""
+        result = self.call("joints", sdk_joints.joints_args(model, names))
+        return [JointInfo.from_wire(joint) for joint in result["joints"]]
+
+    def get_joint_states(self, names: Sequence[str] | None = None) -> JointStates:
+        """Positions, velocities, efforts of these 1-DOF joints (all when None)."""
+        return JointStates.from_reply(
+            self._ok("get_joint_states", sdk_joints.names_arg(names)))
+
+    def set_joint_states(self, names: Sequence[str], positions: ArrayLike,
+                         velocities: ArrayLike | None = None) -> Stamp:
+        """Teleport joints between steps (velocities None: each keeps its own)."""
+        return Stamp.of(self._ok("set_joint_states", sdk_joints.set_joint_states_args(
+            names, positions, velocities)))
+
+    def set_joint_states_and_read(self, names: Sequence[str], positions: ArrayLike,
+                                  read: Sequence[str], velocities: ArrayLike | None = None
+                                  ) -> States:
+        """Teleport joints and return these bodies' or links' states where the joints now
+        put them (no step): mirroring a robot is one round trip per cycle."""
+        args = sdk_joints.set_joint_states_args(names, positions, velocities)
+        return States.from_reply(self._ok("set_joint_states", {**args, "read": list(read)}))
+
+    def set_joint_targets(self, names: Sequence[str], mode: str,
+                          targets: ArrayLike | None = None, kp: ArrayLike | None = None,
+                          kd: ArrayLike | None = None,
+                          max_effort: ArrayLike | None = None) -> Stamp:
+        """Hold a target (mode "position", "velocity", "effort" or "none") on these joints,
+        applied every step by the engine until changed. Each of ``targets``, ``kp``, ``kd``
+        and ``max_effort`` is one value per joint or a scalar for all."""
+        return Stamp.of(self._ok("set_joint_targets", sdk_joints.set_joint_targets_args(
+            names, mode, targets, kp, kd, max_effort)))
+
+    def apply_wrench(self, names: Sequence[str], wrenches: ArrayLike,
+                     points: ArrayLike | None = None, duration: float | None = None) -> Stamp:
+        """Hold a world-frame wrench (rows fx fy fz tx ty tz) on bodies or links, at
+        ``points`` (rows x y z, world frame; None: each centre of mass), for ``duration``
+        seconds or until cleared. One row alone acts on every body."""
+        return Stamp.of(self._ok("apply_wrench", sdk_joints.apply_wrench_args(
+            names, wrenches, points, duration)))
+
+    def clear_wrenches(self, names: Sequence[str] | None = None) -> Stamp:
+        """Remove the wrenches of these bodies (every wrench when None)."""
+        return Stamp.of(self._ok("clear_wrenches", sdk_joints.names_arg(names)))
+
+    # -- streams ------------------------------------------------------------------------
+    def telemetry(self, timeout: float | None = None) -> TelemetryStream:
+        """An iterator of Telemetry samples (close it, or use it as a context manager)."""
+        self._check_open()
+        return TelemetryStream(self.transport, self.timeout if timeout is None else timeout)
+
+    def on_telemetry(self, callback: Callable[[Telemetry], None]) -> Subscription:
+        """Call ``callback`` on Zenoh's thread for every sample; keep it short."""
+        self._check_open()
+        return TelemetryStream.with_callback(self.transport, callback)
+
+    def on_event(self, callback: Callable[[dict[str, Any]], None]) -> Subscription:
+        self._check_open()
+        return subscribe_events(self.transport, callback)
+
+
+def _transport(keys: Keys, client_id: str, connect: str | Sequence[str] | None,
+               session: zenoh.Session | None, config_file: str | None,
+               credentials: Credentials | None = None,
+               zmq_keys: ZmqKeys | None = None) -> Transport:
+    """ZeroMQ for a ``zmq+ipc://`` or ``zmq+tcp://`` endpoint (CURVE keys from ``zmq_keys``,
+    else GALTON_ZMQ_KEY and GALTON_ZMQ_SERVER_KEY), else Zenoh."""
+    endpoint = zmq_endpoint(connect)
+    if endpoint is None:
+        if zmq_keys is not None:
+            raise InvalidArgumentError("ZeroMQ keys are for a zmq+ endpoint, not Zenoh")
+        return ZenohTransport(keys, client_id, session, connect, config_file, credentials)
+    if session is not None or config_file is not None or credentials is not None:
+        raise InvalidArgumentError(
+            "a ZeroMQ endpoint takes no Zenoh session, config file or credentials: its "
+            "security is CURVE keys (zmq_keys)")
+    return ZmqTransport(endpoint, keys=zmq_keys or ZmqKeys.from_env())
+
+
+def _names(result: dict[str, Any]) -> list[str]:
+    return [str(name) for name in result["names"]]
+
+
+def _map(result: dict[str, Any], key: str) -> dict[str, Any]:
+    return dict(result[key])
+
+
+def spheres(names: Sequence[str], positions: Sequence[Sequence[float]] | np.ndarray,
+            radius: float, **options: Any) -> BodyGroup:
+    """A group of spheres at these positions (identity orientation)."""
+    return body_group("sphere", (radius,), names, positions, **options)
+
+
+def boxes(names: Sequence[str], positions: Sequence[Sequence[float]] | np.ndarray,
+          half_extents: Sequence[float], **options: Any) -> BodyGroup:
+    return body_group("box", tuple(half_extents), names, positions, **options)
+
+
+def plane(name: str = "ground", height: float = 0.0, **options: Any) -> BodyGroup:
+    return body_group("plane", (50.0, 50.0), [name], [[0.0, 0.0, height]], static=True, **options)
+
+
+def body_group(shape: str, size: tuple[float, ...], names: Sequence[str],
+               positions: Sequence[Sequence[float]] | np.ndarray, **options: Any) -> BodyGroup:
+    """A group of bodies of one shape at these positions (identity orientation)."""
+    xyz = np.asarray(positions, dtype=float).reshape(-1, 3)
+    poses = np.zeros((len(xyz), POSE_WIDTH))
+    poses[:, :3] = xyz
+    poses[:, 6] = 1.0
+    return BodyGroup(shape=shape, size=size, names=list(names), poses=poses, **options)

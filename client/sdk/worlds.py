@@ -1,0 +1,174 @@
+"""The SDK's worlds, snapshots, predictions and comparisons (issue 25), mixed into Client.
+
+A daemon holds one live world and side worlds; ``Client.world(name)`` is a view of the same
+connection whose every request names that world:
+
+>>> ahead = sim.fork_world("ahead")          # a copy of the live world
+>>> side = sim.world("ahead")                # requests for it
+>>> side.step(500)                           # the live world is not disturbed
+>>> saved = sim.snapshot("before")           # kept in the daemon
+>>> sim.restore("before")                    # the same steps give the same states again
+
+``lockstep`` keeps a world at an external clock's time stamps (a robot's).
+"""
+
+from __future__ import annotations
+
+import copy
+from collections.abc import Iterable, Iterator, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Self
+
+from numpy.typing import ArrayLike
+
+from galton.client.sdk import joints as sdk_joints
+from galton.client.sdk.values import Comparison, Prediction, SnapshotInfo, Stamp, WorldInfo
+from galton.protocol import POSE_WIDTH, TWIST_WIDTH, InvalidArgumentError, Reply
+
+if TYPE_CHECKING:
+    from galton.client.sdk.client import Client
+
+# run_until takes no step when the target is within this fraction of a step (the daemon's
+# own rounding), so a stamp that close is already reached.
+_STEP_TOLERANCE = 1e-9
+
+
+class WorldMethods:
+    """Client methods for worlds, snapshots, prediction and comparison."""
+
+    _world: str | None
+    _parent: WorldMethods | None
+    _closed: bool
+    _own_transport: bool
+
+    if TYPE_CHECKING:
+        def _ok(self, op: str, args: dict[str, Any] | None = None,
+                timeout: float | None = None) -> Reply: ...
+
+        def _check_open(self) -> None: ...
+
+    # -- addressing a world ---------------------------------------------------------------
+    @property
+    def world_name(self) -> str | None:
+        """The world this client's requests name (None: the daemon's live world)."""
+        return self._world
+
+    def world(self, name: str) -> Self:
+        """A view of this client whose every request is for world ``name`` (its session,
+        liveliness and timeouts shared; closing the view leaves this client open, closing
+        this client closes the view)."""
+        self._check_open()
+        if not isinstance(name, str) or not name:
+            raise InvalidArgumentError(f"a world name is a non-empty str, got {name!r}")
+        view = copy.copy(self)
+        view._world, view._parent = name, self
+        view._own_transport, view._closed = False, False
+        return view
+
+    # -- worlds ---------------------------------------------------------------------------
+    def list_worlds(self) -> list[WorldInfo]:
+        """Every world of the daemon, the live one first."""
+        return [WorldInfo.from_wire(row) for row in self._ok("list_worlds").result["worlds"]]
+
+    def create_world(self, name: str, engine: str | None = None,
+                     params: dict[str, Any] | None = None) -> WorldInfo:
+        """An empty side world (engine default: the live world's); it moves only when
+        stepped."""
+        args: dict[str, Any] = {"name": name}
+        if engine is not None:
+            args["engine"] = engine
+        if params:
+            args["params"] = params
+        return WorldInfo.from_wire(self._ok("create_world", args).result)
+
+    def fork_world(self, name: str, source: str | None = None) -> WorldInfo:
+        """A copy of world ``source`` (default the live one): scene, state, parameters,
+        targets, wrenches and clock. The source is not disturbed."""
+        args = {"name": name, **sdk_joints.given(source=source)}
+        return WorldInfo.from_wire(self._ok("fork_world", args).result)
+
+    def delete_world(self, name: str) -> None:
+        """Delete a side world (the live one cannot be)."""
+        self._ok("delete_world", {"name": name})
+
+    # -- snapshots ------------------------------------------------------------------------
+    def snapshot(self, slot: str | None = None, blob: bool = False) -> SnapshotInfo:
+        """The complete world, kept in the daemon under ``slot`` and/or returned as bytes
+        (``.blob``) that any daemon with the same engine restores."""
+        reply = self._ok("snapshot", {"blob": blob, **sdk_joints.given(slot=slot)})
+        return SnapshotInfo.from_wire(reply.result, self._world or "")
+
+    def restore(self, slot: str | None = None, blob: bytes | None = None) -> WorldInfo:
+        """Replace the world by a snapshot: exactly one of a ``slot`` or a ``blob``. The
+        same steps after it give the same states, bit for bit."""
+        if (slot is None) == (blob is None):
+            raise InvalidArgumentError("restore takes exactly one of slot or blob")
+        args: dict[str, Any] = {"slot": slot} if blob is None else {"blob": bytes(blob)}
+        return WorldInfo.from_wire(self._ok("restore", args).result)
+
+    def snapshots(self) -> list[SnapshotInfo]:
+        """The snapshot slots the daemon keeps."""
+        return [SnapshotInfo.from_wire(row) for row in self._ok("snapshots").result["slots"]]
+
+    def delete_snapshot(self, slot: str) -> None:
+        self._ok("delete_snapshot", {"slot": slot})
+
+    # -- ahead of reality -----------------------------------------------------------------
+    def predict(self, horizon: float, every: float | None = None,
+                read: Sequence[str] | None = None, read_joints: Sequence[str] | None = None,
+                slot: str | None = None, set_states: Mapping[str, Any] | None = None,
+                joint_targets: Mapping[str, Any] | None = None,
+                wrenches: Mapping[str, Any] | None = None,
+                timeout: float | None = None) -> Prediction:
+        """Run a copy of the world (or of snapshot ``slot``) ``horizon`` seconds ahead,
+        sampling ``read`` bodies and ``read_joints`` joints every ``every`` seconds, and
+        discard it: the world is never changed. The copy may first be changed, each as its
+        request's keyword arguments: ``set_states`` (names, poses, twists),
+        ``joint_targets`` (names, mode, targets, kp, kd, max_effort) and ``wrenches``
+        (names, wrenches, points, duration)."""
+        args = predict_args(horizon, every, read, read_joints, slot)
+        if set_states is not None:
+            args["set_states"] = sdk_joints.set_states_args(**set_states)
+        if joint_targets is not None:
+            args["joint_targets"] = sdk_joints.set_joint_targets_args(**joint_targets)
+        if wrenches is not None:
+            args["wrenches"] = sdk_joints.apply_wrench_args(**wrenches)
+        return Prediction.from_reply(self._ok("predict", args, timeout))
+
+    def compare(self, names: Sequence[str], poses: ArrayLike, twists: ArrayLike | None = None,
+                sigma_position: float | None = None, sigma_angle: float | None = None,
+                sigma_speed: float | None = None, correct: bool = False) -> Comparison:
+        """Observed poses (rows of 7, and optionally twists) of these bodies against the
+        world's at its present time: per-body errors and one anomaly score (about 1 at the
+        sigmas' noise, 3 a surprise). ``correct`` sets the bodies to the observation."""
+        count = len(names)
+        args: dict[str, Any] = {
+            "names": list(names), "correct": correct,
+            "poses": sdk_joints.body_rows(poses, count, POSE_WIDTH, "compare.poses")}
+        if twists is not None:
+            args["twists"] = sdk_joints.body_rows(twists, count, TWIST_WIDTH, "compare.twists")
+        args.update(sdk_joints.given(sigma_position=sigma_position, sigma_angle=sigma_angle,
+                                     sigma_speed=sigma_speed))
+        return Comparison.from_reply(self._ok("compare", args), list(names))
+
+
+def predict_args(horizon: float, every: float | None, read: Sequence[str] | None,
+                 read_joints: Sequence[str] | None, slot: str | None) -> dict[str, Any]:
+    return {"horizon": horizon, **sdk_joints.given(
+        every=every, slot=slot, read=None if read is None else list(read),
+        read_joints=None if read_joints is None else list(read_joints))}
+
+
+def lockstep(sim: Client, stamps: Iterable[float]) -> Iterator[Stamp]:
+    """Keep ``sim``'s world at an external clock: for each time stamp (increasing, in
+    seconds of the world's sim time), step until the world's sim time reaches it and yield
+    where it got to. Stamps that are whole multiples of the timestep are met exactly
+    (drift 0); others are passed by less than one step, and a stamp already reached takes
+    no step. The caller sets targets or reads states between stamps, as a robot's
+    controller does between its cycles."""
+    status = sim.status()
+    dt = status.timestep
+    reached = Stamp(status.step, status.sim_time)
+    for stamp in stamps:
+        if (stamp - reached.sim_time) / dt > _STEP_TOLERANCE:
+            reached = sim.run_until(stamp)
+        yield reached
