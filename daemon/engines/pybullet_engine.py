@@ -286,6 +286,17 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
         """Link frames, not PyBullet's centres of mass (pybullet_frames.py)."""
         return states.get_states(self, names)
 
+    def bounds(self, names: Sequence[str]) -> np.ndarray:
+        """PyBullet's own box around each body's (or model link's) collision shapes."""
+        links = self._robots.links
+        rows = np.empty((len(names), 6))
+        for row, name in enumerate(names):
+            root, link = links.get(name, (name, -1))
+            [body] = self._lookup([root])
+            low, high = self._bc.getAABB(body.uid, link)
+            rows[row] = [*low, *high]
+        return rows
+
     def _read(self, ids: list[int]) -> tuple[np.ndarray, np.ndarray]:
         return states.read(self, ids)
 
