@@ -276,6 +276,23 @@ class BoundsReply(Reply, kw_only=True, forbid_unknown_fields=True):
                                                          "min x y z, max x y z")]
 
 
+class StatusReply(Reply, kw_only=True, forbid_unknown_fields=True):
+    """A world's clock and state (``status``, and what time control answers)."""
+
+    state: Literal["stopped", "playing", "paused"]
+    step: int
+    sim_time: float
+    timestep: float
+    target_rtf: float
+    rtf: float
+    entity_count: int
+    engine: str
+    instance: str
+    world: str
+    faulted: bool
+    controller: str | None
+
+
 class CountReply(Reply, kw_only=True, forbid_unknown_fields=True):
     count: int
 
