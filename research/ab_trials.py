@@ -36,7 +36,7 @@ def awake_trees(sim: LocalSim) -> int | None:
     if engine.name != "mujoco":
         return None
     sim.world.step(round(AFTER_S / engine.timestep))
-    return int(np.count_nonzero(engine._data.tree_asleep < 0))
+    return int(np.count_nonzero(engine.data.tree_asleep < 0))
 
 
 def one_trial(engine: str, balls: int, mode: str, params: dict[str, Any], rep: int,

@@ -54,7 +54,7 @@ def kuka(engine: MujocoEngine) -> list[str]:
 
 def state(engine: MujocoEngine) -> np.ndarray:
     """Every entity's pose and twist, every joint's state and effort, the properties."""
-    names = sorted(engine._entities)
+    names = sorted(engine.entities)
     joints = [j.name for j in engine.joints() if j.type in ("revolute", "prismatic")]
     parts = [*engine.get_states(names), engine.properties(names)]
     if joints:
@@ -100,14 +100,14 @@ def assert_same_world(a: MujocoEngine, b: MujocoEngine) -> None:
     renamed in the spec after their compile: the source's model may hold their temporary
     names, which nothing reads); the data in every float array and the sleep books (its
     other integers are remade by the next step)."""
-    for one, other in ((a._model, b._model), (a._data, b._data)):
+    for one, other in ((a.model, b.model), (a.data, b.data)):
         mine, theirs = arrays(one), arrays(other)
-        mine = carried(one) if one is a._data else \
+        mine = carried(one) if one is a.data else \
             {n: v for n, v in mine.items() if not n.startswith(("name_", "names"))}
         assert [n for n in mine if not np.array_equal(mine[n], theirs[n],
                                                       equal_nan=True)] == []
-    assert [(n, getattr(a._data, n)) for n in ("ntree_awake", "nbody_awake", "nv_awake")] == \
-        [(n, getattr(b._data, n)) for n in ("ntree_awake", "nbody_awake", "nv_awake")]
+    assert [(n, getattr(a.data, n)) for n in ("ntree_awake", "nbody_awake", "nv_awake")] == \
+        [(n, getattr(b.data, n)) for n in ("ntree_awake", "nbody_awake", "nv_awake")]
 
 
 def steps(count: int) -> Callable[[MujocoEngine], None]:
@@ -119,7 +119,7 @@ def settled_pile(engine: MujocoEngine, rng: np.random.Generator) -> None:
     engine.spawn([floor()])
     pile(engine, rng)
     engine.step(1500)
-    assert (engine._data.tree_asleep >= 0).any() and engine._data.ncon > 0
+    assert (engine.data.tree_asleep >= 0).any() and engine.data.ncon > 0
 
 
 def pile_requests() -> list[Callable[[MujocoEngine], None]]:

@@ -46,7 +46,7 @@ def kuka_text() -> str:
 
 
 def names_of(engine: PybulletEngine) -> list[str]:
-    return list(engine._bodies) + list(engine._robots.links)
+    return list(engine.bodies) + list(engine.robots.links)
 
 
 def record(engine: PybulletEngine, names: list[str], steps: int, every: int = 25,

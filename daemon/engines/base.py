@@ -18,7 +18,7 @@ import sys
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import Any, ClassVar, NamedTuple
 
 import numpy as np
 
@@ -76,6 +76,27 @@ class CameraView:
     near: float
     far: float
     outputs: tuple[str, ...]  # among IMAGE_OUTPUTS
+
+
+class RayHits(NamedTuple):
+    """What ``Engine.raycast`` finds, per ray (a plain 5-tuple before; it unpacks the same)."""
+
+    hit: np.ndarray  # (n,) bool
+    entity: list[str]  # "" for a miss
+    point: np.ndarray  # (n, 3), NaN for a miss
+    normal: np.ndarray  # (n, 3), NaN for a miss
+    distance: np.ndarray  # (n,), NaN for a miss
+
+
+class ContactPoints(NamedTuple):
+    """What ``Engine.contacts`` reports, per contact point (a plain 6-tuple before)."""
+
+    first: list[str]
+    second: list[str]
+    position: np.ndarray  # (n, 3)
+    normal: np.ndarray  # (n, 3), from the first entity to the second
+    force: np.ndarray  # (n,) N, normal force
+    penetration: np.ndarray  # (n,) m
 
 
 class Engine(ABC):
@@ -263,7 +284,7 @@ class Engine(ABC):
         raise self._unsupported("rendering")
 
     def raycast(self, origins: np.ndarray, directions: np.ndarray, max_length: float
-                ) -> tuple[np.ndarray, list[str], np.ndarray, np.ndarray, np.ndarray]:
+                ) -> RayHits:
         """Per ray (unit directions, world frame): hit, entity ("" for none), point,
         normal, distance; NaN point, normal and distance for a miss."""
         raise self._unsupported("ray casts")
@@ -274,8 +295,7 @@ class Engine(ABC):
         raise self._unsupported("bounds of loaded models")
 
     def contacts(self, names: Sequence[str] | None
-                 ) -> tuple[list[str], list[str], np.ndarray, np.ndarray, np.ndarray,
-                            np.ndarray]:
+                 ) -> ContactPoints:
         """The last step's contact points (involving any of ``names``; None: all): the two
         entities, positions (n, 3), normals (n, 3) from the first to the second, normal
         forces (n,) N, penetrations (n,) m."""

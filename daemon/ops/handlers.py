@@ -12,11 +12,12 @@ bound here too, so that a status that does reach the physics thread is answered 
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from galton.daemon.access import lease
 from galton.daemon.core import predict, time_control
 from galton.daemon.core.calls import Call
+from galton.daemon.core.context import OpContext
 from galton.daemon.ops import joints as ops_joints
 from galton.daemon.ops import perception as ops_perception
 from galton.daemon.ops import scene as ops
@@ -26,13 +27,10 @@ from galton.daemon.world import state_streams
 from galton.protocol.operations import OPERATIONS
 from galton.protocol.requests import Args
 
-if TYPE_CHECKING:
-    from galton.daemon.core.loop import SimLoop
-
 Result = dict[str, Any] | None  # None: the reply comes later (a step job)
 # A handler receives its operation's declared request (protocol/requests.py), decoded and
 # checked before it runs.
-Handler = Callable[["SimLoop", Call, Any], Result]
+Handler = Callable[["OpContext", Call, Any], Result]
 
 
 def _scene(name: str, apply: ops.SceneOp) -> Handler:
@@ -40,7 +38,7 @@ def _scene(name: str, apply: ops.SceneOp) -> Handler:
     the scene is announced, and a step job reading a deleted entity is answered now."""
     mutates = OPERATIONS[name].mutates
 
-    def handle(loop: SimLoop, call: Call, request: Args) -> Result:
+    def handle(loop: OpContext, call: Call, request: Args) -> Result:
         world = loop.world_for(request)
         result = apply(world, request)
         if mutates:
@@ -54,7 +52,7 @@ def _scene(name: str, apply: ops.SceneOp) -> Handler:
     return handle
 
 
-def _capabilities(loop: SimLoop, call: Call, request: Args) -> Result:
+def _capabilities(loop: OpContext, call: Call, request: Args) -> Result:
     """The engine's capabilities, with what the daemon adds (its ZeroMQ endpoints)."""
     return {**ops.capabilities(loop.world_for(request), request), **loop.advertised}
 

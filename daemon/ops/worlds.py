@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Any
 
 from galton.daemon.core import time_control
 from galton.daemon.core.calls import Call
+from galton.daemon.core.context import OpContext
 from galton.daemon.core.reply_limit import require_room
 from galton.daemon.world.scene import World
 from galton.daemon.world.slots import Slot
@@ -28,13 +29,12 @@ from galton.protocol import requests as rq
 from galton.protocol.errors import brief
 
 if TYPE_CHECKING:
-    from galton.daemon.core.loop import SimLoop
     from galton.daemon.engines.base import Engine
 
 MAX_WORLD_NAME = 64
 
 
-def world_row(loop: SimLoop, world: World) -> dict[str, Any]:
+def world_row(loop: OpContext, world: World) -> dict[str, Any]:
     live = world is loop.world
     state = loop.state if live else (SimState.STOPPED if world.step_index == 0
                                      else SimState.PAUSED)
@@ -43,11 +43,11 @@ def world_row(loop: SimLoop, world: World) -> dict[str, Any]:
             "entity_count": len(world.entities), "faulted": world.faulted}
 
 
-def list_worlds(loop: SimLoop, call: Call, request: rq.NoArgs) -> dict[str, Any]:
+def list_worlds(loop: OpContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
     return {"worlds": [world_row(loop, w) for w in (loop.world, *loop.side.values())]}
 
 
-def _new_name(loop: SimLoop, name: str, where: str) -> str:
+def _new_name(loop: OpContext, name: str, where: str) -> str:
     if not 1 <= len(name) <= MAX_WORLD_NAME or not name.isprintable():
         raise InvalidArgumentError(f"{where}.name {brief(name)} must be 1-{MAX_WORLD_NAME} "
                                    "printable characters")
@@ -60,13 +60,13 @@ def _new_name(loop: SimLoop, name: str, where: str) -> str:
     return name
 
 
-def _factory(loop: SimLoop) -> Any:
+def _factory(loop: OpContext) -> Any:
     if loop.engine_factory is None:
         raise OperationFailedError("this daemon cannot make engines")
     return loop.engine_factory
 
 
-def create_world(loop: SimLoop, call: Call, request: rq.CreateWorld) -> dict[str, Any]:
+def create_world(loop: OpContext, call: Call, request: rq.CreateWorld) -> dict[str, Any]:
     name = _new_name(loop, request.name, "create_world")
     kind = request.engine or loop.world.engine.name
     params = request.params
@@ -82,7 +82,7 @@ def create_world(loop: SimLoop, call: Call, request: rq.CreateWorld) -> dict[str
     return world_row(loop, loop.side[name])
 
 
-def fork_world(loop: SimLoop, call: Call, request: rq.ForkWorld) -> dict[str, Any]:
+def fork_world(loop: OpContext, call: Call, request: rq.ForkWorld) -> dict[str, Any]:
     name = _new_name(loop, request.name, "fork_world")
     source = loop.world_for({"world": request.source})
     source.verify()
@@ -91,7 +91,7 @@ def fork_world(loop: SimLoop, call: Call, request: rq.ForkWorld) -> dict[str, An
     return world_row(loop, loop.side[name])
 
 
-def delete_world(loop: SimLoop, call: Call, request: rq.Named) -> dict[str, Any]:
+def delete_world(loop: OpContext, call: Call, request: rq.Named) -> dict[str, Any]:
     name = request.name
     world = loop.world_for({"world": name})
     if world is loop.world:
@@ -104,7 +104,7 @@ def delete_world(loop: SimLoop, call: Call, request: rq.Named) -> dict[str, Any]
     return {"count": 1}
 
 
-def snapshot(loop: SimLoop, call: Call, request: rq.Snapshot) -> dict[str, Any]:
+def snapshot(loop: OpContext, call: Call, request: rq.Snapshot) -> dict[str, Any]:
     world = loop.world_for(request)
     slot_name = request.slot
     want_blob = bool(request.blob)
@@ -130,7 +130,7 @@ def snapshot(loop: SimLoop, call: Call, request: rq.Snapshot) -> dict[str, Any]:
     return result
 
 
-def restore(loop: SimLoop, call: Call, request: rq.Restore) -> dict[str, Any]:
+def restore(loop: OpContext, call: Call, request: rq.Restore) -> dict[str, Any]:
     world = loop.world_for(request)
     slot_name, blob = request.slot, request.blob
     if (slot_name is None) == (blob is None):
@@ -154,10 +154,10 @@ def restore(loop: SimLoop, call: Call, request: rq.Restore) -> dict[str, Any]:
     return world_row(loop, new)
 
 
-def snapshots(loop: SimLoop, call: Call, request: rq.NoArgs) -> dict[str, Any]:
+def snapshots(loop: OpContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
     return {"slots": [slot.to_wire() for slot in loop.slots.by_name.values()]}
 
 
-def delete_snapshot(loop: SimLoop, call: Call, request: rq.Slot) -> dict[str, Any]:
+def delete_snapshot(loop: OpContext, call: Call, request: rq.Slot) -> dict[str, Any]:
     loop.slots.delete(request.slot)
     return {"count": 1}

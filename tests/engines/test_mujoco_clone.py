@@ -57,7 +57,7 @@ def test_a_pile_in_contact_and_asleep_goes_on_bit_identically(
     settled_pile(engine, rng)
     twin = engine.clone()
     assert_same_world(engine, twin)
-    assert twin._data.ncon == engine._data.ncon
+    assert twin.data.ncon == engine.data.ncon
     assert_same_runs(engine, twin, pile_requests())
 
 
@@ -81,9 +81,9 @@ def test_a_world_edited_in_its_pool_goes_on_exactly_and_later_edits_agree(
     engine.delete([f"s{i}" for i in range(0, 70, 3)])  # parked
     pile(engine, rng, prefix="n", count=20)  # bound from the pool, no compile
     engine.step(200)
-    assert engine._pool_edited
+    assert engine.pool_edited
     twin = engine.clone()
-    assert engine._pool_edited and twin._pool_edited
+    assert engine.pool_edited and twin.pool_edited
     assert_same_world(engine, twin)
     assert_same_runs(engine, twin, [churn, steps(200), lambda e: e.clear(),
                                     lambda e: e.spawn([floor()]),
@@ -105,7 +105,7 @@ def test_what_a_clone_does_leaves_its_source_alone_and_the_other_way_round(
     edited.clear_wrenches(None)
     edited.step(300)
     edited.clear()
-    assert sorted(engine._entities) == sorted(witness._entities)
+    assert sorted(engine.entities) == sorted(witness.entities)
     assert_same_world(engine, witness)
     assert_same_runs(engine, witness, [steps(300)])
     before = state(edited)
@@ -122,11 +122,11 @@ def test_a_ball_held_awake_on_a_crown_stays_held_and_is_let_go_alike(
                      poses=np.array([[0, 0, 1.145, 0, 0, 0, 1]]))
     engine.spawn([floor(), pin, ball])
     engine.step(500)
-    assert engine._balance is not None and engine._balance.held
+    assert engine.balance is not None and engine.balance.held
     twin = engine.clone()
-    assert twin._balance is not None and twin._balance.held == engine._balance.held
+    assert twin.balance is not None and twin.balance.held == engine.balance.held
     assert_same_runs(engine, twin, [steps(1000)] * 4)
-    assert not engine._balance.held
+    assert not engine.balance.held
 
 
 def test_changed_parameters_travel_and_later_changes_agree(
@@ -172,6 +172,6 @@ def test_a_clone_snapshots_as_its_source(engine: MujocoEngine,
 
 
 def test_a_broken_world_is_not_cloned(engine: MujocoEngine) -> None:
-    engine._broken = True  # as a failed step leaves it
+    engine.broken = True  # as a failed step leaves it
     with pytest.raises(OperationFailedError, match="broken"):
         engine.clone()

@@ -223,7 +223,7 @@ def _piles_after(threads: int, seconds: float) -> tuple[tuple[np.ndarray, np.nda
                                                 0.1 + 0.11 * i] for i in range(20)])])
     run(engine, seconds)
     states = engine.get_states([f"p{p}_{i}" for p in range(3) for i in range(20)])
-    workers = engine._workers
+    workers = engine.workers
     engine.close()
     return states, workers
 
@@ -249,10 +249,10 @@ def test_worker_threads_stop_when_the_crowd_thins(engine: MujocoEngine,
     monkeypatch.setattr(mujoco_engine, "WORKERS_OFF_CONTACTS", 1)
     engine.spawn([ground(), ball(z=RADIUS, twists=[[1.0, 0, 0, 0, 0, 0]])])  # rolls: 1 contact
     run(engine, 0.2)
-    assert engine._workers == 1
+    assert engine.workers == 1
     engine.set_states(["ball"], np.array([[0, 0, 50.0, *IDENTITY]]), None)  # no contact left
     run(engine, 0.2)
-    assert engine._workers == 0
+    assert engine.workers == 0
 
 
 def test_worker_threads_can_change_at_run_time(engine: MujocoEngine,
@@ -261,9 +261,9 @@ def test_worker_threads_can_change_at_run_time(engine: MujocoEngine,
     engine.spawn([ground(), ball(z=RADIUS, twists=[[1.0, 0, 0, 0, 0, 0]])])  # rolls: 1 contact
     engine.set_params({"mujoco.threads": 3})
     run(engine, 0.2)
-    assert engine._workers == 3
+    assert engine.workers == 3
     engine.set_params({"mujoco.threads": 0})
-    assert engine._workers == 0 and engine.get_params()["mujoco.threads"] == 0
+    assert engine.workers == 0 and engine.get_params()["mujoco.threads"] == 0
     with pytest.raises(InvalidArgumentError):
         engine.set_params({"mujoco.threads": -1})
 
@@ -416,8 +416,8 @@ def test_properties_of_a_loaded_model(engine: MujocoEngine) -> None:
     unknown (NaN: MuJoCo has none) until set."""
     engine.load_model("mjcf", ROBOT, None, "r/")
     names = ["r/base", "r/post", "r/pendulum"]
-    m = engine._model
-    masses = [float(m.body_subtreemass[engine._ids[n]]) for n in names]
+    m = engine.model
+    masses = [float(m.body_subtreemass[engine.ids[n]]) for n in names]
     np.testing.assert_allclose(engine.properties(names), [
         [masses[0], 1.0, math.nan], [math.nan, 1.0, math.nan], [masses[2], 1.0, math.nan]])
     engine.update(["r/base"], BodyProperties(mass=5.0, friction=0.3, restitution=0.5))
@@ -428,9 +428,9 @@ def test_properties_of_a_loaded_model(engine: MujocoEngine) -> None:
 def _books(engine: MujocoEngine) -> tuple[object, ...]:
     """Everything a failed call must leave as it was: the spec, model, data, the engine's
     entities, ids and pool."""
-    pool = {key: list(bodies) for key, bodies in engine._pool._parked.items()}
-    return (engine._spec.to_xml(), engine._model, engine._data, dict(engine._ids),
-            list(engine._entities), pool)
+    pool = {key: list(bodies) for key, bodies in engine.pool._parked.items()}
+    return (engine.spec.to_xml(), engine.model, engine.data, dict(engine.ids),
+            list(engine.entities), pool)
 
 
 def _busy_world(engine: MujocoEngine) -> None:
@@ -498,7 +498,7 @@ def test_a_delete_whose_recompile_fails_faults_the_world_until_cleared(
     def failing(self: MujocoEngine, *args: int | None) -> None:
         raise InvalidArgumentError("MuJoCo rejected the change: out of luck")
 
-    monkeypatch.setattr(MujocoEngine, "_compile", failing)
+    monkeypatch.setattr(MujocoEngine, "compile", failing)
     with pytest.raises(OperationFailedError, match="reset"):
         engine.delete([f"many{i}" for i in range(100)] + ["r/base"])
     assert not engine.state_within(*LIMITS)
@@ -670,7 +670,7 @@ def test_a_ball_asleep_on_a_pins_apex_is_woken_and_rolls_off(engine: MujocoEngin
     engine.set_params({"mujoco.wake_balanced": True})
     run(engine, 3.0)
     assert engine.get_states(["a"])[0][0, 2] < start - 0.05  # rolled off the crown
-    assert engine._balance is not None and not engine._balance.held
+    assert engine.balance is not None and not engine.balance.held
 
 
 def test_a_ball_asleep_on_another_balls_crown_is_left_alone(engine: MujocoEngine) -> None:
@@ -690,10 +690,10 @@ def test_a_ball_that_stays_on_its_crown_is_let_go_and_sleeps(engine: MujocoEngin
     scene[2].poses[0, 0] = 0.0  # dead centre: perfect balance
     engine.spawn(scene)
     run(engine, 1.0)
-    assert engine._balance is not None and engine._balance.held
+    assert engine.balance is not None and engine.balance.held
     run(engine, HOLD_LIMIT_S + 1.0)
     pose, twist = engine.get_states(["a"])
-    assert not engine._balance.held
+    assert not engine.balance.held
     assert not twist.any() and pose[0, 2] > 1.1  # asleep on the crown after all
 
 
@@ -731,10 +731,10 @@ def test_clearing_the_world_gives_a_held_ball_its_sleep_policy_back(
     """clear() parks bodies in the same compiled model: none may stay barred from sleep."""
     engine.spawn(_crown_scene("pin"))
     run(engine, 0.2)
-    assert engine._balance is not None and engine._balance.held  # still on the crown
+    assert engine.balance is not None and engine.balance.held  # still on the crown
     engine.clear()
     never = int(mujoco.mjtSleepPolicy.mjSLEEP_NEVER)
-    assert not (engine._model.tree_sleep_policy == never).any()
+    assert not (engine.model.tree_sleep_policy == never).any()
 
 
 def test_how_steps_are_split_into_requests_does_not_change_the_trajectory() -> None:
@@ -747,7 +747,7 @@ def test_how_steps_are_split_into_requests_does_not_change_the_trajectory() -> N
         held = False
         for count in pieces:
             engine.step(count)
-            held |= bool(engine._balance is not None and engine._balance.held)
+            held |= bool(engine.balance is not None and engine.balance.held)
         trajectories.append(engine.get_states(["a"]))
         assert held or pieces == [1500]  # the guard acted (seen between requests)
     for poses, twists in trajectories[1:]:
@@ -774,10 +774,10 @@ def test_a_rewound_world_replays_the_same_trajectory(engine: MujocoEngine) -> No
 
 
 def test_wake_balanced_takes_only_a_boolean(engine: MujocoEngine) -> None:
-    guard = engine._balance
+    guard = engine.balance
     with pytest.raises(InvalidArgumentError, match=r"mujoco\.wake_balanced"):
         engine.set_params({"mujoco.wake_balanced": 1})
-    assert engine.get_params()["mujoco.wake_balanced"] is True and engine._balance is guard
+    assert engine.get_params()["mujoco.wake_balanced"] is True and engine.balance is guard
 
 
 def test_balls_at_a_stable_rest_still_sleep_with_the_balance_guard(
@@ -794,7 +794,7 @@ def test_balls_at_a_stable_rest_still_sleep_with_the_balance_guard(
     poses, twists = engine.get_states(["on_cap", "on_floor", "wedged"])
     assert not twists.any()  # all three asleep
     assert poses[0, 2] > 1.0 and poses[2, 2] > 1.0
-    assert engine._balance is not None and not engine._balance.held
+    assert engine.balance is not None and not engine.balance.held
 
 
 def test_contact_dimension_must_be_one_mujoco_has(engine: MujocoEngine) -> None:
@@ -808,13 +808,13 @@ def test_contact_dimension_must_be_one_mujoco_has(engine: MujocoEngine) -> None:
 # -- the pool of parked bodies -----------------------------------------------------------
 def _count_compiles(monkeypatch: pytest.MonkeyPatch) -> list[int]:
     calls: list[int] = []
-    original = MujocoEngine._compile
+    original = MujocoEngine.compile
 
     def counting(self: MujocoEngine, *args: int | None) -> None:
         calls.append(1)
         original(self, *args)
 
-    monkeypatch.setattr(MujocoEngine, "_compile", counting)
+    monkeypatch.setattr(MujocoEngine, "compile", counting)
     return calls
 
 
@@ -850,14 +850,14 @@ def test_parked_bodies_are_invisible(engine: MujocoEngine) -> None:
     np.testing.assert_allclose(pose[0, 2], RADIUS, atol=5e-3)
     engine.set_states(["other"], np.array([[0, 0, RADIUS * 0.99, *IDENTITY]]), None)
     engine.step(1)
-    touching = engine._model.geom_bodyid[engine._data.contact.geom[:engine._data.ncon]]
-    assert engine._data.ncon == 1  # the ground and "other" only: no parked body touches
-    assert set(touching.ravel()) == {engine._ids["other"], engine._ids["ground"]}
+    touching = engine.model.geom_bodyid[engine.data.contact.geom[:engine.data.ncon]]
+    assert engine.data.ncon == 1  # the ground and "other" only: no parked body touches
+    assert set(touching.ravel()) == {engine.ids["other"], engine.ids["ground"]}
     for name in ("ball", "ball_0"):
         with pytest.raises(NotFoundError):
             engine.get_states([name])
-    m, d = engine._model, engine._data
-    parked = [b for b in range(1, m.nbody) if b not in engine._ids.values()]
+    m, d = engine.model, engine.data
+    parked = [b for b in range(1, m.nbody) if b not in engine.ids.values()]
     assert parked and not m.body_contype[parked].any() and not m.body_conaffinity[parked].any()
     heights = d.xpos[parked, 2].copy()
     run(engine, 1.0)
@@ -901,8 +901,8 @@ def test_an_updated_body_is_not_parked_as_its_kind(engine: MujocoEngine) -> None
     engine.update(["ball"], BodyProperties(friction=0.9))
     engine.delete(["ball"])
     engine.spawn([ball("next")])
-    gid = engine._model.body_geomadr[engine._ids["next"]]
-    assert engine._model.geom_friction[gid, 0] == engine.get_params()["default_friction"]
+    gid = engine.model.body_geomadr[engine.ids["next"]]
+    assert engine.model.geom_friction[gid, 0] == engine.get_params()["default_friction"]
 
 
 # -- size ---------------------------------------------------------------------------------
@@ -926,7 +926,7 @@ def test_5000_free_spheres_fit_in_memory(engine: MujocoEngine) -> None:
     memory"."""
     engine.spawn([ground(), _spheres("ball", 5000, 1.0)])
     engine.step(2)
-    assert engine._model.narena < 40 * engine._model.nv ** 2 / 5
+    assert engine.model.narena < 40 * engine.model.nv ** 2 / 5
     assert engine.get_states(["ball4999"])[0][0, 2] < 1.0
 
 
@@ -963,8 +963,8 @@ def test_attached_and_added_bodies_simulate_alike(monkeypatch: pytest.MonkeyPatc
                                        for i in range(100)], friction=0.4)])
         engine.step(300)
         results.append(engine.get_states([f"b{i}" for i in range(100)]))
-        assert not any(name.startswith("\x01") for name in engine._ids)
-        assert "<default" not in engine._spec.to_xml()  # no class left by the attaches
+        assert not any(name.startswith("\x01") for name in engine.ids)
+        assert "<default" not in engine.spec.to_xml()  # no class left by the attaches
     for got, want in zip(*results, strict=True):
         np.testing.assert_array_equal(got, want)
 
@@ -975,12 +975,12 @@ def test_a_compile_past_max_free_bodies_is_refused_up_front(engine: MujocoEngine
     used to keep the daemon busy for longer than 15 minutes)."""
     engine.set_params({"mujoco.max_free_bodies": 4})
     engine.spawn([ground(), group("sphere", ["a", "b"], [[0, 0, 1], [1, 0, 1]])])
-    before = engine._spec.to_xml()
+    before = engine.spec.to_xml()
     with pytest.raises(ResourceLimitError, match="max_free_bodies") as caught:
         engine.spawn([group("box", ["c", "d", "e"], [[2, 0, 1], [3, 0, 1], [4, 0, 1]],
                             size=(0.05, 0.05, 0.05))])
     assert caught.value.details["count"] > 4
-    assert engine._spec.to_xml() == before
+    assert engine.spec.to_xml() == before
     statics = group("sphere", [f"s{i}" for i in range(10)], [[i, 1, 0] for i in range(10)])
     statics.static = True
     engine.spawn([statics])  # static bodies cost the compile nothing of that kind

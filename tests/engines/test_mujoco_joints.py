@@ -59,7 +59,7 @@ def kuka(engine: MujocoEngine) -> list[str]:
 def about_the_hinge(engine: MujocoEngine, body: str) -> tuple[float, float, float]:
     """Mass, distance of the centre of mass from the hinge (at the body's origin, about y),
     and moment of inertia about the hinge, from the compiled model."""
-    m, b = engine._model, engine._ids[body]
+    m, b = engine.model, engine.ids[body]
     rotation = np.zeros(9)
     mujoco.mju_quat2Mat(rotation, m.body_iquat[b])
     rotation = rotation.reshape(3, 3)
@@ -240,7 +240,7 @@ def test_restore_joints_puts_back_positions_modes_and_wrenches(engine: MujocoEng
     q, qd, effort = engine.get_joint_states(names)
     assert not q.any() and not qd.any() and not effort.any()
     assert {j.mode for j in engine.joints()} == {"none"}
-    assert not engine._data.xfrc_applied.any()
+    assert not engine.data.xfrc_applied.any()
     engine.step(10)
     assert not engine.get_joint_states(names)[2].any()
 
@@ -251,7 +251,7 @@ def test_a_model_with_joints_never_falls_asleep(engine: MujocoEngine) -> None:
     engine.set_joint_targets(names, "position", np.zeros(7), np.full(7, 100.0),
                              np.full(7, 10.0), np.full(7, np.inf))
     engine.step(3000)
-    assert engine._data.ntree_awake == engine._model.ntree
+    assert engine.data.ntree_awake == engine.model.ntree
 
 
 def test_a_wrench_wakes_a_sleeping_body(engine: MujocoEngine) -> None:
@@ -260,7 +260,7 @@ def test_a_wrench_wakes_a_sleeping_body(engine: MujocoEngine) -> None:
                   BodyGroup(shape="sphere", size=(0.1,), names=["b"],
                             poses=np.array([[0, 0, 0.1, 0, 0, 0, 1.0]]))])
     engine.step(3000)
-    assert engine._data.ntree_awake == 0
+    assert engine.data.ntree_awake == 0
     engine.set_wrenches(["b"], np.array([[0, 0, 200.0, 0, 0, 0]]), None)  # 4.2 kg
     engine.step(50)
     assert engine.get_states(["b"])[0][0, 2] > 0.15  # 0.1 + 38 m/s² x (0.1 s)² / 2

@@ -159,8 +159,8 @@ def test_link_states_are_their_frames_moving(engine: MujocoEngine) -> None:
     engine.set_joint_states(names, np.full(7, 0.3), np.linspace(-1, 1, 7))
     links = [f"k/lbr_iiwa_link_{i}" for i in range(1, 8)]
     before, twists = engine.get_states(links)
-    m, ids = engine._model, [engine._ids[n] for n in links]
-    np.testing.assert_allclose(before[:, :3], engine._data.xpos[ids])
+    m, ids = engine.model, [engine.ids[n] for n in links]
+    np.testing.assert_allclose(before[:, :3], engine.data.xpos[ids])
     engine.set_params({"timestep": 1e-5})
     engine.step(1)
     after, _ = engine.get_states(links)
@@ -188,15 +188,15 @@ def test_deleting_a_model_takes_its_links_joints_targets_and_wrenches(
         engine.delete(["c/pole"])
     engine.delete(["c/slideBar"])
     assert {j.model for j in engine.joints()} == {"d/slideBar"}
-    assert not engine._wrenches.held and not engine._joints.targets
-    assert not engine._data.xfrc_applied.any()
+    assert not engine.wrenches.held and not engine.joint_book.targets
+    assert not engine.data.xfrc_applied.any()
     with pytest.raises(NotFoundError):
         engine.get_states(["c/pole"])
     with pytest.raises(NotFoundError):
         engine.get_joint_states(["c/cart_to_pole"])
     engine.load_model("urdf", urdf_text("cartpole.urdf"), None, "c/")  # the names are free
     engine.clear()
-    assert engine.joints() == [] and engine._model.nu == 0
+    assert engine.joints() == [] and engine.model.nu == 0
 
 
 def test_joint_names_that_are_not_one_dof_or_unknown_are_refused(engine: MujocoEngine) -> None:
@@ -214,10 +214,10 @@ def test_joint_names_that_are_not_one_dof_or_unknown_are_refused(engine: MujocoE
 def test_a_broken_urdf_is_refused_and_changes_nothing(engine: MujocoEngine, text: str) -> None:
     engine.spawn([BodyGroup(shape="sphere", size=(0.1,), names=["b"],
                             poses=np.array([[0, 0, 1, 0, 0, 0, 1.0]]))])
-    spec = engine._spec.to_xml()
+    spec = engine.spec.to_xml()
     with pytest.raises(InvalidArgumentError, match="URDF"):
         engine.load_model("urdf", text, None, "x/")
-    assert engine._spec.to_xml() == spec and list(engine._entities) == ["b"]
+    assert engine.spec.to_xml() == spec and list(engine.entities) == ["b"]
     with pytest.raises(FeatureUnsupportedError):
         engine.load_model("sdf", text, None, "x/")
 
@@ -232,7 +232,7 @@ def test_a_deleted_models_meshes_go_with_it(engine: MujocoEngine) -> None:
     for _ in range(2):
         engine.load_model("urdf", urdf_text(KUKA), None, "")
         engine.delete(["lbr_iiwa_link_0"])
-    assert not engine._spec.meshes
+    assert not engine.spec.meshes
 
 
 def test_a_load_refused_at_its_recompile_leaves_no_meshes(
@@ -240,12 +240,12 @@ def test_a_load_refused_at_its_recompile_leaves_no_meshes(
     """A refusal after the attach (the world's recompile, forced to fail here as MuJoCo
     fails when out of memory) takes the model's assets out with its bodies."""
     engine.load_model("urdf", urdf_text(KUKA), None, "a/")
-    meshes = len(engine._spec.meshes)
+    meshes = len(engine.spec.meshes)
 
     def refuse(*_: object) -> None:
         raise InvalidArgumentError("refused")
 
-    monkeypatch.setattr(MujocoEngine, "_recompile", refuse)
+    monkeypatch.setattr(MujocoEngine, "recompile", refuse)
     with pytest.raises(InvalidArgumentError, match="refused"):
         engine.load_model("urdf", urdf_text(KUKA), None, "b/")
-    assert len(engine._spec.meshes) == meshes and "b/lbr_iiwa_link_0" not in engine._entities
+    assert len(engine.spec.meshes) == meshes and "b/lbr_iiwa_link_0" not in engine.entities

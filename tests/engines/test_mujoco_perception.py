@@ -168,7 +168,7 @@ def test_a_moved_static_body_is_where_rays_find_it(engine: MujocoEngine) -> None
 def test_parked_bodies_are_not_seen_hit_or_touched(engine: MujocoEngine) -> None:
     scene(engine)
     engine.delete(["ball"])
-    assert len(engine._pool) > 0  # its body waits, parked, far below the world
+    assert len(engine.pool) > 0  # its body waits, parked, far below the world
     below = (0.0, 0.0, -990.0)
     hit, _, _, _, _ = engine.raycast(np.array([below]), np.array([[0.0, 0, -1]]), 100.0)
     assert not hit.any()

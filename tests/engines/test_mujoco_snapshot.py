@@ -104,13 +104,13 @@ def test_a_snapshot_after_pool_edits_keeps_the_sources_state_and_sleepers(
     engine.delete(["s1", "s2"])
     pile(engine, rng, prefix="n", count=2)  # bound from the pool
     engine.step(100)
-    before = {n: a.copy() for n, a in carried(engine._data).items()}
-    asleep = int(np.count_nonzero(engine._data.tree_asleep >= 0))
-    assert asleep and engine._pool_edited
+    before = {n: a.copy() for n, a in carried(engine.data).items()}
+    asleep = int(np.count_nonzero(engine.data.tree_asleep >= 0))
+    assert asleep and engine.pool_edited
     engine.snapshot()
-    after = carried(engine._data)
+    after = carried(engine.data)
     assert [n for n in before if not np.array_equal(before[n], after[n], equal_nan=True)] == []
-    assert not engine._pool_edited
+    assert not engine.pool_edited
 
 
 def test_a_second_snapshot_sees_edits_since_the_first_and_restored_worlds_snapshot_alike(
@@ -160,11 +160,11 @@ def test_a_ball_held_awake_on_a_crown_stays_held_and_is_let_go_alike(
                      poses=np.array([[0, 0, 1.145, 0, 0, 0, 1]]))
     engine.spawn([floor(), pin, ball])
     engine.step(500)
-    assert engine._balance is not None and engine._balance.held
+    assert engine.balance is not None and engine.balance.held
     copy_ = restored(engine.snapshot())
-    assert copy_._balance is not None and copy_._balance.held == engine._balance.held
+    assert copy_.balance is not None and copy_.balance.held == engine.balance.held
     assert_same_runs(engine, copy_, [steps(1000)] * 4)
-    assert not engine._balance.held
+    assert not engine.balance.held
 
 
 def test_a_snapshot_restores_twice_alike_and_after_its_source_closed(

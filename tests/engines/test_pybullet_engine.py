@@ -74,7 +74,7 @@ def grid(count: int, spacing: float = 0.11, z: float = 0.5) -> np.ndarray:
 
 
 def body_id(engine: PybulletEngine, name: str) -> int:
-    return engine._bodies[name].uid
+    return engine.bodies[name].uid
 
 
 # -- description and parameters ----------------------------------------------------------
@@ -184,11 +184,11 @@ def test_spawning_after_deletes_finds_each_body(engine: PybulletEngine) -> None:
     """PyBullet reuses removed bodies' ids, and its batch call then misreports the ids."""
     engine.spawn([ground(), balls([f"a{i}" for i in range(20)], grid(20))])
     engine.delete(["a3", "a4", "a11"])
-    engine._bc.removeBody(engine._bodies.pop("a7").uid)  # a hole the engine did not make
+    engine._bc.removeBody(engine.bodies.pop("a7").uid)  # a hole the engine did not make
     names = [f"b{i}" for i in range(30)]
     engine.spawn([balls(names, grid(30, z=3.0))])
     assert np.array_equal(engine.get_states(names)[0][:, :3], grid(30, z=3.0))
-    uids = [b.uid for b in engine._bodies.values()]
+    uids = [b.uid for b in engine.bodies.values()]
     assert len(set(uids)) == len(uids) == 1 + 16 + 30
 
 
@@ -442,7 +442,7 @@ def test_a_model_name_in_use_is_refused(engine: PybulletEngine) -> None:
     before = engine._maker.known_ids()
     with pytest.raises(NameNotUniqueError, match="m/crate"):
         engine.load_model("urdf", TINY_URDF, None, "m/", fixed_base=False)
-    assert engine._maker.known_ids() == before and list(engine._bodies) == ["m/crate"]
+    assert engine._maker.known_ids() == before and list(engine.bodies) == ["m/crate"]
 
 
 @pytest.mark.parametrize(("text", "message"), [
@@ -457,7 +457,7 @@ def test_a_broken_urdf_is_refused_and_changes_nothing(
     before = engine._maker.known_ids()
     with pytest.raises(InvalidArgumentError, match=message):
         engine.load_model("urdf", text, None, "")
-    assert engine._maker.known_ids() == before and set(engine._bodies) == {"ground", "a"}
+    assert engine._maker.known_ids() == before and set(engine.bodies) == {"ground", "a"}
 
 
 def test_load_mjcf_gives_one_entity_per_body(engine: PybulletEngine, tmp_path: Any) -> None:
@@ -485,7 +485,7 @@ def seen(engine: PybulletEngine, names: list[str]) -> tuple[Any, ...]:
     looks = [bc.getVisualShapeData(body_id(engine, n))[0][7] for n in names]
     dynamics = [bc.getDynamicsInfo(body_id(engine, n), -1) for n in names]
     kept = [(b.static, b.shape, b.size, b.mass, b.friction, b.restitution, b.rgba,
-             b.follows_friction, b.follows_restitution) for b in map(engine._bodies.get, names)]
+             b.follows_friction, b.follows_restitution) for b in map(engine.bodies.get, names)]
     return *engine.get_states(names), looks, dynamics, kept
 
 
@@ -512,7 +512,7 @@ def test_a_rebuild_keeps_every_body_as_it_was(engine: PybulletEngine, monkeypatc
     engine.delete(junk[5:])  # 20 removed >= max(10, 2 * 6 left)
     assert engine.rebuilds == 1 and engine._removed == 0
     after = seen(engine, kept)
-    assert list(engine._bodies) == kept and engine._bc.getNumBodies() == len(kept)
+    assert list(engine.bodies) == kept and engine._bc.getNumBodies() == len(kept)
     assert np.array_equal(after[0], before[0]) and np.array_equal(after[1], before[1])
     assert after[2:] == before[2:]
     engine.set_params({"default_friction": 0.3})  # followers still follow, others keep theirs
@@ -521,7 +521,7 @@ def test_a_rebuild_keeps_every_body_as_it_was(engine: PybulletEngine, monkeypatc
     engine.step(480)  # the ball rests on the kept plane, the others fell or stood
     poses, twists = engine.get_states(["ball"])
     assert poses[0, 2] == pytest.approx(RADIUS, abs=0.002) and np.abs(twists[0]).max() < 0.01
-    assert engine.state_within(1e6, 1e5) and not engine._held
+    assert engine.state_within(1e6, 1e5) and not engine.held
 
 
 def test_churn_rebuilds_every_five_thousand_deleted(engine: PybulletEngine) -> None:
@@ -531,7 +531,7 @@ def test_churn_rebuilds_every_five_thousand_deleted(engine: PybulletEngine) -> N
         engine.spawn([balls(names, grid(1000))])
         engine.delete(names)
         assert engine.rebuilds == round_ // 5 and engine._removed == round_ % 5 * 1000
-    assert list(engine._bodies) == ["ground"] and engine._bc.getNumBodies() == 1
+    assert list(engine.bodies) == ["ground"] and engine._bc.getNumBodies() == 1
 
 
 def test_a_world_with_a_model_is_not_rebuilt(engine: PybulletEngine, monkeypatch: Any) -> None:
@@ -543,9 +543,9 @@ def test_a_world_with_a_model_is_not_rebuilt(engine: PybulletEngine, monkeypatch
     uid = body_id(engine, info.name)
     engine.delete(junk)
     assert engine.rebuilds == 0 and engine._removed == 20
-    assert body_id(engine, info.name) == uid and set(engine._bodies) == {"ground", info.name}
+    assert body_id(engine, info.name) == uid and set(engine.bodies) == {"ground", info.name}
     engine.delete([info.name])  # the model gone, the count so far brings the rebuild
-    assert engine.rebuilds == 1 and set(engine._bodies) == {"ground"}
+    assert engine.rebuilds == 1 and set(engine.bodies) == {"ground"}
 
 
 def resident_bytes() -> int:

@@ -165,8 +165,8 @@ def test_mjcf_inertia_is_the_files(engine: PybulletEngine) -> None:
       <geom type="sphere" size="0.02" pos="0 0 -0.5" mass="0"/></body></body>
       </worldbody></mujoco>"""
     engine.load_model("mjcf", text, None, "p/")
-    root, link = engine._robots.links["p/bob"]
-    info = engine._bc.getDynamicsInfo(engine._bodies[root].uid, link)
+    root, link = engine.robots.links["p/bob"]
+    info = engine._bc.getDynamicsInfo(engine.bodies[root].uid, link)
     assert (info[0], info[2]) == (1.0, (0.01, 0.02, 0.03))
 
 
@@ -174,7 +174,7 @@ def test_names_in_use_are_refused_and_leave_nothing(engine: PybulletEngine) -> N
     engine.spawn([BodyGroup("sphere", (0.1,), ["p/bob"], np.array([[5.0, 0, 1, 0, 0, 0, 1]]))])
     with pytest.raises(NameNotUniqueError, match="p/bob"):
         engine.load_model("urdf", pendulum(), None, "p/")
-    assert list(engine._bodies) == ["p/bob"] and engine.joints() == []
+    assert list(engine.bodies) == ["p/bob"] and engine.joints() == []
     engine.load_model("urdf", pendulum(), None, "q/")
     with pytest.raises(NameNotUniqueError, match="q/swing"):
         engine.load_model("urdf", pendulum().replace('"pivot"', '"hub"').replace(
@@ -195,10 +195,10 @@ def test_delete_and_clear_take_links_joints_targets_and_wrenches(
     hold(engine, "effort", 1.0)
     engine.set_wrenches(["p/bob"], np.ones((1, 6)), None)
     engine.delete(["p/pivot"])
-    assert engine.joints() == [] and not engine._robots.wrenches and not engine._robots.links
+    assert engine.joints() == [] and not engine.robots.wrenches and not engine.robots.links
     engine.load_model("urdf", pendulum(), None, "p/")
     engine.clear()
-    assert engine.joints() == [] and not engine._robots.links
+    assert engine.joints() == [] and not engine.robots.links
 
 
 # -- the actuator law --------------------------------------------------------------------
@@ -308,7 +308,7 @@ def test_a_wrench_gives_f_over_m(engine: PybulletEngine, target: str) -> None:
 
 def momentum(engine: PybulletEngine) -> np.ndarray:
     """The floating pendulum's linear momentum, from its base's and bob's centres."""
-    bc, uid = engine._bc, engine._bodies["p/pivot"].uid
+    bc, uid = engine._bc, engine.bodies["p/pivot"].uid
     base = np.array(bc.getBaseVelocity(uid)[0]) * 2.0
     bob = np.array(bc.getLinkState(uid, 0, computeLinkVelocity=1,
                                    computeForwardKinematics=1)[6]) * MASS
@@ -357,7 +357,7 @@ def test_kuka_tracks_a_sinusoid(engine: PybulletEngine) -> None:
     engine.set_params({"timestep": 0.001})
     engine.load_model("urdf", model_text("kuka_iiwa/model.urdf"), None, "k/")
     names = [j.name for j in engine.joints()]
-    uid = engine._bodies["k/lbr_iiwa_link_0"].uid
+    uid = engine.bodies["k/lbr_iiwa_link_0"].uid
     inertia = np.diag(engine._bc.calculateMassMatrix(uid, [0.0] * 7))
     omega, dt = 80.0, engine.timestep
     kp, kd = np.maximum(omega**2 * inertia, 300.0), 2 * omega * inertia
@@ -380,7 +380,7 @@ def test_a_rebuild_keeps_targets_wrenches_and_joint_states(engine: PybulletEngin
     before = state(engine)
     engine.reset_dynamics()
     assert state(engine)[:2] == before[:2] and engine.joints()[1].mode == "position"
-    assert "p/bob" in engine._robots.wrenches
+    assert "p/bob" in engine.robots.wrenches
     engine.step(100)
     other = PybulletEngine()  # the same run without the rebuild
     try:
@@ -415,7 +415,7 @@ def test_a_rewound_model_with_targets_replays_bit_for_bit(engine: PybulletEngine
 
     first, again = run(), run()
     np.testing.assert_array_equal(first, again)
-    assert engine.joints()[0].mode == "none" and not engine._robots.wrenches
+    assert engine.joints()[0].mode == "none" and not engine.robots.wrenches
 
 
 def test_a_hundred_joint_chain_on_one_line_loads(engine: PybulletEngine) -> None:

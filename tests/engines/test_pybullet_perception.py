@@ -141,7 +141,7 @@ def test_a_ray_bullet_grazes_goes_on_past_the_body(scene: PybulletEngine) -> Non
     off = (HALF + 3e-4) / math.sqrt(2)
     clear = (BALL_AT[0] + off, BALL_AT[1] + off, HEIGHT)
     bullet = scene._bc.rayTestBatch([clear], [(*clear[:2], -1.0)])[0]
-    assert bullet[0] == scene._bodies["ball"].uid  # Bullet alone says: the ball
+    assert bullet[0] == scene.bodies["ball"].uid  # Bullet alone says: the ball
     hits, names, points, _, distances = scene.raycast(
         np.array([clear]), np.array([[0, 0, -1.0]]), 10.0)
     assert hits[0] and names == ["floor"] and distances[0] == pytest.approx(HEIGHT, abs=1e-9)

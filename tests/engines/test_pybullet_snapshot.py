@@ -211,7 +211,7 @@ def test_a_restored_engine_does_everything_else(engines: Callable[[], PybulletEn
     assert repr(engine._batches) == "count(5)"  # groups 0-2, the KUKA 3, "new" 4
     assert "new" in engine.snapshot()["runs"][-1]["names"]
     engine.clear()
-    assert not engine._bodies and not engine.joints()
+    assert not engine.bodies and not engine.joints()
 
 
 def test_an_empty_world_keeps_its_parameters(engines: Callable[[], PybulletEngine]) -> None:

@@ -6,7 +6,6 @@ from __future__ import annotations
 import functools
 from collections.abc import Callable
 
-from galton.daemon.core.params import KNOWN_ENGINES
 from galton.daemon.engines.base import FEATURE_LOAD_MODEL, Engine
 from galton.daemon.engines.check.support import (
     CheckContext,
@@ -18,6 +17,7 @@ from galton.daemon.engines.check.support import (
     skip_unless,
     states,
 )
+from galton.daemon.engines.params import KNOWN_ENGINES
 from galton.protocol import (
     FeatureUnsupportedError,
     InvalidArgumentError,

@@ -23,7 +23,6 @@ from typing import Any
 
 import numpy as np
 
-from galton.daemon.core.params import check_updates
 from galton.daemon.engines.base import (
     FEATURE_CONTACTS,
     FEATURE_DELETE,
@@ -43,6 +42,7 @@ from galton.daemon.engines.base import (
     FEATURE_UPDATE_RESTITUTION,
     FEATURE_UPDATE_RGBA,
     FEATURE_WRENCH,
+    ContactPoints,
     Engine,
 )
 from galton.daemon.engines.dart import contacts as contact_points
@@ -53,6 +53,7 @@ from galton.daemon.engines.dart.models import MODEL_FORMATS
 from galton.daemon.engines.dart.params import SPECS
 from galton.daemon.engines.dart.scene import Scene
 from galton.daemon.engines.dart.snapshot import Snapshots
+from galton.daemon.engines.params import check_updates
 from galton.protocol import (
     PROTOCOL_VERSION,
     BodyGroup,
@@ -270,7 +271,6 @@ class DartEngine(Scene, Snapshots, Engine):
 
     # -- perception -----------------------------------------------------------------------
     def contacts(self, names: Sequence[str] | None
-                 ) -> tuple[list[str], list[str], np.ndarray, np.ndarray, np.ndarray,
-                            np.ndarray]:
-        return contact_points.contacts(self._world, self._entity_keys(),
-                                       None if names is None else set(names))
+                 ) -> ContactPoints:
+        return ContactPoints(*contact_points.contacts(
+            self._world, self._entity_keys(), None if names is None else set(names)))

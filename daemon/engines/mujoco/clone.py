@@ -31,38 +31,38 @@ if TYPE_CHECKING:
 
 def clone(source: MujocoEngine) -> MujocoEngine:
     """A new engine holding a copy of ``source``'s world (see the module docstring)."""
-    if source._broken:
+    if source.broken:
         raise OperationFailedError("the MuJoCo world is broken (a failed step or delete); "
                                    "reset it before copying it")
     engine = type(source).__new__(type(source))
     _copy_compiled(source, engine)
-    twins = _twins(source._spec, engine._spec)
+    twins = _twins(source.spec, engine.spec)
     _copy_books(source, engine, twins)
-    engine._workers = 0  # a new MjData has no thread pool
-    engine._start_workers()
+    engine.workers = 0  # a new MjData has no thread pool
+    engine.start_workers()
     return engine
 
 
 def _copy_compiled(source: MujocoEngine, engine: MujocoEngine) -> None:
     """The spec, the compiled model and its data, and what is kept beside them."""
-    engine._values = dict(source._values)
-    engine._spec = source._spec.copy()
-    engine._spec.copy_during_attach = True  # (not carried by MjSpec.copy)
-    engine._builders = mp.Builders()
-    engine._model = copy.copy(source._model)
-    engine._data = mujoco.MjData(engine._model)
-    mujoco.mj_copyData(engine._data, engine._model, source._data)
-    engine._xml = source._xml
-    engine._pool_edited = source._pool_edited
-    engine._broken = False
-    engine._diverged, engine._crowded = source._diverged, source._crowded
-    engine._steps_since_look = source._steps_since_look
-    engine._index = source._index  # frozen, rebuilt (never written) after a compile
-    engine._ids = dict(source._ids)
-    engine._watch = None
-    engine._warnings = engine._data.warning.number
-    engine._balance = copy.deepcopy(source._balance)
-    engine._cameras = None  # its own GL context, made by its first render
+    engine.values = dict(source.values)
+    engine.spec = source.spec.copy()
+    engine.spec.copy_during_attach = True  # (not carried by MjSpec.copy)
+    engine.builders = mp.Builders()
+    engine.model = copy.copy(source.model)
+    engine.data = mujoco.MjData(engine.model)
+    mujoco.mj_copyData(engine.data, engine.model, source.data)
+    engine.xml = source.xml
+    engine.pool_edited = source.pool_edited
+    engine.broken = False
+    engine.diverged, engine.crowded = source.diverged, source.crowded
+    engine.steps_since_look = source.steps_since_look
+    engine.index = source.index  # frozen, rebuilt (never written) after a compile
+    engine.ids = dict(source.ids)
+    engine.watch = None
+    engine.warnings = engine.data.warning.number
+    engine.balance = copy.deepcopy(source.balance)
+    engine.cameras = None  # its own GL context, made by its first render
 
 
 def _twins(spec: Any, twin: Any) -> dict[int, Any]:
@@ -76,18 +76,18 @@ def _twins(spec: Any, twin: Any) -> dict[int, Any]:
 def _copy_books(source: MujocoEngine, engine: MujocoEngine, twins: dict[int, Any]) -> None:
     """The engine's own books, each spec element swapped for its twin."""
     loads: dict[int, Assets] = {}  # a load's Assets are shared by its roots
-    engine._entities = {name: _entity(e, twins, loads)
-                        for name, e in source._entities.items()}
-    engine._parts = set(source._parts)
-    engine._models = source._models
-    engine._litter = [twins[id(frame)] for frame in source._litter]
-    engine._pool = mp.Pool()
-    engine._pool._serial = source._pool._serial
-    engine._pool._parked = {key: [twins[id(b)] for b in bodies]
-                            for key, bodies in source._pool._parked.items()}
-    engine._joints = _joints(source._joints)
-    engine._wrenches = Wrenches()
-    engine._wrenches.held = {n: w.copy() for n, w in source._wrenches.held.items()}
+    engine.entities = {name: _entity(e, twins, loads)
+                        for name, e in source.entities.items()}
+    engine.parts = set(source.parts)
+    engine.models = source.models
+    engine.litter = [twins[id(frame)] for frame in source.litter]
+    engine.pool = mp.Pool()
+    engine.pool._serial = source.pool._serial
+    engine.pool._parked = {key: [twins[id(b)] for b in bodies]
+                            for key, bodies in source.pool._parked.items()}
+    engine.joint_book = _joints(source.joint_book)
+    engine.wrenches = Wrenches()
+    engine.wrenches.held = {n: w.copy() for n, w in source.wrenches.held.items()}
 
 
 def _entity(e: Entity, twins: dict[int, Any], loads: dict[int, Assets]) -> Entity:

@@ -44,7 +44,6 @@ from typing import Any, ClassVar
 import mujoco
 import numpy as np
 
-from galton.daemon.core.params import check_updates
 from galton.daemon.engines.base import (
     FEATURE_CONTACTS,
     FEATURE_DELETE,
@@ -67,7 +66,9 @@ from galton.daemon.engines.base import (
     FEATURE_UPDATE_RGBA,
     FEATURE_WRENCH,
     CameraView,
+    ContactPoints,
     Engine,
+    RayHits,
 )
 from galton.daemon.engines.mujoco import clone as cloning
 from galton.daemon.engines.mujoco import compiled as compiling
@@ -87,6 +88,7 @@ from galton.daemon.engines.mujoco.entities import Entity
 from galton.daemon.engines.mujoco.joints import Joints
 from galton.daemon.engines.mujoco.poses import PoseReader
 from galton.daemon.engines.mujoco.wrench import Wrenches
+from galton.daemon.engines.params import check_updates
 from galton.protocol import (
     BODY_SHAPES,
     PROTOCOL_VERSION,
@@ -116,52 +118,52 @@ class MujocoEngine(Engine):
     releases_gil_while_stepping: ClassVar[bool] = True  # mj_step runs without the GIL
     # What the last step left, frozen before an edit until the next step (a class default:
     # a clone is made without __init__).
-    _observed: observing.Observed | None = None
+    observed: observing.Observed | None = None
 
     def __init__(self) -> None:
         ms.route_warnings()
-        self._values: dict[str, Any] = {n: p.default for n, p in ms.PARAMS.items()}
-        self._entities: dict[str, Entity] = {}
-        self._diverged = False
-        self._crowded = False
-        self._workers = 0
-        self._steps_since_look = 0
-        self._cameras: rendering.CameraRig | None = None  # made by the first render
-        self._build_empty()
+        self.values: dict[str, Any] = {n: p.default for n, p in ms.PARAMS.items()}
+        self.entities: dict[str, Entity] = {}
+        self.diverged = False
+        self.crowded = False
+        self.workers = 0
+        self.steps_since_look = 0
+        self.cameras: rendering.CameraRig | None = None  # made by the first render
+        self.build_empty()
 
     # -- compile & index ----------------------------------------------------------------
-    def _build_empty(self) -> None:
-        self._pool = mp.Pool()
-        self._spec = mujoco.MjSpec()
-        self._spec.modelname = "galton"
-        self._spec.copy_during_attach = True  # see spec.add_group
-        self._litter: list[Any] = []  # empty frames, deleted with the next bodies removed
-        self._builders = mp.Builders()
-        self._spec.memory = ms.arena_bytes(1, 0)
-        self._parts: set[str] = set()  # names of loaded models' links
-        self._joints = Joints()
-        self._wrenches = Wrenches()
-        self._models = 0  # model entities alive
-        self._broken = False
+    def build_empty(self) -> None:
+        self.pool = mp.Pool()
+        self.spec = mujoco.MjSpec()
+        self.spec.modelname = "galton"
+        self.spec.copy_during_attach = True  # see spec.add_group
+        self.litter: list[Any] = []  # empty frames, deleted with the next bodies removed
+        self.builders = mp.Builders()
+        self.spec.memory = ms.arena_bytes(1, 0)
+        self.parts: set[str] = set()  # names of loaded models' links
+        self.joint_book = Joints()
+        self.wrenches = Wrenches()
+        self.models = 0  # model entities alive
+        self.broken = False
         # Bodies bound from or parked into the pool since the last compile: the compiled
         # model then differs from what its spec compiles to (see snapshot).
-        self._pool_edited = False
-        self._xml: str | None = None  # the spec as MJCF, kept until the spec changes
-        ms.write_options(self._spec.option, self._values)
-        self._model = self._spec.compile()
-        self._data = mujoco.MjData(self._model)
-        self._workers = 0  # a new MjData has no thread pool
-        self._start_workers()
-        self._reindex()
+        self.pool_edited = False
+        self.xml: str | None = None  # the spec as MJCF, kept until the spec changes
+        ms.write_options(self.spec.option, self.values)
+        self.model = self.spec.compile()
+        self.data = mujoco.MjData(self.model)
+        self.workers = 0  # a new MjData has no thread pool
+        self.start_workers()
+        self.reindex()
 
-    def _recompile(self, nbody: int | None = None, nv: int | None = None) -> None:
-        self._compile(nbody, nv)
-        self._reindex()
+    def recompile(self, nbody: int | None = None, nv: int | None = None) -> None:
+        self.compile(nbody, nv)
+        self.reindex()
 
-    def _compile(self, nbody: int | None = None, nv: int | None = None) -> None:
+    def compile(self, nbody: int | None = None, nv: int | None = None) -> None:
         compiling.compile_in_place(self, nbody, nv)
 
-    def _start_workers(self) -> None:
+    def start_workers(self) -> None:
         """Size the current MjData's thread pool (a new MjData starts with none).
 
         Workers pay off only in a crowded world: always on, their hand-off made 100-ball
@@ -169,45 +171,45 @@ class MujocoEngine(Engine):
         while the last step had at least WORKERS_ON_CONTACTS contacts, and stop below
         WORKERS_OFF_CONTACTS. Results are bit-identical either way.
         """
-        wanted = self._values["mujoco.threads"] if self._crowded else 0
-        if wanted != self._workers:
-            mujoco.mju_threadpool(self._data, wanted)
-            self._workers = wanted
+        wanted = self.values["mujoco.threads"] if self.crowded else 0
+        if wanted != self.workers:
+            mujoco.mju_threadpool(self.data, wanted)
+            self.workers = wanted
 
-    def _track_crowding(self) -> None:
-        ncon = self._data.ncon
-        crowded = ncon >= WORKERS_ON_CONTACTS or (self._crowded and ncon >= WORKERS_OFF_CONTACTS)
-        if crowded != self._crowded:
-            self._crowded = crowded
-            self._start_workers()
+    def track_crowding(self) -> None:
+        ncon = self.data.ncon
+        crowded = ncon >= WORKERS_ON_CONTACTS or (self.crowded and ncon >= WORKERS_OFF_CONTACTS)
+        if crowded != self.crowded:
+            self.crowded = crowded
+            self.start_workers()
 
-    def _reindex(self) -> None:
-        self._index = mst.StateIndex.of(self._model)
-        self._balance = self._balance_guard()
-        self._ids = {name: e.body.id for name, e in self._entities.items()}
-        self._watch: np.ndarray | None = None
-        self._warnings = self._data.warning.number
-        self._joints.reindex(self._model)
-        self._joints.apply(self._model, self._data)
-        self._wrenches.apply(self._data, self._ids)
+    def reindex(self) -> None:
+        self.index = mst.StateIndex.of(self.model)
+        self.balance = self.balance_guard()
+        self.ids = {name: e.body.id for name, e in self.entities.items()}
+        self.watch: np.ndarray | None = None
+        self.warnings = self.data.warning.number
+        self.joint_book.reindex(self.model)
+        self.joint_book.apply(self.model, self.data)
+        self.wrenches.apply(self.data, self.ids)
 
-    def _balance_guard(self) -> BalanceGuard | None:
+    def balance_guard(self) -> BalanceGuard | None:
         """A guard for the compiled model, if wanted (see balance)."""
-        return BalanceGuard(self._model) if self._values["mujoco.wake_balanced"] else None
+        return BalanceGuard(self.model) if self.values["mujoco.wake_balanced"] else None
 
-    def _body_ids(self, names: Sequence[str]) -> np.ndarray:
+    def body_ids(self, names: Sequence[str]) -> np.ndarray:
         try:
-            return np.fromiter((self._ids[n] for n in names), dtype=np.int64, count=len(names))
+            return np.fromiter((self.ids[n] for n in names), dtype=np.int64, count=len(names))
         except KeyError as exc:
             raise NotFoundError(f"no body named {exc.args[0]!r} in the MuJoCo world") from exc
 
-    def _geom_ids(self, names: Sequence[str]) -> np.ndarray:
+    def geom_ids(self, names: Sequence[str]) -> np.ndarray:
         return compiling.geom_ids(self, names)
 
-    def _watched(self) -> np.ndarray:
-        if self._watch is None:
-            self._watch = compiling.watched_rows(self)
-        return self._watch
+    def watched(self) -> np.ndarray:
+        if self.watch is None:
+            self.watch = compiling.watched_rows(self)
+        return self.watch
 
     # -- Engine: description & parameters ------------------------------------------------
     def capabilities(self) -> Capabilities:
@@ -220,28 +222,28 @@ class MujocoEngine(Engine):
 
     @property
     def timestep(self) -> float:
-        return float(self._model.opt.timestep)
+        return float(self.model.opt.timestep)
 
     def get_params(self) -> dict[str, Any]:
-        return {n: list(v) if isinstance(v, tuple) else v for n, v in self._values.items()}
+        return {n: list(v) if isinstance(v, tuple) else v for n, v in self.values.items()}
 
     def set_params(self, params: dict[str, Any]) -> None:
         clean = check_updates(self.name, ms.PARAMS, params)
         observing.freeze(self)
-        self._xml = None
-        self._values.update(clean)
-        ms.write_options(self._spec.option, self._values)
-        ms.write_options(self._model.opt, self._values)
+        self.xml = None
+        self.values.update(clean)
+        ms.write_options(self.spec.option, self.values)
+        ms.write_options(self.model.opt, self.values)
         if "mujoco.threads" in clean:
-            self._start_workers()
+            self.start_workers()
         if "mujoco.wake_balanced" in clean:
-            if self._balance is not None:
-                self._balance.release_all(self._model)
-            self._balance = self._balance_guard()
+            if self.balance is not None:
+                self.balance.release_all(self.model)
+            self.balance = self.balance_guard()
         if ms.CONTACT_PARAMS & clean.keys():
-            for entity in self._entities.values():
+            for entity in self.entities.values():
                 entity.key = None  # its values are rewritten: it no longer matches its kind
-            self._apply_contacts(list(self._entities))
+            self._apply_contacts(list(self.entities))
 
     def _apply_contacts(self, names: Sequence[str]) -> None:
         mpr.apply_contacts(self, names)
@@ -249,9 +251,9 @@ class MujocoEngine(Engine):
     def properties(self, names: Sequence[str]) -> np.ndarray:
         return mpr.properties(self, names)
 
-    def _free_bodies(self) -> int:
+    def free_bodies(self) -> int:
         """Free joints in the compiled model: what its compile is quadratic in."""
-        return int(np.count_nonzero(self._model.jnt_type == mujoco.mjtJoint.mjJNT_FREE))
+        return int(np.count_nonzero(self.model.jnt_type == mujoco.mjtJoint.mjJNT_FREE))
 
     # -- Engine: create & delete ---------------------------------------------------------
     def spawn(self, groups: Sequence[BodyGroup]) -> None:
@@ -272,7 +274,7 @@ class MujocoEngine(Engine):
 
     # -- Engine: state --------------------------------------------------------------------
     def get_states(self, names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
-        return mst.read_states(self._model, self._data, self._index, self._body_ids(names))
+        return mst.read_states(self.model, self.data, self.index, self.body_ids(names))
 
     def pose_reader(self, names: Sequence[str]) -> Callable[[], np.ndarray]:
         return PoseReader(self, names)
@@ -284,14 +286,14 @@ class MujocoEngine(Engine):
 
     def update(self, names: Sequence[str], props: BodyProperties) -> None:
         observing.freeze(self)
-        self._xml = None
+        self.xml = None
         mpr.update(self, names, props)
 
     # -- Engine: time (stepping) --------------------------------------------------------
     def step(self, count: int) -> None:
         timing.step(self, count)
 
-    def _look(self) -> None:
+    def look(self) -> None:
         timing.look(self)
 
     def state_within(self, max_position: float, max_speed: float) -> bool:
@@ -300,16 +302,16 @@ class MujocoEngine(Engine):
     def reset_dynamics(self) -> None:
         timing.reset_dynamics(self)
 
-    def _restart_looks(self) -> None:
+    def restart_looks(self) -> None:
         timing.restart_looks(self)
 
     # -- Engine: joints and wrenches (joints, wrench) ------------------------
     def joints(self) -> list[JointInfo]:
-        return self._joints.describe()
+        return self.joint_book.describe()
 
     def get_joint_states(self, names: Sequence[str]
                          ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        positions, velocities, efforts = self._joints.read(self._data, names)
+        positions, velocities, efforts = self.joint_book.read(self.data, names)
         return positions, velocities, observing.efforts(self, names, efforts)
 
     def set_joint_states(self, names: Sequence[str], positions: np.ndarray,
@@ -317,11 +319,11 @@ class MujocoEngine(Engine):
         """Written into qpos/qvel; a model's trees never sleep (their actuators keep them
         awake), so nothing needs waking."""
         observing.freeze(self)
-        self._joints.write(self._data, names, positions, velocities)
+        self.joint_book.write(self.data, names, positions, velocities)
 
     def set_joint_targets(self, names: Sequence[str], mode: str, targets: np.ndarray,
                           kp: np.ndarray, kd: np.ndarray, max_effort: np.ndarray) -> None:
-        self._joints.hold(self._model, self._data, names, mode, targets, kp, kd, max_effort)
+        self.joint_book.hold(self.model, self.data, names, mode, targets, kp, kd, max_effort)
 
     def set_wrenches(self, names: Sequence[str], wrenches: np.ndarray,
                      points: np.ndarray | None) -> None:
@@ -351,7 +353,7 @@ class MujocoEngine(Engine):
         snapshots.restore(self, data)
 
     def entity_names(self) -> list[str]:
-        return list(self._entities)
+        return list(self.entities)
 
     def clone(self) -> MujocoEngine:
         """A copy of the compiled world, no MJCF and no compile (``clone``): it goes
@@ -364,21 +366,20 @@ class MujocoEngine(Engine):
         return sensing.render(self, cameras)
 
     def raycast(self, origins: np.ndarray, directions: np.ndarray, max_length: float
-                ) -> tuple[np.ndarray, list[str], np.ndarray, np.ndarray, np.ndarray]:
-        return sensing.cast_rays(self, origins, directions, max_length)
+                ) -> RayHits:
+        return RayHits(*sensing.cast_rays(self, origins, directions, max_length))
 
     def contacts(self, names: Sequence[str] | None
-                 ) -> tuple[list[str], list[str], np.ndarray, np.ndarray, np.ndarray,
-                            np.ndarray]:
-        return observing.contacts(self, names)
+                 ) -> ContactPoints:
+        return ContactPoints(*observing.contacts(self, names))
 
     def bounds(self, names: Sequence[str]) -> np.ndarray:
         """Each body's world box around its own geoms' boxes (MuJoCo's ``geom_aabb``, in
         the geom's frame); a body without geoms is a point at its origin."""
-        model, data = self._model, self._data
+        model, data = self.model, self.data
         mujoco.mj_kinematics(model, data)  # positions only: the state is unchanged
         rows = np.empty((len(names), 6))
-        for row, body in enumerate(self._body_ids(names)):
+        for row, body in enumerate(self.body_ids(names)):
             geoms = np.flatnonzero(model.geom_bodyid == body)
             if not len(geoms):
                 rows[row] = np.tile(data.xpos[body], 2)
@@ -391,7 +392,7 @@ class MujocoEngine(Engine):
         return rows
 
     def close(self) -> None:
-        self._entities.clear()
-        if self._cameras is not None:
-            self._cameras.close()
-            self._cameras = None
+        self.entities.clear()
+        if self.cameras is not None:
+            self.cameras.close()
+            self.cameras = None

@@ -66,16 +66,16 @@ def load_model(engine: MujocoEngine, fmt: str, text: str | None, path: str | Non
     check_model_names(engine, [*tops, *links], world_link=bool(facts.renamed))
     size = try_attaching(engine, child, prefix, facts, f"the {fmt.upper()} model")
     enter(engine, child, prefix, facts, tops, parts, size)
-    engine._models += len(tops)
-    engine._parts.update(links)
+    engine.models += len(tops)
+    engine.parts.update(links)
     infos: list[EntityInfo] = []
     for name in tops:
-        root = engine._ids[name]
-        engine._joints.add_model(name, mj.describe_model(engine._model, root, name, prefix,
+        root = engine.ids[name]
+        engine.joint_book.add_model(name, mj.describe_model(engine.model, root, name, prefix,
                                                          facts))
         infos.append(model_info(engine, name))
         infos += [link_info(engine, int(b), name)
-                  for b in np.flatnonzero(engine._model.body_rootid == root)[1:]]
+                  for b in np.flatnonzero(engine.model.body_rootid == root)[1:]]
     return infos
 
 
@@ -84,7 +84,7 @@ def try_attaching(engine: MujocoEngine, child: mujoco.MjSpec, prefix: str, facts
     """The world compiled with the model on a copy of the spec (attaching cannot be
     undone); the compile's warnings go where MuJoCo's others go: to the log."""
     try:
-        trial = engine._spec.copy()
+        trial = engine.spec.copy()
         with warnings.catch_warnings(record=True) as said:
             warnings.simplefilter("always")
             attach(trial, child.copy(), prefix, trial.worldbody.add_frame(), facts)
@@ -101,24 +101,24 @@ def enter(engine: MujocoEngine, child: mujoco.MjSpec, prefix: str, facts: Facts,
           tops: list[str], parts: list[tuple[str, ...]], size: mujoco.MjModel) -> None:
     """Attach the model to the world's spec, book its roots and links, recompile; on a
     failure take it all out again (its bodies and what uses them, its assets)."""
-    frame = engine._spec.worldbody.add_frame()
-    before = asset_names(engine._spec)
+    frame = engine.spec.worldbody.add_frame()
+    before = asset_names(engine.spec)
     try:
-        attach(engine._spec, child, prefix, frame, facts)
-        assets = Assets(asset_names(engine._spec) - before, len(tops))
+        attach(engine.spec, child, prefix, frame, facts)
+        assets = Assets(asset_names(engine.spec) - before, len(tops))
         for name, inner in zip(tops, parts, strict=True):
-            body = engine._spec.body(body_name(name))
-            engine._entities[name] = Entity(body, static=bool(body.mocap), source="model",
+            body = engine.spec.body(body_name(name))
+            engine.entities[name] = Entity(body, static=bool(body.mocap), source="model",
                                             parts=inner, model=name, assets=assets)
             for link in inner:
-                engine._entities[link] = Entity(engine._spec.body(body_name(link)),
+                engine.entities[link] = Entity(engine.spec.body(body_name(link)),
                                                 static=False, source="link", model=name)
-        engine._recompile(size.nbody, size.nv)
+        engine.recompile(size.nbody, size.nv)
     except (GaltonError, *MUJOCO_ERRORS) as exc:
         for name in [*tops, *(n for names in parts for n in names)]:
-            engine._entities.pop(name, None)
-        mp.remove_frame(engine._spec, frame)
-        delete_assets(engine._spec, asset_names(engine._spec) - before)
+            engine.entities.pop(name, None)
+        mp.remove_frame(engine.spec, frame)
+        delete_assets(engine.spec, asset_names(engine.spec) - before)
         if isinstance(exc, GaltonError):
             raise
         raise mujoco_error(exc, "the model does not fit this world") from exc
@@ -158,7 +158,7 @@ def check_model_names(engine: MujocoEngine, names: Sequence[str], *,
     a URDF's world link, which MuJoCo knows by another name: ``rig.body_name``)."""
     for name in names:
         own = (name == WORLD and not world_link) or name.startswith(mp.PREFIX)
-        if name in engine._entities or name in engine._parts or own:
+        if name in engine.entities or name in engine.parts or own:
             raise NameNotUniqueError(
                 f"the model's body {name!r} has the name of a body already in the MuJoCo "
                 "world; load it with another prefix")
@@ -166,17 +166,17 @@ def check_model_names(engine: MujocoEngine, names: Sequence[str], *,
 
 def model_info(engine: MujocoEngine, name: str) -> EntityInfo:
     """A loaded entity as the World lists it; a jointed one's pose kept as its initial."""
-    bid = engine._ids[name]
-    entity = engine._entities[name]
-    if engine._index.kind[bid] == JOINTED:
-        poses, _ = mst.jointed_states(engine._model, engine._data, np.array([bid]))
+    bid = engine.ids[name]
+    entity = engine.entities[name]
+    if engine.index.kind[bid] == JOINTED:
+        poses, _ = mst.jointed_states(engine.model, engine.data, np.array([bid]))
         entity.initial_pose = poses[0]
     return EntityInfo(name=name, shape="model", static=entity.static,
-                      mass=float(engine._model.body_subtreemass[bid]), source="model",
+                      mass=float(engine.model.body_subtreemass[bid]), source="model",
                       model=name)
 
 
 def link_info(engine: MujocoEngine, bid: int, model: str) -> EntityInfo:
     """A model's link as the World lists it (its own mass)."""
-    return EntityInfo(name=entity_name(engine._model.body(bid).name), shape="link",
-                      mass=float(engine._model.body_mass[bid]), source="model", model=model)
+    return EntityInfo(name=entity_name(engine.model.body(bid).name), shape="link",
+                      mass=float(engine.model.body_mass[bid]), source="model", model=model)

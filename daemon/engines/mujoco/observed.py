@@ -33,25 +33,25 @@ class Observed:
 
 def freeze(engine: MujocoEngine) -> None:
     """Keep what the last step left, before an edit recomputes it (once per step)."""
-    if engine._observed is not None:
+    if engine.observed is not None:
         return
-    names = [j.name for j in engine._joints.describe() if j.scalar]
-    efforts = engine._joints.read(engine._data, names)[2] if names else np.zeros(0)
-    engine._observed = Observed(sensing.touching(engine, None),
+    names = [j.name for j in engine.joint_book.describe() if j.scalar]
+    efforts = engine.joint_book.read(engine.data, names)[2] if names else np.zeros(0)
+    engine.observed = Observed(sensing.touching(engine, None),
                                 dict(zip(names, efforts.tolist(), strict=True)))
 
 
 def contacts(engine: MujocoEngine, names: Sequence[str] | None) -> ContactRows:
     """The last step's contacts among entities still there (either among ``names``)."""
-    observed = engine._observed
+    observed = engine.observed
     if observed is None:
         return sensing.touching(engine, names)
     if names is not None:
-        engine._body_ids(names)  # NotFoundError for a name that is no entity's
+        engine.body_ids(names)  # NotFoundError for a name that is no entity's
     first, second, positions, normals, forces, depths = observed.contacts
     wanted = None if names is None else set(names)
     rows = [i for i, (a, b) in enumerate(zip(first, second, strict=True))
-            if a in engine._ids and b in engine._ids
+            if a in engine.ids and b in engine.ids
             and (wanted is None or a in wanted or b in wanted)]
     return ([first[i] for i in rows], [second[i] for i in rows], positions[rows],
             normals[rows], forces[rows], depths[rows])
@@ -59,7 +59,7 @@ def contacts(engine: MujocoEngine, names: Sequence[str] | None) -> ContactRows:
 
 def efforts(engine: MujocoEngine, names: Sequence[str], current: np.ndarray) -> np.ndarray:
     """The efforts of the last step (a joint loaded since: none yet, 0)."""
-    observed = engine._observed
+    observed = engine.observed
     if observed is None:
         return current
     return np.array([observed.efforts.get(n, 0.0) for n in names], dtype=float)

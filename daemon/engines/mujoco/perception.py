@@ -33,12 +33,12 @@ def render(engine: MujocoEngine, cameras: Sequence[CameraView]
     """The cameras' images at the current positions; labels are the entities seen."""
     if not cameras:
         return [], []
-    if engine._cameras is None:
-        engine._cameras = CameraRig()
-    m, d = engine._model, engine._data
+    if engine.cameras is None:
+        engine.cameras = CameraRig()
+    m, d = engine.model, engine.data
     mujoco.mj_kinematics(m, d)  # the data's poses are from before the last step's move
-    names, label = geom_entities(m, engine._ids)
-    images = engine._cameras.render(m, d, label >= 0, label, cameras)
+    names, label = geom_entities(m, engine.ids)
+    images = engine.cameras.render(m, d, label >= 0, label, cameras)
     seen = np.unique(np.concatenate([im["segmentation"].ravel() for im in images
                                      if "segmentation" in im] or [np.empty(0, np.int32)]))
     seen = seen[seen >= 0]
@@ -54,9 +54,9 @@ def cast_rays(engine: MujocoEngine, origins: np.ndarray, directions: np.ndarray,
               max_length: float
               ) -> tuple[np.ndarray, list[str], np.ndarray, np.ndarray, np.ndarray]:
     """Engine.raycast at the current positions (see the module docstring)."""
-    m, d = engine._model, engine._data
+    m, d = engine.model, engine.data
     mujoco.mj_kinematics(m, d)
-    names, label = geom_entities(m, engine._ids)
+    names, label = geom_entities(m, engine.ids)
     geom, dist, normal = raycast(m, d, label >= 0, origins, directions, max_length)
     hit = geom >= 0
     points = np.where(hit[:, None], origins + directions * dist[:, None], np.nan)
@@ -68,10 +68,10 @@ def touching(engine: MujocoEngine, names: Sequence[str] | None
              ) -> tuple[list[str], list[str], np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Engine.contacts: the last step's contacts (see ``contacts``)."""
     if names is not None:
-        engine._body_ids(names)  # NotFoundError for a name that is no entity's
-    m = engine._model
-    labels, label = geom_entities(m, engine._ids)
-    return contacts(m, _awake_view(m, engine._data, engine._ids), label, labels, names)
+        engine.body_ids(names)  # NotFoundError for a name that is no entity's
+    m = engine.model
+    labels, label = geom_entities(m, engine.ids)
+    return contacts(m, _awake_view(m, engine.data, engine.ids), label, labels, names)
 
 
 def _awake_view(model: mujoco.MjModel, data: mujoco.MjData, ids: Mapping[str, int]

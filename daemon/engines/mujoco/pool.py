@@ -211,7 +211,7 @@ class Additions:
     (or ``undo`` if the compile failed)."""
 
     def __init__(self, spec: mujoco.MjSpec, builders: Builders) -> None:
-        self._spec, self._builders = spec, builders
+        self.spec, self.builders = spec, builders
         self._groups: list[tuple[BodyGroup, list[Any] | None]] = []  # None: attached
         self._frames: list[Any] = []
         self._homes: list[Any] = []  # a frame per attached group, made before the compile
@@ -228,16 +228,16 @@ class Additions:
         body still moves without a compile: its pose lives in the model (body_pos, body_quat).
         """
         if len(group) < ATTACH_MIN or group.vertices is not None:
-            mesh = shapes.add_mesh(self._spec, group)
+            mesh = shapes.add_mesh(self.spec, group)
             if mesh is not None:
                 self._meshes.append(mesh)
-            bodies = _add_bodies(self._spec.worldbody, group, material, range(len(group)),
+            bodies = _add_bodies(self.spec.worldbody, group, material, range(len(group)),
                                  parked, group.names, mesh)
             self._direct += bodies
             self._groups.append((group, bodies))
             return
-        block, chunks = self._builders.block, self._builders.chunks
-        self._homes.append(self._spec.worldbody.add_frame())
+        block, chunks = self.builders.block, self.builders.chunks
+        self._homes.append(self.spec.worldbody.add_frame())
         try:
             for start in range(0, len(group), BLOCK):
                 for chunk, first in zip(chunks, range(start, min(start + BLOCK, len(group)),
@@ -247,18 +247,18 @@ class Additions:
                                 [str(self._attached + row - rows.start) for row in rows])
                     self._attached += len(rows)
                     _attach(block, chunk, block.worldbody.add_frame())
-                self._frames.append(self._spec.worldbody.add_frame())
-                _attach(self._spec, block, self._frames[-1])
+                self._frames.append(self.spec.worldbody.add_frame())
+                _attach(self.spec, block, self._frames[-1])
         except BaseException:
-            self._builders.reset()
+            self.builders.reset()
             raise
         self._groups.append((group, None))
 
     def undo(self) -> None:
         """Take every added body (and mesh asset) out of the spec again."""
-        _delete(self._spec, self._direct, [*self._frames, *self._homes])
+        _delete(self.spec, self._direct, [*self._frames, *self._homes])
         for name in self._meshes:
-            self._spec.delete(self._spec.mesh(name))
+            self.spec.delete(self.spec.mesh(name))
 
     def bodies(self) -> list[list[Any]]:
         """Once compiled: each added group's bodies, named, each attached group gathered in
@@ -272,7 +272,7 @@ class Additions:
         its first body is, while a compile keeps the bodies' order; a frame shared by groups
         spawned apart would make a snapshot's MJCF compile its bodies in another order than
         the world's (whose arrays the snapshot holds by position)."""
-        found = iter([self._spec.body(f"{_TEMPORARY * 2}{i}") for i in range(self._attached)])
+        found = iter([self.spec.body(f"{_TEMPORARY * 2}{i}") for i in range(self._attached)])
         homes = iter(self._homes)
         out = []
         for group, bodies in self._groups:

@@ -31,7 +31,7 @@ class PoseReader:
 
     def __init__(self, engine: MujocoEngine, names: Sequence[str]) -> None:
         self.engine = engine
-        self.ids = engine._body_ids(names)
+        self.ids = engine.body_ids(names)
         self.index: mst.StateIndex | None = None
         # Positions in ``names`` of each kind of body, and where their poses live.
         self.at: dict[int, np.ndarray] = {}
@@ -40,9 +40,9 @@ class PoseReader:
 
     def __call__(self) -> np.ndarray:
         engine = self.engine
-        if self.index is not engine._index:
-            self._locate(engine._index)
-        m, d, at = engine._model, engine._data, self.at
+        if self.index is not engine.index:
+            self._locate(engine.index)
+        m, d, at = engine.model, engine.data, self.at
         poses = np.empty((len(self.ids), 7))
         poses[at[mst.FREE]] = d.qpos[self.rows]
         if len(at[mst.STATIC]):
@@ -52,7 +52,7 @@ class PoseReader:
             poses[at[mst.MOCAP]] = np.hstack([d.mocap_pos[self.mocap],
                                               mst.to_xyzw(d.mocap_quat[self.mocap])])
         if len(at[mst.JOINTED]):
-            poses[at[mst.JOINTED]] = mst.read_states(m, d, engine._index,
+            poses[at[mst.JOINTED]] = mst.read_states(m, d, engine.index,
                                                      self.ids[at[mst.JOINTED]])[0]
         return poses
 

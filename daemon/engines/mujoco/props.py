@@ -24,11 +24,11 @@ if TYPE_CHECKING:
 def update(engine: MujocoEngine, names: Sequence[str], props: BodyProperties) -> None:
     """The mass first, the one change MuJoCo may refuse (its recompile); the rest
     cannot fail, so a refused mass leaves every property as it was."""
-    engine._body_ids(names)
+    engine.body_ids(names)
     if props.mass is not None:
         set_masses(engine, names, props.mass)
     for name in names:
-        entity = engine._entities[name]
+        entity = engine.entities[name]
         entity.key = None  # no longer like its parked twins: deleting it removes it
         if props.friction is not None:
             entity.friction = props.friction
@@ -37,23 +37,23 @@ def update(engine: MujocoEngine, names: Sequence[str], props: BodyProperties) ->
     if props.friction is not None or props.restitution is not None:
         apply_contacts(engine, names)
     if props.rgba is not None:
-        engine._model.geom_rgba[engine._geom_ids(names)] = props.rgba
+        engine.model.geom_rgba[engine.geom_ids(names)] = props.rgba
         for name in names:
-            for geom in engine._entities[name].geoms():
+            for geom in engine.entities[name].geoms():
                 geom.rgba = props.rgba
 
 
 def set_masses(engine: MujocoEngine, names: Sequence[str], mass: float) -> None:
     """Give each entity this total mass (a model's bodies scaled alike); one recompile,
     the spec's old values put back if MuJoCo refuses it."""
-    m = engine._model
+    m = engine.model
     undo: list[tuple[Any, str, Any]] = []
     for name in names:
-        entity = engine._entities[name]
+        entity = engine.entities[name]
         if entity.source == "spawn" and not entity.body.explicitinertial:
             undo += ms.set_values(entity.body.first_geom(), mass=mass)
             continue  # a body with its own inertia (spawn's) is scaled as a model's is
-        scale = mass / max(float(m.body_subtreemass[engine._ids[name]]), 1e-12)
+        scale = mass / max(float(m.body_subtreemass[engine.ids[name]]), 1e-12)
         for body in [entity.body, *entity.body.find_all(BODY)]:
             bid = body.id
             undo += ms.set_values(body, mass=float(m.body_mass[bid]) * scale,
@@ -61,7 +61,7 @@ def set_masses(engine: MujocoEngine, names: Sequence[str], mass: float) -> None:
                                   ipos=m.body_ipos[bid], iquat=m.body_iquat[bid],
                                   explicitinertial=True)
     try:
-        engine._recompile()
+        engine.recompile()
     except GaltonError:
         for element, attribute, value in reversed(undo):
             setattr(element, attribute, value)
@@ -75,9 +75,9 @@ def apply_contacts(engine: MujocoEngine, names: Sequence[str]) -> None:
     Spawned bodies follow the defaults where they were given none; a loaded model keeps
     its file's values except those set by ``update``.
     """
-    m, v = engine._model, engine._values
+    m, v = engine.model, engine.values
     for name in names:
-        e = engine._entities[name]
+        e = engine.entities[name]
         spawned = e.source == "spawn"
         default_friction, default_restitution = ms.default_surface(e.static, v)
         friction = default_friction if e.friction is None and spawned else e.friction
@@ -85,7 +85,7 @@ def apply_contacts(engine: MujocoEngine, names: Sequence[str]) -> None:
             else e.restitution
         if friction is None and restitution is None:
             continue
-        ms.write_contacts(m, e.geoms(), engine._geom_ids([name]), v, friction, restitution,
+        ms.write_contacts(m, e.geoms(), engine.geom_ids([name]), v, friction, restitution,
                           spawned)
 
 
@@ -94,15 +94,15 @@ def properties(engine: MujocoEngine, names: Sequence[str]) -> np.ndarray:
     static), the first geom's sliding friction (a link's own geoms only), and the nominal
     restitution: the one given, the default a spawned body follows, NaN for a model's own
     contacts (MuJoCo has no restitution as such)."""
-    m, ids = engine._model, engine._body_ids(names)
-    entities = [engine._entities[n] for n in names]
+    m, ids = engine.model, engine.body_ids(names)
+    entities = [engine.entities[n] for n in names]
     alone = np.array([e.source != "model" for e in entities], dtype=bool)  # no subtree
     mass = np.where(alone, m.body_mass[ids], m.body_subtreemass[ids])
     mass[[e.static for e in entities]] = np.nan
     geoms = mst.first_geoms(m, ids, alone)
     friction = np.full(len(ids), np.nan)  # no geom (a model may have none at all): NaN
     friction[geoms >= 0] = m.geom_friction[geoms[geoms >= 0], 0]
-    values = [restitution(e, engine._values) for e in entities]
+    values = [restitution(e, engine.values) for e in entities]
     return np.column_stack([mass, friction, np.array(values, dtype=float)])
 
 

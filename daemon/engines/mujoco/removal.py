@@ -30,22 +30,22 @@ if TYPE_CHECKING:
 def delete(engine: MujocoEngine, names: Sequence[str]) -> None:
     """Spawned bodies still of their kind go back to the pool, parked (no compile while
     they all fit); the others leave the spec, and one recompile follows."""
-    ids = engine._body_ids(names)
-    entities = [engine._entities[n] for n in names]
+    ids = engine.body_ids(names)
+    entities = [engine.entities[n] for n in names]
     for name, entity in zip(names, entities, strict=True):
         if entity.source == "link":
             raise InvalidArgumentError(f"entity {name!r} is a link of the model "
                                        f"{entity.model!r}: delete the model")
-    parked, removed = engine._pool.split(entities)
-    if removed and engine._models:
-        try_removing(engine._spec, removed)
+    parked, removed = engine.pool.split(entities)
+    if removed and engine.models:
+        try_removing(engine.spec, removed)
     for name, entity in zip(names, entities, strict=True):
         forget(engine, name, entity)
     if put_away(engine, parked, removed):
         try:
-            engine._recompile()
+            engine.recompile()
         except GaltonError as exc:
-            engine._broken = True  # the bodies are out of the spec, not of the model
+            engine.broken = True  # the bodies are out of the spec, not of the model
             raise OperationFailedError(
                 f"MuJoCo failed to recompile after a delete ({exc}); the world must be "
                 "reset") from exc
@@ -53,66 +53,66 @@ def delete(engine: MujocoEngine, names: Sequence[str]) -> None:
     else:
         chosen = {id(e) for e in parked}
         park = ids[[i for i, e in enumerate(entities) if id(e) in chosen]]
-        engine._pool_edited |= bool(len(park))
-        if engine._balance is not None:
-            engine._balance.forget(engine._model, engine._model.body_treeid[park])
-    mp.park_arrays(engine._model, engine._data, engine._index, park)
-    engine._wrenches.apply(engine._data, engine._ids)
+        engine.pool_edited |= bool(len(park))
+        if engine.balance is not None:
+            engine.balance.forget(engine.model, engine.model.body_treeid[park])
+    mp.park_arrays(engine.model, engine.data, engine.index, park)
+    engine.wrenches.apply(engine.data, engine.ids)
 
 
 def clear(engine: MujocoEngine) -> None:
     """An empty world at time 0; the pool stays warm: every spawned body is parked."""
-    engine._restart_looks()  # held balls get their sleep policy back: the model may stay
-    entities = list(engine._entities.values())
-    engine._entities.clear()
-    engine._wrenches.drop(None)
-    engine._diverged = False
-    engine._observed = None
-    if engine._models or engine._broken:
-        engine._build_empty()  # a model may bring more than bodies: start afresh
+    engine.restart_looks()  # held balls get their sleep policy back: the model may stay
+    entities = list(engine.entities.values())
+    engine.entities.clear()
+    engine.wrenches.drop(None)
+    engine.diverged = False
+    engine.observed = None
+    if engine.models or engine.broken:
+        engine.build_empty()  # a model may bring more than bodies: start afresh
         return
-    parked, removed = engine._pool.split(entities)
+    parked, removed = engine.pool.split(entities)
     if put_away(engine, parked, removed):
         try:
-            engine._recompile()
+            engine.recompile()
         except GaltonError:
-            engine._build_empty()
+            engine.build_empty()
             return
     else:
-        engine._pool_edited |= bool(parked)
-    mp.park_arrays(engine._model, engine._data, engine._index,
+        engine.pool_edited |= bool(parked)
+    mp.park_arrays(engine.model, engine.data, engine.index,
                    np.array([e.body.id for e in parked], dtype=np.int64))
-    mujoco.mj_resetData(engine._model, engine._data)
-    engine._reindex()
+    mujoco.mj_resetData(engine.model, engine.data)
+    engine.reindex()
 
 
 def put_away(engine: MujocoEngine, parked: Sequence[Entity],
              removed: Sequence[Entity]) -> bool:
     """Park what the pool takes and take the rest out of the spec; whether a recompile
     must follow."""
-    engine._pool.park(parked)
+    engine.pool.park(parked)
     if removed:
-        mp.remove_bodies(engine._spec, [e.body for e in removed], sweep(engine))
-        drop_assets(engine._spec, list(removed))
-    return bool(removed) or gravcomp_missing(engine._model, parked)
+        mp.remove_bodies(engine.spec, [e.body for e in removed], sweep(engine))
+        drop_assets(engine.spec, list(removed))
+    return bool(removed) or gravcomp_missing(engine.model, parked)
 
 
 def forget(engine: MujocoEngine, name: str, entity: Entity) -> None:
     """Strike an entity (with a model's links, joints and targets) from the engine's
     books, and its wrenches."""
     for gone in (name, *entity.parts):
-        del engine._entities[gone]
-        del engine._ids[gone]
-    engine._wrenches.drop([name, *entity.parts])
-    engine._joints.forget_model(name)
-    engine._watch = None
-    engine._parts.difference_update(entity.parts)
-    engine._models -= entity.source == "model"
+        del engine.entities[gone]
+        del engine.ids[gone]
+    engine.wrenches.drop([name, *entity.parts])
+    engine.joint_book.forget_model(name)
+    engine.watch = None
+    engine.parts.difference_update(entity.parts)
+    engine.models -= entity.source == "model"
 
 
 def sweep(engine: MujocoEngine) -> list[Any]:
     """The litter (see pool.Additions.bodies), handed over to be deleted."""
-    litter, engine._litter = engine._litter, []
+    litter, engine.litter = engine.litter, []
     return litter
 
 

@@ -75,7 +75,7 @@ class CameraRig:
 
     def __init__(self) -> None:
         self._gl: Any = None
-        self._model: mujoco.MjModel | None = None
+        self.model: mujoco.MjModel | None = None
         self._con: Any = None
         self._scene: Any = None
         self._option = _scene_option()
@@ -96,11 +96,11 @@ class CameraRig:
     def _free_context(self) -> None:
         if self._con is not None:
             self._con.free()
-        self._con = self._scene = self._model = None
+        self._con = self._scene = self.model = None
 
     def _ready(self, model: mujoco.MjModel, width: int, height: int) -> None:
         """The render context for this model, its buffer at least this large (current)."""
-        if self._model is not model:
+        if self.model is not model:
             self._free_context()
             self._con = mujoco.MjrContext(model, mujoco.mjtFontScale.mjFONTSCALE_100)
             mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN, self._con)
@@ -108,7 +108,7 @@ class CameraRig:
             self._scene = mujoco.MjvScene(model, maxgeom=model.ngeom + SCENE_MARGIN)
             self._scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = 0
             self._scene.flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = 0
-            self._model = model
+            self.model = model
         if width > self._con.offWidth or height > self._con.offHeight:
             mujoco.mjr_resizeOffscreen(max(width, self._con.offWidth),
                                        max(height, self._con.offHeight), self._con)

@@ -21,11 +21,11 @@ from typing import TYPE_CHECKING, Any
 
 import mujoco
 
-from galton.daemon.core.params import check_updates
 from galton.daemon.engines.mujoco import snapshot_arrays as arrays
 from galton.daemon.engines.mujoco import spec as ms
 from galton.daemon.engines.mujoco.entities import MUJOCO_ERRORS, Entity
 from galton.daemon.engines.mujoco.snapshot_books import read_books
+from galton.daemon.engines.params import check_updates
 from galton.protocol import InvalidArgumentError, OperationFailedError
 from galton.protocol.errors import brief
 
@@ -43,46 +43,46 @@ KEYS = frozenset({"format", "engine", "engine_version", "params", "spec", "memor
 
 # -- taking a snapshot ----------------------------------------------------------------------
 def snapshot(engine: MujocoEngine) -> dict[str, Any]:
-    if engine._broken:
+    if engine.broken:
         raise OperationFailedError("the MuJoCo world is broken (a failed step or delete); "
                                    "reset it before taking a snapshot")
-    if engine._pool_edited:
+    if engine.pool_edited:
         _recompile(engine)
-    m, d = engine._model, engine._data
+    m, d = engine.model, engine.data
     loads: dict[int, int] = {}  # id(Assets) -> its place in "loads"
     kinds: dict[tuple[Any, ...], int] = {}  # pool kind -> its place in "kinds"
-    entities = [_entity(name, e, loads, kinds) for name, e in engine._entities.items()]
+    entities = [_entity(name, e, loads, kinds) for name, e in engine.entities.items()]
     parked = [[kinds.setdefault(key, len(kinds)), [b.name for b in bodies]]
-              for key, bodies in engine._pool._parked.items()]
-    assets = {id(e.assets): e.assets for e in engine._entities.values() if e.assets}
+              for key, bodies in engine.pool._parked.items()]
+    assets = {id(e.assets): e.assets for e in engine.entities.values() if e.assets}
     return {
         "format": FORMAT, "engine": ENGINE, "engine_version": mujoco.__version__,
         "params": engine.get_params(), "spec": _xml(engine),
-        "memory": int(engine._spec.memory), "sizes": {s: int(getattr(m, s)) for s in SIZES},
-        "bodies": _body_order(engine._spec),
+        "memory": int(engine.spec.memory), "sizes": {s: int(getattr(m, s)) for s in SIZES},
+        "bodies": _body_order(engine.spec),
         "model": arrays.model_numbers(m), "data": arrays.data_numbers(m, d),
         "entities": entities,
         "loads": [{"assets": sorted([k, n] for k, n in assets[i].names),
                    "roots": assets[i].roots} for i in sorted(loads, key=loads.__getitem__)],
         "kinds": [_key(key) for key in kinds],
-        "pool": {"serial": engine._pool._serial, "parked": parked},
+        "pool": {"serial": engine.pool._serial, "parked": parked},
         "joints": {root: [i.to_wire() for i in infos]
-                   for root, infos in engine._joints.infos.items()},
+                   for root, infos in engine.joint_book.infos.items()},
         "targets": {n: [t.mode, t.target, t.kp, t.kd, t.max_effort]
-                    for n, t in engine._joints.targets.items()},
-        "wrenches": {n: arrays.pack(w) for n, w in engine._wrenches.held.items()},
-        "balance": None if engine._balance is None else engine._balance.books(),
-        "looks": {"diverged": engine._diverged, "crowded": engine._crowded,
-                  "steps_since_look": engine._steps_since_look},
+                    for n, t in engine.joint_book.targets.items()},
+        "wrenches": {n: arrays.pack(w) for n, w in engine.wrenches.held.items()},
+        "balance": None if engine.balance is None else engine.balance.books(),
+        "looks": {"diverged": engine.diverged, "crowded": engine.crowded,
+                  "steps_since_look": engine.steps_since_look},
     }
 
 
 def _xml(engine: MujocoEngine) -> str:
     """The spec as MJCF: 50 ms for a 500-ball board, so kept until the spec changes (a
     compile, a parameter, an update, a static body moved; pool edits recompile first)."""
-    if engine._xml is None:
-        engine._xml = engine._spec.to_xml()
-    return engine._xml
+    if engine.xml is None:
+        engine.xml = engine.spec.to_xml()
+    return engine.xml
 
 
 def _body_order(spec: mujoco.MjSpec) -> list[str]:
@@ -96,12 +96,12 @@ def _recompile(engine: MujocoEngine) -> None:
     bodies in the pool edit the compiled model alone (collisions, hence its bounding volume
     hierarchy). The bodies stay where they are in the model, so the whole data, sleep books
     included, and the balance guard's books are carried over exactly."""
-    numbers = arrays.data_numbers(engine._model, engine._data)
-    guard = None if engine._balance is None else engine._balance.books()
-    engine._recompile()
-    arrays.write_data_numbers(engine._model, engine._data, numbers)
-    if guard is not None and engine._balance is not None:
-        engine._balance.load(engine._model, guard)
+    numbers = arrays.data_numbers(engine.model, engine.data)
+    guard = None if engine.balance is None else engine.balance.books()
+    engine.recompile()
+    arrays.write_data_numbers(engine.model, engine.data, numbers)
+    if guard is not None and engine.balance is not None:
+        engine.balance.load(engine.model, guard)
 
 
 def _entity(name: str, e: Entity, loads: dict[int, int],
@@ -147,12 +147,12 @@ def restore(engine: MujocoEngine, data: Any) -> None:
         raise InvalidArgumentError(f"snapshot.model does not fit its spec: {exc}") from exc
     state = mujoco.MjData(model)
     arrays.write_data_numbers(model, state, data["data"])
-    engine._values, engine._spec = values, spec
-    engine._model, engine._data, engine._litter = model, state, []
-    engine._xml = data["spec"]  # compiles to this world as well as its own MJCF would
+    engine.values, engine.spec = values, spec
+    engine.model, engine.data, engine.litter = model, state, []
+    engine.xml = data["spec"]  # compiles to this world as well as its own MJCF would
     read_books(engine, data)
-    engine._workers = 0
-    engine._start_workers()
+    engine.workers = 0
+    engine.start_workers()
 
 
 def _check_header(data: Any) -> None:

@@ -30,12 +30,12 @@ def read_books(engine: MujocoEngine, data: dict[str, Any]) -> None:
     """The snapshot's books into the engine whose spec, model and data it now holds."""
     loads = [_load(i, load) for i, load in enumerate(_list(data["loads"], "loads"))]
     kinds = [_read_key(kind) for kind in _list(data["kinds"], "kinds")]
-    engine._entities = {}
+    engine.entities = {}
     for row in _list(data["entities"], "entities"):
-        name, entity = _read_entity(engine._spec, row, loads, kinds)
-        engine._entities[name] = entity
-    engine._parts = {n for n, e in engine._entities.items() if e.source == "link"}
-    engine._models = sum(e.source == "model" for e in engine._entities.values())
+        name, entity = _read_entity(engine.spec, row, loads, kinds)
+        engine.entities[name] = entity
+    engine.parts = {n for n, e in engine.entities.items() if e.source == "link"}
+    engine.models = sum(e.source == "model" for e in engine.entities.values())
     _pool(engine, data["pool"], kinds)
     _joints(engine, data["joints"], data["targets"])
     _wrenches(engine, data["wrenches"])
@@ -47,20 +47,20 @@ def read_books(engine: MujocoEngine, data: dict[str, Any]) -> None:
     steps = looks["steps_since_look"]
     if type(steps) is not int or not 0 <= steps < 1 << 31:
         raise InvalidArgumentError(f"snapshot.looks.steps_since_look is {brief(steps)}")
-    engine._diverged, engine._crowded = looks["diverged"], looks["crowded"]
-    engine._steps_since_look = steps
+    engine.diverged, engine.crowded = looks["diverged"], looks["crowded"]
+    engine.steps_since_look = steps
     try:
-        engine._reindex()  # writes the held targets and wrenches into the model and data
+        engine.reindex()  # writes the held targets and wrenches into the model and data
     except InvalidArgumentError:
         raise
     except (GaltonError, KeyError, IndexError) as exc:
         raise InvalidArgumentError(f"snapshot names what its world lacks: {exc}") from exc
     balance = data["balance"]
-    if (balance is None) != (engine._balance is None):
+    if (balance is None) != (engine.balance is None):
         raise InvalidArgumentError("snapshot.balance must be given exactly when "
                                    "mujoco.wake_balanced is on")
-    if engine._balance is not None:
-        engine._balance.load(engine._model, balance)
+    if engine.balance is not None:
+        engine.balance.load(engine.model, balance)
 
 
 def _list(value: Any, where: str) -> list[Any]:
@@ -178,24 +178,24 @@ def _pool(engine: MujocoEngine, value: Any, kinds: list[tuple[Any, ...]]) -> Non
     for pair in _list(row["parked"], "pool.parked"):
         if not isinstance(pair, list) or len(pair) != 2:
             raise InvalidArgumentError(f"snapshot.pool.parked holds {brief(pair)}")
-        bodies = [engine._spec.body(n) if isinstance(n, str) else None
+        bodies = [engine.spec.body(n) if isinstance(n, str) else None
                   for n in _list(pair[1], "pool.parked[]")]
         if any(b is None for b in bodies):
             raise InvalidArgumentError("snapshot.pool.parked names a body the spec lacks")
         parked[kinds[_index(pair[0], len(kinds), "pool.parked[].kind")]] = bodies
-    engine._pool._serial, engine._pool._parked = row["serial"], parked
+    engine.pool._serial, engine.pool._parked = row["serial"], parked
 
 
 def _joints(engine: MujocoEngine, infos: Any, targets: Any) -> None:
     if not isinstance(infos, dict) or not isinstance(targets, dict):
         raise InvalidArgumentError("snapshot.joints and snapshot.targets must be maps")
-    joints = engine._joints
+    joints = engine.joint_book
     try:
         joints.infos = {root: [JointInfo.from_wire(i) for i in _list(rows, "joints[]")]
                         for root, rows in infos.items()}
     except (TypeError, ValueError, KeyError, IndexError) as exc:
         raise InvalidArgumentError(f"snapshot.joints is malformed: {exc}") from exc
-    if set(joints.infos) - set(engine._entities):
+    if set(joints.infos) - set(engine.entities):
         raise InvalidArgumentError("snapshot.joints names a model the world lacks")
     joints.own = {i.name: i.damping for rows in joints.infos.values() for i in rows if i.scalar}
     joints.targets = {}
@@ -212,8 +212,8 @@ def _wrenches(engine: MujocoEngine, value: Any) -> None:
         raise InvalidArgumentError(f"snapshot.wrenches must be a map, got {brief(value)}")
     held = {}
     for name, packed in value.items():
-        if name not in engine._entities:
+        if name not in engine.entities:
             raise InvalidArgumentError(f"snapshot.wrenches names {brief(name)}, no entity")
         held[name] = arrays.unpack(packed, f"snapshot.wrenches[{name!r}]", arrays.F64,
                                    (6,)).copy()
-    engine._wrenches.held = held
+    engine.wrenches.held = held

@@ -25,17 +25,17 @@ def spawn(engine: MujocoEngine, groups: Sequence[BodyGroup]) -> None:
     """Bind parked bodies where the pool has enough of a group's kind; compile the other
     groups (with spare parked twins) in one recompile."""
     check_new(engine, [n for g in groups for n in g.names])
-    pooled, compiled = engine._pool.plan(groups, engine._values, engine._model.nbody,
-                                         len(engine._entities), engine._free_bodies())
+    pooled, compiled = engine.pool.plan(groups, engine.values, engine.model.nbody,
+                                         len(engine.entities), engine.free_bodies())
     if compiled:
         compile_groups(engine, compiled)
     for group, key in pooled:
         bind(engine, group, key)
     if pooled:
-        mp.refresh(engine._model, engine._data)
+        mp.refresh(engine.model, engine.data)
     for group in groups:
         if group.twists is not None and not group.static:
-            mst.write_twists(engine._data, engine._index, engine._body_ids(group.names),
+            mst.write_twists(engine.data, engine.index, engine.body_ids(group.names),
                              np.asarray(group.twists, dtype=float), None)
 
 
@@ -44,7 +44,7 @@ def check_new(engine: MujocoEngine, names: Sequence[str]) -> None:
     if len(set(names)) != len(names):
         raise InvalidArgumentError("MuJoCo rejected the change: a name is repeated")
     for name in names:
-        if name in engine._entities:  # a model's links are entities too
+        if name in engine.entities:  # a model's links are entities too
             raise NameNotUniqueError(f"an entity named {name!r} already exists")
         if name == WORLD or name.startswith(mp.PREFIX):
             raise InvalidArgumentError(f"the body name {name!r} is the MuJoCo engine's own "
@@ -53,42 +53,42 @@ def check_new(engine: MujocoEngine, names: Sequence[str]) -> None:
 
 def compile_groups(engine: MujocoEngine, compiled: Sequence[mp.Planned]) -> None:
     """Add the groups' bodies and spares, recompile; on any failure take them out."""
-    snapshot = engine._pool.snapshot()
-    additions = mp.Additions(engine._spec, engine._builders)
-    nbody, nv = engine._model.nbody, engine._model.nv
+    snapshot = engine.pool.snapshot()
+    additions = mp.Additions(engine.spec, engine.builders)
+    nbody, nv = engine.model.nbody, engine.model.nv
     try:
         for group, material, _, spares in compiled:
             additions.add(group, material)
             if spares:
-                additions.add(engine._pool.spare_group(group, spares), material, parked=True)
+                additions.add(engine.pool.spare_group(group, spares), material, parked=True)
             nbody += len(group) + spares
             nv += 0 if group.static else 6 * (len(group) + spares)
-        engine._compile(nbody, nv)
+        engine.compile(nbody, nv)
     except BaseException:
-        engine._pool.restore(snapshot)
+        engine.pool.restore(snapshot)
         additions.undo()
         raise
     made = iter(additions.bodies())
-    engine._litter += additions.litter
+    engine.litter += additions.litter
     for group, _, key, spares in compiled:
         for name, body in zip(group.names, next(made), strict=True):
-            engine._entities[name] = Entity(body, group.static, friction=group.friction,
+            engine.entities[name] = Entity(body, group.static, friction=group.friction,
                                             restitution=group.restitution, key=key)
         if spares and key is not None:
-            engine._pool.adopt(key, next(made))
-    engine._reindex()
+            engine.pool.adopt(key, next(made))
+    engine.reindex()
 
 
 def bind(engine: MujocoEngine, group: BodyGroup, key: mp.Key) -> None:
     """Give a group's names to parked bodies of its kind and release them: no compile."""
-    bodies = engine._pool.take(key, len(group))
+    bodies = engine.pool.take(key, len(group))
     poses = np.asarray(group.poses, dtype=float)
     mp.bind_spec(bodies, group.names, poses)
     for name, body in zip(group.names, bodies, strict=True):
-        engine._entities[name] = Entity(body, group.static, friction=group.friction,
+        engine.entities[name] = Entity(body, group.static, friction=group.friction,
                                         restitution=group.restitution, key=key)
-        engine._ids[name] = body.id
-    engine._watch = None
-    engine._pool_edited = True
-    mp.bind_arrays(engine._model, engine._data, engine._index, engine._body_ids(group.names),
+        engine.ids[name] = body.id
+    engine.watch = None
+    engine.pool_edited = True
+    mp.bind_arrays(engine.model, engine.data, engine.index, engine.body_ids(group.names),
                    poses)

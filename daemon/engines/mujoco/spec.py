@@ -15,7 +15,7 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from galton.daemon.core.params import ParamSpec, choice, flag, integer, number, vector
+from galton.daemon.engines.params import ParamSpec, choice, flag, integer, number, vector
 from galton.protocol import BodyGroup, InvalidArgumentError
 from galton.protocol.errors import brief
 

@@ -34,23 +34,23 @@ MIN_AWAKE = 10
 def step(engine: MujocoEngine, count: int) -> None:
     """MuJoCo's own errors in a step (its arena overflowing) leave the data unusable:
     the world reads as diverged until cleared."""
-    engine._warnings[ms.DIVERGENCE_WARNINGS] = 0
-    engine._observed = None  # the step makes what is observed anew (observed)
+    engine.warnings[ms.DIVERGENCE_WARNINGS] = 0
+    engine.observed = None  # the step makes what is observed anew (observed)
     while count > 0:
-        run = min(count, AWAKE_EVERY_STEPS - engine._steps_since_look % AWAKE_EVERY_STEPS)
+        run = min(count, AWAKE_EVERY_STEPS - engine.steps_since_look % AWAKE_EVERY_STEPS)
         try:
-            mujoco.mj_step(engine._model, engine._data, run)
+            mujoco.mj_step(engine.model, engine.data, run)
         except mujoco.FatalError as exc:
-            engine._broken = True
+            engine.broken = True
             raise OperationFailedError(f"MuJoCo failed in a step ({exc}); the world "
                                        "must be reset") from exc
         count -= run
-        engine._steps_since_look += run
-        if engine._steps_since_look % AWAKE_EVERY_STEPS == 0:
-            keep_drifting_awake(engine._model, engine._data)
-        if engine._steps_since_look == LOOK_EVERY_STEPS:
-            engine._look()
-    engine._diverged |= bool(engine._warnings[ms.DIVERGENCE_WARNINGS].any())
+        engine.steps_since_look += run
+        if engine.steps_since_look % AWAKE_EVERY_STEPS == 0:
+            keep_drifting_awake(engine.model, engine.data)
+        if engine.steps_since_look == LOOK_EVERY_STEPS:
+            engine.look()
+    engine.diverged |= bool(engine.warnings[ms.DIVERGENCE_WARNINGS].any())
 
 
 def keep_drifting_awake(m: mujoco.MjModel, d: mujoco.MjData) -> None:
@@ -74,38 +74,38 @@ def keep_drifting_awake(m: mujoco.MjModel, d: mujoco.MjData) -> None:
 def look(engine: MujocoEngine) -> None:
     """The periodic look: worker threads for a crowd, balls balanced on a crown. It
     costs about 40 µs, twice a small world's step, so never once per step."""
-    engine._steps_since_look = 0
-    engine._track_crowding()
-    if engine._balance is not None:
-        engine._balance.check(engine._model, engine._data)
+    engine.steps_since_look = 0
+    engine.track_crowding()
+    if engine.balance is not None:
+        engine.balance.check(engine.model, engine.data)
 
 
 def state_within(engine: MujocoEngine, max_position: float, max_speed: float) -> bool:
     """numpy over qpos, qvel and mocap (see state.within); MuJoCo's own warnings
     of a blow-up, or a world left half-changed by a failed delete, count as diverged."""
-    if engine._diverged or engine._broken:
+    if engine.diverged or engine.broken:
         return False
-    return mst.within(engine._data, engine._index, engine._watched(), max_position, max_speed)
+    return mst.within(engine.data, engine.index, engine.watched(), max_position, max_speed)
 
 
 def reset_dynamics(engine: MujocoEngine) -> None:
     """Forget warm starts; also clear what a divergence left beyond the entities' roots."""
-    m, d = engine._model, engine._data
+    m, d = engine.model, engine.data
     bad = ~np.isfinite(d.qpos)
     d.qpos[bad] = m.qpos0[bad]
     d.qvel[~np.isfinite(d.qvel)] = 0.0
     d.qacc_warmstart[:] = 0.0
     d.qacc[:] = 0.0
     mst.wake_all(m, d)
-    engine._observed = None
-    engine._diverged = False
+    engine.observed = None
+    engine.diverged = False
     restart_looks(engine)
 
 
 def restart_looks(engine: MujocoEngine) -> None:
     """The periodic looks start over, with a fresh balance guard: a rewound or cleared
     world replays its trajectory exactly."""
-    engine._steps_since_look = 0
-    if engine._balance is not None:
-        engine._balance.release_all(engine._model)
-        engine._balance = engine._balance_guard()
+    engine.steps_since_look = 0
+    if engine.balance is not None:
+        engine.balance.release_all(engine.model)
+        engine.balance = engine.balance_guard()

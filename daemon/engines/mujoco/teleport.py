@@ -24,8 +24,8 @@ if TYPE_CHECKING:
 def set_states(engine: MujocoEngine, names: Sequence[str], poses: np.ndarray | None,
                twists: np.ndarray | None) -> None:
     """Teleport bodies and/or set their world twists (see the module docstring)."""
-    ids = engine._body_ids(names)
-    kind = engine._index.kind[ids]
+    ids = engine.body_ids(names)
+    kind = engine.index.kind[ids]
     free, mocap, jointed = kind == FREE, kind == MOCAP, kind == JOINTED
     static = kind == STATIC
     poses = None if poses is None else np.asarray(poses, dtype=float)
@@ -36,41 +36,41 @@ def set_states(engine: MujocoEngine, names: Sequence[str], poses: np.ndarray | N
         raise InvalidArgumentError(f"entity {bad!r} is static: it cannot be given a "
                                    "non-zero twist")
     for row in np.flatnonzero(jointed).tolist():
-        mst.check_jointed(names[row], engine._entities[names[row]].initial_pose,
+        mst.check_jointed(names[row], engine.entities[names[row]].initial_pose,
                           None if poses is None else poses[row],
                           None if twists is None else twists[row])
-    d = engine._data
+    d = engine.data
     if poses is not None and twists is None and free.any():
         # A pose alone keeps the world-frame twist: MuJoCo holds a free body's spin in
         # its own frame, so it is read first and written back after the turn.
         twists = np.zeros((len(ids), 6))
-        twists[free] = mst.read_states(engine._model, d, engine._index, ids[free])[1]
+        twists[free] = mst.read_states(engine.model, d, engine.index, ids[free])[1]
     if poses is not None and free.any():
-        mst.write_free_poses(d, engine._index, ids[free], poses[free])
+        mst.write_free_poses(d, engine.index, ids[free], poses[free])
     if twists is not None and free.any():
-        mst.write_twists(d, engine._index, ids[free], twists[free],
+        mst.write_twists(d, engine.index, ids[free], twists[free],
                          None if poses is None else poses[free])
     if poses is not None and mocap.any():
-        mst.write_mocap_poses(d, engine._index, ids[mocap], poses[mocap])
+        mst.write_mocap_poses(d, engine.index, ids[mocap], poses[mocap])
     if poses is not None and static.any():
         move_static(engine, [names[i] for i in np.flatnonzero(static).tolist()], ids[static],
                     poses[static])
     if poses is not None and fixed.any():
-        mst.wake_all(engine._model, d)
+        mst.wake_all(engine.model, d)
     if poses is not None and static.any():
-        mst.place_static(engine._model, d)
+        mst.place_static(engine.model, d)
     if jointed.any():
-        mst.reset_joints(engine._model, d, ids[jointed])
+        mst.reset_joints(engine.model, d, ids[jointed])
 
 
 def move_static(engine: MujocoEngine, names: Sequence[str], ids: np.ndarray,
                 poses: np.ndarray) -> None:
     """Pose static bodies in the compiled model and in the spec (kept by recompiles)."""
-    engine._xml = None
+    engine.xml = None
     quats = mst.to_wxyz(poses[:, 3:])
-    engine._model.body_pos[ids] = poses[:, :3]
-    engine._model.body_quat[ids] = quats
+    engine.model.body_pos[ids] = poses[:, :3]
+    engine.model.body_quat[ids] = quats
     for row, name in enumerate(names):
-        body = engine._entities[name].body
+        body = engine.entities[name].body
         body.pos = poses[row, :3]
         body.quat = quats[row]

@@ -54,26 +54,26 @@ def set_wrenches(engine: MujocoEngine, names: Sequence[str], wrenches: np.ndarra
                  points: np.ndarray | None) -> None:
     """The centres of mass are computed from the current state (the data's were taken
     before the last step's integration)."""
-    ids = engine._body_ids(names)
+    ids = engine.body_ids(names)
     if points is not None:
-        mujoco.mj_kinematics(engine._model, engine._data)
-    engine._wrenches.hold(engine._data, names, ids, wrenches, points)
-    engine._wrenches.apply(engine._data, engine._ids)
+        mujoco.mj_kinematics(engine.model, engine.data)
+    engine.wrenches.hold(engine.data, names, ids, wrenches, points)
+    engine.wrenches.apply(engine.data, engine.ids)
 
 
 def clear_wrenches(engine: MujocoEngine, names: Sequence[str] | None) -> None:
     """Drop the named bodies' wrenches (NotFoundError for an unknown name), or all."""
     if names is not None:
-        engine._body_ids(names)
-    engine._wrenches.drop(names)
-    engine._wrenches.apply(engine._data, engine._ids)
+        engine.body_ids(names)
+    engine.wrenches.drop(names)
+    engine.wrenches.apply(engine.data, engine.ids)
 
 
 def restore_joints(engine: MujocoEngine) -> None:
     """Every loaded model's joints back as loaded, no targets held, no wrenches."""
-    joints = engine._joints
-    roots = np.fromiter((engine._ids[n] for n in joints.infos), dtype=np.int64,
+    joints = engine.joint_book
+    roots = np.fromiter((engine.ids[n] for n in joints.infos), dtype=np.int64,
                         count=len(joints.infos))
-    joints.restore(engine._model, engine._data, roots)
-    engine._wrenches.drop(None)
-    engine._wrenches.apply(engine._data, engine._ids)
+    joints.restore(engine.model, engine.data, roots)
+    engine.wrenches.drop(None)
+    engine.wrenches.apply(engine.data, engine.ids)

@@ -21,7 +21,6 @@ from typing import Any
 
 import numpy as np
 
-from galton.daemon.core.params import check_updates
 from galton.daemon.engines.base import (
     FEATURE_CONTACTS,
     FEATURE_DELETE,
@@ -42,7 +41,9 @@ from galton.daemon.engines.base import (
     FEATURE_UPDATE_RESTITUTION,
     FEATURE_UPDATE_RGBA,
     FEATURE_WRENCH,
+    ContactPoints,
     Engine,
+    RayHits,
 )
 from galton.daemon.engines.ode import spawn as spawning
 from galton.daemon.engines.ode import state as states
@@ -54,6 +55,7 @@ from galton.daemon.engines.ode.rays import RayCaster
 from galton.daemon.engines.ode.snapshot import Snapshots
 from galton.daemon.engines.ode.spawn import Body
 from galton.daemon.engines.ode.urdf import MODEL_FORMATS, load_urdf
+from galton.daemon.engines.params import check_updates
 from galton.protocol import (
     BODY_SHAPES,
     PROTOCOL_VERSION,
@@ -316,16 +318,15 @@ class OdeEngine(Snapshots, Engine):
 
     # -- perception ---------------------------------------------------------------------------
     def raycast(self, origins: np.ndarray, directions: np.ndarray, max_length: float
-                ) -> tuple[np.ndarray, list[str], np.ndarray, np.ndarray, np.ndarray]:
-        return self._rays.cast(origins, directions, max_length)
+                ) -> RayHits:
+        return RayHits(*self._rays.cast(origins, directions, max_length))
 
     def contacts(self, names: Sequence[str] | None
-                 ) -> tuple[list[str], list[str], np.ndarray, np.ndarray, np.ndarray,
-                            np.ndarray]:
+                 ) -> ContactPoints:
         wanted = None if names is None else set(names)
         if wanted is not None:
             self._lookup(list(wanted))
-        return self._collider.report(wanted)
+        return ContactPoints(*self._collider.report(wanted))
 
     # -- models and joints (joints.py, urdf.py) -----------------------------------------------
     def load_model(self, fmt: str, text: str | None, path: str | None,

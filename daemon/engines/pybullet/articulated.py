@@ -42,13 +42,13 @@ class Articulated:
     """Models, links, joints, targets and wrenches (mixed into PybulletEngine)."""
 
     _bc: BulletClient
-    _bodies: dict[str, Body]
+    bodies: dict[str, Body]
     _maker: BodyMaker
     _values: dict[str, Any]
     _batches: itertools.count[int]
     _change: Callable[..., Any]
-    _robots: Robots
-    _frames: dict[str, Offset]  # roots whose inertial frame is not their link frame
+    robots: Robots
+    frames: dict[str, Offset]  # roots whose inertial frame is not their link frame
 
     if TYPE_CHECKING:
         def _read(self, ids: list[int]) -> tuple[np.ndarray, np.ndarray]: ...
@@ -56,7 +56,7 @@ class Articulated:
 
     def _uid_of(self, name: str) -> int:
         try:
-            return self._bodies[name].uid
+            return self.bodies[name].uid
         except KeyError:
             raise NotFoundError(f"no entity named {name!r} in the PyBullet world") from None
 
@@ -73,20 +73,20 @@ class Articulated:
         except BaseException:
             self._maker.remove(ids)
             for name in roots:
-                self._bodies.pop(name, None)
-                self._frames.pop(name, None)
-            self._robots.forget(roots)
+                self.bodies.pop(name, None)
+                self.frames.pop(name, None)
+            self.robots.forget(roots)
             raise
 
     def _adopt_model(self, fmt: str, ids: list[int], prefix: str, text: str,
                      path: str | None, fixed: bool, roots: list[str]) -> list[EntityInfo]:
         """Name the loaded bodies and their links, refuse names in use, register them
         (appending each root to ``roots`` as it is registered)."""
-        taken = set(self._bodies) | set(self._robots.links)
+        taken = set(self.bodies) | set(self.robots.links)
         names = models.body_names(self._bc, fmt, ids, prefix, taken)
         file = facts(fmt, text)
         links = models.link_names(self._bc, ids, names, prefix, taken, file)
-        joints = self._robots.joint_names()
+        joints = self.robots.joint_names()
         batch, infos = next(self._batches), []
         for index, (uid, name) in enumerate(zip(ids, names, strict=True)):
             floating = self._bc.getDynamicsInfo(uid, -1)[0] > 0 and not fixed
@@ -101,10 +101,10 @@ class Articulated:
             body.model = Model(fmt, text, path, index,
                                link_masses(self._bc, uid, body.links),
                                (poses[0].tolist(), twists[0].tolist()), fixed_base=fixed)
-            self._robots.add(model)
+            self.robots.add(model)
             offset = base_offset(self._bc, uid)
             if offset is not None:
-                self._frames[name] = offset
+                self.frames[name] = offset
             infos.append(models.entity_info(self._bc, name, body, body.model))
             infos.extend(models.link_info(self._bc, uid, j, link, name)
                          for j, link in enumerate(model.links) if link is not None)
@@ -115,30 +115,30 @@ class Articulated:
         body = models.model_body(self._bc, self._change,
                                  self._values["pybullet.ccd_swept_sphere_radius"], uid, batch)
         free_motors(self._bc, uid)
-        self._bodies[name] = body
+        self.bodies[name] = body
         return body
 
     # -- links as entities ----------------------------------------------------------------
-    def _link_states(self, names: Sequence[str], rows: list[int], poses: np.ndarray,
+    def link_states(self, names: Sequence[str], rows: list[int], poses: np.ndarray,
                      twists: np.ndarray) -> None:
         """Put the frames of these links (at ``rows`` of the arrays): one getLinkStates
         per model."""
         groups: dict[str, tuple[list[int], list[int]]] = {}
         for k in rows:
-            root, link = self._robots.links[names[k]]
+            root, link = self.robots.links[names[k]]
             group = groups.setdefault(root, ([], []))
             group[0].append(link)
             group[1].append(k)
         for root, (links, order) in groups.items():
             poses[order], twists[order] = link_states(self._bc, self._uid_of(root), links)
 
-    def _to_centres(self, names: Sequence[str], poses: np.ndarray | None,
+    def to_centres(self, names: Sequence[str], poses: np.ndarray | None,
                     twists: np.ndarray | None) -> tuple[np.ndarray | None, np.ndarray | None]:
         """Link-frame states of offset roots as PyBullet's centre-of-mass ones."""
         poses = None if poses is None else np.array(poses, dtype=float)
         twists = None if twists is None else np.array(twists, dtype=float)
-        rows = [k for k, name in enumerate(names) if name in self._frames]
-        offsets = [self._frames[names[k]] for k in rows]
+        rows = [k for k, name in enumerate(names) if name in self.frames]
+        offsets = [self.frames[names[k]] for k in rows]
         turns = poses[rows, 3:] if poses is not None else self.get_states(
             [names[k] for k in rows])[0][:, 3:]
         some_poses = None if poses is None else poses[rows]
@@ -151,14 +151,14 @@ class Articulated:
         return poses, twists
 
     def _link_properties(self, name: str) -> tuple[float, float, float]:
-        root, link = self._robots.links[name]
+        root, link = self.robots.links[name]
         info = self._bc.getDynamicsInfo(self._uid_of(root), link)
         return float(info[0]), float(info[1]), float(info[5])
 
-    def _joints_finite(self) -> bool:
+    def joints_finite(self) -> bool:
         """Whether every model's joint positions and velocities are finite (a welded
         model's links diverge where no base shows it)."""
-        for root, model in self._robots.models.items():
+        for root, model in self.robots.models.items():
             if model.indices:
                 states = self._bc.getJointStates(self._uid_of(root), model.indices)
                 if not np.isfinite([value for s in states for value in s[:2]]).all():
@@ -167,33 +167,33 @@ class Articulated:
 
     # -- joints ---------------------------------------------------------------------------
     def joints(self) -> list[JointInfo]:
-        return self._robots.joints()
+        return self.robots.joints()
 
     def get_joint_states(self, names: Sequence[str]
                          ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        return self._robots.read(self._bc, self._uid_of, names)
+        return self.robots.read(self._bc, self._uid_of, names)
 
     def set_joint_states(self, names: Sequence[str], positions: np.ndarray,
                          velocities: np.ndarray | None) -> None:
-        self._robots.write(self._bc, self._uid_of, names, np.asarray(positions, float),
+        self.robots.write(self._bc, self._uid_of, names, np.asarray(positions, float),
                            None if velocities is None else np.asarray(velocities, float))
 
     def set_joint_targets(self, names: Sequence[str], mode: str, targets: np.ndarray,
                           kp: np.ndarray, kd: np.ndarray, max_effort: np.ndarray) -> None:
         arrays = (np.asarray(a, float) for a in (targets, kp, kd, max_effort))
-        self._robots.hold(names, mode, *arrays)
+        self.robots.hold(names, mode, *arrays)
 
     def set_wrenches(self, names: Sequence[str], wrenches: np.ndarray,
                      points: np.ndarray | None) -> None:
-        self._robots.check_entities(self._bodies, names)
-        self._robots.hold_wrenches(self._bc, self._uid_of, names, np.asarray(wrenches, float),
+        self.robots.check_entities(self.bodies, names)
+        self.robots.hold_wrenches(self._bc, self._uid_of, names, np.asarray(wrenches, float),
                                    None if points is None else np.asarray(points, float))
 
     def clear_wrenches(self, names: Sequence[str] | None) -> None:
         if names is None:
-            self._robots.wrenches.clear()
+            self.robots.wrenches.clear()
         for name in names or ():
-            self._robots.wrenches.pop(name, None)
+            self.robots.wrenches.pop(name, None)
 
     def restore_joints(self) -> None:
-        self._robots.restore(self._bc, self._uid_of)
+        self.robots.restore(self._bc, self._uid_of)

@@ -47,7 +47,6 @@ import numpy as np
 import pybullet
 from pybullet_utils.bullet_client import BulletClient
 
-from galton.daemon.core.params import check_updates
 from galton.daemon.engines.base import (
     FEATURE_CONTACTS,
     FEATURE_DELETE,
@@ -72,6 +71,7 @@ from galton.daemon.engines.base import (
     Engine,
     native_output_silenced,
 )
+from galton.daemon.engines.params import check_updates
 from galton.daemon.engines.pybullet import props as bodyprops
 from galton.daemon.engines.pybullet import rebuild
 from galton.daemon.engines.pybullet import spawn as spawning
@@ -112,24 +112,24 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
         self._closed = False
         bc = self._bc
         # Bound once: BulletClient builds a new functools.partial on every attribute access.
-        self._get_pose = bc.getBasePositionAndOrientation
-        self._get_velocity = bc.getBaseVelocity
-        self._reset_pose = bc.resetBasePositionAndOrientation
-        self._reset_velocity = bc.resetBaseVelocity
+        self.get_pose = bc.getBasePositionAndOrientation
+        self.get_velocity = bc.getBaseVelocity
+        self.reset_pose = bc.resetBasePositionAndOrientation
+        self.reset_velocity = bc.resetBaseVelocity
         self._change = bc.changeDynamics
         self._step = bc.stepSimulation
         self._shapes = ShapeCache(bc)
-        self._bodies: dict[str, _Body] = {}
+        self.bodies: dict[str, _Body] = {}
         self._maker = BodyMaker(bc)
         self._values: dict[str, Any] = {name: spec.default for name, spec in SPECS.items()}
         self._removed = 0  # bodies removed since resetSimulation last ran
-        self._held: dict[str, rebuild.Held] = {}  # states a rebuild could not set bit for bit
+        self.held: dict[str, rebuild.Held] = {}  # states a rebuild could not set bit for bit
         # Poses given to PyBullet (spawn, set_states) since the last step: a rebuild sets
         # them again as given, which reading them back (a rotation matrix) cannot promise.
-        self._given: dict[str, list[float]] = {}
+        self.given: dict[str, list[float]] = {}
         self._batches = itertools.count()  # spawn groups and model loads, in order
-        self._robots = Robots()  # models' links, joints, targets, held wrenches
-        self._frames: dict[str, Offset] = {}  # roots whose inertial frame is offset
+        self.robots = Robots()  # models' links, joints, targets, held wrenches
+        self.frames: dict[str, Offset] = {}  # roots whose inertial frame is offset
         self.rebuilds = 0
         self._configure_world()
 
@@ -168,7 +168,7 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
     # -- bodies ---------------------------------------------------------------------------
     @engine_call
     def spawn(self, groups: Sequence[BodyGroup]) -> None:
-        taken = [n for g in groups for n in g.names if n in self._bodies]
+        taken = [n for g in groups for n in g.names if n in self.bodies]
         if taken:
             raise NameNotUniqueError(f"an entity named {taken[0]!r} already exists")
         made: list[int] = []
@@ -180,9 +180,9 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
         except BaseException:
             self._maker.remove(made)
             raise
-        self._bodies.update(bodies)
+        self.bodies.update(bodies)
         for group in groups:
-            self._given.update(zip(group.names, np.asarray(
+            self.given.update(zip(group.names, np.asarray(
                 group.poses, dtype=float).reshape(-1, POSE_WIDTH).tolist(), strict=True))
 
     def _spawn_group(self, group: BodyGroup, made: list[int], batch: int,
@@ -204,9 +204,9 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
             group.twists, dtype=float).reshape(-1, TWIST_WIDTH).tolist()
         for k, uid in enumerate(ids):
             if redo.turned[k]:
-                self._reset_pose(uid, poses[k][:3], poses[k][3:])
+                self.reset_pose(uid, poses[k][:3], poses[k][3:])
             if twists is not None:
-                self._reset_velocity(uid, twists[k][:3], twists[k][3:])
+                self.reset_velocity(uid, twists[k][:3], twists[k][3:])
             self._change(uid, -1, **dynamics)
         self._set_margin(ids[0], group.shape, size)
         return spawning.books(group, ids, size, mass, (friction, restitution), batch, redo)
@@ -223,31 +223,31 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
 
     @engine_call
     def delete(self, names: Sequence[str]) -> None:
-        bodies = self._lookup(names)
+        bodies = self.lookup(names)
         self._maker.remove([b.uid for b in bodies])
         self._removed += len(bodies)
         for name in names:
-            del self._bodies[name]
-            self._held.pop(name, None)
-            self._given.pop(name, None)
-            self._frames.pop(name, None)
-        self._robots.forget(names)
+            del self.bodies[name]
+            self.held.pop(name, None)
+            self.given.pop(name, None)
+            self.frames.pop(name, None)
+        self.robots.forget(names)
         # removeBody keeps about 0.9 kB per body (measured with shared shapes) until
         # resetSimulation: an empty world is reset for free, a fuller one rebuilt now and then.
-        if not self._bodies:
+        if not self.bodies:
             self.clear()
-        elif rebuild.due(self._removed, self._bodies):
+        elif rebuild.due(self._removed, self.bodies):
             self._rebuild()
 
     @engine_call
     def clear(self) -> None:
         """resetSimulation: the only call that frees PyBullet's collision shapes."""
         self._bc.resetSimulation()
-        self._bodies.clear()
-        self._held.clear()
-        self._given.clear()
+        self.bodies.clear()
+        self.held.clear()
+        self.given.clear()
         self._removed = 0
-        self._robots, self._frames = Robots(), {}
+        self.robots, self.frames = Robots(), {}
         self._maker.forget()
         self._shapes.forget()
         self._configure_world()
@@ -258,12 +258,12 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
         contact points and their warm-start impulses across a teleport, so a rewound world
         would otherwise not replay its first run, and would replay it differently after a
         longer run."""
-        if self._bodies:
+        if self.bodies:
             self._rebuild()
 
     @engine_call
     def update(self, names: Sequence[str], props: BodyProperties) -> None:
-        bodies = self._lookup(names)
+        bodies = self.lookup(names)
         if props.mass is not None:
             static = [n for n, b in zip(names, bodies, strict=True) if b.static]
             if static:
@@ -282,11 +282,11 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
         bodyprops.edit_model(self._bc, self._change, body, props)
 
     def _owned(self) -> set[int]:
-        return {b.uid for b in self._bodies.values()}
+        return {b.uid for b in self.bodies.values()}
 
-    def _lookup(self, names: Sequence[str]) -> list[_Body]:
+    def lookup(self, names: Sequence[str]) -> list[_Body]:
         try:
-            return [self._bodies[n] for n in names]
+            return [self.bodies[n] for n in names]
         except KeyError as exc:
             raise NotFoundError(f"no entity named {exc.args[0]!r} in the PyBullet world") from None
 
@@ -298,11 +298,11 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
 
     def bounds(self, names: Sequence[str]) -> np.ndarray:
         """PyBullet's own box around each body's (or model link's) collision shapes."""
-        links = self._robots.links
+        links = self.robots.links
         rows = np.empty((len(names), 6))
         for row, name in enumerate(names):
             root, link = links.get(name, (name, -1))
-            [body] = self._lookup([root])
+            [body] = self.lookup([root])
             low, high = self._bc.getAABB(body.uid, link)
             rows[row] = [*low, *high]
         return rows
@@ -323,10 +323,10 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
         """stepSimulation alone, unless targets or wrenches are held: then they are
         applied before each step (they last one step in PyBullet)."""
         step = self._step
-        self._held.clear()
-        self._given.clear()
-        if self._robots.busy():
-            actuate, bc, uid_of, dt = self._robots.actuate, self._bc, self._uid_of, \
+        self.held.clear()
+        self.given.clear()
+        if self.robots.busy():
+            actuate, bc, uid_of, dt = self.robots.actuate, self._bc, self._uid_of, \
                 self.timestep
             for _ in range(count):
                 actuate(bc, uid_of, dt)
@@ -343,10 +343,10 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
     def properties(self, names: Sequence[str]) -> np.ndarray:
         """Spawned bodies from what the engine last gave PyBullet (getDynamicsInfo reports
         a rigid body's restitution as 0); models from PyBullet, the mass summed over links."""
-        links = self._robots.links
-        self._lookup([name for name in names if name not in links])  # NotFound for others
+        links = self.robots.links
+        self.lookup([name for name in names if name not in links])  # NotFound for others
         rows = [self._link_properties(name) if name in links
-                else self._properties(self._bodies[name]) for name in names]
+                else self._properties(self.bodies[name]) for name in names]
         return np.array(rows, dtype=float).reshape(len(rows), 3)
 
     def _properties(self, body: _Body) -> tuple[float, float, float]:
@@ -382,7 +382,7 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
         self._restore(data)
 
     def entity_names(self) -> list[str]:
-        return [*self._bodies, *self._robots.links]
+        return [*self.bodies, *self.robots.links]
 
     @engine_call
     def clone(self) -> PybulletEngine:

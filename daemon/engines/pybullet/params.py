@@ -13,7 +13,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
-from galton.daemon.core.params import ParamSpec, flag, integer, number, vector
+from galton.daemon.engines.params import ParamSpec, flag, integer, number, vector
 from galton.daemon.engines.pybullet.shapes import margin_for
 
 if TYPE_CHECKING:
@@ -91,7 +91,7 @@ class Parameters:
 
     # What it uses of the engine it is a part of (PybulletEngine sets them).
     _bc: BulletClient
-    _bodies: dict[str, Body]
+    bodies: dict[str, Body]
     _values: dict[str, Any]
     _change: Callable[..., Any]
 
@@ -110,7 +110,7 @@ class Parameters:
             self._bc.setPhysicsEngineParameter(**world)
         if "gravity" in values:
             self._bc.setGravity(*values["gravity"])
-        bodies = list(self._bodies.values())
+        bodies = list(self.bodies.values())
         if values.keys() & SURFACE_DEFAULTS:
             self._follow_surface_defaults(bodies, values)
         if "pybullet.ccd_swept_sphere_radius" in values:

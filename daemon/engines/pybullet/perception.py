@@ -9,7 +9,7 @@ from collections.abc import Sequence
 import numpy as np
 from pybullet_utils.bullet_client import BulletClient
 
-from galton.daemon.engines.base import CameraView
+from galton.daemon.engines.base import CameraView, ContactPoints, RayHits
 from galton.daemon.engines.pybullet import contacts as pybullet_contacts
 from galton.daemon.engines.pybullet import rays as pybullet_rays
 from galton.daemon.engines.pybullet import render as pybullet_render
@@ -23,11 +23,11 @@ class Perception:
     """render, raycast and contacts over the engine's books of bodies and models."""
 
     _bc: BulletClient
-    _bodies: dict[str, Body]
-    _robots: Robots
+    bodies: dict[str, Body]
+    robots: Robots
 
     def _codes(self) -> dict[int, str]:
-        return pybullet_render.entity_codes(self._bc, self._bodies, self._robots)
+        return pybullet_render.entity_codes(self._bc, self.bodies, self.robots)
 
     @engine_call
     def render(self, cameras: Sequence[CameraView]
@@ -37,17 +37,17 @@ class Perception:
 
     @engine_call
     def raycast(self, origins: np.ndarray, directions: np.ndarray, max_length: float
-                ) -> pybullet_rays.Rays:
+                ) -> RayHits:
         """rayTestBatch, hits on spawned primitives made exact (rays.py)."""
         primitives = {pybullet_render.code(body.uid, -1): (body.shape, body.size)
-                      for body in self._bodies.values() if body.shape in EXACT}
-        return pybullet_rays.raycast(self._bc, self._codes(), primitives, origins,
-                                     directions, max_length)
+                      for body in self.bodies.values() if body.shape in EXACT}
+        return RayHits(*pybullet_rays.raycast(self._bc, self._codes(), primitives, origins,
+                                              directions, max_length))
 
     @engine_call
-    def contacts(self, names: Sequence[str] | None) -> pybullet_contacts.Contacts:
+    def contacts(self, names: Sequence[str] | None) -> ContactPoints:
         """getContactPoints of the last step, normals from the first entity to the second."""
         if names is not None:
-            self._robots.check_entities(self._bodies, names)
+            self.robots.check_entities(self.bodies, names)
         wanted = None if names is None else set(names)
-        return pybullet_contacts.contacts(self._bc, self._codes(), wanted)
+        return ContactPoints(*pybullet_contacts.contacts(self._bc, self._codes(), wanted))

@@ -272,14 +272,14 @@ class Rebuilding:
 
     # What it uses of the engine it is a part of (PybulletEngine sets and defines them).
     _bc: BulletClient
-    _bodies: dict[str, Body]
-    _given: dict[str, list[float]]
-    _held: dict[str, Held]
+    bodies: dict[str, Body]
+    given: dict[str, list[float]]
+    held: dict[str, Held]
     _maker: BodyMaker
-    _reset_pose: Callable[..., Any]
-    _reset_velocity: Callable[..., Any]
-    _robots: Robots  # models' joints, targets and wrenches: kept, by name, across a rebuild
-    _frames: dict[str, Offset]
+    reset_pose: Callable[..., Any]
+    reset_velocity: Callable[..., Any]
+    robots: Robots  # models' joints, targets and wrenches: kept, by name, across a rebuild
+    frames: dict[str, Offset]
     rebuilds: int
 
     if TYPE_CHECKING:
@@ -298,10 +298,10 @@ class Rebuilding:
 
     def _plan(self) -> Plan:
         """What a rebuild makes the world again from, read from the world as it is."""
-        kept = dict(self._bodies)
-        return Plan(kept, read_states(self._bc, kept, self._given, self._held),
-                    set(self._given), self._robots, self._frames,
-                    self._robots.snapshot(self._bc, self._uid_of))
+        kept = dict(self.bodies)
+        return Plan(kept, read_states(self._bc, kept, self.given, self.held),
+                    set(self.given), self.robots, self.frames,
+                    self.robots.snapshot(self._bc, self._uid_of))
 
     def _make_again(self, plan: Plan, check: Callable[[], None] | None = None) -> None:
         """A new world holding what ``plan`` describes: the same calls, in the same order,
@@ -316,10 +316,10 @@ class Rebuilding:
                 self._remake(names, kept, states)
         if check is not None:
             check()
-        self._robots, self._frames = plan.robots, plan.frames
+        self.robots, self.frames = plan.robots, plan.frames
         plan.robots.put_back(self._bc, self._uid_of, plan.joints)
-        self._held = settle(self._bc, self._bodies, states, plan.exact)
-        self._given = {name: states[name][0] for name in plan.exact}
+        self.held = settle(self._bc, self.bodies, states, plan.exact)
+        self.given = {name: states[name][0] for name in plan.exact}
         self.rebuilds += 1
 
     def _remake(self, names: list[str], kept: dict[str, Body],
@@ -336,7 +336,7 @@ class Rebuilding:
             body.follows_friction = old.follows_friction
             body.follows_restitution = old.follows_restitution
             body.turned, body.rgba = old.turned, old.rgba
-        self._bodies.update(bodies)
+        self.bodies.update(bodies)
 
     def _reload(self, names: list[str], kept: dict[str, Body],
                 states: dict[str, State]) -> None:
@@ -372,5 +372,5 @@ class Rebuilding:
         self._edit_model(body, model.edits)
         if state != model.loaded:
             pose, twist = state
-            self._reset_pose(uid, pose[:3], pose[3:])
-            self._reset_velocity(uid, twist[:3], twist[3:])
+            self.reset_pose(uid, pose[:3], pose[3:])
+            self.reset_velocity(uid, twist[:3], twist[3:])

@@ -45,11 +45,11 @@ class Snapshots:
     """The engine's part that takes and restores snapshots (mixed into PybulletEngine)."""
 
     _bc: BulletClient
-    _bodies: dict[str, Body]
+    bodies: dict[str, Body]
     _values: dict[str, Any]
     _batches: itertools.count[int]
-    _robots: Robots
-    _frames: dict[str, Offset]
+    robots: Robots
+    frames: dict[str, Offset]
 
     if TYPE_CHECKING:
         def _plan(self) -> Plan: ...
@@ -60,7 +60,7 @@ class Snapshots:
         plan = self._plan()
         data = snapformat.encode(plan, self._values, self._next_batch(),
                                  importlib.metadata.version("pybullet"))
-        if canonical and self._bodies:
+        if canonical and self.bodies:
             self._make_again(plan)
         return data
 
@@ -96,18 +96,18 @@ class Snapshots:
         """After a snapshot's bodies are made, before its joints are set: every body is
         there, and each articulation fits the model its text made; the roots' inertial
         offsets are read from the bodies made (as a load reads them)."""
-        missing = [name for name in plan.bodies if name not in self._bodies]
+        missing = [name for name in plan.bodies if name not in self.bodies]
         if missing:
             raise InvalidArgumentError(f"the snapshot's model body {missing[0]!r} is not "
                                        "among the bodies its model text makes")
         for root, model in plan.robots.models.items():
-            uid = self._bodies[root].uid
-            joints = self._bodies[root].links
+            uid = self.bodies[root].uid
+            joints = self.bodies[root].links
             if len(model.links) != joints or any(
                     self._bc.getJointInfo(uid, j)[2] not in SCALAR for j in model.indices):
                 raise InvalidArgumentError(f"the snapshot's joints of model {root!r} do not "
                                            "fit the model its text makes")
-        for name, body in self._bodies.items():
+        for name, body in self.bodies.items():
             if body.model is not None and (
                     offset := base_offset(self._bc, body.uid)) is not None:
                 plan.frames[name] = offset

@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from galton.daemon.core.params import check_updates
+from galton.daemon.engines.params import check_updates
 from galton.daemon.engines.pybullet import snapshot_data as sd
 from galton.daemon.engines.pybullet.joints import Articulation
 from galton.daemon.engines.pybullet.models import MODEL_FORMATS
