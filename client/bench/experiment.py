@@ -30,7 +30,7 @@ from galton.client.bench.trial import (
     run_trial,
 )
 from galton.client.sdk.client import Client
-from galton.client.view.recording import SUFFIX as RECORDING_SUFFIX
+from galton.client.sdk.recording import SUFFIX as RECORDING_SUFFIX
 from galton.protocol import ENGINE_NAMES, GaltonError, InvalidArgumentError
 from galton.protocol.errors import did_you_mean
 

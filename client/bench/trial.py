@@ -19,7 +19,7 @@ from galton.analysis.records import TrialRecord
 from galton.client.bench.build import ball_group, ball_names, board_groups
 from galton.client.bench.defaults import DEFAULT_MAX_SIM_TIME_S
 from galton.client.sdk.client import Client, States
-from galton.client.view.recording import Recorder
+from galton.client.sdk.recording import Recorder
 from galton.protocol import Telemetry
 
 DEFAULT_CHECK_INTERVAL_S = 0.5

@@ -25,7 +25,7 @@ if TYPE_CHECKING:  # numpy, the SDK and viser load when a command runs, not for 
 commands = typer.Typer()
 
 PANEL = "Streams"
-RECORDING_SUFFIX = ".npz"  # galton.client.view.recording.SUFFIX
+RECORDING_SUFFIX = ".npz"  # galton.client.sdk.recording.SUFFIX
 Point = tuple[float, float, float]
 
 
@@ -139,7 +139,7 @@ def record(ctx: typer.Context,
         signal.signal(signum, lambda *_: stop.set())
 
     def go() -> None:
-        from galton.client.view.recording import Recorder
+        from galton.client.sdk.recording import Recorder
         with target.client() as client, Recorder(client, out, rate) as recorder:
             typer.echo(f"galton-client record: recording to {out}", err=True)
             stop.wait(seconds if seconds > 0 else None)

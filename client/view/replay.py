@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import viser
 
-from galton.client.view.recording import Recording, recordings_in
+from galton.client.sdk.recording import Recording, recordings_in
 from galton.client.view.scene import WorldDrawing, framing
 
 FRAME_PERIOD_S = 1 / 30

@@ -12,7 +12,7 @@ import pytest
 from cli_support import invoke, run, target_of
 
 from galton.client import Client, EmbeddedDaemon, plane, spheres
-from galton.client.view.recording import Recorder, Recording, recordings_in
+from galton.client.sdk.recording import Recorder, Recording, recordings_in
 from galton.protocol import InvalidArgumentError
 
 viser = pytest.importorskip("viser", reason="the [view] extra is not installed")
