@@ -1,4 +1,5 @@
-"""Every operation of the protocol, declared once: its arguments, and what it does to a world.
+"""Every operation of the protocol, declared once: its request (protocol/requests.py), and
+what it does to a world.
 
 The daemon refuses an argument not declared here (INVALID_ARGUMENT, with a "did you mean"),
 the fuzz harness generates requests from these declarations, and docs/protocol.md is held
@@ -17,11 +18,14 @@ to them by a test. Each argument's ``kind`` names the value it takes on the wire
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
+import msgspec
+
+from galton.protocol import requests as rq
 from galton.protocol.errors import UnknownOperationError, did_you_mean
-from galton.protocol.vocabulary import ENGINE_NAMES, TARGET_MODES, check_fields
+from galton.protocol.vocabulary import check_fields
 
 ARG_KINDS = ("number", "count", "string", "bool", "names", "map", "groups", "poses", "twists",
              "choice", "values", "wrenches", "points", "blob", "cameras")
@@ -44,6 +48,18 @@ class Arg:
             raise ValueError(f"argument {self.name}: unknown kind {self.kind!r}")
 
 
+def args_of(declared: type[rq.Args]) -> tuple[Arg, ...]:
+    """The argument table of a declared request (every field but ``world``)."""
+    found = []
+    for spec in msgspec.structs.fields(declared):
+        if spec.name == WORLD_ARG:
+            continue
+        kind, choices, long_text = rq.field_kind(declared, spec.name)
+        found.append(Arg(spec.name, kind, required=spec.required, choices=choices,
+                         long_text=long_text))
+    return tuple(found)
+
+
 # A client's timeout for a long-running operation (one that steps the world) by default.
 LONG_RUNNING_TIMEOUT_S = 600.0
 
@@ -60,11 +76,21 @@ class Operation:
     """
 
     name: str
-    args: tuple[Arg, ...] = ()
+    request: type[rq.Args] = rq.NoArgs
     mutates: bool = False
     steps: bool = False
     fast: bool = False
     timeout_floor_s: float = 0.0
+    reply: type[rq.Reply] | None = None  # its result map's declaration, where declared
+    args: tuple[Arg, ...] = field(init=False, default=())
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "args", args_of(self.request))
+
+    def decode(self, args: dict[str, Any]) -> rq.Args:
+        """The request's args as its declared type (INVALID_ARGUMENT when they do not fit);
+        names it does not declare are refused first, with a "did you mean"."""
+        return rq.decode_args(self.name, self.request, args)
 
     def arg(self, name: str) -> Arg | None:
         return next((a for a in self.args if a.name == name), None)
@@ -84,92 +110,73 @@ class Operation:
         return max(default_s, self.timeout_floor_s)
 
 
-_NAMES = Arg("names", "names", required=True)
 _REBUILDS = 30.0  # operations that may rebuild the engine's world wait at least this long
 OPERATIONS: dict[str, Operation] = {op.name: op for op in (
-    Operation("status", fast=True),
-    Operation("capabilities"),
-    Operation("play", (Arg("rtf", "number"),), mutates=True),
-    Operation("set_rtf", (Arg("rtf", "number", required=True),), mutates=True),
-    Operation("pause", mutates=True),
-    Operation("stop", mutates=True),
-    Operation("step", (Arg("count", "count"), Arg("read", "names"), Arg("read_joints", "names")),
-              mutates=True, steps=True),
-    Operation("run_until", (Arg("sim_time", "number", required=True), Arg("read", "names"),
-                            Arg("until_rest", "map"), Arg("read_joints", "names")),
-              mutates=True, steps=True),
-    Operation("reset", (Arg("scope", "choice", choices=("time", "state", "spawned", "all")),),
-              mutates=True),
-    Operation("load_world", (Arg("engine", "choice", required=True,
-                                 choices=ENGINE_NAMES), Arg("params", "map")),
-              mutates=True, timeout_floor_s=_REBUILDS),
-    Operation("spawn", (Arg("groups", "groups", required=True),), mutates=True,
-              timeout_floor_s=_REBUILDS),
-    Operation("load_model", (Arg("format", "choice", required=True, choices=("mjcf", "urdf")),
-                             Arg("text", "string", long_text=True), Arg("path", "string"),
-                             Arg("prefix", "string"), Arg("fixed_base", "bool"),
-                             Arg("search_path", "string")), mutates=True,
-              timeout_floor_s=_REBUILDS),
-    Operation("list", (Arg("name", "string"), Arg("tag", "string"),
-                       Arg("kind", "choice", choices=("static", "dynamic")))),
-    Operation("get_states", (Arg("names", "names"),)),
-    Operation("set_states", (_NAMES, Arg("poses", "poses"), Arg("twists", "twists")),
-              mutates=True),
-    Operation("update", (_NAMES, Arg("properties", "map", required=True)), mutates=True),
-    Operation("delete", (_NAMES,), mutates=True, timeout_floor_s=_REBUILDS),
-    Operation("joints", (Arg("model", "string"), Arg("names", "names"))),
-    Operation("get_joint_states", (Arg("names", "names"),)),
-    Operation("set_joint_states", (_NAMES, Arg("positions", "values", required=True),
-                                   Arg("velocities", "values"), Arg("read", "names")),
-              mutates=True),
-    Operation("set_joint_targets", (_NAMES, Arg("mode", "choice", required=True,
-                                                choices=TARGET_MODES),
-                                    Arg("targets", "values"), Arg("kp", "values"),
-                                    Arg("kd", "values"), Arg("max_effort", "values")),
-              mutates=True),
-    Operation("apply_wrench", (_NAMES, Arg("wrenches", "wrenches", required=True),
-                               Arg("points", "points"), Arg("duration", "number")),
-              mutates=True),
-    Operation("clear_wrenches", (Arg("names", "names"),), mutates=True),
-    Operation("snapshot", (Arg("slot", "string"), Arg("blob", "bool"))),
-    Operation("restore", (Arg("slot", "string"), Arg("blob", "blob", long_text=True)),
-              mutates=True, timeout_floor_s=_REBUILDS),
-    Operation("snapshots"),
-    Operation("delete_snapshot", (Arg("slot", "string", required=True),)),
-    Operation("list_worlds"),
-    Operation("create_world", (Arg("name", "string", required=True),
-                               Arg("engine", "choice", choices=ENGINE_NAMES),
-                               Arg("params", "map")), timeout_floor_s=_REBUILDS),
-    Operation("fork_world", (Arg("name", "string", required=True), Arg("source", "string")),
-              timeout_floor_s=_REBUILDS),
-    Operation("delete_world", (Arg("name", "string", required=True),)),
-    Operation("predict", (Arg("horizon", "number", required=True), Arg("every", "number"),
-                          Arg("read", "names"), Arg("read_joints", "names"),
-                          Arg("slot", "string"), Arg("set_states", "map"),
-                          Arg("joint_targets", "map"), Arg("wrenches", "map")),
-              steps=True),
-    Operation("compare", (_NAMES, Arg("poses", "poses", required=True), Arg("twists", "twists"),
-                          Arg("sigma_position", "number"), Arg("sigma_angle", "number"),
-                          Arg("sigma_speed", "number"), Arg("correct", "bool")),
-              mutates=True),
-    Operation("render", (Arg("cameras", "cameras", required=True),
-                         Arg("format", "choice", choices=("raw", "png")))),
-    Operation("add_camera", (Arg("name", "string", required=True),
-                             Arg("camera", "map", required=True)), mutates=True),
-    Operation("remove_camera", (Arg("name", "string", required=True),), mutates=True),
-    Operation("cameras"),
-    Operation("raycast", (Arg("origins", "points", required=True), Arg("directions", "points"),
-                          Arg("ends", "points"), Arg("max_length", "number"))),
-    Operation("contacts", (Arg("names", "names"),)),
-    Operation("get_params"),
-    Operation("set_params", (Arg("params", "map", required=True),), mutates=True),
+    Operation("status", rq.NoArgs, fast=True, reply=rq.StatusReply),
+    Operation("capabilities", rq.NoArgs),
+    Operation("play", rq.Play, mutates=True, reply=rq.StatusReply),
+    Operation("set_rtf", rq.SetRtf, mutates=True, reply=rq.StatusReply),
+    Operation("pause", rq.NoArgs, mutates=True, reply=rq.StatusReply),
+    Operation("stop", rq.NoArgs, mutates=True, reply=rq.StatusReply),
+    Operation("step", rq.Step, mutates=True, steps=True),
+    Operation("run_until", rq.RunUntil, mutates=True, steps=True),
+    Operation("reset", rq.Reset, mutates=True, reply=rq.StatusReply),
+    Operation("load_world", rq.LoadWorld, mutates=True, timeout_floor_s=_REBUILDS,
+              reply=rq.StatusReply),
+    Operation("spawn", rq.Spawn, mutates=True, timeout_floor_s=_REBUILDS, reply=rq.NamesReply),
+    Operation("load_model", rq.LoadModel, mutates=True, timeout_floor_s=_REBUILDS,
+              reply=rq.NamesReply),
+    Operation("list", rq.List, reply=rq.EntitiesReply),
+    Operation("get_states", rq.NamesOrAll, reply=rq.StatesReply),
+    Operation("get_bounds", rq.NamesOrAll, reply=rq.BoundsReply),
+    Operation("set_states", rq.SetStates, mutates=True, reply=rq.CountReply),
+    Operation("update", rq.Update, mutates=True, reply=rq.CountReply),
+    Operation("delete", rq.NamedOnly, mutates=True, timeout_floor_s=_REBUILDS, reply=rq.CountReply),
+    Operation("joints", rq.Joints),
+    Operation("get_joint_states", rq.NamesOrAll),
+    Operation("set_joint_states", rq.SetJointStates, mutates=True),
+    Operation("set_joint_targets", rq.SetJointTargets, mutates=True, reply=rq.CountReply),
+    Operation("apply_wrench", rq.ApplyWrench, mutates=True, reply=rq.CountReply),
+    Operation("clear_wrenches", rq.NamesOrAll, mutates=True, reply=rq.CountReply),
+    Operation("snapshot", rq.Snapshot),
+    Operation("restore", rq.Restore, mutates=True, timeout_floor_s=_REBUILDS),
+    Operation("snapshots", rq.NoArgs),
+    Operation("delete_snapshot", rq.Slot, reply=rq.CountReply),
+    Operation("list_worlds", rq.NoArgs),
+    Operation("create_world", rq.CreateWorld, timeout_floor_s=_REBUILDS),
+    Operation("fork_world", rq.ForkWorld, timeout_floor_s=_REBUILDS),
+    Operation("delete_world", rq.Named, reply=rq.CountReply),
+    Operation("predict", rq.Predict, steps=True),
+    Operation("compare", rq.Compare, mutates=True),
+    Operation("render", rq.Render),
+    Operation("add_camera", rq.AddCamera, mutates=True),
+    Operation("remove_camera", rq.Named, mutates=True, reply=rq.CountReply),
+    Operation("cameras", rq.NoArgs),
+    Operation("raycast", rq.Raycast),
+    Operation("contacts", rq.NamesOrAll),
+    Operation("get_params", rq.NoArgs, reply=rq.ParamsReply),
+    Operation("set_params", rq.SetParams, mutates=True, reply=rq.ParamsReply),
     # The control lease (daemon/access/lease.py): they change who may mutate, not the world.
-    Operation("take_control"),
-    Operation("release_control"),
+    Operation("take_control", rq.NoArgs),
+    Operation("release_control", rq.NoArgs),
     # State streams (daemon/world/state_streams.py): poses published at a client's rate.
-    Operation("stream_states", (Arg("rate", "number"), Arg("names", "names"))),
-    Operation("close_stream", (Arg("stream", "string", required=True),)),
+    Operation("stream_states", rq.StreamStates),
+    Operation("close_stream", rq.CloseStream),
 )}
+
+
+def json_schema() -> dict[str, Any]:
+    """Every operation's request (its ``args`` map) and declared reply (its ``result``
+    map) as JSON Schema (2020-12), for clients in other languages: msgpack bins appear as
+    base64 strings, as a JSON rendering of the wire would carry them."""
+    types = [t for op in OPERATIONS.values() for t in (op.request, op.reply) if t is not None]
+    refs, defs = msgspec.json.schema_components(types, ref_template="#/$defs/{name}")
+    by_type = dict(zip(types, refs, strict=True))
+    operations = {name: {"request": by_type[op.request],
+                         "reply": by_type[op.reply] if op.reply is not None else {}}
+                  for name, op in OPERATIONS.items()}
+    return {"$schema": "https://json-schema.org/draft/2020-12/schema", "$defs": defs,
+            "operations": operations}
 
 
 def operation(name: str) -> Operation:

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from enum import StrEnum
-from typing import Any
+from typing import Any, Literal, get_args
 
 from galton.protocol.errors import InvalidArgumentError, brief, did_you_mean
 
@@ -24,15 +24,26 @@ class SimState(StrEnum):
 
 
 SIM_STATES = tuple(state.value for state in SimState)
-RESET_SCOPES = ("time", "state", "spawned", "all")
+# Each choice list is spelled once, as a Literal type: requests are declared with it
+# (protocol/requests.py) and the tuples below are read from it.
+ResetScope = Literal["time", "state", "spawned", "all"]
+RESET_SCOPES: tuple[str, ...] = get_args(ResetScope)
+EntityKind = Literal["static", "dynamic"]
+ENTITY_KINDS: tuple[str, ...] = get_args(EntityKind)
+ModelFormat = Literal["mjcf", "urdf"]
+MODEL_FORMATS: tuple[str, ...] = get_args(ModelFormat)
+ImageFormat = Literal["raw", "png"]
+IMAGE_FORMATS: tuple[str, ...] = get_args(ImageFormat)
 BODY_SHAPES = ("sphere", "box", "cylinder", "capsule", "plane", "mesh")
 # What list reports for the bodies of a loaded model: its root, and every other link.
 MODEL_SHAPES = ("model", "link")
 JOINT_TYPES = ("revolute", "prismatic", "spherical", "free", "fixed")
 SCALAR_JOINT_TYPES = ("revolute", "prismatic")  # one degree of freedom: states and targets
-TARGET_MODES = ("none", "position", "velocity", "effort")
+TargetMode = Literal["none", "position", "velocity", "effort"]
+TARGET_MODES: tuple[str, ...] = get_args(TargetMode)
 # The engines a daemon may host (``load_world``'s and ``create_world``'s choices).
-ENGINE_NAMES = ("mujoco", "pybullet", "ode", "dart")
+EngineName = Literal["mujoco", "pybullet", "ode", "dart"]
+ENGINE_NAMES: tuple[str, ...] = get_args(EngineName)
 WRENCH_WIDTH = 6  # fx fy fz tx ty tz, world frame
 # How many numbers ``size`` holds per shape, and what they mean (all half sizes, metres).
 SIZE_LAYOUT: dict[str, tuple[str, ...]] = {

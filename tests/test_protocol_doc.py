@@ -7,6 +7,7 @@ import re
 from dataclasses import fields
 from pathlib import Path
 
+import msgspec
 import pytest
 import typer
 
@@ -33,6 +34,20 @@ def test_every_operation_and_argument_is_documented(op: Operation) -> None:
     text = section(op.name)
     for name in op.arg_names:
         assert f"`{name}`" in text, f"{op.name}: argument {name!r} is not documented"
+
+
+@pytest.mark.parametrize("op", [op for op in OPERATIONS.values() if op.reply is not None],
+                         ids=[name for name, op in OPERATIONS.items() if op.reply is not None])
+def test_every_declared_reply_field_is_documented(op: Operation) -> None:
+    assert op.reply is not None
+    text = section(op.name) + REPLY_SHAPES.get(op.reply.__name__, "")
+    for name in msgspec.structs.fields(op.reply):
+        assert f"`{name.name}`" in text, f"{op.name}: reply field {name.name!r} is not documented"
+
+
+# Replies several operations share are described once: status and time control answer a
+# status map (docs/protocol.md, "status").
+REPLY_SHAPES = {"StatusReply": section("status")}
 
 
 def test_every_result_code_is_in_the_table() -> None:

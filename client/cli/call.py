@@ -129,3 +129,14 @@ def call(
         reply.raise_for_code()
     except GaltonError as error:
         raise fail(error) from error
+
+
+@commands.command(rich_help_panel="Scripts")
+def schema() -> None:
+    """Print the JSON Schema of every operation's request and reply (no daemon needed).
+
+    Under "operations", each operation's "request" and "reply" refer to "$defs"; a reply
+    not yet declared is {} (any map). Msgpack bins appear as base64 strings."""
+    from galton.protocol.operations import json_schema
+
+    typer.echo(json.dumps(json_schema(), indent=2))

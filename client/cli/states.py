@@ -1,4 +1,5 @@
-"""galton-client get-states and set-states: poses and twists of named bodies."""
+"""galton-client get-states, get-bounds and set-states: poses, twists and boxes of named
+bodies."""
 
 from __future__ import annotations
 
@@ -61,6 +62,25 @@ def get_states(
     """Show poses (x y z qx qy qz qw) and world-frame twists of bodies, in one request."""
     states = with_client(ctx, lambda c: c.get_states(names or None))
     show_states(states, as_json)
+
+
+@commands.command("get-bounds", rich_help_panel=PANEL)
+def get_bounds(
+    ctx: typer.Context,
+    names: Annotated[list[str] | None, typer.Argument(
+        help="Entity names, as separate arguments; none: every entity.",
+        show_default=False)] = None,
+    as_json: JsonOpt = False,
+) -> None:
+    """Show each entity's axis-aligned bounds in the world frame (min and max x y z)."""
+    bounds = with_client(ctx, lambda c: c.get_bounds(names or None))
+
+    def render() -> None:
+        table = Table("name", "min (m)", "max (m)")
+        for name, row in bounds.items():
+            table.add_row(name, _numbers(row[:3]), _numbers(row[3:]))
+        console.print(table)
+    emit({name: row.tolist() for name, row in bounds.items()}, as_json, render)
 
 
 @commands.command("set-states", rich_help_panel=PANEL)

@@ -31,7 +31,7 @@ from galton.client.sdk.joints import SearchPath
 from galton.client.sdk.perception import PerceptionMethods
 from galton.client.sdk.streams import StateSample, StateStream, StreamMethods
 from galton.client.sdk.telemetry import Subscription, TelemetryStream, subscribe_events
-from galton.client.sdk.values import JointStates, Stamp, States
+from galton.client.sdk.values import FloatArray, JointStates, Stamp, States
 from galton.client.sdk.worlds import WorldMethods
 from galton.client.transport.base import Transport, ZenohTransport, zmq_endpoint
 from galton.client.transport.credentials import Credentials
@@ -51,8 +51,10 @@ from galton.protocol import (
     Telemetry,
 )
 from galton.protocol import mesh as mesh_wire
+from galton.protocol.arrays import unpack_f64
 from galton.protocol.errors import ClientClosedError, InvalidArgumentError
 from galton.protocol.operations import OPERATIONS
+from galton.protocol.requests import BoundsReply, decode_result
 
 DEFAULT_TIMEOUT_S = 5.0
 
@@ -276,6 +278,14 @@ class Client(WorldMethods, PerceptionMethods, ControlMethods, StreamMethods):
         """States of these bodies (all when None) in one request."""
         return States.from_reply(
             self._ok("get_states", sdk_joints.names_arg(names)))
+
+    def get_bounds(self, names: Sequence[str] | None = None) -> dict[str, FloatArray]:
+        """Each entity's world-frame axis-aligned bounds (all when None), as a row
+        ``min_x min_y min_z max_x max_y max_z``."""
+        reply = decode_result(BoundsReply, self._ok("get_bounds",
+                                                    sdk_joints.names_arg(names)).result)
+        rows = unpack_f64(reply.bounds, 6, "bounds")
+        return dict(zip(reply.names, rows, strict=True))
 
     def set_states(self, names: Sequence[str], poses: ArrayLike | None = None,
                    twists: ArrayLike | None = None) -> Stamp:

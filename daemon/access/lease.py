@@ -26,6 +26,7 @@ from typing import Any
 from galton.daemon.core.calls import Call
 from galton.daemon.core.context import OpContext
 from galton.protocol import ControlHeldError, InvalidArgumentError
+from galton.protocol import requests as rq
 from galton.protocol.operations import Operation
 
 NO_IDENTITY = (
@@ -85,7 +86,7 @@ def check(loop: OpContext, call: Call, op: Operation) -> None:
     raise _held(holder, f"{op.name} from {_asker(call)} would change the world and is refused")
 
 
-def take_control(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+def take_control(loop: OpContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
     """Take the lease, or keep it (taking it again is no change); refused while another
     client holds it."""
     if call.client is None and call.peer is None:
@@ -112,7 +113,7 @@ def take_control(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str,
     return {"controller": taker.name, "taken": True}
 
 
-def release_control(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+def release_control(loop: OpContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
     """Give the lease back (its holder only); with nobody holding it, nothing to do."""
     holder = loop.lease.holder
     if holder is None:

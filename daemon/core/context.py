@@ -20,6 +20,7 @@ if TYPE_CHECKING:
     from galton.daemon.world.slots import SnapshotSlots
     from galton.daemon.world.state_streams import StateStreams
     from galton.protocol import RemoteError, SimState, SimStatus
+    from galton.protocol.requests import Args
 
 
 class OpContext(Protocol):
@@ -47,7 +48,7 @@ class OpContext(Protocol):
     client_alive: Callable[[str], bool] | None
     streams: StateStreams
 
-    def world_for(self, args: dict[str, Any]) -> World:
+    def world_for(self, args: dict[str, Any] | Args) -> World:
         """The world a request names (the live one when it names none), or NOT_FOUND."""
 
     def set_state(self, state: SimState) -> None:

@@ -52,6 +52,7 @@ from galton.protocol import (
 )
 from galton.protocol.errors import brief, did_you_mean
 from galton.protocol.operations import OPERATIONS, operation
+from galton.protocol.requests import Args
 
 log = logging.getLogger("galton.daemon")
 
@@ -278,14 +279,13 @@ class SimLoop:
             call.op = request.op
             op = operation(request.op)
             refuse_by_role(call.role, op.name)
-            op.check_arg_names(request.args)
-            self.world_for(request.args)  # an unknown world is refused before anything
+            typed = op.decode(request.args)  # the declared request, or INVALID_ARGUMENT
+            self.world_for(typed)  # an unknown world is refused before anything
             call.client = request.client
-            named = request.args.get("world")
-            call.world = named if isinstance(named, str) else None
+            call.world = typed.world if isinstance(typed.world, str) else None
             lease.check(self, call, op)  # while another client holds control: refused
             with self.work_guard() if op.mutates and not op.steps else nullcontext():
-                result = HANDLERS[op.name](self, call, request.args)
+                result = HANDLERS[op.name](self, call, typed)
             self._keep_invariants()  # before the reply: what the client asks next sees it
             if result is not None:
                 self._reply_ok(call, result)
@@ -333,9 +333,9 @@ class SimLoop:
         except Exception:
             log.exception("could not publish an event")
 
-    def world_for(self, args: dict[str, Any]) -> World:
+    def world_for(self, args: dict[str, Any] | Args) -> World:
         """The world a request is for: the one its ``world`` names, else the live one."""
-        name = args.get("world")
+        name = args.get("world") if isinstance(args, dict) else args.world
         if name is None or name == self.world.name:
             return self.world
         found = self.side.get(name) if isinstance(name, str) else None

@@ -62,7 +62,7 @@ def answer_status(loop: SimLoop, call: Call) -> None:
     status = status_from(loop, taken)
     try:
         request = decode_request(call.payload, call.op, loop.decode_limits)
-        operation(request.op).check_arg_names(request.args)
+        operation(request.op).decode(request.args)
         named = request.args.get("world")
         if named is not None and named != status.world:
             # On the transport's thread only one membership test of the side worlds (the

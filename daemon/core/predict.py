@@ -25,8 +25,9 @@ from galton.protocol import (
     OperationFailedError,
     ResourceLimitError,
 )
+from galton.protocol import requests as rq
 from galton.protocol.arrays import pack_f64
-from galton.protocol.model import check_names, check_type, finite_number
+from galton.protocol.model import check_names, finite_number
 
 
 @dataclass
@@ -66,25 +67,25 @@ class PredictSampler:
         return out
 
 
-def predict(loop: OpContext, call: Call, args: dict[str, Any]) -> None:
+def predict(loop: OpContext, call: Call, request: rq.Predict) -> None:
     """Start a prediction job (answered when its horizon is done)."""
     if loop.job is not None:
         raise IncorrectStateError("another step request is still running; wait for it")
     if loop.engine_factory is None:
         raise OperationFailedError("this daemon cannot make engines")
-    horizon = finite_number(args.get("horizon"), "predict.horizon", low=0.0, low_open=True)
-    source = loop.world_for(args)
-    slot = args.get("slot")
+    horizon = finite_number(request.horizon, "predict.horizon", low=0.0, low_open=True)
+    source = loop.world_for(request)
+    slot = request.slot
     name = f"{source.name}:prediction"
     if slot is None:
         source.verify()
         copy = clone_of(source, name, loop.limits)
     else:
-        blob = loop.slots.get(check_type(slot, str, "predict.slot")).blob
+        blob = loop.slots.get(slot).blob
         data = decode(blob, loop.limits, loop.snapshot_key)
         copy = world_from(data, loop.engine_factory, name, loop.limits)
     try:
-        job = _job(loop, call, copy, horizon, args)
+        job = _job(loop, call, copy, horizon, request)
     except Exception:
         copy.engine.close()
         raise
@@ -93,21 +94,21 @@ def predict(loop: OpContext, call: Call, args: dict[str, Any]) -> None:
 
 
 def _job(loop: OpContext, call: Call, copy: World, horizon: float,
-         args: dict[str, Any]) -> StepJob:
+         request: rq.Predict) -> StepJob:
     dt = copy.engine.timestep
     steps = horizon_steps(horizon, dt, loop.limits.max_steps)
-    every_s = args.get("every")
+    every_s = request.every
     every = 1 if every_s is None else sample_period(
         finite_number(every_s, "predict.every", low=0.0, low_open=True), dt, steps)
-    read = _names(args, "read")
-    joints = _names(args, "read_joints")
+    read = _names(request.read, "read")
+    joints = _names(request.read_joints, "read_joints")
     if read is not None:
         copy.require_known(read)
     if joints is not None:
         copy.joints.require_scalar(joints, "predict.read_joints")
     _require_reply_room(loop.limits.max_reply_bytes, steps // every + 1,
                         0 if read is None else len(read), 0 if joints is None else len(joints))
-    _apply_changes(copy, args)
+    _apply_changes(copy, request)
     sampler = PredictSampler(min(every, steps), read, joints)
     sampler.take(copy)
     return StepJob(call, steps, steps, world=copy, sampler=sampler, scratch=True)
@@ -144,16 +145,18 @@ def sample_period(every_s: float, dt: float, steps: int) -> int:
     return steps if exact >= steps else max(1, round(exact))
 
 
-def _names(args: dict[str, Any], key: str) -> list[str] | None:
-    raw = args.get(key)
+def _names(raw: list[str] | None, key: str) -> list[str] | None:
     return None if raw is None else check_names(raw, f"predict.{key}")
 
 
-def _apply_changes(copy: World, args: dict[str, Any]) -> None:
-    """The changes a prediction starts from, each checked as its own request would be."""
-    for key, apply in (("set_states", ops.set_states),
-                       ("joint_targets", ops_joints.set_joint_targets),
-                       ("wrenches", ops_joints.apply_wrench)):
-        change = args.get(key)
-        if change is not None:
-            apply(copy, check_type(change, dict, f"predict.{key}"))
+def _apply_changes(copy: World, request: rq.Predict) -> None:
+    """The changes a prediction starts from, each decoded and checked as its own request
+    would be."""
+    if request.set_states is not None:
+        ops.set_states(copy, rq.decode_args("set_states", rq.SetStates, request.set_states))
+    if request.joint_targets is not None:
+        ops_joints.set_joint_targets(copy, rq.decode_args(
+            "set_joint_targets", rq.SetJointTargets, request.joint_targets))
+    if request.wrenches is not None:
+        ops_joints.apply_wrench(copy, rq.decode_args("apply_wrench", rq.ApplyWrench,
+                                                     request.wrenches))

@@ -2,9 +2,9 @@
 load_world.
 
 The state machine: stopped → playing ⇄ paused, with step jobs while not playing. Each
-operation takes the loop, the call and its arguments, and returns the reply's result map,
-or None when the reply comes later (a step job). daemon/ops/handlers.py binds them to the
-operations of protocol/operations.py.
+operation takes the loop, the call and its typed request (protocol/requests.py), and
+returns the reply's result map, or None when the reply comes later (a step job).
+daemon/ops/handlers.py binds them to the operations of protocol/operations.py.
 """
 
 from __future__ import annotations
@@ -23,7 +23,8 @@ from galton.protocol import (
     OperationFailedError,
     SimStatus,
 )
-from galton.protocol.model import check_names, check_type, finite_number, integer_in
+from galton.protocol import requests as rq
+from galton.protocol.model import check_names, finite_number, integer_in
 from galton.protocol.vocabulary import SimState, check_fields
 
 MAX_RTF = 1e6
@@ -33,13 +34,11 @@ def _check_rtf(value: Any, where: str) -> float:
     return finite_number(value, where, low=0.0, high=MAX_RTF)
 
 
-def _rest_check(args: dict[str, Any], read: list[str] | None,
+def _rest_check(rest: dict[str, Any] | None, read: list[str] | None,
                 timestep: float) -> RestCheck | None:
     """run_until's optional ``until_rest: {speed, every}``: stop once the read bodies rest."""
-    rest = args.get("until_rest")
     if rest is None:
         return None
-    check_type(rest, dict, "run_until.until_rest")
     check_fields(rest, ("speed", "every"), "run_until.until_rest")
     if read is None:
         raise InvalidArgumentError("run_until.until_rest needs 'read': the bodies that must rest")
@@ -50,8 +49,8 @@ def _rest_check(args: dict[str, Any], read: list[str] | None,
     return RestCheck(speed, max(1, round(every / timestep)))
 
 
-def status(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any]:
-    world = loop.world_for(args)
+def status(loop: OpContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
+    world = loop.world_for(request)
     if world is loop.world:
         return loop.status().to_wire()
     return side_status(loop, world).to_wire()
@@ -67,15 +66,15 @@ def side_status(loop: OpContext, world: World) -> SimStatus:
         controller=loop.lease.controller)
 
 
-def _live_only(loop: OpContext, args: dict[str, Any], op: str) -> None:
-    if loop.world_for(args) is not loop.world:
+def _live_only(loop: OpContext, request: rq.Args, op: str) -> None:
+    if loop.world_for(request) is not loop.world:
         raise IncorrectStateError(f"{op}: only the live world {loop.world.name!r} plays; a "
                                   "side world moves by step and run_until")
 
 
-def play(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any]:
-    _live_only(loop, args, "play")
-    rtf = args.get("rtf")
+def play(loop: OpContext, call: Call, request: rq.Play) -> dict[str, Any]:
+    _live_only(loop, request, "play")
+    rtf = request.rtf
     target = loop.target_rtf if rtf is None else _check_rtf(rtf, "play.rtf")
     if loop.job is not None and loop.job.world is None:
         raise IncorrectStateError("a step request is still running; wait for it or pause")
@@ -85,15 +84,15 @@ def play(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any]:
     return loop.status().to_wire()
 
 
-def set_rtf(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any]:
-    _live_only(loop, args, "set_rtf")
-    loop.target_rtf = _check_rtf(args.get("rtf"), "set_rtf.rtf")
+def set_rtf(loop: OpContext, call: Call, request: rq.SetRtf) -> dict[str, Any]:
+    _live_only(loop, request, "set_rtf")
+    loop.target_rtf = _check_rtf(request.rtf, "set_rtf.rtf")
     loop.pacer.anchor(time.monotonic(), loop.world.sim_time, loop.target_rtf)
     return loop.status().to_wire()
 
 
-def pause(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any]:
-    world = loop.world_for(args)
+def pause(loop: OpContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
+    world = loop.world_for(request)
     _cancel_job_on(loop, world, "paused")
     if world is not loop.world:
         return side_status(loop, world).to_wire()
@@ -101,9 +100,9 @@ def pause(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any]:
     return loop.status().to_wire()
 
 
-def stop(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+def stop(loop: OpContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
     """Pause and rewind: time to 0 and every entity back to the state it was created in."""
-    world = loop.world_for(args)
+    world = loop.world_for(request)
     _cancel_job_on(loop, world, "stopped")
     world.reset("state")
     world.reset("time")
@@ -114,19 +113,17 @@ def stop(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any]:
     return loop.status().to_wire()
 
 
-def step(loop: OpContext, call: Call, args: dict[str, Any]) -> None:
-    if "until_rest" in args:
-        raise InvalidArgumentError("step takes no until_rest: use run_until with "
-                                   "until_rest and read to stop once bodies rest")
-    count = integer_in(args.get("count", 1), "step.count", 1, loop.limits.max_steps)
-    world = loop.world_for(args)
-    _start_job(loop, call, world, count, _read_list(world, args, "step"),
-               read_joints=_read_joint_list(world, args, "step"))
+def step(loop: OpContext, call: Call, request: rq.Step) -> None:
+    count = integer_in(1 if request.count is None else request.count, "step.count", 1,
+                       loop.limits.max_steps)
+    world = loop.world_for(request)
+    _start_job(loop, call, world, count, _read_list(world, request.read, "step"),
+               read_joints=_read_joint_list(world, request.read_joints, "step"))
 
 
-def run_until(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any] | None:
-    target = finite_number(args.get("sim_time"), "run_until.sim_time", low=0.0)
-    world = loop.world_for(args)
+def run_until(loop: OpContext, call: Call, request: rq.RunUntil) -> dict[str, Any] | None:
+    target = finite_number(request.sim_time, "run_until.sim_time", low=0.0)
+    world = loop.world_for(request)
     dt = world.engine.timestep
     steps = (target - world.sim_time) / dt - 1e-9
     limit = loop.limits.max_steps
@@ -140,15 +137,15 @@ def run_until(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, An
         raise InvalidArgumentError(
             f"run_until.sim_time {target} is not after the current sim time "
             f"{world.sim_time}")
-    read = _read_list(world, args, "run_until")
-    _start_job(loop, call, world, count, read, _rest_check(args, read, dt),
-               _read_joint_list(world, args, "run_until"))
+    read = _read_list(world, request.read, "run_until")
+    _start_job(loop, call, world, count, read, _rest_check(request.until_rest, read, dt),
+               _read_joint_list(world, request.read_joints, "run_until"))
     return None
 
 
-def reset(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any]:
-    scope = check_scope(args.get("scope", "all"))
-    world = loop.world_for(args)
+def reset(loop: OpContext, call: Call, request: rq.Reset) -> dict[str, Any]:
+    scope = check_scope(request.scope or "all")
+    world = loop.world_for(request)
     _cancel_job_on(loop, world, "reset")
     world.reset(scope)
     if world is not loop.world:
@@ -161,17 +158,17 @@ def reset(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any]:
     return loop.status().to_wire()
 
 
-def load_world(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+def load_world(loop: OpContext, call: Call, request: rq.LoadWorld) -> dict[str, Any]:
     """Replace the world with a fresh one on the named engine, in this process."""
-    _live_only(loop, args, "load_world")
-    name = check_type(args.get("engine"), str, "load_world.engine")
+    _live_only(loop, request, "load_world")
+    name = request.engine
     if loop.engine_factory is None:
         raise OperationFailedError("this daemon cannot switch engines")
     engine = loop.engine_factory(name)
-    params = args.get("params")
+    params = request.params
     if params is not None:
         try:
-            engine.set_params(check_type(params, dict, "load_world.params"))
+            engine.set_params(params)
         except Exception:
             engine.close()
             raise
@@ -186,10 +183,9 @@ def load_world(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, A
 
 
 # -- helpers ------------------------------------------------------------------------
-def _read_list(world: World, args: dict[str, Any], where: str) -> list[str] | None:
+def _read_list(world: World, read: list[str] | None, where: str) -> list[str] | None:
     """The entities a step request wants read back when done; unknown names reject the
     request before any step is taken."""
-    read = args.get("read")
     if read is None:
         return None
     names = check_names(read, f"{where}.read")
@@ -197,9 +193,9 @@ def _read_list(world: World, args: dict[str, Any], where: str) -> list[str] | No
     return names
 
 
-def _read_joint_list(world: World, args: dict[str, Any], where: str) -> list[str] | None:
+def _read_joint_list(world: World, read: list[str] | None, where: str
+                     ) -> list[str] | None:
     """The joints a step request wants read back when done, checked before any step."""
-    read = args.get("read_joints")
     if read is None:
         return None
     names = check_names(read, f"{where}.read_joints")

@@ -289,6 +289,11 @@ class Engine(ABC):
         normal, distance; NaN point, normal and distance for a miss."""
         raise self._unsupported("ray casts")
 
+    def bounds(self, names: Sequence[str]) -> np.ndarray:
+        """World-frame axis-aligned bounds (rows ``min xyz, max xyz``) of a loaded model's
+        bodies, from their collision shapes; spawned primitives need no engine."""
+        raise self._unsupported("bounds of loaded models")
+
     def contacts(self, names: Sequence[str] | None
                  ) -> ContactPoints:
         """The last step's contact points (involving any of ``names``; None: all): the two

@@ -25,9 +25,12 @@ from galton.daemon.ops import worlds
 from galton.daemon.world import pose_compare as compare
 from galton.daemon.world import state_streams
 from galton.protocol.operations import OPERATIONS
+from galton.protocol.requests import Args
 
 Result = dict[str, Any] | None  # None: the reply comes later (a step job)
-Handler = Callable[[OpContext, Call, dict[str, Any]], Result]
+# A handler receives its operation's declared request (protocol/requests.py), decoded and
+# checked before it runs.
+Handler = Callable[["OpContext", Call, Any], Result]
 
 
 def _scene(name: str, apply: ops.SceneOp) -> Handler:
@@ -35,9 +38,9 @@ def _scene(name: str, apply: ops.SceneOp) -> Handler:
     the scene is announced, and a step job reading a deleted entity is answered now."""
     mutates = OPERATIONS[name].mutates
 
-    def handle(loop: OpContext, call: Call, args: dict[str, Any]) -> Result:
-        world = loop.world_for(args)
-        result = apply(world, args)
+    def handle(loop: OpContext, call: Call, request: Args) -> Result:
+        world = loop.world_for(request)
+        result = apply(world, request)
         if mutates:
             event = {"kind": "scene", "op": name, "world": world.name,
                      "step": world.step_index}
@@ -49,9 +52,9 @@ def _scene(name: str, apply: ops.SceneOp) -> Handler:
     return handle
 
 
-def _capabilities(loop: OpContext, call: Call, args: dict[str, Any]) -> Result:
+def _capabilities(loop: OpContext, call: Call, request: Args) -> Result:
     """The engine's capabilities, with what the daemon adds (its ZeroMQ endpoints)."""
-    return {**ops.capabilities(loop.world_for(args), args), **loop.advertised}
+    return {**ops.capabilities(loop.world_for(request), request), **loop.advertised}
 
 
 HANDLERS: dict[str, Handler] = {
@@ -69,6 +72,7 @@ HANDLERS: dict[str, Handler] = {
     "load_model": _scene("load_model", ops.load_model),
     "list": _scene("list", ops.list_entities),
     "get_states": _scene("get_states", ops.get_states),
+    "get_bounds": _scene("get_bounds", ops.get_bounds),
     "set_states": _scene("set_states", ops.set_states),
     "update": _scene("update", ops.update),
     "delete": _scene("delete", ops.delete),

@@ -11,8 +11,9 @@ from galton.daemon.core.reply_limit import RAW_PIXEL_BYTES, RAY_BYTES, require_r
 from galton.daemon.world.cameras import Camera, parse_camera, view_of
 from galton.daemon.world.scene import World
 from galton.protocol import InvalidArgumentError, NotFoundError, ResourceLimitError, pack_f64
+from galton.protocol import requests as rq
 from galton.protocol.errors import brief
-from galton.protocol.model import check_names, check_type, decode_points, finite_number, require
+from galton.protocol.model import check_names, check_type, decode_points, finite_number
 from galton.protocol.png import depth_png, encode_png, segmentation_png
 from galton.protocol.vocabulary import check_fields
 
@@ -43,14 +44,12 @@ def _request_camera(world: World, raw: Any, where: str) -> Camera:
     return spec
 
 
-def render(world: World, args: dict[str, Any]) -> dict[str, Any]:
-    raw = require(args, "cameras", list, "render")
+def render(world: World, request: rq.Render) -> dict[str, Any]:
+    raw = request.cameras
     if not 1 <= len(raw) <= MAX_CAMERAS_PER_REQUEST:
         raise InvalidArgumentError(f"render.cameras must hold 1-{MAX_CAMERAS_PER_REQUEST} "
                                    f"cameras, got {len(raw)}")
-    fmt = check_type(args.get("format", "raw"), str, "render.format")
-    if fmt not in ("raw", "png"):
-        raise InvalidArgumentError(f"render.format must be raw or png, got {brief(fmt)}")
+    fmt = request.format or "raw"  # one of IMAGE_FORMATS: its declaration says so
     cameras = [_request_camera(world, c, f"render.cameras[{i}]") for i, c in enumerate(raw)]
     pixels = sum(c.pixels for c in cameras)
     if pixels > world.limits.max_pixels:
@@ -89,12 +88,12 @@ def _raw_dtype(kind: str) -> str:
     return {"rgb": "u1", "depth": "<f4", "segmentation": "<i4"}[kind]
 
 
-def add_camera(world: World, args: dict[str, Any]) -> dict[str, Any]:
-    name = require(args, "name", str, "add_camera")
+def add_camera(world: World, request: rq.AddCamera) -> dict[str, Any]:
+    name = request.name
     if not 1 <= len(name) <= MAX_CAMERA_NAME or not name.isprintable():
         raise InvalidArgumentError(f"add_camera.name {brief(name)} must be "
                                    f"1-{MAX_CAMERA_NAME} printable characters")
-    camera = parse_camera(require(args, "camera", dict, "add_camera"), "add_camera.camera")
+    camera = parse_camera(request.camera, "add_camera.camera")
     if camera.attach is not None:
         world.require_known([camera.attach])
     cameras = _cameras_of(world)
@@ -106,19 +105,19 @@ def add_camera(world: World, args: dict[str, Any]) -> dict[str, Any]:
     return {"name": name, "camera": camera.to_wire()}
 
 
-def remove_camera(world: World, args: dict[str, Any]) -> dict[str, Any]:
-    name = require(args, "name", str, "remove_camera")
+def remove_camera(world: World, request: rq.Named) -> dict[str, Any]:
+    name = request.name
     if _cameras_of(world).pop(name, None) is None:
         raise NotFoundError(f"no camera named {brief(name)}")
     return {"count": 1}
 
 
-def cameras(world: World, args: dict[str, Any]) -> dict[str, Any]:
+def cameras(world: World, request: rq.NoArgs) -> dict[str, Any]:
     return {"cameras": [{"name": n, **c.to_wire()} for n, c in _cameras_of(world).items()]}
 
 
-def raycast(world: World, args: dict[str, Any]) -> dict[str, Any]:
-    raw = args.get("origins")
+def raycast(world: World, request: rq.Raycast) -> dict[str, Any]:
+    raw = request.origins
     count = _row_count(raw)
     if count > world.limits.max_rays:
         raise ResourceLimitError(f"raycast casts {count} rays; at most {world.limits.max_rays}",
@@ -126,15 +125,16 @@ def raycast(world: World, args: dict[str, Any]) -> dict[str, Any]:
     require_room("this raycast's reply", count * RAY_BYTES, world.limits.max_reply_bytes,
                  "cast fewer rays a request")
     origins = decode_points(raw, count, "raycast.origins")
-    if (args.get("directions") is None) == (args.get("ends") is None):
+    if (request.directions is None) == (request.ends is None):
         raise InvalidArgumentError("raycast needs exactly one of 'directions' or 'ends'")
-    max_length = finite_number(args.get("max_length", DEFAULT_MAX_LENGTH),
-                               "raycast.max_length", low=0.0, low_open=True)
-    if args.get("ends") is not None:
-        vectors = decode_points(args["ends"], count, "raycast.ends") - origins
+    max_length = finite_number(
+        DEFAULT_MAX_LENGTH if request.max_length is None else request.max_length,
+        "raycast.max_length", low=0.0, low_open=True)
+    if request.ends is not None:
+        vectors = decode_points(request.ends, count, "raycast.ends") - origins
         lengths = np.linalg.norm(vectors, axis=1)
     else:
-        vectors = decode_points(args["directions"], count, "raycast.directions")
+        vectors = decode_points(request.directions, count, "raycast.directions")
         lengths = np.full(count, max_length)
     norms = np.linalg.norm(vectors, axis=1)
     if (norms < 1e-12).any():
@@ -163,8 +163,8 @@ def _row_count(raw: Any) -> int:
     return len(raw) // 24
 
 
-def contacts(world: World, args: dict[str, Any]) -> dict[str, Any]:
-    raw = args.get("names")
+def contacts(world: World, request: rq.NamesOrAll) -> dict[str, Any]:
+    raw = request.names
     names = None if raw is None else check_names(raw, "contacts.names")
     if names is not None:
         world.require_known(names)

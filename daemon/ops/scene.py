@@ -1,8 +1,8 @@
-"""Scene operations: parse a request's args, apply it to the World, build the result map.
+"""Scene operations: check a request, apply it to the World, build the result map.
 
-Each function takes the World and the request's ``args`` map and returns the ``result``
-map of the reply. Parsing happens before anything is changed, so a bad request leaves the
-scene as it was.
+Each function takes the World and the operation's typed request (protocol/requests.py,
+already checked for types) and returns the ``result`` map of the reply. The remaining
+checks happen before anything is changed, so a bad request leaves the scene as it was.
 """
 
 from __future__ import annotations
@@ -11,6 +11,8 @@ import os
 import stat
 from collections.abc import Callable
 from typing import Any
+
+import numpy as np
 
 from galton.daemon.core.host_info import host_info
 from galton.daemon.engines import ENGINE_CLASSES
@@ -25,16 +27,17 @@ from galton.protocol import (
     ResourceLimitError,
     pack_f64,
 )
+from galton.protocol import requests as rq
 from galton.protocol.errors import brief
-from galton.protocol.model import check_names, check_type, decode_poses, decode_twists, require
-from galton.protocol.vocabulary import MAX_BATCH
+from galton.protocol.model import check_names, decode_poses, decode_twists
+from galton.protocol.vocabulary import MAX_BATCH, MODEL_SHAPES
 
-SceneOp = Callable[[World, dict[str, Any]], dict[str, Any]]
+SceneOp = Callable[[World, Any], dict[str, Any]]  # Any: the op's declared request
 MAX_PREFIX_LENGTH = 64
 
 
-def spawn(world: World, args: dict[str, Any]) -> dict[str, Any]:
-    groups_raw = require(args, "groups", list, "spawn")
+def spawn(world: World, request: rq.Spawn) -> dict[str, Any]:
+    groups_raw = request.groups
     if not groups_raw:
         raise InvalidArgumentError("spawn.groups must hold at least one group")
     if len(groups_raw) > MAX_BATCH:
@@ -59,29 +62,26 @@ def _require_shapes(world: World, groups: list[BodyGroup]) -> None:
                 f"the {world.engine.name} engine cannot set a spawned body's inertia")
 
 
-def load_model(world: World, args: dict[str, Any]) -> dict[str, Any]:
-    fmt = require(args, "format", str, "load_model")
+def load_model(world: World, request: rq.LoadModel) -> dict[str, Any]:
+    fmt = request.format
     formats = world.engine.capabilities().model_formats
     if fmt not in formats:
         raise FeatureUnsupportedError(
             f"the {world.engine.name} engine loads {', '.join(formats) or 'no'} models, "
             f"not {brief(fmt)}")
-    text, path = args.get("text"), args.get("path")
+    text, path = request.text, request.path
     if (text is None) == (path is None):
         raise InvalidArgumentError("load_model needs exactly one of 'text' or 'path'")
     limit = world.limits.max_model_bytes
     if text is not None:
-        check_type(text, str, "load_model.text")
         if len(text) > limit:
             raise ResourceLimitError(f"load_model.text holds {len(text)} characters; at most "
                                      f"{limit}", {"limit": "max_model_bytes", "max": limit})
-    else:
-        path = model_file(check_type(path, str, "load_model.path"), limit)
-    prefix = check_prefix(args.get("prefix", ""))
-    fixed_base = check_type(args.get("fixed_base", True), bool, "load_model.fixed_base")
-    raw_search = args.get("search_path")
-    search = search_folders(None if raw_search is None else check_type(
-        raw_search, str, "load_model.search_path"))
+    elif path is not None:
+        path = model_file(path, limit)
+    prefix = check_prefix(request.prefix or "")
+    fixed_base = True if request.fixed_base is None else request.fixed_base
+    search = search_folders(request.search_path)
     world.require_room(1)
     return {"names": world.load_model(fmt, text, path, prefix, fixed_base=fixed_base,
                                       search=search)}
@@ -106,9 +106,8 @@ def model_file(path: str, limit: int) -> str:
     return path
 
 
-def check_prefix(value: Any) -> str:
+def check_prefix(prefix: str) -> str:
     """A name prefix: printable, and short enough that prefixed names stay names."""
-    prefix = check_type(value, str, "load_model.prefix")
     if len(prefix) > MAX_PREFIX_LENGTH or not prefix.isprintable():
         raise InvalidArgumentError(
             f"load_model.prefix {brief(prefix)} must be at most {MAX_PREFIX_LENGTH} printable "
@@ -116,32 +115,62 @@ def check_prefix(value: Any) -> str:
     return prefix
 
 
-def list_entities(world: World, args: dict[str, Any]) -> dict[str, Any]:
-    pattern = args.get("name")
-    tag = args.get("tag")
-    kind = args.get("kind")
-    for key, value in (("name", pattern), ("tag", tag), ("kind", kind)):
-        if value is not None:
-            check_type(value, str, f"list.{key}")
-    found = world.select(pattern, tag, kind)
+def list_entities(world: World, request: rq.List) -> dict[str, Any]:
+    found = world.select(request.name, request.tag, request.kind)
     return {"entities": [info.to_wire() for info in world.effective(found)]}
 
 
-def _names_or_all(world: World, args: dict[str, Any], where: str) -> list[str]:
-    if args.get("names") is None:
+def _names_or_all(world: World, names: list[str] | None, where: str) -> list[str]:
+    if names is None:
         return list(world.entities)
-    return check_names(args["names"], f"{where}.names")
+    return check_names(names, f"{where}.names")
 
 
-def get_states(world: World, args: dict[str, Any]) -> dict[str, Any]:
-    names = _names_or_all(world, args, "get_states")
+def get_states(world: World, request: rq.NamesOrAll) -> dict[str, Any]:
+    names = _names_or_all(world, request.names, "get_states")
     poses, twists = world.get_states(names)
     return {"names": names, "poses": pack_f64(poses), "twists": pack_f64(twists)}
 
 
-def set_states(world: World, args: dict[str, Any]) -> dict[str, Any]:
-    names = check_names(require(args, "names", list, "set_states"), "set_states.names")
-    poses_raw, twists_raw = args.get("poses"), args.get("twists")
+def get_bounds(world: World, request: rq.NamesOrAll) -> dict[str, Any]:
+    """Each entity's axis-aligned bounds in the world frame (simulation_interfaces'
+    GetEntityBounds): rows of ``min_x min_y min_z max_x max_y max_z``."""
+    names = _names_or_all(world, request.names, "get_bounds")
+    poses, _ = world.get_states(names)  # unknown names: NOT_FOUND, as get_states
+    infos = [world.entities[n].info for n in names]
+    modelled = [n for n, info in zip(names, infos, strict=True) if info.shape in MODEL_SHAPES]
+    from_engine = dict(zip(modelled, world.engine.bounds(modelled), strict=True)) \
+        if modelled else {}
+    rows = [from_engine[info.name] if info.name in from_engine
+            else primitive_bounds(info.shape, info.size, pose)
+            for info, pose in zip(infos, poses, strict=True)]
+    return {"names": names, "bounds": pack_f64(np.array(rows, dtype=float).reshape(-1, 6))}
+
+
+def primitive_bounds(shape: str, size: tuple[float, ...], pose: np.ndarray) -> np.ndarray:
+    """The world-frame box around a primitive (half sizes as SIZE_LAYOUT; a cylinder's
+    and a capsule's axis is their local z; a plane is a box of no thickness)."""
+    x, y, z, w = pose[3], pose[4], pose[5], pose[6]
+    rotation = np.array([
+        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+    if shape == "sphere":
+        half = np.full(3, size[0])
+    elif shape in ("cylinder", "capsule"):
+        radius, length, axis = size[0], size[1], np.abs(rotation[:, 2])
+        across = radius if shape == "capsule" else radius * np.sqrt(np.clip(1 - axis**2, 0, 1))
+        half = across + length * axis
+    else:  # box, plane, mesh (its size: its vertices' reach about its origin)
+        local = np.array([*size[:2], size[2] if len(size) > 2 else 0.0])
+        half = np.abs(rotation) @ local
+    centre = np.asarray(pose[:3], dtype=float)
+    return np.concatenate([centre - half, centre + half])
+
+
+def set_states(world: World, request: rq.SetStates) -> dict[str, Any]:
+    names = check_names(request.names, "set_states.names")
+    poses_raw, twists_raw = request.poses, request.twists
     if poses_raw is None and twists_raw is None:
         raise InvalidArgumentError("set_states needs 'poses', 'twists' or both")
     poses = None if poses_raw is None else decode_poses(poses_raw, len(names),
@@ -152,31 +181,29 @@ def set_states(world: World, args: dict[str, Any]) -> dict[str, Any]:
     return {"count": len(names)}
 
 
-def update(world: World, args: dict[str, Any]) -> dict[str, Any]:
-    names = check_names(require(args, "names", list, "update"), "update.names")
-    props = BodyProperties.from_wire(require(args, "properties", dict, "update"),
-                                     "update.properties")
+def update(world: World, request: rq.Update) -> dict[str, Any]:
+    names = check_names(request.names, "update.names")
+    props = BodyProperties.from_wire(request.properties, "update.properties")
     world.update(names, props)
     return {"count": len(names)}
 
 
-def delete(world: World, args: dict[str, Any]) -> dict[str, Any]:
-    names = check_names(require(args, "names", list, "delete"), "delete.names")
+def delete(world: World, request: rq.NamedOnly) -> dict[str, Any]:
+    names = check_names(request.names, "delete.names")
     world.delete(names)
     return {"count": len(names)}
 
 
-def get_params(world: World, args: dict[str, Any]) -> dict[str, Any]:
+def get_params(world: World, request: rq.NoArgs) -> dict[str, Any]:
     return {"params": _wire_values(world.engine.get_params())}
 
 
-def set_params(world: World, args: dict[str, Any]) -> dict[str, Any]:
-    params = require(args, "params", dict, "set_params")
-    world.engine.set_params(params)
+def set_params(world: World, request: rq.SetParams) -> dict[str, Any]:
+    world.engine.set_params(request.params)
     return {"params": _wire_values(world.engine.get_params())}
 
 
-def capabilities(world: World, args: dict[str, Any]) -> dict[str, Any]:
+def capabilities(world: World, request: rq.Args) -> dict[str, Any]:
     caps = world.engine.capabilities()
     caps.engines_available = tuple(ENGINE_CLASSES)
     caps.host = host_info()

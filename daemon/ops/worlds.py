@@ -25,8 +25,8 @@ from galton.protocol import (
     ResourceLimitError,
     SimState,
 )
+from galton.protocol import requests as rq
 from galton.protocol.errors import brief
-from galton.protocol.model import check_type, require
 
 if TYPE_CHECKING:
     from galton.daemon.engines.base import Engine
@@ -43,12 +43,11 @@ def world_row(loop: OpContext, world: World) -> dict[str, Any]:
             "entity_count": len(world.entities), "faulted": world.faulted}
 
 
-def list_worlds(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+def list_worlds(loop: OpContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
     return {"worlds": [world_row(loop, w) for w in (loop.world, *loop.side.values())]}
 
 
-def _new_name(loop: OpContext, args: dict[str, Any], where: str) -> str:
-    name: str = require(args, "name", str, where)
+def _new_name(loop: OpContext, name: str, where: str) -> str:
     if not 1 <= len(name) <= MAX_WORLD_NAME or not name.isprintable():
         raise InvalidArgumentError(f"{where}.name {brief(name)} must be 1-{MAX_WORLD_NAME} "
                                    "printable characters")
@@ -67,12 +66,10 @@ def _factory(loop: OpContext) -> Any:
     return loop.engine_factory
 
 
-def create_world(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any]:
-    name = _new_name(loop, args, "create_world")
-    kind = check_type(args.get("engine", loop.world.engine.name), str, "create_world.engine")
-    params = args.get("params")
-    if params is not None:
-        check_type(params, dict, "create_world.params")
+def create_world(loop: OpContext, call: Call, request: rq.CreateWorld) -> dict[str, Any]:
+    name = _new_name(loop, request.name, "create_world")
+    kind = request.engine or loop.world.engine.name
+    params = request.params
     engine: Engine = _factory(loop)(kind)
     try:
         if params:
@@ -85,18 +82,17 @@ def create_world(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str,
     return world_row(loop, loop.side[name])
 
 
-def fork_world(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any]:
-    name = _new_name(loop, args, "fork_world")
-    source_name = args.get("source")
-    source = loop.world_for({} if source_name is None else {"world": source_name})
+def fork_world(loop: OpContext, call: Call, request: rq.ForkWorld) -> dict[str, Any]:
+    name = _new_name(loop, request.name, "fork_world")
+    source = loop.world_for({"world": request.source})
     source.verify()
     loop.side[name] = clone_of(source, name, loop.limits)
     loop.emit({"kind": "world", "op": "fork_world", "world": name, "source": source.name})
     return world_row(loop, loop.side[name])
 
 
-def delete_world(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any]:
-    name = require(args, "name", str, "delete_world")
+def delete_world(loop: OpContext, call: Call, request: rq.Named) -> dict[str, Any]:
+    name = request.name
     world = loop.world_for({"world": name})
     if world is loop.world:
         raise InvalidArgumentError("the live world cannot be deleted (load_world replaces it)")
@@ -108,18 +104,17 @@ def delete_world(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str,
     return {"count": 1}
 
 
-def snapshot(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any]:
-    world = loop.world_for(args)
-    slot_name = args.get("slot")
-    want_blob = check_type(args.get("blob", False), bool, "snapshot.blob")
+def snapshot(loop: OpContext, call: Call, request: rq.Snapshot) -> dict[str, Any]:
+    world = loop.world_for(request)
+    slot_name = request.slot
+    want_blob = bool(request.blob)
     if slot_name is None and not want_blob:
         raise InvalidArgumentError("snapshot needs a 'slot' to keep it in, 'blob': true to "
                                    "return it, or both")
-    if slot_name is not None:
-        check_type(slot_name, str, "snapshot.slot")
-        if not 1 <= len(slot_name) <= MAX_WORLD_NAME or not slot_name.isprintable():
-            raise InvalidArgumentError(f"snapshot.slot {brief(slot_name)} must be "
-                                       f"1-{MAX_WORLD_NAME} printable characters")
+    if slot_name is not None and (not 1 <= len(slot_name) <= MAX_WORLD_NAME
+                                  or not slot_name.isprintable()):
+        raise InvalidArgumentError(f"snapshot.slot {brief(slot_name)} must be "
+                                   f"1-{MAX_WORLD_NAME} printable characters")
     world.verify()
     blob = encode(snapshot_of(world), loop.snapshot_key)
     if want_blob:  # checked before a slot is kept: a refused request changes nothing
@@ -135,13 +130,13 @@ def snapshot(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any
     return result
 
 
-def restore(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any]:
-    world = loop.world_for(args)
-    slot_name, blob = args.get("slot"), args.get("blob")
+def restore(loop: OpContext, call: Call, request: rq.Restore) -> dict[str, Any]:
+    world = loop.world_for(request)
+    slot_name, blob = request.slot, request.blob
     if (slot_name is None) == (blob is None):
         raise InvalidArgumentError("restore needs exactly one of 'slot' or 'blob'")
     if slot_name is not None:
-        blob = loop.slots.get(check_type(slot_name, str, "restore.slot")).blob
+        blob = loop.slots.get(slot_name).blob
     data = decode(blob, loop.limits, loop.snapshot_key)
     new = world_from(data, _factory(loop), world.name, loop.limits, world.engine.name)
     if loop.job is not None and (loop.job.world or loop.world) is world:
@@ -159,10 +154,10 @@ def restore(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any]
     return world_row(loop, new)
 
 
-def snapshots(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+def snapshots(loop: OpContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
     return {"slots": [slot.to_wire() for slot in loop.slots.by_name.values()]}
 
 
-def delete_snapshot(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any]:
-    loop.slots.delete(require(args, "slot", str, "delete_snapshot"))
+def delete_snapshot(loop: OpContext, call: Call, request: rq.Slot) -> dict[str, Any]:
+    loop.slots.delete(request.slot)
     return {"count": 1}

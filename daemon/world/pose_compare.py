@@ -10,13 +10,12 @@ import numpy as np
 
 from galton.daemon.world.scene import World
 from galton.protocol import pack_f64
+from galton.protocol import requests as rq
 from galton.protocol.model import (
     check_names,
-    check_type,
     decode_poses,
     decode_twists,
     finite_number,
-    require,
 )
 
 DEFAULT_SIGMA_POSITION = 0.01  # m
@@ -31,16 +30,16 @@ def angle_between(q1: np.ndarray, q2: np.ndarray) -> np.ndarray:
     return angles
 
 
-def compare(world: World, args: dict[str, Any]) -> dict[str, Any]:
-    names = check_names(require(args, "names", list, "compare"), "compare.names")
-    observed = decode_poses(args.get("poses"), len(names), "compare.poses")
-    raw_twists = args.get("twists")
+def compare(world: World, request: rq.Compare) -> dict[str, Any]:
+    names = check_names(request.names, "compare.names")
+    observed = decode_poses(request.poses, len(names), "compare.poses")
+    raw_twists = request.twists
     twists = None if raw_twists is None else decode_twists(raw_twists, len(names),
                                                            "compare.twists")
-    sigma_p = _sigma(args, "sigma_position", DEFAULT_SIGMA_POSITION)
-    sigma_a = _sigma(args, "sigma_angle", DEFAULT_SIGMA_ANGLE)
-    sigma_v = _sigma(args, "sigma_speed", DEFAULT_SIGMA_SPEED)
-    correct = check_type(args.get("correct", False), bool, "compare.correct")
+    sigma_p = _sigma(request.sigma_position, "sigma_position", DEFAULT_SIGMA_POSITION)
+    sigma_a = _sigma(request.sigma_angle, "sigma_angle", DEFAULT_SIGMA_ANGLE)
+    sigma_v = _sigma(request.sigma_speed, "sigma_speed", DEFAULT_SIGMA_SPEED)
+    correct = bool(request.correct)
     poses, world_twists = world.get_states(names)
     position_errors = np.linalg.norm(observed[:, :3] - poses[:, :3], axis=1)
     angle_errors = angle_between(observed[:, 3:7], poses[:, 3:7])
@@ -58,8 +57,7 @@ def compare(world: World, args: dict[str, Any]) -> dict[str, Any]:
     return result
 
 
-def _sigma(args: dict[str, Any], key: str, default: float) -> float:
-    value = args.get(key)
+def _sigma(value: float | None, key: str, default: float) -> float:
     if value is None:
         return default
     return finite_number(value, f"compare.{key}", low=0.0, low_open=True)

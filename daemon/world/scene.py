@@ -36,8 +36,7 @@ from galton.protocol import (
 )
 from galton.protocol.errors import brief, did_you_mean, unknown_names
 from galton.protocol.model import check_type
-
-ENTITY_KINDS = ("static", "dynamic")
+from galton.protocol.vocabulary import ENTITY_KINDS
 
 
 @dataclass

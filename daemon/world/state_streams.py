@@ -30,6 +30,7 @@ from galton.daemon.core.context import OpContext
 from galton.daemon.world.scene import World, canonical_quaternions
 from galton.daemon.world.stream_sender import Publish, SampleSender
 from galton.protocol import InvalidArgumentError, Keys, NotFoundError, ResourceLimitError
+from galton.protocol import requests as rq
 from galton.protocol.arrays import pack_f64
 from galton.protocol.errors import brief
 from galton.protocol.keys import STREAMS_CHUNK
@@ -81,11 +82,11 @@ class StateStreams:
         self.streams: dict[str, StateStream] = {}
         self.next_due = math.inf
 
-    def open(self, loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+    def open(self, loop: OpContext, call: Call, request: rq.StreamStates) -> dict[str, Any]:
         """Open a stream for the request's client; its first sample is due at once."""
-        rate = _check_rate(args.get("rate", 10.0))
-        names = args.get("names")
-        world = loop.world_for(args)
+        rate = _check_rate(10.0 if request.rate is None else request.rate)
+        names = request.names
+        world = loop.world_for(request)
         if names is not None:
             world.require_known(names)
         owner = _owner(loop, call)
@@ -93,7 +94,7 @@ class StateStreams:
             raise ResourceLimitError(
                 f"stream_states: {MAX_STREAMS} state streams are open already (each client's "
                 "end when it goes): close one with close_stream", {"limit": MAX_STREAMS})
-        named = args.get("world")
+        named = request.world
         stream = StateStream(secrets.token_hex(8), owner,
                              named if isinstance(named, str) and world is not loop.world
                              else None,
@@ -104,9 +105,9 @@ class StateStreams:
         return {"stream": stream.stream_id, "key": f"{Keys(loop.instance).prefix}/{stream.topic}",
                 "topic": stream.topic, "rate": rate, "world": world.name}
 
-    def close(self, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+    def close(self, call: Call, request: rq.CloseStream) -> dict[str, Any]:
         """Close a stream; a client may close only its own."""
-        stream_id = args["stream"]
+        stream_id = request.stream
         stream = self.streams.get(stream_id)
         if stream is None or stream.owner != _caller(call):
             raise NotFoundError(f"close_stream: no stream {brief(stream_id)} of this client is "
@@ -251,11 +252,11 @@ def _owner(loop: OpContext, call: Call) -> str:
     return owner
 
 
-def stream_states(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+def stream_states(loop: OpContext, call: Call, request: rq.StreamStates) -> dict[str, Any]:
     """The ``stream_states`` operation (docs/protocol.md, "State streams")."""
-    return loop.streams.open(loop, call, args)
+    return loop.streams.open(loop, call, request)
 
 
-def close_stream(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+def close_stream(loop: OpContext, call: Call, request: rq.CloseStream) -> dict[str, Any]:
     """The ``close_stream`` operation."""
-    return loop.streams.close(call, args)
+    return loop.streams.close(call, request)

@@ -228,6 +228,7 @@ CALLS: dict[str, Callable[[Client], object]] = {
     "load_model": lambda c: c.load_model("mjcf", text="<mujoco/>"),
     "list": Client.list,
     "get_states": Client.get_states,
+    "get_bounds": Client.get_bounds,
     "set_states": lambda c: c.set_states(["a"]),
     "update": lambda c: c.update(["a"], mass=1.0),
     "delete": lambda c: c.delete(["a"]),

@@ -17,7 +17,9 @@ import pytest
 from support_daemons import ENGINES, STATED_GAPS
 
 from galton.client import Client, EmbeddedDaemon
-from galton.protocol import FeatureUnsupportedError
+from galton.protocol import FeatureUnsupportedError, Reply
+from galton.protocol.operations import OPERATIONS
+from galton.protocol.requests import decode_result
 
 TRANSPORTS = ("zenoh", "zmq")
 # Each engine's transport in the suite: the transports alternate over the engines.
@@ -51,8 +53,25 @@ def sim(daemon: EmbeddedDaemon, transport: str) -> Iterator[Client]:
     """A client over ``transport`` on a fresh, empty, stopped world."""
     endpoint = daemon.endpoint if transport == "zenoh" else daemon.zmq_endpoint
     with Client(daemon.instance, endpoint, timeout=20.0) as client:
+        hold_replies_to_declarations(client)
         client.load_world(daemon.engine)
         yield client
+
+
+def hold_replies_to_declarations(client: Client) -> None:
+    """Every successful reply this client (and its world views, which share its transport)
+    gets whose operation declares its reply (protocol/requests.py) is decoded strictly
+    against it: a missing, extra or mistyped field fails the test that met it."""
+    transport = client.transport
+    send = transport.request
+
+    def request(op: str, args: dict[str, Any] | None, *rest: Any) -> Reply:
+        reply = send(op, args, *rest)
+        declared = OPERATIONS[op].reply if op in OPERATIONS else None
+        if reply.ok and declared is not None:
+            decode_result(declared, reply.result)
+        return reply
+    transport.request = request  # type: ignore[method-assign]
 
 
 @pytest.hookimpl(hookwrapper=True)

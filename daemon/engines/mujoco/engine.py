@@ -373,6 +373,24 @@ class MujocoEngine(Engine):
                  ) -> ContactPoints:
         return ContactPoints(*observing.contacts(self, names))
 
+    def bounds(self, names: Sequence[str]) -> np.ndarray:
+        """Each body's world box around its own geoms' boxes (MuJoCo's ``geom_aabb``, in
+        the geom's frame); a body without geoms is a point at its origin."""
+        model, data = self.model, self.data
+        mujoco.mj_kinematics(model, data)  # positions only: the state is unchanged
+        rows = np.empty((len(names), 6))
+        for row, body in enumerate(self.body_ids(names)):
+            geoms = np.flatnonzero(model.geom_bodyid == body)
+            if not len(geoms):
+                rows[row] = np.tile(data.xpos[body], 2)
+                continue
+            frames = data.geom_xmat[geoms].reshape(-1, 3, 3)
+            local = model.geom_aabb[geoms]
+            centres = data.geom_xpos[geoms] + np.einsum("nij,nj->ni", frames, local[:, :3])
+            halves = np.einsum("nij,nj->ni", np.abs(frames), local[:, 3:])
+            rows[row] = [*(centres - halves).min(axis=0), *(centres + halves).max(axis=0)]
+        return rows
+
     def close(self) -> None:
         self.entities.clear()
         if self.cameras is not None:

@@ -16,7 +16,7 @@ from typing import Any
 
 from galton.daemon.engines.ode.native import STATE_LENGTH
 from galton.daemon.engines.ode.spawn import Body
-from galton.protocol import BODY_SHAPES, InvalidArgumentError
+from galton.protocol import BODY_SHAPES, TARGET_MODES, InvalidArgumentError
 
 FORMAT = "galton-ode-snapshot"
 VERSION = 1
@@ -141,7 +141,7 @@ def check_model(entry: Any, where: str) -> None:
             raise _fail(f"{where}.links[{k}].follows", "must be two booleans")
     for k, joint in enumerate(joints):
         if not isinstance(joint, dict) or not isinstance(joint.get("name"), str) or \
-                joint.get("mode") not in ("none", "position", "velocity", "effort"):
+                joint.get("mode") not in TARGET_MODES:
             raise _fail(f"{where}.joints[{k}]", "must name the joint and its mode")
         _numbers([joint.get(f) for f in JOINT_FIELDS], len(JOINT_FIELDS),
                  f"{where}.joints[{k}]")

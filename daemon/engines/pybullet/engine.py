@@ -296,6 +296,17 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
         """Link frames, not PyBullet's centres of mass (frames.py)."""
         return states.get_states(self, names)
 
+    def bounds(self, names: Sequence[str]) -> np.ndarray:
+        """PyBullet's own box around each body's (or model link's) collision shapes."""
+        links = self.robots.links
+        rows = np.empty((len(names), 6))
+        for row, name in enumerate(names):
+            root, link = links.get(name, (name, -1))
+            [body] = self.lookup([root])
+            low, high = self._bc.getAABB(body.uid, link)
+            rows[row] = [*low, *high]
+        return rows
+
     def pose_reader(self, names: Sequence[str]) -> Callable[[], np.ndarray]:
         return engine_call(states.PoseReader(self, names).__call__)
 

@@ -1,0 +1,99 @@
+"""The declared requests (protocol/requests.py): what a bad one is told, and their JSON
+Schema as `galton-client schema` prints it, checked against real requests."""
+
+from __future__ import annotations
+
+import base64
+import json
+from typing import Any
+
+import jsonschema
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from galton.client import spheres
+from galton.client.cli.app import app
+from galton.protocol import InvalidArgumentError, MalformedRequestError, pack_f64
+from galton.protocol import requests as rq
+from galton.protocol.operations import OPERATIONS
+
+REFUSED = {
+    "wrong type": ("step", {"count": "ten"}, r"step\.count must be int, got 'ten'"),
+    "bool is no number": ("play", {"rtf": True}, r"play\.rtf must be float, got True"),
+    "unknown choice": ("reset", {"scope": "spawnd"},
+                       r"reset\.scope 'spawnd' is not one of .*did you mean 'spawned'"),
+    "missing field": ("set_states", {"poses": b""},
+                      r"set_states: missing required field 'names'"),
+    "unknown field": ("step", {"cuont": 3}, r"step takes no field 'cuont'.*did you mean 'count'"),
+    "nested path": ("spawn", {"groups": ["x"]}, r"spawn\.groups\[0\] must be object, got 'x'"),
+    "list item": ("delete", {"names": ["a", 7]}, r"delete\.names\[1\] must be str, got 7"),
+}
+
+
+@pytest.mark.parametrize("op, args, message", REFUSED.values(), ids=REFUSED.keys())
+def test_a_bad_request_is_told_what_and_where(op: str, args: dict[str, Any],
+                                               message: str) -> None:
+    with pytest.raises(InvalidArgumentError, match=message):
+        OPERATIONS[op].decode(args)
+
+
+def test_a_good_request_decodes_to_its_declared_type() -> None:
+    step = OPERATIONS["step"].decode({"count": 5, "read": ["a"], "world": "side"})
+    assert isinstance(step, rq.Step)
+    assert (step.count, step.read, step.read_joints, step.world) == (5, ["a"], None, "side")
+
+
+def as_json(value: Any) -> Any:
+    """A msgpack value as JSON carries it: bins as base64 strings."""
+    if isinstance(value, bytes):
+        return base64.b64encode(value).decode()
+    if isinstance(value, dict):
+        return {k: as_json(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [as_json(v) for v in value]
+    return value
+
+
+@pytest.fixture(scope="module")
+def schema() -> dict[str, Any]:
+    printed = CliRunner().invoke(app, ["schema"])
+    assert printed.exit_code == 0, printed.output
+    document: dict[str, Any] = json.loads(printed.output)
+    assert set(document["operations"]) == set(OPERATIONS)
+    return document
+
+
+def validator(schema: dict[str, Any], op: str, part: str) -> jsonschema.Draft202012Validator:
+    return jsonschema.Draft202012Validator({**schema["operations"][op][part],
+                                            "$defs": schema["$defs"]})
+
+
+def test_the_schema_takes_real_requests_and_refuses_bad_ones(schema: dict[str, Any]) -> None:
+    group = spheres(["a", "b"], [[0, 0, 1], [1, 0, 1]], 0.1).to_wire()
+    poses = pack_f64(np.tile([0, 0, 1, 0, 0, 0, 1.0], (2, 1)))
+    good = {"spawn": {"groups": [group]}, "step": {"count": 10, "read": ["a"]},
+            "set_states": {"names": ["a", "b"], "poses": poses}, "reset": {"scope": "all"},
+            "get_bounds": {"names": ["a"], "world": "main"}}
+    for op, args in good.items():
+        OPERATIONS[op].decode(args)  # the daemon takes it ...
+        validator(schema, op, "request").validate(as_json(args))  # ... and so does the schema
+    bad = {"step": {"count": "ten"}, "reset": {"scope": "everything"},
+           "set_states": {"poses": poses}, "get_bounds": {"nmaes": ["a"]}}
+    for op, args in bad.items():
+        assert not validator(schema, op, "request").is_valid(as_json(args)), op
+
+
+def test_the_schema_holds_declared_replies(schema: dict[str, Any]) -> None:
+    bounds = {"names": ["a"], "bounds": pack_f64(np.zeros((1, 6)))}
+    validator(schema, "get_bounds", "reply").validate(as_json(bounds))
+    assert not validator(schema, "get_bounds", "reply").is_valid({"names": ["a"]})
+    assert schema["operations"]["capabilities"]["reply"] == {}  # not declared yet: any map
+
+
+def test_a_reply_that_does_not_fit_its_declaration_is_refused() -> None:
+    fits = {"names": ["a"], "bounds": pack_f64(np.zeros((1, 6)))}
+    assert rq.decode_result(rq.BoundsReply, fits).names == ["a"]
+    for wrong in ({"names": ["a"]}, {**fits, "extra": 1}, {**fits, "names": "a"}):
+        with pytest.raises(MalformedRequestError, match="does not fit its declaration"):
+            rq.decode_result(rq.BoundsReply, wrong)
