@@ -47,7 +47,7 @@ from galton.protocol.keys import (
 # Read-only operations a viewer may ask: discovery (`galton-client daemons`) asks the
 # first two; `galton-client view` the others (a state stream changes no world).
 VIEWER_OPERATIONS = ("status", "capabilities", "list", "list_worlds", "contacts",
-                     "stream_states", "close_stream")
+                     "stream_states", "close_stream", "get_shapes")
 TLS_SCHEME = "tls/"
 USRPWD = "transport/auth/usrpwd/dictionary_file"
 

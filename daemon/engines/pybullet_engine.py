@@ -53,6 +53,7 @@ from galton.daemon.engine import (
     FEATURE_JOINT_TARGETS,
     FEATURE_JOINTS,
     FEATURE_LOAD_MODEL,
+    FEATURE_MODEL_SHAPES,
     FEATURE_RAYCAST,
     FEATURE_RENDER,
     FEATURE_SET_STATE,
@@ -68,8 +69,10 @@ from galton.daemon.engine import (
     FEATURE_UPDATE_RGBA,
     FEATURE_WRENCH,
     Engine,
+    Shape,
     native_output_silenced,
 )
+from galton.daemon.engines import pybullet_collisions
 from galton.daemon.engines import pybullet_props as bodyprops
 from galton.daemon.engines import pybullet_rebuild as rebuild
 from galton.daemon.engines import pybullet_spawn as spawning
@@ -145,7 +148,7 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
                       FEATURE_LOAD_MODEL, FEATURE_STATIC_POSE, FEATURE_JOINTS,
                       FEATURE_JOINT_TARGETS, FEATURE_TARGET_POSITION, FEATURE_TARGET_VELOCITY,
                       FEATURE_TARGET_EFFORT, FEATURE_WRENCH, FEATURE_SNAPSHOT, FEATURE_RENDER,
-                      FEATURE_RAYCAST, FEATURE_CONTACTS),
+                      FEATURE_RAYCAST, FEATURE_CONTACTS, FEATURE_MODEL_SHAPES),
             params={name: spec.describe() for name, spec in SPECS.items()},
             render_backend=RENDER_BACKEND,
         )
@@ -296,6 +299,15 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
             low, high = self._bc.getAABB(body.uid, link)
             rows[row] = [*low, *high]
         return rows
+
+    def shapes(self, names: Sequence[str]) -> list[list[Shape]]:
+        links = self._robots.links
+        found = []
+        for name in names:
+            root, link = links.get(name, (name, -1))
+            [body] = self._lookup([root])
+            found.append(pybullet_collisions.link_shapes(self._bc, body.uid, link))
+        return found
 
     def _read(self, ids: list[int]) -> tuple[np.ndarray, np.ndarray]:
         return states.read(self, ids)
