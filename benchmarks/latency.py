@@ -27,8 +27,8 @@ from common import ENGINES, daemon_client, machine, percentiles_ms, write_json
 from galton.client import plane, spheres
 from galton.client.sdk.embedded import free_loopback_port
 from galton.client.transport.session import open_session
-from galton.daemon.engine import Engine
 from galton.daemon.engines import create_engine
+from galton.daemon.engines.base import Engine
 from galton.protocol import BodyGroup, encode_request
 
 BALLS = 20

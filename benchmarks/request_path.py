@@ -28,10 +28,11 @@ from common import write_json
 
 from galton.client import Client, plane, spheres
 from galton.client.sdk.embedded import free_loopback_port
-from galton.daemon import loop, server
+from galton.daemon import server
+from galton.daemon.core import loop
 from galton.daemon.engines import ENGINE_CLASSES
 from galton.daemon.server import Daemon, DaemonOptions
-from galton.daemon.world import World
+from galton.daemon.world.scene import World
 
 BALLS = 20
 INSTANCE = "request-path"

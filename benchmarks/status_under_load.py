@@ -9,7 +9,7 @@ with its worker threads off.
 
 Status is answered on Zenoh's thread from a snapshot, so it should not wait for physics;
 an engine that holds the GIL while stepping (PyBullet) needs the loop's short switch
-interval for that (see galton.daemon.loop).
+interval for that (see galton.daemon.core.loop).
 """
 
 from __future__ import annotations

@@ -11,12 +11,12 @@ from typing import Annotated, Any
 import typer
 import zenoh
 
-from galton.daemon.limits import Limits, describe_limits, parse_limits
-from galton.daemon.ros2.options import Ros2Options, ros2_options
+from galton.daemon.access.users import User, load_users, readable_by_others
+from galton.daemon.access.zenoh_security import TlsFiles
+from galton.daemon.core.limits import Limits, describe_limits, parse_limits
+from galton.daemon.fronts.ros2.options import Ros2Options, ros2_options
+from galton.daemon.fronts.zenoh_config import DEFAULT_LISTEN, DEFAULT_TLS_LISTEN
 from galton.daemon.server import DaemonOptions, run_daemon
-from galton.daemon.users import User, load_users, readable_by_others
-from galton.daemon.zenoh_merge import DEFAULT_LISTEN, DEFAULT_TLS_LISTEN
-from galton.daemon.zenoh_security import TlsFiles
 from galton.protocol import GaltonError, InvalidArgumentError, validate_instance_name
 
 MIN_SNAPSHOT_KEY_BYTES = 16

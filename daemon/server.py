@@ -16,24 +16,24 @@ from typing import Any
 import msgpack
 import zenoh
 
-from galton.daemon import checkpoint
-from galton.daemon.calls import Call, Task
-from galton.daemon.engine import Engine
-from galton.daemon.engines import ENGINE_CLASSES, create_engine
-from galton.daemon.limits import DEFAULT_LIMITS, Limits
-from galton.daemon.loop import SimLoop
-from galton.daemon.ros2.options import Ros2Options
-from galton.daemon.users import User
-from galton.daemon.world import World
-from galton.daemon.zenoh_merge import file_says, listen_endpoints, merge
-from galton.daemon.zenoh_security import (
+from galton.daemon.access.users import User
+from galton.daemon.access.zenoh_security import (
     TlsFiles,
     remove_private_files,
     security_settings,
     tls_settings,
 )
-from galton.daemon.zmq_auth import ZmqSecurity
-from galton.daemon.zmq_front import PolledInbox, ZmqFront, parse_endpoint
+from galton.daemon.access.zmq_auth import ZmqSecurity
+from galton.daemon.core.calls import Call, Task
+from galton.daemon.core.limits import DEFAULT_LIMITS, Limits
+from galton.daemon.core.loop import SimLoop
+from galton.daemon.engines import ENGINE_CLASSES, create_engine
+from galton.daemon.engines.base import Engine
+from galton.daemon.fronts.ros2.options import Ros2Options
+from galton.daemon.fronts.zenoh_config import file_says, listen_endpoints, merge
+from galton.daemon.fronts.zmq import PolledInbox, ZmqFront, parse_endpoint
+from galton.daemon.world import checkpoint
+from galton.daemon.world.scene import World
 from galton.protocol import InvalidArgumentError, Keys, Telemetry
 from galton.protocol.keys import (
     CLIENTS_PATTERN,
@@ -57,7 +57,7 @@ class DaemonOptions:
 
     engine: str = "mujoco"
     instance: str = "galton"
-    # Empty: the --zenoh-config file's endpoints, else DEFAULT_LISTEN (daemon/zenoh_merge.py)
+    # Empty: the --zenoh-config file's endpoints, else DEFAULT_LISTEN (fronts/zenoh_config.py)
     listen: list[str] = field(default_factory=list)
     connect: list[str] = field(default_factory=list)
     zenoh_config: Path | None = None
@@ -65,19 +65,19 @@ class DaemonOptions:
     telemetry_rate_hz: float = 10.0
     params: dict[str, Any] = field(default_factory=dict)
     limits: Limits = DEFAULT_LIMITS
-    state_dir: Path | None = None  # checkpoints of the live world (daemon/checkpoint.py)
+    state_dir: Path | None = None  # checkpoints of the live world (daemon/world/checkpoint.py)
     checkpoint_period_s: float = checkpoint.DEFAULT_PERIOD_S
-    zmq: list[str] = field(default_factory=list)  # ZeroMQ endpoints (daemon/zmq_front.py)
+    zmq: list[str] = field(default_factory=list)  # ZeroMQ endpoints (daemon/fronts/zmq.py)
     users: Mapping[str, User] | None = None  # --users: authentication and roles (SECURITY.md)
     zmq_key: Path | None = None  # --zmq-key: the ZeroMQ front's CURVE key pair
     tls: TlsFiles | None = None  # --tls-cert/--tls-key/--tls-ca
-    ros2: Ros2Options | None = None  # --ros2: the ROS 2 front (daemon/ros2, docs/ROS2.md)
+    ros2: Ros2Options | None = None  # --ros2: the ROS 2 front (daemon/fronts/ros2, docs/ROS2.md)
     snapshot_key: bytes | None = None  # --snapshot-key: the secret that seals snapshot blobs
 
 
 def zenoh_config(options: DaemonOptions) -> zenoh.Config:
     """The --zenoh-config file (or Zenoh's defaults) merged with the options by the rules of
-    daemon/zenoh_merge.py, with --users and --tls-* security (daemon/zenoh_security.py)."""
+    fronts/zenoh_config.py, with --users and --tls-* security (access/zenoh_security.py)."""
     return _merged_config(options, security_settings(options.users, options.tls,
                                                      options.instance))
 
@@ -163,7 +163,9 @@ class Daemon:
         self._queryable = self.session.declare_queryable(self.keys.control_all, self._on_query)
         self._token = self.session.liveliness().declare_token(self.keys.alive)
         if self.options.ros2 is not None:
-            from galton.daemon.ros2.front import Ros2Front  # [ros2] extra: imported here only
+            from galton.daemon.fronts.ros2.front import (
+                Ros2Front,  # [ros2] extra: imported here only
+            )
             self.ros2 = Ros2Front(self.session, self.dispatch, self.options.instance,
                                   self.options.ros2)
 
@@ -238,7 +240,7 @@ class Daemon:
             self.front.publish("telemetry", data)
 
     def _publish_states(self, topic: str, data: bytes) -> None:
-        """A state stream's sample (daemon/state_streams.py), dropped rather than queued
+        """A state stream's sample (daemon/world/state_streams.py), dropped rather than queued
         when the network is congested, as telemetry is."""
         self.session.put(f"{self.keys.prefix}/{topic}", data,
                          congestion_control=zenoh.CongestionControl.DROP)

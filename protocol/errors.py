@@ -24,7 +24,7 @@
     │                                credentials, or a role without that right (client side)
     ├── ClientClosedError            the SDK Client was closed before this call (client side)
     └── EngineCheckError             an engine breaks the engine contract
-                                     (galton.daemon.engine_check; CheckFailedError and
+                                     (galton.daemon.engines.check; CheckFailedError and
                                      CheckSkippedError report one check each)
 """
 

@@ -157,10 +157,10 @@ OPERATIONS: dict[str, Operation] = {op.name: op for op in (
     Operation("contacts", rq.NamesOrAll),
     Operation("get_params", rq.NoArgs, reply=rq.ParamsReply),
     Operation("set_params", rq.SetParams, mutates=True, reply=rq.ParamsReply),
-    # The control lease (daemon/lease.py): they change who may mutate, not the world.
+    # The control lease (daemon/access/lease.py): they change who may mutate, not the world.
     Operation("take_control", rq.NoArgs),
     Operation("release_control", rq.NoArgs),
-    # State streams (daemon/state_streams.py): poses published at a client's rate.
+    # State streams (daemon/world/state_streams.py): poses published at a client's rate.
     Operation("stream_states", rq.StreamStates),
     Operation("close_stream", rq.CloseStream),
 )}

@@ -30,8 +30,8 @@ from typing import Any
 
 import numpy as np
 
-from galton.daemon.engine import Engine
 from galton.daemon.engines import create_engine
+from galton.daemon.engines.base import Engine
 from galton.protocol import BodyGroup
 
 RADIUS, MASS, GRAVITY = 0.045, 0.38, 9.81

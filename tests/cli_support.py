@@ -11,7 +11,7 @@ from typing import Any
 from typer.testing import CliRunner, Result
 
 from galton.client import EmbeddedDaemon
-from galton.client.cli.common import app
+from galton.client.cli.app import app
 
 runner = CliRunner()
 # The real console command, installed beside this interpreter.

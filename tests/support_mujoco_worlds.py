@@ -11,8 +11,8 @@ from typing import Any
 import numpy as np
 import pybullet_data
 
-from galton.daemon.engines.mujoco_engine import MujocoEngine
-from galton.daemon.model_files import resolve_model
+from galton.daemon.engines.mujoco.engine import MujocoEngine
+from galton.daemon.world.model_files import resolve_model
 from galton.protocol import BodyGroup
 
 KUKA = Path(pybullet_data.getDataPath()) / "kuka_iiwa/model.urdf"

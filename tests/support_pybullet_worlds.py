@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 from support_models import ROBOTS
 
-from galton.daemon.engines.pybullet_engine import PybulletEngine
+from galton.daemon.engines.pybullet.engine import PybulletEngine
 from galton.protocol import BodyGroup
 
 SEED = 25

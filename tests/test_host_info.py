@@ -6,7 +6,7 @@ import os
 from pathlib import Path
 
 from galton.client import Client
-from galton.daemon.host_info import cpu_model, host_info
+from galton.daemon.core.host_info import cpu_model, host_info
 from galton.protocol import Capabilities
 
 HOST_KEYS = {"cpu_model", "logical_cores", "memory_bytes", "os", "hostname", "python",

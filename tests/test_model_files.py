@@ -9,7 +9,7 @@ from pathlib import Path
 import pybullet_data
 import pytest
 
-from galton.daemon.model_files import resolve_model, search_folders
+from galton.daemon.world.model_files import resolve_model, search_folders
 from galton.protocol import InvalidArgumentError
 
 DATA = Path(pybullet_data.getDataPath())

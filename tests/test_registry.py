@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import pytest
 
-from galton.daemon.handlers import HANDLERS, check_bindings
+from galton.daemon.ops.handlers import HANDLERS, check_bindings
 from galton.protocol.operations import LONG_RUNNING_TIMEOUT_S, OPERATIONS, Operation, operation
 
 

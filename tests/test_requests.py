@@ -13,7 +13,7 @@ import pytest
 from typer.testing import CliRunner
 
 from galton.client import spheres
-from galton.client.cli.common import app
+from galton.client.cli.app import app
 from galton.protocol import InvalidArgumentError, MalformedRequestError, pack_f64
 from galton.protocol import requests as rq
 from galton.protocol.operations import OPERATIONS

@@ -15,8 +15,8 @@ from typing import Any
 import numpy as np
 import pytest
 
-from galton.daemon.ros2 import interfaces
-from galton.daemon.ros2.messages import decode, encode, header, new, pose_msg, twist_msg
+from galton.daemon.fronts.ros2 import interfaces
+from galton.daemon.fronts.ros2.messages import decode, encode, header, new, pose_msg, twist_msg
 
 pytestmark = [pytest.mark.ros2_tools,
               # rosidl's parser imports lark, which imports the deprecated sre_* modules

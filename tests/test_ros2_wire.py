@@ -13,8 +13,8 @@ from rosbags.typesys import Stores, get_typestore
 from typer.testing import CliRunner
 
 from galton.daemon.cli import app as daemon_app
-from galton.daemon.ros2 import interfaces, rmw_zenoh
-from galton.daemon.ros2.messages import decode, encode, header, new, tf_cdr, vector
+from galton.daemon.fronts.ros2 import interfaces, rmw_zenoh
+from galton.daemon.fronts.ros2.messages import decode, encode, header, new, tf_cdr, vector
 from galton.protocol import InvalidArgumentError
 
 ROSIDL = json.loads((Path(__file__).parent / "ros2_rosidl_hashes.json").read_text())

@@ -31,7 +31,7 @@ from galton.client import (
     spheres,
     wait_for_daemon,
 )
-from galton.client.cli.common import app as cli_app
+from galton.client.cli.app import app as cli_app
 from galton.client.sdk.embedded import free_loopback_port
 from galton.client.transport.session import close_session, daemon_alive, open_session
 from galton.protocol import Keys, Reply, ResultCode, encode_reply

@@ -9,10 +9,10 @@ from collections.abc import Iterator
 
 import pytest
 
-from galton.daemon.calls import Call
+from galton.daemon.core.calls import Call
+from galton.daemon.core.loop import SimLoop
 from galton.daemon.engines import create_engine
-from galton.daemon.loop import SimLoop
-from galton.daemon.world import World
+from galton.daemon.world.scene import World
 from galton.protocol import ResultCode, SimState, decode_reply, encode_request
 
 

@@ -11,8 +11,8 @@ from pathlib import Path
 
 import pytest
 
-from galton.daemon.users import ROLES, load_users, parse_users, readable_by_others
-from galton.daemon.zenoh_security import (
+from galton.daemon.access.users import ROLES, load_users, parse_users, readable_by_others
+from galton.daemon.access.zenoh_security import (
     ROLE_RULES,
     TlsFiles,
     access_control,
@@ -176,7 +176,7 @@ def test_the_dictionary_holds_wire_secrets_in_a_private_file() -> None:
 
 
 def test_the_private_file_is_removed_when_the_process_exits() -> None:
-    code = ("from galton.daemon.zenoh_security import write_private_file; "
+    code = ("from galton.daemon.access.zenoh_security import write_private_file; "
             "print(write_private_file('alice:x\\n'))")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           check=True, timeout=60)

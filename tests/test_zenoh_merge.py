@@ -1,4 +1,4 @@
-"""``--zenoh-config FILE`` merged predictably (daemon/zenoh_merge.py): what the command line
+"""``--zenoh-config FILE`` merged predictably (daemon/fronts/zenoh_config.py): what the command line
 gives wins, else the file, else the daemon's defaults; and the daemon's command line
 refuses bad security options with one line."""
 
@@ -15,8 +15,7 @@ from typer.testing import CliRunner
 from galton.client.sdk.embedded import free_loopback_port
 from galton.client.transport.session import close_session, open_session
 from galton.daemon.cli import app as daemon_app
-from galton.daemon.server import DaemonOptions, listening_on, zenoh_config
-from galton.daemon.zenoh_merge import (
+from galton.daemon.fronts.zenoh_config import (
     DEFAULT_LISTEN,
     DEFAULT_TLS_LISTEN,
     LISTEN,
@@ -25,6 +24,7 @@ from galton.daemon.zenoh_merge import (
     file_says,
     merge,
 )
+from galton.daemon.server import DaemonOptions, listening_on, zenoh_config
 from galton.protocol.errors import InvalidArgumentError
 
 NOTHING: dict[str, Any] = {}

@@ -19,7 +19,7 @@ from support_daemons import start_daemon
 
 from galton.client import Client, EmbeddedDaemon, discover_at
 from galton.client.sdk.embedded import daemon_command, free_loopback_port
-from galton.daemon.zmq_front import telemetry_endpoint
+from galton.daemon.fronts.zmq import telemetry_endpoint
 from galton.protocol import DaemonUnreachableError, InvalidArgumentError
 
 ROOT = Path(__file__).resolve().parents[1]

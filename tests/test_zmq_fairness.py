@@ -13,7 +13,7 @@ import zmq
 from support_daemons import start_daemon
 
 from galton.client import Client, EmbeddedDaemon, plane, spheres
-from galton.daemon.zmq_front import MAX_QUEUED_PER_CONNECTION
+from galton.daemon.fronts.zmq import MAX_QUEUED_PER_CONNECTION
 
 FLOOD = 1800
 PROMPT_S = 3.0  # a status behind the flood took 9 s; behind one render, milliseconds

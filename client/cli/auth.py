@@ -13,9 +13,12 @@ from typing import Annotated
 
 import typer
 
-from galton.client.cli.common import app, run_guarded
+from galton.client.cli.common import run_guarded
 from galton.protocol.auth import validate_user_name, wire_password
 from galton.protocol.errors import InvalidArgumentError
+
+# This group's commands; galton.client.cli.app registers them on the CLI.
+commands = typer.Typer()
 
 
 def read_password(user: str) -> str:
@@ -31,7 +34,7 @@ def read_password(user: str) -> str:
     return password
 
 
-@app.command("hash-password", rich_help_panel="Network")
+@commands.command("hash-password", rich_help_panel="Network")
 def hash_password(
     user: Annotated[str, typer.Argument(help="The user's name, as in the users file.")],
 ) -> None:

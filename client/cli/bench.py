@@ -24,7 +24,7 @@ from galton.client.bench.defaults import (
     DEFAULT_REPETITIONS,
     default_pool_size,
 )
-from galton.client.cli.common import JsonOpt, app, console, fail, run_guarded
+from galton.client.cli.common import JsonOpt, console, fail, run_guarded
 from galton.protocol import GaltonError
 
 if TYPE_CHECKING:
@@ -41,6 +41,9 @@ if TYPE_CHECKING:
 
 if TYPE_CHECKING:
     from galton.analysis.summary import EngineSummary
+
+# This group's commands; galton.client.cli.app registers them on the CLI.
+commands = typer.Typer()
 
 DEFAULT_OUT = Path("galton-results")
 
@@ -76,7 +79,7 @@ def load_board(source: str) -> BoardSpec:
         raise typer.BadParameter(f"--board {source!r}: {error}") from error
 
 
-@app.command()
+@commands.command()
 def bench(
     ctx: typer.Context,
     engines: Annotated[str, typer.Option(help="Comma-separated engines.")] = ",".join(
@@ -263,7 +266,7 @@ def table2(summaries: list[EngineSummary], rows: int = 11) -> Table:
     return table
 
 
-@app.command()
+@commands.command()
 def report(
     results_json: Annotated[Path, typer.Argument(help="A results.json written by bench.",
                                                  exists=True, dir_okay=False)],
@@ -281,7 +284,7 @@ def report(
     _finish(load(), out or results_json.parent, as_json)
 
 
-@app.command()
+@commands.command()
 def sweep(
     ctx: typer.Context,
     param: Annotated[list[str], typer.Option(

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from galton.client.cli.common import Target, app, fail, run_guarded
+from galton.client.cli.common import Target, fail, run_guarded
 from galton.protocol import POSE_WIDTH, TWIST_WIDTH, GaltonError
 from galton.protocol.operations import OPERATIONS
 
@@ -23,6 +23,9 @@ if TYPE_CHECKING:
 
 if TYPE_CHECKING:
     pass
+
+# This group's commands; galton.client.cli.app registers them on the CLI.
+commands = typer.Typer()
 
 BIN_WIDTHS = {"poses": POSE_WIDTH, "twists": TWIST_WIDTH}
 # Argument kinds sent as float64 bins (a single number of kind "values" stays a number).
@@ -97,7 +100,7 @@ def reply_dict(reply: Reply) -> dict[str, Any]:
             "details": unpacked(reply.details)}
 
 
-@app.command(rich_help_panel="Scripts")
+@commands.command(rich_help_panel="Scripts")
 def call(
     ctx: typer.Context,
     op: Annotated[str, typer.Argument(
@@ -128,7 +131,7 @@ def call(
         raise fail(error) from error
 
 
-@app.command(rich_help_panel="Scripts")
+@commands.command(rich_help_panel="Scripts")
 def schema() -> None:
     """Print the JSON Schema of every operation's request and reply (no daemon needed).
 

@@ -16,11 +16,14 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 from galton.analysis.errors import AnalysisError
-from galton.client.cli.common import JsonOpt, app, emit
+from galton.client.cli.common import JsonOpt, emit
 
 if TYPE_CHECKING:
     from galton.analysis.records import TrialRecord
     from galton.analysis.targets import CellVerdict
+
+# This group's commands; galton.client.cli.app registers them on the CLI.
+commands = typer.Typer()
 
 UNREADABLE_EXIT = 2
 
@@ -41,7 +44,7 @@ def _summary_line(cells: list[CellVerdict]) -> str:
     return f"{met} of {len(cells)} cells meet every target ({TARGETS_TEXT})"
 
 
-@app.command()
+@commands.command()
 def check(
     results: Annotated[list[Path], typer.Argument(
         help="results.json files written by bench, or the folders holding them.")],

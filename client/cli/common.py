@@ -1,23 +1,14 @@
-"""galton-client: find, watch and drive galton daemons; run the Galton benchmark.
-
-Every operation of the wire protocol has a command; "call OP JSON" sends any request as is.
-Lists: several entity names are separate arguments (delete a b c); a list given to one
-option is comma-separated in that one value (--pos 0,0,1 or --read a,b). Errors print one
-line naming the wire code and exit 1; bad command lines exit 2 before anything is sent.
-"""
+"""What every command of the CLI shares: the target the global options point at, one
+client per command, errors as one line, tables, JSON output and help text."""
 
 from __future__ import annotations
 
 import inspect
 import json
-import math
-import os
 import re
-import sys
 from collections.abc import Callable
 from dataclasses import asdict
 from importlib.metadata import PackageNotFoundError, version
-from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any, TypeVar
 
 import typer
@@ -26,7 +17,7 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
-from galton.client.transport.credentials import Credentials, resolve_credentials
+from galton.client.transport.credentials import Credentials
 from galton.protocol import (
     AccessDeniedError,
     DaemonUnreachableError,
@@ -64,7 +55,6 @@ def readable(table: Table) -> None:
             column.min_width = min(KEY_WIDTH, max([len(str(column.header)), *cells]))
 
 
-app = typer.Typer(add_completion=False, help=__doc__, no_args_is_help=True)
 console = ReadableConsole()
 T = TypeVar("T")
 PACKAGE = "galton-bridge"
@@ -101,74 +91,6 @@ def package_version() -> str:
     except PackageNotFoundError:
         return "unknown (not installed)"
 
-
-def print_version(wanted: bool) -> None:
-    if wanted:
-        typer.echo(f"galton-client {package_version()}")
-        raise typer.Exit(0)
-
-
-@app.callback()
-def main_options(
-    ctx: typer.Context,
-    connect: Annotated[list[str] | None, typer.Option(
-        help="Zenoh endpoint(s) of daemons, comma-separated (default tcp/127.0.0.1:7460), "
-             "or one daemon's ZeroMQ endpoint: zmq+ipc:///path or zmq+tcp://HOST:PORT.")
-    ] = None,
-    instance: Annotated[str, typer.Option(help="Daemon instance to control.")] = "galton",
-    timeout: Annotated[float, typer.Option(
-        help="Seconds to wait for a reply (steps and rebuilds wait longer).")] = 5.0,
-    user: Annotated[str | None, typer.Option(
-        help="User name for a daemon started with --users (else GALTON_USER).",
-        rich_help_panel="Credentials (docs/SECURITY.md)")] = None,
-    password_file: Annotated[Path | None, typer.Option(
-        help="A file whose first line is the user's password (else GALTON_PASSWORD; a "
-             "GALTON_CREDENTIALS file may hold every credential).", dir_okay=False,
-        rich_help_panel="Credentials (docs/SECURITY.md)")] = None,
-    tls_ca: Annotated[Path | None, typer.Option(
-        help="CA certificate (PEM) that signed the daemon's TLS certificate.",
-        dir_okay=False, rich_help_panel="Credentials (docs/SECURITY.md)")] = None,
-    tls_cert: Annotated[Path | None, typer.Option(
-        help="This client's TLS certificate (PEM), for mutual TLS.", dir_okay=False,
-        rich_help_panel="Credentials (docs/SECURITY.md)")] = None,
-    tls_key: Annotated[Path | None, typer.Option(
-        help="The private key (PEM) of --tls-cert.", dir_okay=False,
-        rich_help_panel="Credentials (docs/SECURITY.md)")] = None,
-    zmq_key: Annotated[Path | None, typer.Option(
-        help="This client's CURVE key pair (.key_secret) for a daemon's encrypted ZeroMQ "
-             "front (else GALTON_ZMQ_KEY).", dir_okay=False,
-        rich_help_panel="Credentials (docs/SECURITY.md)")] = None,
-    zmq_server_key: Annotated[str | None, typer.Option(
-        help="The daemon's CURVE public key: its .key file or the Z85 text (else "
-             "GALTON_ZMQ_SERVER_KEY).", rich_help_panel="Credentials (docs/SECURITY.md)")
-    ] = None,
-    show_version: Annotated[bool, typer.Option(
-        "--version", is_eager=True, callback=print_version,
-        help="Print the version and exit.")] = False,
-) -> None:
-    if not math.isfinite(timeout) or timeout <= 0:
-        raise typer.BadParameter(f"--timeout must be a number of seconds above 0, got {timeout}")
-    credentials = None
-    if ctx.invoked_subcommand != "hash-password":
-        try:
-            credentials = resolve_credentials(user, password_file, tls_ca, tls_cert, tls_key,
-                                              os.environ)
-        except GaltonError as error:
-            raise typer.BadParameter(str(error)) from error
-    ctx.obj = Target(connect, instance, timeout, credentials, _zmq_keys(zmq_key, zmq_server_key))
-
-
-def _zmq_keys(key: Path | None, server_key: str | None) -> ZmqKeys | None:
-    """The options' CURVE keys (both or neither), else the environment's."""
-    if key is None and server_key is None:
-        return None
-    if key is None or server_key is None:
-        raise typer.BadParameter("--zmq-key and --zmq-server-key go together")
-    from galton.client.transport.zmq_keys import ZmqKeys
-    try:
-        return ZmqKeys.load(key, server_key)
-    except GaltonError as error:
-        raise typer.BadParameter(str(error)) from error
 
 
 def error_line(error: GaltonError) -> str:
@@ -249,53 +171,3 @@ def tidy_help(typer_app: typer.Typer) -> None:
         doc = command.help or (command.callback.__doc__ if command.callback else None)
         if doc:
             command.help = help_text(doc)
-
-
-def main() -> None:
-    """The console command: every error is one line on stderr, exit code 2 for a bad
-    command line (typer's boxed usage text and pydantic's "Value error, " left out)."""
-    try:
-        code = app(standalone_mode=False)
-    except typer.Abort:
-        typer.echo("galton-client: aborted", err=True)
-        sys.exit(1)
-    except typer.TyperException as error:  # click's UsageError and its kin
-        sys.exit(usage_error(error))
-    sys.exit(code if isinstance(code, int) else 0)
-
-
-def usage_error(error: typer.TyperException) -> int:
-    """Print a command-line error as one line; return its exit code."""
-    message = " ".join(str(getattr(error, "format_message", error.__str__)()).split())
-    message = message.replace("Value error, ", "")
-    context = getattr(error, "ctx", None)
-    command = context.command_path if context is not None else "galton-client"
-    typer.echo(f"galton-client: {message} (see '{command} --help')", err=True)
-    code: int = getattr(error, "exit_code", 2)
-    return code
-
-
-# Registering every command on ``app`` (each module adds its own):
-from galton.client.cli import (  # noqa: E402,F401
-    auth,
-    bench,
-    call,
-    check,
-    control,
-    fuzz,
-    joints,
-    laws,
-    perception,
-    report_card,
-    router,
-    scene,
-    states,
-    streams,
-    time,
-    view,
-    world,
-    worlds,
-)
-from galton.client.cli import zmq_keys as zmq_keys_commands  # noqa: E402,F401
-
-tidy_help(app)

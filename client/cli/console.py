@@ -1,5 +1,5 @@
 """The ``galton-client`` command's entry: ``--version`` answers before typer and the
-commands are imported; anything else goes to the CLI (``galton.client.cli.common``)."""
+commands are imported; anything else goes to the CLI (``galton.client.cli.app``)."""
 
 from __future__ import annotations
 
@@ -14,6 +14,6 @@ def main() -> None:
         except PackageNotFoundError:
             print("galton-client unknown (not installed)")
         return
-    from galton.client.cli.common import main as cli_main
+    from galton.client.cli.app import main as cli_main
 
     cli_main()

@@ -14,15 +14,18 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from galton.client.cli.common import JsonOpt, app, console, emit, with_client
+from galton.client.cli.common import JsonOpt, console, emit, with_client
 
 if TYPE_CHECKING:
     from galton.client.sdk.client import Client
 
+# This group's commands; galton.client.cli.app registers them on the CLI.
+commands = typer.Typer()
+
 PANEL = "Control"
 
 
-@app.command("take-control", rich_help_panel=PANEL)
+@commands.command("take-control", rich_help_panel=PANEL)
 def take_control(ctx: typer.Context,
                  hold: Annotated[float | None, typer.Option(
                      help="Seconds to hold control, then release it (default: until "
@@ -53,7 +56,7 @@ def take_control(ctx: typer.Context,
     with_client(ctx, hold_control)
 
 
-@app.command("release-control", rich_help_panel=PANEL)
+@commands.command("release-control", rich_help_panel=PANEL)
 def release_control(ctx: typer.Context, as_json: JsonOpt = False) -> None:
     """Release control held by this command's client. Another process's control is its
     own: the daemon refuses (CONTROL_HELD, naming the holder), and the lease ends when that

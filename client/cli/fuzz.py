@@ -8,14 +8,17 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from galton.client.cli.common import JsonOpt, app, console, run_guarded
+from galton.client.cli.common import JsonOpt, console, run_guarded
 
 if TYPE_CHECKING:
 
     from galton.client.fuzz.campaign import FuzzReport
 
+# This group's commands; galton.client.cli.app registers them on the CLI.
+commands = typer.Typer()
 
-@app.command()
+
+@commands.command()
 def fuzz(
     ctx: typer.Context,
     requests: Annotated[int, typer.Option(help="Requests to send.", min=1)] = 2000,

@@ -15,7 +15,7 @@ import typer
 from rich.table import Table
 
 from galton.client.cli.choices import LIST_HELP, TargetMode, counted, numbers, rows
-from galton.client.cli.common import JsonOpt, app, console, emit, show_stamp, with_client
+from galton.client.cli.common import JsonOpt, console, emit, show_stamp, with_client
 from galton.client.cli.states import NamesArg
 
 if TYPE_CHECKING:
@@ -25,6 +25,9 @@ if TYPE_CHECKING:
     import numpy as np
 
     from galton.client.sdk.values import JointStates
+
+# This group's commands; galton.client.cli.app registers them on the CLI.
+commands = typer.Typer()
 
 PANEL = "Joints"
 JointNamesArg = Annotated[list[str], typer.Argument(
@@ -86,7 +89,7 @@ def show_joint_states(states: JointStates, as_json: bool) -> None:
     emit(joint_states_dict(states), as_json, lambda: render_joint_states(states))
 
 
-@app.command(rich_help_panel=PANEL)
+@commands.command(rich_help_panel=PANEL)
 def joints(
     ctx: typer.Context,
     names: SomeJoints = None,
@@ -98,13 +101,13 @@ def joints(
     show_joints(with_client(ctx, lambda c: c.joints(model, names or None)), as_json)
 
 
-@app.command("get-joints", rich_help_panel=PANEL)
+@commands.command("get-joints", rich_help_panel=PANEL)
 def get_joints(ctx: typer.Context, names: SomeJoints = None, as_json: JsonOpt = False) -> None:
     """Show positions, velocities and applied efforts of 1-DOF joints, in one request."""
     show_joint_states(with_client(ctx, lambda c: c.get_joint_states(names or None)), as_json)
 
 
-@app.command("set-joints", rich_help_panel=PANEL)
+@commands.command("set-joints", rich_help_panel=PANEL)
 def set_joints(
     ctx: typer.Context,
     names: JointNamesArg,
@@ -122,7 +125,7 @@ def set_joints(
     show_stamp(f"set {counted(count, 'joint', 'joints')}", stamp, as_json, names=names)
 
 
-@app.command("joint-targets", rich_help_panel=PANEL)
+@commands.command("joint-targets", rich_help_panel=PANEL)
 def joint_targets(
     ctx: typer.Context,
     mode: Annotated[TargetMode, typer.Argument(
@@ -150,7 +153,7 @@ def joint_targets(
                names=names, mode=str(mode))
 
 
-@app.command(rich_help_panel=PANEL)
+@commands.command(rich_help_panel=PANEL)
 def wrench(
     ctx: typer.Context,
     names: NamesArg,
@@ -177,7 +180,7 @@ def wrench(
     show_stamp(f"wrench on {counted(count, 'body', 'bodies')}", stamp, as_json, names=names)
 
 
-@app.command("clear-wrenches", rich_help_panel=PANEL)
+@commands.command("clear-wrenches", rich_help_panel=PANEL)
 def clear_wrenches(
     ctx: typer.Context,
     names: Annotated[list[str] | None, typer.Argument(
@@ -193,4 +196,4 @@ def clear_wrenches(
 # The operations' own names, for whoever types them (hidden: one command, two names).
 for alias, command in (("get-joint-states", get_joints), ("set-joint-states", set_joints),
                        ("set-joint-targets", joint_targets), ("apply-wrench", wrench)):
-    app.command(alias, hidden=True, rich_help_panel=PANEL)(command)
+    commands.command(alias, hidden=True, rich_help_panel=PANEL)(command)

@@ -14,11 +14,14 @@ from typing import TYPE_CHECKING, Annotated, Any
 import typer
 from rich.table import Table
 
-from galton.client.cli.common import JsonOpt, Target, app, console, emit, run_guarded
+from galton.client.cli.common import JsonOpt, Target, console, emit, run_guarded
 
 if TYPE_CHECKING:
     from galton.analysis.laws import LawResults
     from galton.client.sdk.client import Client
+
+# This group's commands; galton.client.cli.app registers them on the CLI.
+commands = typer.Typer()
 
 DEFAULT_OUT = Path("galton-laws")
 
@@ -43,7 +46,7 @@ def _daemon(target: Target, engines: list[str] | None) -> Iterator[Client]:
         yield client
 
 
-@app.command()
+@commands.command()
 def laws(
     ctx: typer.Context,
     engines: Annotated[str | None, typer.Option(

@@ -16,7 +16,7 @@ import typer
 from rich.table import Table
 
 from galton.client.cli.choices import LIST_HELP, numbers, split_list
-from galton.client.cli.common import JsonOpt, app, console, emit, with_client
+from galton.client.cli.common import JsonOpt, console, emit, with_client
 
 if TYPE_CHECKING:
     pass
@@ -25,6 +25,9 @@ if TYPE_CHECKING:
     import numpy as np
 
     from galton.client.sdk.values import Contacts, Image, RayHits
+
+# This group's commands; galton.client.cli.app registers them on the CLI.
+commands = typer.Typer()
 
 PANEL = "Perception"
 XYZ = "x,y,z"
@@ -94,7 +97,7 @@ def write_image(image: Image, out: Path | None, depth_out: Path | None,
     return written
 
 
-@app.command(rich_help_panel=PANEL)
+@commands.command(rich_help_panel=PANEL)
 def render(
     ctx: typer.Context,
     out: Annotated[Path | None, typer.Option(help="Write the RGB picture here (PNG).")] = None,
@@ -128,7 +131,7 @@ def render(
         + (f" (seen: {', '.join(seen)})" if seen else ""), markup=False))
 
 
-@app.command("add-camera", rich_help_panel=PANEL)
+@commands.command("add-camera", rich_help_panel=PANEL)
 def add_camera(
     ctx: typer.Context, name: CameraNameArg,
     eye: EyeOpt = None, target: TargetOpt = None, up: UpOpt = None, fov: FovOpt = None,
@@ -145,7 +148,7 @@ def add_camera(
     show_cameras({name: kept}, as_json)
 
 
-@app.command("remove-camera", rich_help_panel=PANEL)
+@commands.command("remove-camera", rich_help_panel=PANEL)
 def remove_camera(ctx: typer.Context, name: CameraNameArg, as_json: JsonOpt = False) -> None:
     """Remove a named camera."""
     with_client(ctx, lambda c: c.remove_camera(name))
@@ -153,7 +156,7 @@ def remove_camera(ctx: typer.Context, name: CameraNameArg, as_json: JsonOpt = Fa
                                                            markup=False))
 
 
-@app.command(rich_help_panel=PANEL)
+@commands.command(rich_help_panel=PANEL)
 def cameras(ctx: typer.Context, as_json: JsonOpt = False) -> None:
     """List the world's named cameras."""
     show_cameras(with_client(ctx, lambda c: c.cameras()), as_json)
@@ -185,7 +188,7 @@ def ray_rows(text: str, where: str) -> np.ndarray:
     return np.asarray(values, dtype=float).reshape(-1, 3)
 
 
-@app.command(rich_help_panel=PANEL)
+@commands.command(rich_help_panel=PANEL)
 def raycast(
     ctx: typer.Context,
     origins: Annotated[str, typer.Option(
@@ -234,7 +237,7 @@ def _finite(row: np.ndarray) -> list[float] | None:
     return [float(v) for v in row] if np.isfinite(row).all() else None
 
 
-@app.command(rich_help_panel=PANEL)
+@commands.command(rich_help_panel=PANEL)
 def contacts(
     ctx: typer.Context,
     names: Annotated[list[str] | None, typer.Argument(

@@ -14,11 +14,14 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from galton.client.cli.common import app, console, run_guarded
+from galton.client.cli.common import console, run_guarded
 
 if TYPE_CHECKING:
     from galton.analysis.laws import LawResults
     from galton.analysis.report_card import CardResults
+
+# This group's commands; galton.client.cli.app registers them on the CLI.
+commands = typer.Typer()
 
 DEFAULT_OUT = Path("galton-report-card")
 
@@ -32,7 +35,7 @@ def offered_engines() -> list[str]:
         return list(sim.capabilities().engines_available)
 
 
-@app.command("report-card")
+@commands.command("report-card")
 def report_card(
     engines: Annotated[str | None, typer.Option(
         help="Comma-separated engines (default: every engine installed).")] = None,

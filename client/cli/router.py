@@ -16,10 +16,11 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from galton.client.cli.common import app
-
 if TYPE_CHECKING:
     import zenoh
+
+# This group's commands; galton.client.cli.app registers them on the CLI.
+commands = typer.Typer()
 
 
 DEFAULT_ROUTER_LISTEN = "tcp/127.0.0.1:7447"
@@ -54,7 +55,7 @@ def wait_for_stop() -> None:
     stop.wait()
 
 
-@app.command(rich_help_panel="Network")
+@commands.command(rich_help_panel="Network")
 def router(
     listen: Annotated[list[str] | None, typer.Option(
         help="Endpoint to listen on (repeatable); e.g. tcp/0.0.0.0:7447 for other machines. "

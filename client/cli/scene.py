@@ -19,13 +19,16 @@ from galton.client.cli.choices import (
     rows,
     split_list,
 )
-from galton.client.cli.common import JsonOpt, app, console, emit, show_stamp, with_client
+from galton.client.cli.common import JsonOpt, console, emit, show_stamp, with_client
 from galton.client.cli.states import NamesArg
 from galton.protocol import TWIST_WIDTH
 from galton.protocol.vocabulary import SIZE_LAYOUT
 
 if TYPE_CHECKING:
     import numpy as np
+
+# This group's commands; galton.client.cli.app registers them on the CLI.
+commands = typer.Typer()
 
 
 PANEL = "Scene"
@@ -89,7 +92,7 @@ def tag_values(tags: str | None) -> tuple[str, ...] | None:
     return None if tags is None else tuple(split_list(tags, "--tags"))
 
 
-@app.command(rich_help_panel=PANEL)
+@commands.command(rich_help_panel=PANEL)
 def spawn(
     ctx: typer.Context,
     shape: Annotated[Shape, typer.Argument(help="Shape of every body.", show_default=False)],
@@ -150,7 +153,7 @@ def model_text(file: Path) -> str:
             from None
 
 
-@app.command("load-model", rich_help_panel=PANEL)
+@commands.command("load-model", rich_help_panel=PANEL)
 def load_model(
     ctx: typer.Context,
     file: Annotated[Path | None, typer.Option(
@@ -202,7 +205,7 @@ def with_own_folder(file: Path, text: str, folders: list[str] | None) -> list[st
     return [own, *(f for f in folders or [] if f != own)]
 
 
-@app.command(rich_help_panel=PANEL)
+@commands.command(rich_help_panel=PANEL)
 def entities(
     ctx: typer.Context,
     name: Annotated[str | None, typer.Option(help="Name glob, * and ? (quote it).")] = None,
@@ -229,7 +232,7 @@ def _maybe(value: float | None) -> str:
     return "–" if value is None else f"{value:.4g}"
 
 
-@app.command(rich_help_panel=PANEL)
+@commands.command(rich_help_panel=PANEL)
 def update(
     ctx: typer.Context,
     names: NamesArg,
@@ -252,7 +255,7 @@ def update(
     show_stamp(f"updated {counted(len(names), 'entity', 'entities')}", stamp, as_json, names=names)
 
 
-@app.command(rich_help_panel=PANEL)
+@commands.command(rich_help_panel=PANEL)
 def delete(ctx: typer.Context, names: NamesArg, as_json: JsonOpt = False) -> None:
     """Remove entities in one request (all or none: an unknown name deletes nothing)."""
     stamp = with_client(ctx, lambda c: c.delete(names))

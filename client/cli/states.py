@@ -9,13 +9,16 @@ import typer
 from rich.table import Table
 
 from galton.client.cli.choices import LIST_HELP, counted, numbers, rows
-from galton.client.cli.common import JsonOpt, app, console, emit, show_stamp, with_client
+from galton.client.cli.common import JsonOpt, console, emit, show_stamp, with_client
 from galton.protocol import POSE_WIDTH, TWIST_WIDTH
 
 if TYPE_CHECKING:
     import numpy as np
 
     from galton.client.sdk.client import States
+
+# This group's commands; galton.client.cli.app registers them on the CLI.
+commands = typer.Typer()
 
 PANEL = "Scene"
 NamesArg = Annotated[list[str], typer.Argument(
@@ -48,7 +51,7 @@ def show_states(states: States, as_json: bool, **extra: Any) -> None:
     emit(states_dict(states, **extra), as_json, render)
 
 
-@app.command("get-states", rich_help_panel=PANEL)
+@commands.command("get-states", rich_help_panel=PANEL)
 def get_states(
     ctx: typer.Context,
     names: Annotated[list[str] | None, typer.Argument(
@@ -61,7 +64,7 @@ def get_states(
     show_states(states, as_json)
 
 
-@app.command("get-bounds", rich_help_panel=PANEL)
+@commands.command("get-bounds", rich_help_panel=PANEL)
 def get_bounds(
     ctx: typer.Context,
     names: Annotated[list[str] | None, typer.Argument(
@@ -80,7 +83,7 @@ def get_bounds(
     emit({name: row.tolist() for name, row in bounds.items()}, as_json, render)
 
 
-@app.command("get-shapes", rich_help_panel=PANEL)
+@commands.command("get-shapes", rich_help_panel=PANEL)
 def get_shapes(
     ctx: typer.Context,
     names: Annotated[list[str] | None, typer.Argument(
@@ -102,7 +105,7 @@ def get_shapes(
                  for s in found] for name, found in shapes.items()}, as_json, render)
 
 
-@app.command("set-states", rich_help_panel=PANEL)
+@commands.command("set-states", rich_help_panel=PANEL)
 def set_states(
     ctx: typer.Context,
     names: NamesArg,

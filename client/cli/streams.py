@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from galton.client.cli.common import JsonOpt, Target, app, console, with_client
+from galton.client.cli.common import JsonOpt, Target, console, with_client
 
 if TYPE_CHECKING:
     from galton.protocol import Telemetry
@@ -19,12 +19,15 @@ if TYPE_CHECKING:
 if TYPE_CHECKING:
     from galton.client.sdk.client import Client
 
+# This group's commands; galton.client.cli.app registers them on the CLI.
+commands = typer.Typer()
+
 PANEL = "Streams"
 Count = Annotated[int, typer.Option(help="Stop after N samples (0 = run until Ctrl-C).",
                                     min=0)]
 
 
-@app.command(rich_help_panel=PANEL)
+@commands.command(rich_help_panel=PANEL)
 def watch(ctx: typer.Context, count: Count = 0, as_json: JsonOpt = False) -> None:
     """Print live telemetry, a line per world each period: sim time, RTF, CPU and memory
     (JSON: one object a line)."""
@@ -52,7 +55,7 @@ def print_telemetry(sample: Telemetry, as_json: bool) -> None:
         markup=False)
 
 
-@app.command(rich_help_panel=PANEL)
+@commands.command(rich_help_panel=PANEL)
 def events(ctx: typer.Context,
            count: Annotated[int, typer.Option(
                help="Stop after N events (0 = run until Ctrl-C).", min=0)] = 0,

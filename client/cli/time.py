@@ -8,13 +8,16 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 from galton.client.cli.choices import LIST_HELP, ResetScope, counted, numbers, split_list
-from galton.client.cli.common import JsonOpt, app, show_stamp, show_status, with_client
+from galton.client.cli.common import JsonOpt, show_stamp, show_status, with_client
 from galton.client.cli.joints import joint_states_dict, render_joint_states, show_joint_states
 from galton.client.cli.states import show_states, states_dict
 from galton.client.cli.worlds import WorldOpt, on_world
 
 if TYPE_CHECKING:
     from galton.client.sdk.client import Client, JointStates, States
+
+# This group's commands; galton.client.cli.app registers them on the CLI.
+commands = typer.Typer()
 
 PANEL = "Clock"
 Read = Annotated[str | None, typer.Option(
@@ -26,7 +29,7 @@ Rtf = Annotated[float, typer.Argument(
     help="Target real-time factor (0 = as fast as possible).", min=0.0, show_default=False)]
 
 
-@app.command(rich_help_panel=PANEL)
+@commands.command(rich_help_panel=PANEL)
 def play(ctx: typer.Context,
          rtf: Annotated[float | None, typer.Option(
              help="Target real-time factor (0 = as fast as possible; default: the current "
@@ -36,25 +39,25 @@ def play(ctx: typer.Context,
     show_status(with_client(ctx, lambda c: c.play(rtf)), as_json)
 
 
-@app.command("set-rtf", rich_help_panel=PANEL)
+@commands.command("set-rtf", rich_help_panel=PANEL)
 def set_rtf(ctx: typer.Context, rtf: Rtf, as_json: JsonOpt = False) -> None:
     """Change the target real-time factor, playing or not."""
     show_status(with_client(ctx, lambda c: c.set_rtf(rtf)), as_json)
 
 
-@app.command(rich_help_panel=PANEL)
+@commands.command(rich_help_panel=PANEL)
 def pause(ctx: typer.Context, as_json: JsonOpt = False) -> None:
     """Pause the simulation clock (a running step request ends)."""
     show_status(with_client(ctx, lambda c: c.pause()), as_json)
 
 
-@app.command(rich_help_panel=PANEL)
+@commands.command(rich_help_panel=PANEL)
 def stop(ctx: typer.Context, as_json: JsonOpt = False) -> None:
     """Pause and rewind: time to 0, entities back to their created state."""
     show_status(with_client(ctx, lambda c: c.stop()), as_json)
 
 
-@app.command(rich_help_panel=PANEL)
+@commands.command(rich_help_panel=PANEL)
 def reset(ctx: typer.Context,
           scope: Annotated[ResetScope, typer.Option(
               help="time: clock to 0; state: entities to their created state; spawned: "
@@ -95,7 +98,7 @@ def read_step(client: Client, count: int, names: list[str] | None,
     return client.step_and_read_both(count, names, joints)
 
 
-@app.command(rich_help_panel=PANEL)
+@commands.command(rich_help_panel=PANEL)
 def step(ctx: typer.Context,
          count: Annotated[int, typer.Argument(help="Steps to advance.", min=1)] = 1,
          read: Read = None,
@@ -121,7 +124,7 @@ def rest_rule(text: str) -> tuple[float, float]:
     return values[0], values[1]
 
 
-@app.command("run-until", rich_help_panel=PANEL)
+@commands.command("run-until", rich_help_panel=PANEL)
 def run_until(
     ctx: typer.Context,
     sim_time: Annotated[float, typer.Argument(help="Sim time to reach, s.",

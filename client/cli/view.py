@@ -15,11 +15,14 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from galton.client.cli.common import JsonOpt, Target, app, run_guarded
+from galton.client.cli.common import JsonOpt, Target, run_guarded
 from galton.client.cli.streams import until_interrupted
 
 if TYPE_CHECKING:  # numpy, the SDK and viser load when a command runs, not for --help
     from galton.client.sdk.client import Client, StateSample
+
+# This group's commands; galton.client.cli.app registers them on the CLI.
+commands = typer.Typer()
 
 PANEL = "Streams"
 RECORDING_SUFFIX = ".npz"  # galton.client.view.recording.SUFFIX
@@ -45,7 +48,7 @@ def _require_viser() -> None:
             "galton-client view needs the [view] extra: pip install 'galton-bridge[view]'")
 
 
-@app.command(rich_help_panel=PANEL)
+@commands.command(rich_help_panel=PANEL)
 def view(ctx: typer.Context,
          source: Annotated[Path | None, typer.Argument(
              help="A bench results directory or a recording (.npz) to replay, instead of a "
@@ -116,7 +119,7 @@ def _ready(host: str, port: int) -> None:
     typer.echo(f"galton-client view: serving http://{host}:{port}", err=True)
 
 
-@app.command(rich_help_panel=PANEL)
+@commands.command(rich_help_panel=PANEL)
 def record(ctx: typer.Context,
            out: Annotated[Path, typer.Argument(help="The recording to write (.npz).")],
            rate: Annotated[float, typer.Option(
@@ -145,7 +148,7 @@ def record(ctx: typer.Context,
     run_guarded(go)
 
 
-@app.command("stream-states", rich_help_panel=PANEL)
+@commands.command("stream-states", rich_help_panel=PANEL)
 def stream_states(ctx: typer.Context,
                   names: Annotated[list[str] | None, typer.Argument(
                       help="Entities to stream (default: every one).")] = None,

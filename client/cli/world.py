@@ -12,7 +12,6 @@ from galton.client.cli.choices import Engine, assignments
 from galton.client.cli.common import (
     JsonOpt,
     Target,
-    app,
     console,
     emit,
     run_guarded,
@@ -26,13 +25,16 @@ if TYPE_CHECKING:
 if TYPE_CHECKING:
     pass
 
+# This group's commands; galton.client.cli.app registers them on the CLI.
+commands = typer.Typer()
+
 PANEL = "World"
 Assignments = Annotated[list[str] | None, typer.Argument(
     help="NAME=VALUE pairs, VALUE read as JSON (gravity=[0,0,-9.81]).", metavar="NAME=VALUE...",
     show_default=False)]
 
 
-@app.command(rich_help_panel=PANEL)
+@commands.command(rich_help_panel=PANEL)
 def daemons(ctx: typer.Context, as_json: JsonOpt = False) -> None:
     """List the daemons reachable through --connect, with instance, engine, state, host
     and ZeroMQ endpoints."""
@@ -53,7 +55,7 @@ def daemons(ctx: typer.Context, as_json: JsonOpt = False) -> None:
     emit([d.to_dict() for d in found], as_json, render)
 
 
-app.command("ls", hidden=True)(daemons)  # the old name: one command, two names
+commands.command("ls", hidden=True)(daemons)  # the old name: one command, two names
 
 
 def host_line(host: dict[str, Any]) -> str:
@@ -64,13 +66,13 @@ def host_line(host: dict[str, Any]) -> str:
            f"{host.get('logical_cores', '?')} cores"
 
 
-@app.command(rich_help_panel=PANEL)
+@commands.command(rich_help_panel=PANEL)
 def status(ctx: typer.Context, as_json: JsonOpt = False) -> None:
     """Show the simulation state and clock of one daemon."""
     show_status(with_client(ctx, lambda c: c.status()), as_json)
 
 
-@app.command(rich_help_panel=PANEL)
+@commands.command(rich_help_panel=PANEL)
 def capabilities(ctx: typer.Context, as_json: JsonOpt = False) -> None:
     """Show what the engine can do: shapes, model formats, features and parameters."""
     found = with_client(ctx, lambda c: c.capabilities())
@@ -92,7 +94,7 @@ def render_capabilities(found: Capabilities) -> None:
     console.print(params)
 
 
-@app.command("load-world", rich_help_panel=PANEL)
+@commands.command("load-world", rich_help_panel=PANEL)
 def load_world(ctx: typer.Context,
                engine: Annotated[Engine, typer.Argument(help="Engine of the new world.",
                                                         show_default=False)],
@@ -104,7 +106,7 @@ def load_world(ctx: typer.Context,
     show_status(with_client(ctx, lambda c: c.load_world(str(engine), values)), as_json)
 
 
-@app.command(rich_help_panel=PANEL)
+@commands.command(rich_help_panel=PANEL)
 def params(ctx: typer.Context, assign: Assignments = None, as_json: JsonOpt = False) -> None:
     """Show engine parameters, or set some (all or none) and show them after."""
     updates = assignments(assign)

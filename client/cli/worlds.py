@@ -14,13 +14,16 @@ import typer
 from rich.table import Table
 
 from galton.client.cli.choices import LIST_HELP, Engine, assignments, rows, split_list
-from galton.client.cli.common import JsonOpt, app, console, emit, with_client
+from galton.client.cli.common import JsonOpt, console, emit, with_client
 from galton.client.cli.states import NamesArg, pose_values
 from galton.protocol import TWIST_WIDTH
 
 if TYPE_CHECKING:
     from galton.client.sdk.client import Client
     from galton.client.sdk.values import Comparison, Prediction, SnapshotInfo, WorldInfo
+
+# This group's commands; galton.client.cli.app registers them on the CLI.
+commands = typer.Typer()
 
 PANEL = "Worlds and snapshots"
 WorldOpt = Annotated[str | None, typer.Option(
@@ -44,16 +47,16 @@ def show_worlds(found: list[WorldInfo], as_json: bool) -> None:
     emit([asdict(w) for w in found], as_json, render)
 
 
-@app.command(rich_help_panel=PANEL)
+@commands.command(rich_help_panel=PANEL)
 def worlds(ctx: typer.Context, as_json: JsonOpt = False) -> None:
     """List the daemon's worlds: the live one first, then the side worlds."""
     show_worlds(with_client(ctx, lambda c: c.list_worlds()), as_json)
 
 
-app.command("list-worlds", hidden=True)(worlds)  # the operation's name: one command, two names
+commands.command("list-worlds", hidden=True)(worlds)  # the operation's name: one command, two names
 
 
-@app.command("create-world", rich_help_panel=PANEL)
+@commands.command("create-world", rich_help_panel=PANEL)
 def create_world(
     ctx: typer.Context, name: WorldArg,
     params: Annotated[list[str] | None, typer.Argument(
@@ -70,7 +73,7 @@ def create_world(
     show_worlds([made], as_json)
 
 
-@app.command("fork-world", rich_help_panel=PANEL)
+@commands.command("fork-world", rich_help_panel=PANEL)
 def fork_world(
     ctx: typer.Context, name: WorldArg,
     source: Annotated[str | None, typer.Option(
@@ -81,7 +84,7 @@ def fork_world(
     show_worlds([with_client(ctx, lambda c: c.fork_world(name, source))], as_json)
 
 
-@app.command("delete-world", rich_help_panel=PANEL)
+@commands.command("delete-world", rich_help_panel=PANEL)
 def delete_world(ctx: typer.Context, name: WorldArg, as_json: JsonOpt = False) -> None:
     """Delete a side world (the live one cannot be)."""
     with_client(ctx, lambda c: c.delete_world(name))
@@ -105,7 +108,7 @@ def show_snapshots(found: list[SnapshotInfo], as_json: bool, **extra: Any) -> No
     emit([{**snapshot_dict(s), **extra} for s in found], as_json, render)
 
 
-@app.command(rich_help_panel=PANEL)
+@commands.command(rich_help_panel=PANEL)
 def snapshot(
     ctx: typer.Context,
     slot: Annotated[str | None, typer.Argument(
@@ -125,7 +128,7 @@ def snapshot(
     show_snapshots([taken], as_json, **extra)
 
 
-@app.command(rich_help_panel=PANEL)
+@commands.command(rich_help_panel=PANEL)
 def restore(
     ctx: typer.Context,
     slot: Annotated[str | None, typer.Option(help="A daemon slot.")] = None,
@@ -140,13 +143,13 @@ def restore(
     show_worlds([with_client(ctx, lambda c: on_world(c, world).restore(slot, blob))], as_json)
 
 
-@app.command(rich_help_panel=PANEL)
+@commands.command(rich_help_panel=PANEL)
 def snapshots(ctx: typer.Context, as_json: JsonOpt = False) -> None:
     """List the snapshot slots the daemon keeps."""
     show_snapshots(with_client(ctx, lambda c: c.snapshots()), as_json)
 
 
-@app.command("delete-snapshot", rich_help_panel=PANEL)
+@commands.command("delete-snapshot", rich_help_panel=PANEL)
 def delete_snapshot(ctx: typer.Context, slot: SlotArg, as_json: JsonOpt = False) -> None:
     """Delete a snapshot slot."""
     with_client(ctx, lambda c: c.delete_snapshot(slot))
@@ -172,7 +175,7 @@ def render_prediction(found: Prediction) -> None:
     console.print(table)
 
 
-@app.command(rich_help_panel=PANEL)
+@commands.command(rich_help_panel=PANEL)
 def predict(
     ctx: typer.Context,
     horizon: Annotated[float, typer.Argument(help="Seconds of sim time to run ahead.")],
@@ -206,7 +209,7 @@ def render_comparison(found: Comparison) -> None:
         console.print("the bodies were set to the observation")
 
 
-@app.command(rich_help_panel=PANEL)
+@commands.command(rich_help_panel=PANEL)
 def compare(
     ctx: typer.Context, names: NamesArg,
     poses: Annotated[str, typer.Option(

@@ -13,14 +13,17 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from galton.client.cli.common import app, run_guarded
+from galton.client.cli.common import run_guarded
 from galton.protocol.errors import InvalidArgumentError
 
 if TYPE_CHECKING:
     pass
 
+# This group's commands; galton.client.cli.app registers them on the CLI.
+commands = typer.Typer()
 
-@app.command("zmq-keys", rich_help_panel="Network")
+
+@commands.command("zmq-keys", rich_help_panel="Network")
 def zmq_keys(
     folder: Annotated[Path, typer.Argument(help="Folder to write NAME.key and "
                                                 "NAME.key_secret in (made if missing).")],

@@ -35,6 +35,9 @@ DEFAULT_ENDPOINT = f"tcp/127.0.0.1:{DEFAULT_PORT}"
 # How long a liveliness get may take to say whether a silent daemon is there. It answers
 # in well under a millisecond on loopback whether or not the token exists.
 LIVELINESS_TIMEOUT_S = 1.0
+# How long a get that ended early is watched before it counts as refused: a daemon killed
+# mid-request ends the get at once too, and its token takes a moment to vanish.
+DEATH_GRACE_S = 0.3
 
 
 class Declared(Protocol):
@@ -134,11 +137,27 @@ def first_reply(replies: Iterable[zenoh.Reply], session: zenoh.Session, keys: Ke
             return decode_reply(answer.ok.payload.to_bytes())
     if daemon_alive(session, keys):
         if refused_at_once(time.monotonic() - started, wait):
+            if not stays_alive(session, keys, DEATH_GRACE_S):
+                raise unreachable(op, keys.instance)
             raise access_denied(op, keys.instance)
         raise RequestTimeoutError(
             f"{op}: daemon {keys.instance!r} is alive but sent no reply within {wait:g} s "
             "(busy with a long request, or the operation needs longer: pass a longer "
             "timeout)")
-    raise DaemonUnreachableError(
-        f"{op}: no daemon serves instance {keys.instance!r} (not running, or another "
+    raise unreachable(op, keys.instance)
+
+
+def stays_alive(session: zenoh.Session, keys: Keys, grace_s: float) -> bool:
+    """Whether the instance's token stays visible for grace_s (looked at again and again:
+    each look is a liveliness round trip); False as soon as it is gone."""
+    until = time.monotonic() + grace_s
+    while time.monotonic() < until:
+        if not daemon_alive(session, keys):
+            return False
+    return True
+
+
+def unreachable(op: str, instance: str) -> DaemonUnreachableError:
+    return DaemonUnreachableError(
+        f"{op}: no daemon serves instance {instance!r} (not running, or another "
         "instance name: `galton-client daemons` lists them)")

@@ -4,13 +4,13 @@ from __future__ import annotations
 
 import importlib
 
-from galton.daemon.engine import Engine, native_output_silenced
+from galton.daemon.engines.base import Engine, native_output_silenced
 from galton.protocol import FeatureUnsupportedError, InvalidArgumentError
 from galton.protocol.errors import did_you_mean
 
 ENGINE_CLASSES: dict[str, str] = {
-    "mujoco": "galton.daemon.engines.mujoco_engine:MujocoEngine",
-    "pybullet": "galton.daemon.engines.pybullet_engine:PybulletEngine",
+    "mujoco": "galton.daemon.engines.mujoco.engine:MujocoEngine",
+    "pybullet": "galton.daemon.engines.pybullet.engine:PybulletEngine",
     "ode": "galton.daemon.engines.ode.engine:OdeEngine",
     "dart": "galton.daemon.engines.dart.engine:DartEngine",
 }

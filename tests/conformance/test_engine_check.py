@@ -10,16 +10,16 @@ from collections.abc import Sequence
 import numpy as np
 import pytest
 
-from galton.daemon.engine import FEATURE_LOAD_MODEL
-from galton.daemon.engine_check import (
+from galton.daemon.engines import ENGINE_CLASSES
+from galton.daemon.engines.base import FEATURE_LOAD_MODEL
+from galton.daemon.engines.check import (
     ENGINE_CHECKS,
     EngineCheckError,
     check_engine,
     run_check,
 )
-from galton.daemon.engines import ENGINE_CLASSES
-from galton.daemon.engines.mujoco_engine import MujocoEngine
-from galton.daemon.engines.pybullet_engine import PybulletEngine
+from galton.daemon.engines.mujoco.engine import MujocoEngine
+from galton.daemon.engines.pybullet.engine import PybulletEngine
 from galton.protocol import Capabilities, InvalidArgumentError
 
 
@@ -121,7 +121,7 @@ def test_unknown_engines_and_checks_are_refused_by_name() -> None:
 
 def test_the_checker_imports_no_engine() -> None:
     """It works on any class implementing the interface: importing it loads no engine."""
-    probe = ("import sys, galton.daemon.engine_check; "
+    probe = ("import sys, galton.daemon.engines.check; "
              "print(sorted(m for m in sys.modules if m.split('.')[0] in "
              "('mujoco', 'pybullet') or 'engines.' in m))")
     out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,

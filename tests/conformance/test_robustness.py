@@ -17,7 +17,7 @@ import pytest
 from support import ball_row, companion, raw_replies, send_over_the_edge, snapshot
 
 from galton.client import Client, plane, spheres
-from galton.daemon.engine_check_refusals import PROBE_MODELS
+from galton.daemon.engines.check.refusals import PROBE_MODELS
 from galton.protocol import (
     ClientClosedError,
     IncorrectStateError,

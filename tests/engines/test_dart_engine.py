@@ -1,5 +1,5 @@
 """The DART engine on its own, in-process: what is DART's own, beyond what every engine
-must do (galton.daemon.engine_check, test_engine_check.py): Gazebo's set-up, how DART
+must do (galton.daemon.engines.check, test_engine_check.py): Gazebo's set-up, how DART
 combines a pair's surfaces, its contacts, and the guard that keeps ODE from aborting."""
 
 from __future__ import annotations

@@ -25,7 +25,7 @@ from support_mujoco_worlds import (
     steps,
 )
 
-from galton.daemon.engines.mujoco_engine import MujocoEngine
+from galton.daemon.engines.mujoco.engine import MujocoEngine
 from galton.protocol import BodyGroup, BodyProperties, OperationFailedError
 
 

@@ -1,6 +1,6 @@
 """The MuJoCo engine on its own, without a daemon: state kept across edits, physics, errors.
 
-What every engine must do is checked by galton.daemon.engine_check (test_engine_check.py);
+What every engine must do is checked by galton.daemon.engines.check (test_engine_check.py);
 here is what is MuJoCo's own: its pool, its compiles, sleep, the balance guard, its limits.
 """
 
@@ -17,11 +17,12 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from galton.daemon.engine import FEATURE_LOAD_MODEL, FEATURE_STATIC_POSE
-from galton.daemon.engines import mujoco_engine, mujoco_pool
-from galton.daemon.engines.mujoco_balance import HOLD_LIMIT_S
-from galton.daemon.engines.mujoco_engine import MujocoEngine
-from galton.daemon.engines.mujoco_spec import damping_ratio
+from galton.daemon.engines.base import FEATURE_LOAD_MODEL, FEATURE_STATIC_POSE
+from galton.daemon.engines.mujoco import engine as mujoco_engine
+from galton.daemon.engines.mujoco import pool as mujoco_pool
+from galton.daemon.engines.mujoco.balance import HOLD_LIMIT_S
+from galton.daemon.engines.mujoco.engine import MujocoEngine
+from galton.daemon.engines.mujoco.spec import damping_ratio
 from galton.protocol import (
     BODY_SHAPES,
     BodyGroup,

@@ -15,8 +15,8 @@ import numpy as np
 import pybullet_data
 import pytest
 
-from galton.daemon.engines.mujoco_engine import MujocoEngine
-from galton.daemon.model_files import resolve_model
+from galton.daemon.engines.mujoco.engine import MujocoEngine
+from galton.daemon.world.model_files import resolve_model
 from galton.protocol import (
     BodyGroup,
     FeatureUnsupportedError,

@@ -16,9 +16,9 @@ from typing import Any
 import numpy as np
 import pytest
 
-from galton.daemon.engine import FEATURE_CONTACTS, FEATURE_RAYCAST, FEATURE_RENDER, CameraView
-from galton.daemon.engines import mujoco_sensing
-from galton.daemon.engines.mujoco_engine import MujocoEngine
+from galton.daemon.engines.base import FEATURE_CONTACTS, FEATURE_RAYCAST, FEATURE_RENDER, CameraView
+from galton.daemon.engines.mujoco import perception as mujoco_sensing
+from galton.daemon.engines.mujoco.engine import MujocoEngine
 from galton.protocol import BodyGroup, NotFoundError
 
 GRAVITY = 9.81

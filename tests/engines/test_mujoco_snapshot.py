@@ -35,8 +35,8 @@ from support_mujoco_worlds import (
     steps,
 )
 
-from galton.daemon.engine import FEATURE_SNAPSHOT
-from galton.daemon.engines.mujoco_engine import MujocoEngine
+from galton.daemon.engines.base import FEATURE_SNAPSHOT
+from galton.daemon.engines.mujoco.engine import MujocoEngine
 from galton.protocol import BodyGroup, BodyProperties, InvalidArgumentError
 
 

@@ -138,7 +138,7 @@ def test_a_ray_hits_the_nearest_ball(engine: OdeEngine) -> None:
 
 
 def test_a_robot_with_targets_and_a_wrench_replays_after_a_restore(engine: OdeEngine) -> None:
-    from galton.daemon.engine_check_joints import DRIVEN, RIG
+    from galton.daemon.engines.check.joints import DRIVEN, RIG
 
     engine.load_model("urdf", RIG, None, "r_", fixed_base=True)
     engine.spawn([ground(), balls(["ball"], [0.3, 0.0, 2.0])])

@@ -22,7 +22,7 @@ from support_pybullet_worlds import (
     record,
 )
 
-from galton.daemon.engines.pybullet_engine import PybulletEngine
+from galton.daemon.engines.pybullet.engine import PybulletEngine
 from galton.protocol import BodyGroup, BodyProperties
 
 Requests = Callable[[PybulletEngine, int], None]

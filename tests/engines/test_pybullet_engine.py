@@ -1,6 +1,6 @@
 """The PyBullet engine on its own, in-process: bodies, states, physics, parameters, models.
 
-What every engine must do is checked by galton.daemon.engine_check (test_engine_check.py);
+What every engine must do is checked by galton.daemon.engines.check (test_engine_check.py);
 here is what is PyBullet's own: its calls, its tuning, its rebuilds and its memory.
 """
 
@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from support_urdf import ARM_URDF
 
-from galton.daemon.engines.pybullet_engine import PybulletEngine
+from galton.daemon.engines.pybullet.engine import PybulletEngine
 from galton.protocol import (
     BodyGroup,
     BodyProperties,
@@ -490,7 +490,7 @@ def seen(engine: PybulletEngine, names: list[str]) -> tuple[Any, ...]:
 
 
 def test_a_rebuild_keeps_every_body_as_it_was(engine: PybulletEngine, monkeypatch: Any) -> None:
-    monkeypatch.setattr("galton.daemon.engines.pybullet_rebuild.REBUILD_AFTER", 10)
+    monkeypatch.setattr("galton.daemon.engines.pybullet.rebuild.REBUILD_AFTER", 10)
     engine.set_params({"pybullet.collision_margin": 0.003,
                        "pybullet.ccd_swept_sphere_radius": 0.02})
     engine.spawn([ground(), balls(["ball"], [0, 0, 0.3]),
@@ -535,7 +535,7 @@ def test_churn_rebuilds_every_five_thousand_deleted(engine: PybulletEngine) -> N
 
 
 def test_a_world_with_a_model_is_not_rebuilt(engine: PybulletEngine, monkeypatch: Any) -> None:
-    monkeypatch.setattr("galton.daemon.engines.pybullet_rebuild.REBUILD_AFTER", 10)
+    monkeypatch.setattr("galton.daemon.engines.pybullet.rebuild.REBUILD_AFTER", 10)
     engine.spawn([ground()])
     (info,) = engine.load_model("urdf", TINY_URDF, None, "m/", fixed_base=False)
     junk = [f"j{i}" for i in range(20)]

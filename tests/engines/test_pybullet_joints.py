@@ -11,7 +11,7 @@ import numpy as np
 import pybullet_data
 import pytest
 
-from galton.daemon.engines.pybullet_engine import PybulletEngine
+from galton.daemon.engines.pybullet.engine import PybulletEngine
 from galton.protocol import BodyGroup, NameNotUniqueError, NotFoundError
 
 DATA = pybullet_data.getDataPath()

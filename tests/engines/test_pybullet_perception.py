@@ -11,16 +11,16 @@ import numpy as np
 import pytest
 from support_urdf import ARM_URDF
 
-from galton.daemon.engine import (
+from galton.daemon.engines.base import (
     FEATURE_CONTACTS,
     FEATURE_RAYCAST,
     FEATURE_RENDER,
     IMAGE_OUTPUTS,
     CameraView,
 )
-from galton.daemon.engines.pybullet_engine import PybulletEngine
-from galton.daemon.engines.pybullet_meshes import MESH_TOLERANCE
-from galton.daemon.engines.pybullet_rays import BATCH
+from galton.daemon.engines.pybullet.engine import PybulletEngine
+from galton.daemon.engines.pybullet.meshes import MESH_TOLERANCE
+from galton.daemon.engines.pybullet.rays import BATCH
 from galton.protocol import BodyGroup, NotFoundError
 
 GRAVITY = 9.81

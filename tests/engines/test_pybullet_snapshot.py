@@ -26,9 +26,9 @@ from support_pybullet_worlds import (
     restored,
 )
 
-from galton.daemon.engine import FEATURE_SNAPSHOT
-from galton.daemon.engines.pybullet_engine import PybulletEngine
-from galton.daemon.engines.pybullet_snapdata import pack
+from galton.daemon.engines.base import FEATURE_SNAPSHOT
+from galton.daemon.engines.pybullet.engine import PybulletEngine
+from galton.daemon.engines.pybullet.snapshot_data import pack
 from galton.protocol import BodyGroup, BodyProperties, InvalidArgumentError
 
 

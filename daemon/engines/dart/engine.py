@@ -8,7 +8,7 @@ the constraint solver's collision option, so this engine runs DART's own limit (
 contacts a step, shared between colliding pairs) and no per-pair cap. Past 1,000
 touching pairs the pairs found last get no contact (DART warns once).
 
-The engine's parts: bodies.py (books, spawned skeletons, the world's set-up), state.py
+The engine's parts: spawn.py (books, spawned skeletons, the world's set-up), state.py
 (states and divergence), models.py (URDF and MJCF), joints.py (joints, targets, wrenches),
 snapshot.py (snapshots, rebuilds) and contacts.py. dartpy has no ray casts and no
 headless renderer: ``raycast`` and ``render`` are FEATURE_UNSUPPORTED.
@@ -23,7 +23,8 @@ from typing import Any
 
 import numpy as np
 
-from galton.daemon.engine import (
+from galton.daemon.core.params import check_updates
+from galton.daemon.engines.base import (
     FEATURE_CONTACTS,
     FEATURE_DELETE,
     FEATURE_JOINT_TARGETS,
@@ -43,15 +44,14 @@ from galton.daemon.engine import (
     FEATURE_WRENCH,
     Engine,
 )
-from galton.daemon.engines.dart import bodies as books
 from galton.daemon.engines.dart import contacts as contact_points
 from galton.daemon.engines.dart import frames, state
+from galton.daemon.engines.dart import spawn as books
 from galton.daemon.engines.dart.joints import Robots, Target
 from galton.daemon.engines.dart.models import MODEL_FORMATS
 from galton.daemon.engines.dart.params import SPECS
 from galton.daemon.engines.dart.scene import Scene
 from galton.daemon.engines.dart.snapshot import Snapshots
-from galton.daemon.params import check_updates
 from galton.protocol import (
     PROTOCOL_VERSION,
     BodyGroup,

@@ -10,7 +10,7 @@ under SDF's gravity (0, 0, -9.8).
 
 from __future__ import annotations
 
-from galton.daemon.params import ParamSpec, choice, flag, integer, number, vector
+from galton.daemon.core.params import ParamSpec, choice, flag, integer, number, vector
 
 DETECTORS = ("ode", "fcl", "bullet", "dart")
 

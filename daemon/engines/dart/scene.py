@@ -9,9 +9,9 @@ from typing import Any
 
 import numpy as np
 
-from galton.daemon.engines.dart import bodies as books
 from galton.daemon.engines.dart import joints as joint_books
 from galton.daemon.engines.dart import models
+from galton.daemon.engines.dart import spawn as books
 from galton.daemon.engines.dart.contacts import node_key
 from galton.daemon.engines.dart.joints import Robots
 from galton.protocol import (

@@ -17,11 +17,11 @@ from typing import Any
 
 import numpy as np
 
-from galton.daemon.engines.dart import bodies as books
+from galton.daemon.core.params import check_updates
 from galton.daemon.engines.dart import models
+from galton.daemon.engines.dart import spawn as books
 from galton.daemon.engines.dart.joints import Robots, Target
 from galton.daemon.engines.dart.params import SPECS
-from galton.daemon.params import check_updates
 from galton.protocol import BodyProperties, InvalidArgumentError
 
 FORMAT = "galton-dart-1"

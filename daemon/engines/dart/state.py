@@ -18,7 +18,7 @@ from galton.daemon.engines.dart import frames
 from galton.protocol.vocabulary import POSE_WIDTH, TWIST_WIDTH
 
 if TYPE_CHECKING:
-    from galton.daemon.engines.dart.bodies import Body
+    from galton.daemon.engines.dart.spawn import Body
 
 
 def free_state(bodies: Sequence[Body]) -> tuple[np.ndarray, np.ndarray]:

@@ -5,7 +5,7 @@ Webots sources in docs/ENGINES.md).
 
 One world, one sweep-and-prune space holding every geom, one group of contact joints emptied before
 each step's collision. Parts: bodies (spawn.py), states (state.py), collision and contact
-reports (contacts.py), ray casts (rays.py), snapshots (snapshot.py, restore.py), robots
+reports (contacts.py), ray casts (rays.py), snapshots (snapshot.py, snapshot_format.py), robots
 (joints.py, urdf.py).
 
 Determinism: ``dWorldStep`` draws no random numbers, ODE's space visits geoms in the order
@@ -21,7 +21,8 @@ from typing import Any
 
 import numpy as np
 
-from galton.daemon.engine import (
+from galton.daemon.core.params import check_updates
+from galton.daemon.engines.base import (
     FEATURE_CONTACTS,
     FEATURE_DELETE,
     FEATURE_JOINT_TARGETS,
@@ -49,10 +50,9 @@ from galton.daemon.engines.ode.joints import Robots, place
 from galton.daemon.engines.ode.native import LIB, SAP_AXES_XZY, version
 from galton.daemon.engines.ode.params import SPECS, SURFACE_DEFAULTS, default_keys
 from galton.daemon.engines.ode.rays import RayCaster
-from galton.daemon.engines.ode.restore import Snapshots
+from galton.daemon.engines.ode.snapshot import Snapshots
 from galton.daemon.engines.ode.spawn import Body
 from galton.daemon.engines.ode.urdf import MODEL_FORMATS, load_urdf
-from galton.daemon.params import check_updates
 from galton.protocol import (
     BODY_SHAPES,
     PROTOCOL_VERSION,

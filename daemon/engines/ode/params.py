@@ -9,7 +9,7 @@ uses it), and how two bodies' surfaces combine (Webots has one material pair for
 
 from __future__ import annotations
 
-from galton.daemon.params import ParamSpec, choice, flag, integer, number, vector
+from galton.daemon.core.params import ParamSpec, choice, flag, integer, number, vector
 
 WEBOTS_TIMESTEP = 0.032  # s: WorldInfo.basicTimeStep's default, 32 ms
 # s: the paper board lost no ball at 2, 4 or 8 ms (43 of 100 at 32 ms); 2 ms keeps the

@@ -1,0 +1,1 @@
+"""Who may do what: users and roles, the control lease, Zenoh ACL and TLS, ZeroMQ CURVE."""

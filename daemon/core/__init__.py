@@ -1,0 +1,1 @@
+"""The physics thread: the loop, its calls and jobs, pacing, limits, parameters, status."""

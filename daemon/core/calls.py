@@ -1,0 +1,104 @@
+"""Requests as the physics loop holds them, independent of Zenoh."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, Protocol
+
+if TYPE_CHECKING:
+    from galton.daemon.world.scene import World
+
+
+class Sampler(Protocol):
+    """What a prediction records every ``every`` steps, and the reply it makes of it."""
+
+    every: int
+
+    def take(self, world: World) -> None: ...
+
+    def result(self, steps: int) -> dict[str, Any]: ...
+
+
+@dataclass
+class Call:
+    """One request: which op, its bytes, and how to answer it (exactly once)."""
+
+    op: str
+    payload: bytes
+    respond: Callable[[bytes], None]
+    client: str | None = None  # the sender's id, once the request is decoded
+    world: str | None = None  # the world it names, once decoded (its reply's stamp)
+    # The connection it came on, when the transport has connections (ZeroMQ): a step job
+    # is tied to it as to a Zenoh client's token. ``op`` is "" until decoded there.
+    peer: str | None = None
+    role: str | None = None  # the sender's role where the transport knows it (ZeroMQ)
+
+
+@dataclass
+class Task:
+    """Work for the physics thread that is no request: e.g. a client's disappearance."""
+
+    run: Callable[[], None]
+
+
+@dataclass
+class RestCheck:
+    """Stop a step request early once every body it reads moves slower than ``speed`` m/s,
+    looked at every ``every`` steps."""
+
+    speed: float
+    every: int
+
+
+@dataclass
+class StepJob:
+    """A step or run_until request still in progress; answered when ``remaining`` is 0, or
+    earlier once the bodies it reads rest (``rest``)."""
+
+    call: Call
+    total: int
+    remaining: int
+    read: list[str] | None = None  # entities whose states the reply carries, checked up front
+    rest: RestCheck | None = None
+    read_joints: list[str] | None = None  # 1-DOF joints whose states the reply carries
+    world: World | None = None  # a side world's (or a prediction's); None: the live world
+    sampler: Sampler | None = None  # a prediction's sampling
+    step_cost: float = 1e-4  # seconds per step, for chunks of a side world's steps
+    scratch: bool = False  # its world is a prediction's copy, closed when the job ends
+    source: World | None = None  # the world a prediction copied: pausing it ends the job
+
+    @property
+    def done(self) -> int:
+        return self.total - self.remaining
+
+    def release(self) -> None:
+        """Close a prediction's copy of its world once the job is answered or ended."""
+        if self.scratch and self.world is not None:
+            self.world.engine.close()
+
+    def steps_to_next_check(self) -> int:
+        """Steps until the next rest check (all remaining ones when there is none)."""
+        left = self.remaining
+        if self.rest is not None:
+            left = min(left, self.rest.every - self.done % self.rest.every)
+        if self.sampler is not None:
+            left = min(left, self.sampler.every - self.done % self.sampler.every)
+        return left
+
+
+def smoothed_step_cost(cost: float, seconds: float, count: int) -> float:
+    """A running estimate of seconds per step after ``count`` steps took ``seconds``: it
+    sizes the next chunk of steps, so one slow chunk moves it only a fifth of the way."""
+    return 0.8 * cost + 0.2 * max(seconds / count, 1e-7)
+
+
+class Inbox(Protocol):
+    """Where requests wait for the physics thread: a queue.SimpleQueue, or with ZeroMQ a
+    daemon/zmq_front.PolledInbox that also polls the sockets."""
+
+    def put(self, item: Call | Task | None) -> None: ...
+
+    def get(self, block: bool = True, timeout: float | None = None) -> Call | Task | None: ...
+
+    def get_nowait(self) -> Call | Task | None: ...

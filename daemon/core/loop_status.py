@@ -1,0 +1,112 @@
+"""Status and telemetry. A status request is answered from the loop's atomic
+snapshot, without waiting for the physics thread (the one ``fast`` operation of
+protocol/operations.py).
+
+A controller polling a paused or idle daemon asks the same thing of the same snapshot
+again and again, so the last reply's bytes are kept with the request and snapshot they
+answer: a repeated poll costs one comparison, not a decode and an encode (about 30 µs of a
+0.3 ms round trip, docs/PERFORMANCE.md).
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from typing import TYPE_CHECKING, Any
+
+from galton.daemon.core.calls import Call
+from galton.protocol import (
+    NotFoundError,
+    OperationFailedError,
+    RemoteError,
+    Reply,
+    ResultCode,
+    SimState,
+    SimStatus,
+    Telemetry,
+    decode_request,
+    encode_reply,
+    error_reply,
+)
+from galton.protocol.errors import brief
+from galton.protocol.operations import operation
+
+if TYPE_CHECKING:
+    from galton.daemon.core.loop import SimLoop
+    from galton.daemon.world.scene import World
+
+log = logging.getLogger("galton.daemon")
+
+
+def snapshot(loop: SimLoop) -> tuple[Any, ...]:
+    """Everything a status reply says, read once: equal snapshots give equal replies."""
+    return (loop.clock, loop.state, loop.target_rtf, loop.rtf, loop.world,
+            loop.lease.controller)
+
+
+def status_from(loop: SimLoop, taken: tuple[Any, ...]) -> SimStatus:
+    (step, sim_time, timestep, count, faulted), state, target_rtf, rtf, world, controller = taken
+    return SimStatus(
+        state=state, step=step, sim_time=sim_time, timestep=timestep,
+        target_rtf=target_rtf, rtf=rtf, entity_count=count, engine=world.engine.name,
+        instance=loop.instance, world=world.name, faulted=faulted, controller=controller)
+
+
+def answer_status(loop: SimLoop, call: Call) -> None:
+    """Answer one status request on the caller's thread; never raises."""
+    taken = snapshot(loop)
+    cached = loop.status_reply
+    if cached is not None and cached[0] == call.payload and cached[1] == taken:
+        loop.send(call, cached[2])
+        return
+    status = status_from(loop, taken)
+    try:
+        request = decode_request(call.payload, call.op, loop.decode_limits)
+        operation(request.op).decode(request.args)
+        named = request.args.get("world")
+        if named is not None and named != status.world:
+            # On the transport's thread only one membership test of the side worlds (the
+            # physics thread may be adding or removing one): no iteration, no race.
+            if not isinstance(named, str) or named not in loop.side:
+                raise NotFoundError(f"no world named {brief(named)}; list_worlds lists them")
+            loop.submit(call)  # a side world's status: the physics thread answers it
+            return
+        reply = Reply(ResultCode.OK, result=status.to_wire(), step=status.step,
+                      sim_time=status.sim_time)
+    except Exception as exc:  # on the transport's thread: whatever happens, one typed reply
+        error = exc if isinstance(exc, RemoteError) else OperationFailedError(
+            f"{type(exc).__name__}: {brief(str(exc))}")
+        loop.send(call, encode_reply(error_reply(error, status.step, status.sim_time)))
+        return
+    data = encode_reply(reply)
+    loop.status_reply = (call.payload, taken, data)
+    loop.send(call, data)
+
+
+def side_state(world: World) -> SimState:
+    """A side world never plays: stopped until its first step, paused after."""
+    return SimState.STOPPED if world.step_index == 0 else SimState.PAUSED
+
+
+def publish_telemetry(loop: SimLoop, now: float) -> None:
+    """Publish one telemetry sample per world, the live one first (after checking it is
+    still finite); a side world's sample reads as its ``status`` does (never playing)."""
+    if not loop.world.faulted:
+        loop.verify_physics()
+    cpu, rss, peak = loop.monitor.sample()
+    rtf = loop.rtf = loop.rtf_window.add(now, loop.world.sim_time)
+    wall = time.time()
+    samples = [(loop.world, loop.state, rtf, loop.target_rtf)]
+    samples.extend((world, side_state(world), 0.0, 0.0) for world in loop.side.values())
+    for world, state, world_rtf, target_rtf in samples:
+        loop.telemetry_seq += 1
+        sample = Telemetry(
+            seq=loop.telemetry_seq, instance=loop.instance, engine=world.engine.name,
+            state=state, step=world.step_index, sim_time=world.sim_time, wall_time=wall,
+            rtf=world_rtf, target_rtf=target_rtf, timestep=world.engine.timestep,
+            entity_count=len(world.entities), cpu_percent=cpu, rss_bytes=rss,
+            peak_rss_bytes=peak, world=world.name)
+        try:
+            loop.publish_telemetry(sample)
+        except Exception:
+            log.exception("could not publish telemetry")

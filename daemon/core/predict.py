@@ -1,0 +1,164 @@
+"""predict: run ahead on a copy of a world (its present, or a snapshot slot), optionally
+changed first, sampling named bodies and joints, then discard the copy. The copy is
+stepped as a side job (daemon/core/side_jobs.py), after the live world's due steps."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from galton.daemon.core.calls import Call, StepJob
+from galton.daemon.core.limits import MIB
+from galton.daemon.ops import joints as ops_joints
+from galton.daemon.ops import scene as ops
+from galton.daemon.world.scene import World
+from galton.daemon.world.snapshot import clone_of, decode, world_from
+from galton.protocol import (
+    POSE_WIDTH,
+    TWIST_WIDTH,
+    IncorrectStateError,
+    InvalidArgumentError,
+    OperationFailedError,
+    ResourceLimitError,
+)
+from galton.protocol import requests as rq
+from galton.protocol.arrays import pack_f64
+from galton.protocol.model import check_names, finite_number
+
+if TYPE_CHECKING:
+    from galton.daemon.core.loop import SimLoop
+
+
+@dataclass
+class PredictSampler:
+    """The samples of one prediction: sim times, body states, joint states."""
+
+    every: int
+    read: list[str] | None
+    read_joints: list[str] | None
+    times: list[float] = field(default_factory=list)
+    poses: list[np.ndarray] = field(default_factory=list)
+    twists: list[np.ndarray] = field(default_factory=list)
+    positions: list[np.ndarray] = field(default_factory=list)
+    velocities: list[np.ndarray] = field(default_factory=list)
+
+    def take(self, world: World) -> None:
+        world.verify()
+        self.times.append(world.sim_time)
+        if self.read is not None:
+            poses, twists = world.get_states(self.read)
+            self.poses.append(poses)
+            self.twists.append(twists)
+        if self.read_joints is not None:
+            positions, velocities, _ = world.engine.get_joint_states(self.read_joints)
+            self.positions.append(positions)
+            self.velocities.append(velocities)
+
+    def result(self, steps: int) -> dict[str, Any]:
+        out: dict[str, Any] = {"steps": steps, "times": pack_f64(np.array(self.times))}
+        if self.read is not None:
+            out.update(names=self.read, poses=pack_f64(np.concatenate(self.poses)),
+                       twists=pack_f64(np.concatenate(self.twists)))
+        if self.read_joints is not None:
+            out["joints"] = {"names": self.read_joints,
+                             "positions": pack_f64(np.concatenate(self.positions)),
+                             "velocities": pack_f64(np.concatenate(self.velocities))}
+        return out
+
+
+def predict(loop: SimLoop, call: Call, request: rq.Predict) -> None:
+    """Start a prediction job (answered when its horizon is done)."""
+    if loop.job is not None:
+        raise IncorrectStateError("another step request is still running; wait for it")
+    if loop.engine_factory is None:
+        raise OperationFailedError("this daemon cannot make engines")
+    horizon = finite_number(request.horizon, "predict.horizon", low=0.0, low_open=True)
+    source = loop.world_for(request)
+    slot = request.slot
+    name = f"{source.name}:prediction"
+    if slot is None:
+        source.verify()
+        copy = clone_of(source, name, loop.limits)
+    else:
+        blob = loop.slots.get(slot).blob
+        data = decode(blob, loop.limits, loop.snapshot_key)
+        copy = world_from(data, loop.engine_factory, name, loop.limits)
+    try:
+        job = _job(loop, call, copy, horizon, request)
+    except Exception:
+        copy.engine.close()
+        raise
+    job.source = source
+    loop.job = job
+
+
+def _job(loop: SimLoop, call: Call, copy: World, horizon: float,
+         request: rq.Predict) -> StepJob:
+    dt = copy.engine.timestep
+    steps = horizon_steps(horizon, dt, loop.limits.max_steps)
+    every_s = request.every
+    every = 1 if every_s is None else sample_period(
+        finite_number(every_s, "predict.every", low=0.0, low_open=True), dt, steps)
+    read = _names(request.read, "read")
+    joints = _names(request.read_joints, "read_joints")
+    if read is not None:
+        copy.require_known(read)
+    if joints is not None:
+        copy.joints.require_scalar(joints, "predict.read_joints")
+    _require_reply_room(loop.limits.max_reply_bytes, steps // every + 1,
+                        0 if read is None else len(read), 0 if joints is None else len(joints))
+    _apply_changes(copy, request)
+    sampler = PredictSampler(min(every, steps), read, joints)
+    sampler.take(copy)
+    return StepJob(call, steps, steps, world=copy, sampler=sampler, scratch=True)
+
+
+def _require_reply_room(limit: int, samples: int, bodies: int, joints: int) -> None:
+    """Refuse, before a step, a prediction whose reply would pass ``max_reply_bytes``:
+    each sample is its time, a pose and a twist per body, two values per joint."""
+    size = samples * 8 * (1 + bodies * (POSE_WIDTH + TWIST_WIDTH) + joints * 2)
+    if size > limit:
+        raise ResourceLimitError(
+            f"this prediction's reply would carry {samples} samples, about {size / MIB:.0f} "
+            f"MiB; at most {limit / MIB:.0f} MiB (sample less often with 'every', read "
+            "fewer bodies, or galton-daemon --limit max_reply_bytes=N)",
+            {"limit": "max_reply_bytes", "max": limit, "size": size})
+
+
+def horizon_steps(horizon: float, dt: float, max_steps: int) -> int:
+    """A horizon as whole steps (rounded up), refused when under one step or over the limit
+    (compared as floats first: an absurd horizon must not overflow the rounding)."""
+    exact = horizon / dt - 1e-9
+    if exact > max_steps:
+        raise InvalidArgumentError(f"predict.horizon {horizon:g} s is {exact:.3g} steps; at "
+                                   f"most {max_steps}", {"max_steps": max_steps})
+    if exact <= 0:
+        raise InvalidArgumentError(f"predict.horizon {horizon:g} s is less than one step of "
+                                   f"{dt:g} s")
+    return math.ceil(exact)
+
+
+def sample_period(every_s: float, dt: float, steps: int) -> int:
+    """``every`` seconds as whole steps: at least one, at most the whole horizon."""
+    exact = every_s / dt
+    return steps if exact >= steps else max(1, round(exact))
+
+
+def _names(raw: list[str] | None, key: str) -> list[str] | None:
+    return None if raw is None else check_names(raw, f"predict.{key}")
+
+
+def _apply_changes(copy: World, request: rq.Predict) -> None:
+    """The changes a prediction starts from, each decoded and checked as its own request
+    would be."""
+    if request.set_states is not None:
+        ops.set_states(copy, rq.decode_args("set_states", rq.SetStates, request.set_states))
+    if request.joint_targets is not None:
+        ops_joints.set_joint_targets(copy, rq.decode_args(
+            "set_joint_targets", rq.SetJointTargets, request.joint_targets))
+    if request.wrenches is not None:
+        ops_joints.apply_wrench(copy, rq.decode_args("apply_wrench", rq.ApplyWrench,
+                                                     request.wrenches))

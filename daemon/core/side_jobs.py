@@ -1,0 +1,63 @@
+"""Steps of a side world or of a prediction: run in chunks on the physics thread after the
+live world's due steps, so they never delay it (each chunk is at most about CHUNK_WALL_S of
+work, sized from the job's own measured step cost)."""
+
+from __future__ import annotations
+
+import logging
+import time
+from typing import TYPE_CHECKING
+
+from galton.daemon.core import job_results
+from galton.daemon.core.calls import StepJob, smoothed_step_cost
+from galton.protocol import OperationFailedError, PhysicsError, RemoteError
+from galton.protocol.errors import brief
+
+if TYPE_CHECKING:
+    from galton.daemon.core.loop import SimLoop
+
+log = logging.getLogger("galton.daemon")
+
+# Short chunks: a live control call waits at most about this long behind a prediction.
+CHUNK_WALL_S = 0.002
+
+
+def run_chunk(loop: SimLoop, job: StepJob) -> None:
+    """One chunk of a side job's steps; answers it when done, at rest, or failed."""
+    world = job.world
+    assert world is not None
+    count = min(job.steps_to_next_check(), max(1, int(CHUNK_WALL_S / job.step_cost)))
+    started = time.perf_counter()
+    try:
+        world.step(count)
+        job.step_cost = smoothed_step_cost(job.step_cost, time.perf_counter() - started,
+                                           count)
+        job.remaining -= count
+        finished = job.remaining == 0
+        if job.sampler is not None and job.done % job.sampler.every == 0:
+            job.sampler.take(world)
+        checking = job.rest is not None and job.done % job.rest.every == 0
+        resting = checking and job_results.at_rest(world, job)
+        if finished or resting:
+            world.verify()
+    except RemoteError as error:  # a diverged side world fails its job, not the daemon
+        end(loop, job, error)
+        return
+    except Exception as exc:  # nor does its engine failing pause the live world
+        log.exception("a side world's steps failed")
+        end(loop, job, OperationFailedError(f"the engine failed: {type(exc).__name__}: "
+                                            f"{brief(str(exc))}"))
+        return
+    if finished or resting:
+        loop.job = None
+        loop.finish_job(job)
+
+
+def end(loop: SimLoop, job: StepJob, error: RemoteError) -> None:
+    """Answer a side job with an error and release what it held."""
+    if loop.job is job:
+        loop.job = None
+    if isinstance(error, PhysicsError):
+        error.details["steps_done"] = job.done
+    job.release()
+    loop.reply_error(job.call, error)

@@ -1,0 +1,260 @@
+"""Time-control operations of the physics loop: play, pause, stop, step, run_until, reset,
+load_world.
+
+The state machine: stopped → playing ⇄ paused, with step jobs while not playing. Each
+operation takes the loop, the call and its typed request (protocol/requests.py), and
+returns the reply's result map, or None when the reply comes later (a step job).
+daemon/ops/handlers.py binds them to the operations of protocol/operations.py.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import TYPE_CHECKING, Any
+
+from galton.daemon.access import lease
+from galton.daemon.core.calls import Call, RestCheck, StepJob
+from galton.daemon.world.scene import World, check_scope
+from galton.protocol import (
+    IncorrectStateError,
+    InvalidArgumentError,
+    OperationFailedError,
+    SimStatus,
+)
+from galton.protocol import requests as rq
+from galton.protocol.model import check_names, finite_number, integer_in
+from galton.protocol.vocabulary import SimState, check_fields
+
+if TYPE_CHECKING:
+    from galton.daemon.core.loop import SimLoop
+
+MAX_RTF = 1e6
+
+
+def _check_rtf(value: Any, where: str) -> float:
+    return finite_number(value, where, low=0.0, high=MAX_RTF)
+
+
+def _rest_check(rest: dict[str, Any] | None, read: list[str] | None,
+                timestep: float) -> RestCheck | None:
+    """run_until's optional ``until_rest: {speed, every}``: stop once the read bodies rest."""
+    if rest is None:
+        return None
+    check_fields(rest, ("speed", "every"), "run_until.until_rest")
+    if read is None:
+        raise InvalidArgumentError("run_until.until_rest needs 'read': the bodies that must rest")
+    speed = finite_number(rest.get("speed"), "run_until.until_rest.speed", low=0.0,
+                          low_open=True)
+    every = finite_number(rest.get("every"), "run_until.until_rest.every", low=0.0,
+                          low_open=True)
+    return RestCheck(speed, max(1, round(every / timestep)))
+
+
+def status(loop: SimLoop, call: Call, request: rq.NoArgs) -> dict[str, Any]:
+    world = loop.world_for(request)
+    if world is loop.world:
+        return loop.status().to_wire()
+    return side_status(loop, world).to_wire()
+
+
+def side_status(loop: SimLoop, world: World) -> SimStatus:
+    """A side world's status: it never plays."""
+    return SimStatus(
+        state=SimState.STOPPED if world.step_index == 0 else SimState.PAUSED,
+        step=world.step_index, sim_time=world.sim_time, timestep=world.engine.timestep,
+        target_rtf=0.0, rtf=0.0, entity_count=len(world.entities), engine=world.engine.name,
+        instance=loop.instance, world=world.name, faulted=world.faulted,
+        controller=loop.lease.controller)
+
+
+def _live_only(loop: SimLoop, request: rq.Args, op: str) -> None:
+    if loop.world_for(request) is not loop.world:
+        raise IncorrectStateError(f"{op}: only the live world {loop.world.name!r} plays; a "
+                                  "side world moves by step and run_until")
+
+
+def play(loop: SimLoop, call: Call, request: rq.Play) -> dict[str, Any]:
+    _live_only(loop, request, "play")
+    rtf = request.rtf
+    target = loop.target_rtf if rtf is None else _check_rtf(rtf, "play.rtf")
+    if loop.job is not None and loop.job.world is None:
+        raise IncorrectStateError("a step request is still running; wait for it or pause")
+    loop.world.require_valid()
+    loop.target_rtf = target
+    loop.set_state(SimState.PLAYING)
+    return loop.status().to_wire()
+
+
+def set_rtf(loop: SimLoop, call: Call, request: rq.SetRtf) -> dict[str, Any]:
+    _live_only(loop, request, "set_rtf")
+    loop.target_rtf = _check_rtf(request.rtf, "set_rtf.rtf")
+    loop.pacer.anchor(time.monotonic(), loop.world.sim_time, loop.target_rtf)
+    return loop.status().to_wire()
+
+
+def pause(loop: SimLoop, call: Call, request: rq.NoArgs) -> dict[str, Any]:
+    world = loop.world_for(request)
+    _cancel_job_on(loop, world, "paused")
+    if world is not loop.world:
+        return side_status(loop, world).to_wire()
+    loop.set_state(SimState.PAUSED)
+    return loop.status().to_wire()
+
+
+def stop(loop: SimLoop, call: Call, request: rq.NoArgs) -> dict[str, Any]:
+    """Pause and rewind: time to 0 and every entity back to the state it was created in."""
+    world = loop.world_for(request)
+    _cancel_job_on(loop, world, "stopped")
+    world.reset("state")
+    world.reset("time")
+    if world is not loop.world:
+        return side_status(loop, world).to_wire()
+    _after_reset(loop)
+    loop.set_state(SimState.STOPPED)
+    return loop.status().to_wire()
+
+
+def step(loop: SimLoop, call: Call, request: rq.Step) -> None:
+    count = integer_in(1 if request.count is None else request.count, "step.count", 1,
+                       loop.limits.max_steps)
+    world = loop.world_for(request)
+    _start_job(loop, call, world, count, _read_list(world, request.read, "step"),
+               read_joints=_read_joint_list(world, request.read_joints, "step"))
+
+
+def run_until(loop: SimLoop, call: Call, request: rq.RunUntil) -> dict[str, Any] | None:
+    target = finite_number(request.sim_time, "run_until.sim_time", low=0.0)
+    world = loop.world_for(request)
+    dt = world.engine.timestep
+    steps = (target - world.sim_time) / dt - 1e-9
+    limit = loop.limits.max_steps
+    if steps > limit:
+        raise InvalidArgumentError(
+            f"run_until.sim_time {target:g} s is {steps:.3g} steps of {dt:g} s away; one "
+            f"request takes at most {limit} steps (to sim time "
+            f"{world.sim_time + limit * dt:g} s)", {"max_steps": limit})
+    count = math.ceil(steps)
+    if count <= 0:
+        raise InvalidArgumentError(
+            f"run_until.sim_time {target} is not after the current sim time "
+            f"{world.sim_time}")
+    read = _read_list(world, request.read, "run_until")
+    _start_job(loop, call, world, count, read, _rest_check(request.until_rest, read, dt),
+               _read_joint_list(world, request.read_joints, "run_until"))
+    return None
+
+
+def reset(loop: SimLoop, call: Call, request: rq.Reset) -> dict[str, Any]:
+    scope = check_scope(request.scope or "all")
+    world = loop.world_for(request)
+    _cancel_job_on(loop, world, "reset")
+    world.reset(scope)
+    if world is not loop.world:
+        loop.emit({"kind": "scene", "op": "reset", "scope": scope, "world": world.name,
+                   "step": world.step_index})
+        return side_status(loop, world).to_wire()
+    _after_reset(loop)
+    loop.emit({"kind": "scene", "op": "reset", "scope": scope,
+               "step": loop.world.step_index})
+    return loop.status().to_wire()
+
+
+def load_world(loop: SimLoop, call: Call, request: rq.LoadWorld) -> dict[str, Any]:
+    """Replace the world with a fresh one on the named engine, in this process."""
+    _live_only(loop, request, "load_world")
+    name = request.engine
+    if loop.engine_factory is None:
+        raise OperationFailedError("this daemon cannot switch engines")
+    engine = loop.engine_factory(name)
+    params = request.params
+    if params is not None:
+        try:
+            engine.set_params(params)
+        except Exception:
+            engine.close()
+            raise
+    cancel_job(loop, "world replaced")
+    old, loop.world = loop.world, World(engine, loop.world.name, loop.limits)
+    old.engine.close()
+    loop.tune_switch_interval()
+    _after_reset(loop)
+    loop.set_state(SimState.STOPPED)
+    loop.emit({"kind": "scene", "op": "load_world", "engine": name, "step": 0})
+    return loop.status().to_wire()
+
+
+# -- helpers ------------------------------------------------------------------------
+def _read_list(world: World, read: list[str] | None, where: str) -> list[str] | None:
+    """The entities a step request wants read back when done; unknown names reject the
+    request before any step is taken."""
+    if read is None:
+        return None
+    names = check_names(read, f"{where}.read")
+    world.require_known(names)
+    return names
+
+
+def _read_joint_list(world: World, read: list[str] | None, where: str
+                     ) -> list[str] | None:
+    """The joints a step request wants read back when done, checked before any step."""
+    if read is None:
+        return None
+    names = check_names(read, f"{where}.read_joints")
+    world.joints.require_scalar(names, f"{where}.read_joints")
+    return names
+
+
+def _start_job(loop: SimLoop, call: Call, world: World, count: int,
+               read: list[str] | None = None, rest: RestCheck | None = None,
+               read_joints: list[str] | None = None) -> None:
+    live = world is loop.world
+    if live and loop.state == SimState.PLAYING:
+        raise IncorrectStateError("cannot step while playing: pause first")
+    if loop.job is not None:
+        raise IncorrectStateError("another step request is still running")
+    world.require_valid()
+    if live and loop.state == SimState.STOPPED:
+        loop.set_state(SimState.PAUSED)
+    loop.job = StepJob(call, count, count, read, rest, read_joints,
+                       world=None if live else world)
+
+
+def client_gone(loop: SimLoop, client: str) -> None:
+    """A client's liveliness token vanished, or its ZeroMQ connection closed: the step
+    request it is waiting for ends now (its reply has nowhere to go), the world stays paused
+    where it got to, and control it held is released (daemon/access/lease.py). The event names the
+    client by its id, else by its connection."""
+    job = loop.job
+    # Over ZeroMQ the step is tied to its connection alone, not to a token named like its id.
+    if job is not None and client == (job.call.peer if job.call.peer is not None
+                                      else job.call.client):
+        cancel_job(loop, "its client disappeared")
+        loop.emit({"kind": "job_abandoned", "client": job.call.client or client,
+                   "steps_done": job.done,
+                   "steps_asked": job.total, "step": loop.world.step_index})
+    lease.client_gone(loop, client)
+
+
+def _cancel_job_on(loop: SimLoop, world: World, reason: str) -> None:
+    """Cancel the running step request if it steps this world, or predicts from it (a
+    prediction is long work on the world's behalf: pause, stop and reset end it too)."""
+    job = loop.job
+    if job is not None and world in ((job.world or loop.world), job.source):
+        cancel_job(loop, reason)
+
+
+def cancel_job(loop: SimLoop, reason: str) -> None:
+    if loop.job is None:
+        return
+    job, loop.job = loop.job, None
+    job.release()
+    loop.reply_error(job.call, OperationFailedError(
+        f"step request interrupted ({reason}) after {job.done} of {job.total} steps",
+        {"steps_done": job.done}))
+
+
+def _after_reset(loop: SimLoop) -> None:
+    loop.refresh_clock()
+    loop.rtf_window.clear()
+    loop.pacer.anchor(time.monotonic(), loop.world.sim_time, loop.target_rtf)

@@ -1,0 +1,1 @@
+"""The MuJoCo engine (``--engine mujoco``): a world built with ``mujoco.MjSpec`` (engine.py)."""

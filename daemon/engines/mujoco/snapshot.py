@@ -1,0 +1,199 @@
+"""Snapshots of the MuJoCo world as plain data, and restoring one on a fresh engine.
+
+A snapshot holds the world's spec as MJCF (its structure: bodies in their order, frames,
+geoms, joints, actuators, loaded models' assets -- meshes by file name), the compiled
+model's and the data's numbers exactly (``snapshot_arrays``: XML keeps six digits),
+the parameters, and the engine's own books: entities, the pool of parked bodies, loaded
+models' joints and held targets, held wrenches, the balance guard, and the counters of the
+periodic looks. Restoring parses the MJCF, compiles it, writes the exact numbers into the
+model, writes them back into the spec (``MjSpec.copy_back``: later recompiles start from
+the same values as the source's) and into a fresh MjData, then rebuilds the books.
+
+The promise (``MujocoEngine.snapshot``): a world restored from a snapshot of world A, and A
+itself, given the same requests afterwards, give the same states bit for bit. A mesh named
+by file in the MJCF must still be there at restore (the daemon makes models' file names
+absolute; the snapshot holds the names, not the files).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+import mujoco
+
+from galton.daemon.core.params import check_updates
+from galton.daemon.engines.mujoco import snapshot_arrays as arrays
+from galton.daemon.engines.mujoco import spec as ms
+from galton.daemon.engines.mujoco.entities import HOME, MUJOCO_ERRORS, Entity
+from galton.daemon.engines.mujoco.snapshot_books import read_books
+from galton.protocol import InvalidArgumentError, OperationFailedError
+from galton.protocol.errors import brief
+
+if TYPE_CHECKING:
+    from galton.daemon.engines.mujoco.engine import MujocoEngine
+
+FORMAT = 1
+ENGINE = "mujoco"
+SIZES = ("nbody", "ngeom", "njnt", "nq", "nv", "nu", "ntree", "nmocap")
+KEYS = frozenset({"format", "engine", "engine_version", "params", "spec", "memory", "sizes",
+                  "model", "data", "entities", "loads", "kinds", "pool", "joints", "targets",
+                  "wrenches", "balance", "looks"})
+
+
+# -- taking a snapshot ----------------------------------------------------------------------
+def snapshot(engine: MujocoEngine) -> dict[str, Any]:
+    if engine._broken:
+        raise OperationFailedError("the MuJoCo world is broken (a failed step or delete); "
+                                   "reset it before taking a snapshot")
+    if engine._pool_edited:
+        _recompile(engine)
+    m, d = engine._model, engine._data
+    loads: dict[int, int] = {}  # id(Assets) -> its place in "loads"
+    kinds: dict[tuple[Any, ...], int] = {}  # pool kind -> its place in "kinds"
+    entities = [_entity(name, e, loads, kinds) for name, e in engine._entities.items()]
+    parked = [[kinds.setdefault(key, len(kinds)), [b.name for b in bodies]]
+              for key, bodies in engine._pool._parked.items()]
+    assets = {id(e.assets): e.assets for e in engine._entities.values() if e.assets}
+    return {
+        "format": FORMAT, "engine": ENGINE, "engine_version": mujoco.__version__,
+        "params": engine.get_params(), "spec": _xml(engine),
+        "memory": int(engine._spec.memory), "sizes": {s: int(getattr(m, s)) for s in SIZES},
+        "model": arrays.model_numbers(m), "data": arrays.data_numbers(m, d),
+        "entities": entities,
+        "loads": [{"assets": sorted([k, n] for k, n in assets[i].names),
+                   "roots": assets[i].roots} for i in sorted(loads, key=loads.__getitem__)],
+        "kinds": [_key(key) for key in kinds],
+        "pool": {"serial": engine._pool._serial, "parked": parked},
+        "joints": {root: [i.to_wire() for i in infos]
+                   for root, infos in engine._joints.infos.items()},
+        "targets": {n: [t.mode, t.target, t.kp, t.kd, t.max_effort]
+                    for n, t in engine._joints.targets.items()},
+        "wrenches": {n: arrays.pack(w) for n, w in engine._wrenches.held.items()},
+        "balance": None if engine._balance is None else engine._balance.books(),
+        "looks": {"diverged": engine._diverged, "crowded": engine._crowded,
+                  "steps_since_look": engine._steps_since_look},
+    }
+
+
+def _xml(engine: MujocoEngine) -> str:
+    """The spec as MJCF: 50 ms for a 500-ball board, so kept until the spec changes (a
+    compile, a parameter, an update, a static body moved; pool edits recompile first)."""
+    if engine._xml is None:
+        engine._xml = engine._spec.to_xml()
+    return engine._xml
+
+
+def _recompile(engine: MujocoEngine) -> None:
+    """Compile the model as its spec compiles it, as a restore will: binding and parking
+    bodies in the pool edit the compiled model alone (collisions, hence its bounding volume
+    hierarchy). The bodies stay where they are in the model, so the whole data, sleep books
+    included, and the balance guard's books are carried over exactly."""
+    numbers = arrays.data_numbers(engine._model, engine._data)
+    guard = None if engine._balance is None else engine._balance.books()
+    engine._recompile()
+    arrays.write_data_numbers(engine._model, engine._data, numbers)
+    if guard is not None and engine._balance is not None:
+        engine._balance.load(engine._model, guard)
+
+
+def _entity(name: str, e: Entity, loads: dict[int, int],
+            kinds: dict[tuple[Any, ...], int]) -> dict[str, Any]:
+    load = None if e.assets is None else loads.setdefault(id(e.assets), len(loads))
+    kind = None if e.key is None else kinds.setdefault(e.key, len(kinds))
+    return {"name": name, "body": e.body.name, "static": e.static, "source": e.source,
+            "friction": e.friction, "restitution": e.restitution,
+            "initial_pose": None if e.initial_pose is None else [float(v) for v in
+                                                                 e.initial_pose],
+            "kind": kind, "parts": list(e.parts),
+            "model": e.model, "load": load}
+
+
+def _key(key: tuple[Any, ...]) -> list[Any]:
+    """A pool kind (pool.key_of) as plain data."""
+    shape, size, static, material = key
+    return [shape, list(size), static, {
+        "friction": material.friction, "spin": list(material.spin),
+        "condim": material.condim, "solref": list(material.solref),
+        "solimp": list(material.solimp),
+        "rgba": None if material.rgba is None else list(material.rgba),
+        "mass": material.mass}]
+
+
+# -- restoring -----------------------------------------------------------------------------
+def restore(engine: MujocoEngine, data: Any) -> None:
+    """Rebuild the snapshot's world on this fresh engine; InvalidArgumentError for anything
+    malformed (the engine is then to be discarded)."""
+    _check_header(data)
+    values = _params(data["params"])
+    spec = _parse(data["spec"], data["memory"], values)
+    try:
+        model = spec.compile()
+    except MUJOCO_ERRORS as exc:
+        raise InvalidArgumentError(f"snapshot.spec does not compile: {exc}") from exc
+    _check_sizes(model, data["sizes"])
+    arrays.write_model_numbers(model, data["model"])
+    try:
+        spec.copy_back(model)
+    except MUJOCO_ERRORS as exc:
+        raise InvalidArgumentError(f"snapshot.model does not fit its spec: {exc}") from exc
+    state = mujoco.MjData(model)
+    arrays.write_data_numbers(model, state, data["data"])
+    home = spec.frame(HOME)
+    if home is None:
+        raise InvalidArgumentError(f"snapshot.spec has no frame {HOME!r}")
+    engine._values, engine._spec, engine._home = values, spec, home
+    engine._model, engine._data, engine._litter = model, state, []
+    engine._xml = data["spec"]  # compiles to this world as well as its own MJCF would
+    read_books(engine, data)
+    engine._workers = 0
+    engine._start_workers()
+
+
+def _check_header(data: Any) -> None:
+    if not isinstance(data, dict):
+        raise InvalidArgumentError(f"a MuJoCo snapshot must be a map, got {brief(data)}")
+    if data.get("engine") != ENGINE:
+        raise InvalidArgumentError(f"the snapshot is of the {brief(data.get('engine'))} "
+                                   f"engine, not of {ENGINE}")
+    if data.get("format") != FORMAT:
+        raise InvalidArgumentError(f"the MuJoCo snapshot is of format "
+                                   f"{brief(data.get('format'))}; this engine reads {FORMAT}")
+    if data.get("engine_version") != mujoco.__version__:
+        raise InvalidArgumentError(
+            f"the snapshot was taken with MuJoCo {brief(data.get('engine_version'))}; this "
+            f"is {mujoco.__version__}, whose steps need not be the same bit for bit")
+    if set(data) != KEYS:
+        raise InvalidArgumentError(f"a MuJoCo snapshot holds {sorted(KEYS)}: missing "
+                                   f"{sorted(KEYS - set(data))}, unknown "
+                                   f"{sorted(set(data) - KEYS)[:5]}")
+
+
+def _params(params: Any) -> dict[str, Any]:
+    if not isinstance(params, dict) or set(params) != set(ms.PARAMS):
+        raise InvalidArgumentError(f"snapshot.params must give every MuJoCo parameter, got "
+                                   f"{brief(params)}")
+    return {**{n: p.default for n, p in ms.PARAMS.items()},
+            **check_updates(ENGINE, ms.PARAMS, params)}
+
+
+def _parse(xml: Any, memory: Any, values: dict[str, Any]) -> mujoco.MjSpec:
+    if not isinstance(xml, str):
+        raise InvalidArgumentError(f"snapshot.spec must be MJCF text, got {brief(xml)}")
+    if type(memory) is not int or not 0 < memory <= ms.ARENA_CAP:
+        raise InvalidArgumentError(f"snapshot.memory must be an int in 1..{ms.ARENA_CAP}, "
+                                   f"got {brief(memory)}")
+    try:
+        spec = mujoco.MjSpec.from_string(xml)
+    except MUJOCO_ERRORS as exc:
+        raise InvalidArgumentError(f"snapshot.spec is not MJCF MuJoCo reads: {exc}") from exc
+    spec.copy_during_attach = True
+    spec.memory = memory
+    ms.write_options(spec.option, values)
+    return spec
+
+
+def _check_sizes(model: mujoco.MjModel, sizes: Any) -> None:
+    made = {s: int(getattr(model, s)) for s in SIZES}
+    if sizes != made:
+        raise InvalidArgumentError(f"snapshot.spec compiles to a world of {made}, not of its "
+                                   f"sizes {brief(sizes)}")

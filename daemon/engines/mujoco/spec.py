@@ -1,0 +1,363 @@
+"""MuJoCo building blocks: parameters, the restitution mapping, quaternions, body specs.
+
+Kept apart from ``engine`` so the engine reads as the Engine contract and this module
+as the MuJoCo vocabulary it is written in.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import mujoco
+import numpy as np
+
+from galton.daemon.core.params import ParamSpec, choice, flag, integer, number, vector
+from galton.protocol import BodyGroup, InvalidArgumentError
+from galton.protocol.errors import brief
+
+log = logging.getLogger("galton.daemon.mujoco")
+
+GEOM_TYPES: dict[str, int] = {
+    "sphere": mujoco.mjtGeom.mjGEOM_SPHERE,
+    "box": mujoco.mjtGeom.mjGEOM_BOX,
+    "cylinder": mujoco.mjtGeom.mjGEOM_CYLINDER,
+    "capsule": mujoco.mjtGeom.mjGEOM_CAPSULE,
+    "plane": mujoco.mjtGeom.mjGEOM_PLANE,
+}
+SOLVERS = {"newton": mujoco.mjtSolver.mjSOL_NEWTON, "cg": mujoco.mjtSolver.mjSOL_CG,
+           "pgs": mujoco.mjtSolver.mjSOL_PGS}
+CONES = {"pyramidal": mujoco.mjtCone.mjCONE_PYRAMIDAL, "elliptic": mujoco.mjtCone.mjCONE_ELLIPTIC}
+INTEGRATORS = {"euler": mujoco.mjtIntegrator.mjINT_EULER,
+               "implicit": mujoco.mjtIntegrator.mjINT_IMPLICIT,
+               "implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST,
+               "rk4": mujoco.mjtIntegrator.mjINT_RK4}
+
+# Bodies given no mass get MuJoCo's default density, water's.
+DENSITY = 1000.0
+# A contact between geoms of different priority takes the higher one's friction, solref and
+# solimp (MuJoCo's rule); static bodies outrank moving ones, so a ball on a pin feels the
+# pin's surface and two balls their own (see docs/PHYSICS.md).
+STATIC_PRIORITY = 1
+# The smallest damping ratio a restitution may map to, whatever the step allows.
+MIN_DAMPRATIO = 0.01
+# MuJoCo refuses a model of more bodies (the world body and parked ones included): its
+# broadphase numbers bodies with 16 bits.
+MAX_BODIES = 65_533
+# The arena beyond the pair buffers (see arena_bytes).
+ARENA_BASE = 16 << 20
+ARENA_PER_BODY = 8 << 10
+ARENA_PER_DOF = 8 << 10
+ARENA_CAP = 4 << 30
+# MuJoCo's warnings that mean the state blew up during a step.
+DIVERGENCE_WARNINGS = np.array([int(w) for w in (
+    mujoco.mjtWarning.mjWARN_BADQPOS, mujoco.mjtWarning.mjWARN_BADQVEL,
+    mujoco.mjtWarning.mjWARN_BADQACC)])
+
+
+def _solref(value: Any, where: str) -> tuple[float, ...]:
+    timeconst, dampratio = vector(2, 0.0, 10.0)(value, where)
+    if timeconst <= 0 or dampratio <= 0:
+        raise InvalidArgumentError(f"{where} must be [timeconst > 0 s, dampratio > 0], got "
+                                   f"{brief(value)}")
+    return (timeconst, dampratio)
+
+
+def _solimp(value: Any, where: str) -> tuple[float, ...]:
+    dmin, dmax, width, mid, power = vector(5, 0.0, 1e3)(value, where)
+    if not (0 < dmin <= dmax < 1 and width > 0 and 0 < mid < 1 and power >= 1):
+        raise InvalidArgumentError(
+            f"{where} must be [dmin, dmax, width, midpoint, power] with 0 < dmin <= dmax < 1, "
+            f"width > 0, 0 < midpoint < 1, power >= 1; got {brief(value)}")
+    return (dmin, dmax, width, mid, power)
+
+
+def _condim(value: Any, where: str) -> int:
+    condim = integer(1, 6)(value, where)
+    if condim not in CONDIMS:
+        raise InvalidArgumentError(f"{where} must be one of {', '.join(map(str, CONDIMS))} "
+                                   f"(MuJoCo's contact dimensions), got {brief(value)}")
+    return condim
+
+
+CONDIMS = (1, 3, 4, 6)
+PARAMS: dict[str, ParamSpec] = {p.name: p for p in (
+    ParamSpec("timestep", 0.002, "s", "physics step", number(0.0, 1.0, low_open=True)),
+    ParamSpec("gravity", (0.0, 0.0, -9.81), "m/s²", "gravity vector, world frame",
+              vector(3, -1e3, 1e3)),
+    ParamSpec("solver_iterations", 50, "", "constraint solver iterations (option iterations)",
+              integer(1, 10_000)),
+    ParamSpec("default_friction", 0.5, "",
+              "sliding friction of moving bodies spawned without one, also when changed "
+              "later; between two moving bodies a contact uses the larger value",
+              number(0.0, 100.0)),
+    ParamSpec("default_restitution", 0.3, "",
+              "restitution of moving bodies spawned without one, also when changed later; 0 "
+              "means MuJoCo's own contact (mujoco.solref as given)", number(0.0, 1.0)),
+    ParamSpec("default_static_friction", 0.5, "",
+              "sliding friction of static bodies (the scenery) spawned without one, also when "
+              "changed later; a contact with a static body uses the static body's surface",
+              number(0.0, 100.0)),
+    ParamSpec("default_static_restitution", 0.61, "",
+              "restitution of static bodies spawned without one, also when changed later; a "
+              "contact with a static body uses the static body's surface", number(0.0, 1.0)),
+    ParamSpec("mujoco.solref", (0.02, 1.0), "s, 1",
+              "[timeconst, dampratio] of spawned bodies' contacts; a restitution e > 0 "
+              "replaces the dampratio (see mujoco/spec.py, damping_ratio)", _solref),
+    ParamSpec("mujoco.solimp", (0.8, 0.95, 0.001, 0.5, 2.0), "",
+              "[dmin, dmax, width, midpoint, power] impedance of spawned bodies' contacts",
+              _solimp),
+    ParamSpec("mujoco.condim", 4, "",
+              "contact dimensions of spawned bodies: 1 frictionless, 3 sliding, 4 + spin "
+              "(torsional), 6 + rolling friction; a contact takes the larger of its geoms'",
+              _condim),
+    ParamSpec("mujoco.torsional_friction", 0.005, "m",
+              "torsional (spin) friction of spawned bodies: torque = value x normal force "
+              "(condim 4 and 6)", number(0.0, 1.0)),
+    ParamSpec("mujoco.rolling_friction", 0.0001, "m",
+              "rolling friction of spawned bodies: torque = value x normal force (condim 6); "
+              "value / radius is the rolling-resistance coefficient", number(0.0, 1.0)),
+    ParamSpec("mujoco.solver", "cg", "", "constraint solver", choice(*SOLVERS)),
+    ParamSpec("mujoco.cone", "elliptic", "", "friction cone", choice(*CONES)),
+    ParamSpec("mujoco.tolerance", 1e-4, "",
+              "solver stops early once its relative improvement is below this (option "
+              "tolerance)", number(0.0, 1.0)),
+    ParamSpec("mujoco.ls_iterations", 5, "", "line-search iterations (newton, cg)",
+              integer(1, 10_000)),
+    ParamSpec("mujoco.noslip_iterations", 0, "", "no-slip solver iterations (0 = off)",
+              integer(0, 10_000)),
+    ParamSpec("mujoco.integrator", "euler", "", "numerical integrator", choice(*INTEGRATORS)),
+    ParamSpec("mujoco.threads", 1, "",
+              "worker threads MuJoCo adds to the physics thread while the world is crowded "
+              "(from 400 contacts until below 200): collision detection and the constraint "
+              "solver of separate islands run in parallel, with bit-identical results; "
+              "0 = none", integer(0, 64)),
+    ParamSpec("mujoco.sleep_tolerance", 0.005, "m/s",
+              "island sleeping: trees in contact and slower than this fall asleep; a "
+              "body touching nothing never sleeps (0 = sleeping off)",
+              number(0.0, 10.0)),
+    ParamSpec("mujoco.max_free_bodies", 12_000, "",
+              "moving (free) bodies a spawn that must compile may bring the "
+              "world to, parked ones included; past it the request is RESOURCE_LIMIT, "
+              "nothing done: MuJoCo's compile is quadratic in them (about 12 s for 10,000 "
+              "and 16 s for 12,000 on 2 cores), and a spawn that binds parked bodies needs "
+              "no compile", integer(1, MAX_BODIES)),
+    ParamSpec("mujoco.wake_balanced", True, "",
+              "wake a ball that fell asleep on a single fixed round support near its top (a "
+              "pin's apex or shoulder, within 30 degrees) and keep it awake until it leaves, "
+              "for at most 5 s: a real ball cannot rest there alone, and one pinned by a "
+              "neighbour creeps (mujoco/balance.py)", flag),
+)}
+CONTACT_PARAMS = frozenset({"timestep", "default_friction", "default_restitution",
+                            "default_static_friction", "default_static_restitution",
+                            "mujoco.solref", "mujoco.solimp", "mujoco.condim",
+                            "mujoco.torsional_friction", "mujoco.rolling_friction"})
+
+
+def route_warnings() -> None:
+    """Send MuJoCo's warnings to logging rather than to stdout and ./MUJOCO_LOG.TXT.
+
+    The handler is process-wide; one already set by someone else is left alone.
+    """
+    if mujoco.get_mju_user_warning() is None:
+        mujoco.set_mju_user_warning(_log_warning)
+
+
+def _log_warning(message: str) -> None:
+    log.warning("MuJoCo: %s", message)
+
+
+def damping_floor(values: dict[str, Any]) -> float:
+    """The smallest damping ratio the current step integrates stably.
+
+    MuJoCo's contact spring has angular frequency 1 / (dmax·timeconst·dampratio), so a low
+    damping ratio stiffens the spring; measured drop tests gain energy once that frequency
+    times the step passes about 1 (timeconst is at least 2 steps, MuJoCo's own refsafe).
+    """
+    timestep = values["timestep"]
+    timeconst = max(values["mujoco.solref"][0], 2 * timestep)
+    return float(max(MIN_DAMPRATIO, timestep / (values["mujoco.solimp"][1] * timeconst)))
+
+
+def damping_ratio(restitution: float, floor: float) -> float:
+    """The solref damping ratio ζ giving a nominal restitution e to a contact.
+
+    A damped spring-mass contact bounces back with e = exp(-ζπ / sqrt(1 - ζ²)); inverted,
+    ζ = L / sqrt(π² + L²) with L = -ln e. e = 0 gives ζ = 1 (critically damped); ζ is clamped
+    to ``floor`` (see damping_floor), so the highest reachable e depends on the step: about
+    0.72 at MuJoCo's defaults (2 ms, timeconst 0.02 s). Measured bounces track the formula
+    within ±0.05 for ζ in 0.1..0.3 but exceed it when damped (ζ = 1 still bounces ≈ 0.12,
+    MuJoCo's soft impedance). A contact averages its two geoms' solref (solmix 1), so both
+    bodies need the restitution for the full effect.
+    """
+    if restitution <= 0:
+        return 1.0
+    decay = -math.log(restitution)
+    return max(floor, decay / math.sqrt(math.pi**2 + decay**2))
+
+
+def contact_solref(restitution: float, values: dict[str, Any]) -> tuple[float, float]:
+    """solref of a geom: mujoco.solref as given for e = 0, its damping replaced for e > 0."""
+    timeconst, dampratio = values["mujoco.solref"]
+    if restitution <= 0:
+        return (timeconst, dampratio)
+    return (timeconst, damping_ratio(restitution, damping_floor(values)))
+
+
+def spin_friction(values: dict[str, Any]) -> tuple[float, float]:
+    return (values["mujoco.torsional_friction"], values["mujoco.rolling_friction"])
+
+
+def write_options(option: Any, values: dict[str, Any]) -> None:
+    """Copy the global parameters onto an mjOption (the spec's or the compiled model's)."""
+    option.timestep = values["timestep"]
+    option.gravity = values["gravity"]
+    option.iterations = values["solver_iterations"]
+    option.ls_iterations = values["mujoco.ls_iterations"]
+    option.tolerance = values["mujoco.tolerance"]
+    option.noslip_iterations = values["mujoco.noslip_iterations"]
+    option.solver = SOLVERS[values["mujoco.solver"]]
+    option.cone = CONES[values["mujoco.cone"]]
+    option.integrator = INTEGRATORS[values["mujoco.integrator"]]
+    option.disableflags |= mujoco.mjtDisableBit.mjDSBL_AUTORESET
+    tolerance = values["mujoco.sleep_tolerance"]
+    if tolerance > 0:
+        option.sleep_tolerance = tolerance
+        option.enableflags |= mujoco.mjtEnableBit.mjENBL_SLEEP
+    else:
+        option.enableflags &= ~int(mujoco.mjtEnableBit.mjENBL_SLEEP)
+
+
+# -- bodies ---------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Material:
+    """Per-geom values shared by a spawned group, resolved once for the whole group."""
+
+    friction: float
+    spin: tuple[float, float]  # torsional and rolling friction, m
+    condim: int
+    solref: tuple[float, float]
+    solimp: tuple[float, ...]
+    rgba: tuple[float, float, float, float] | None
+    mass: float | None
+
+
+def default_surface(static: bool, v: dict[str, Any]) -> tuple[float, float]:
+    """The friction and restitution a body given none gets: the scenery has its own."""
+    if static:
+        return v["default_static_friction"], v["default_static_restitution"]
+    return v["default_friction"], v["default_restitution"]
+
+
+def material(group: BodyGroup, v: dict[str, Any]) -> Material:
+    """A group's per-geom values, the defaults where it gives none."""
+    friction, restitution = default_surface(group.static, v)
+    if group.friction is not None:
+        friction = group.friction
+    if group.restitution is not None:
+        restitution = group.restitution
+    return Material(friction=friction, spin=spin_friction(v), condim=v["mujoco.condim"],
+                    solref=contact_solref(restitution, v), solimp=tuple(v["mujoco.solimp"]),
+                    rgba=group.rgba, mass=group.mass)
+
+
+def write_contacts(m: mujoco.MjModel, geoms: list[Any], gids: np.ndarray, v: dict[str, Any],
+                   friction: float | None, restitution: float | None, spawned: bool) -> None:
+    """One entity's contact values into the model (these geom ids) and its spec geoms."""
+    solimp, spin = v["mujoco.solimp"], spin_friction(v)
+    solref = None if restitution is None else contact_solref(restitution, v)
+    if friction is not None:
+        m.geom_friction[gids, 0] = friction
+    if solref is not None:
+        m.geom_solref[gids] = solref
+    if spawned:
+        m.geom_solimp[gids] = solimp
+        m.geom_friction[gids, 1:] = spin
+        m.geom_condim[gids] = v["mujoco.condim"]
+    for geom in geoms:
+        if friction is not None:
+            geom.friction[0] = friction
+        if solref is not None:
+            geom.solref = solref
+        if spawned:
+            geom.solimp = solimp
+            geom.friction[1:] = spin
+            geom.condim = v["mujoco.condim"]
+
+
+def geom_size(shape: str, size: tuple[float, ...]) -> list[float]:
+    """MuJoCo's size triple; a plane's third number is only its rendered grid spacing."""
+    if shape == "sphere":
+        return [size[0], 0.0, 0.0]
+    if shape in ("cylinder", "capsule"):
+        return [size[0], size[1], 0.0]
+    if shape == "plane":
+        return [size[0], size[1], max(0.01, min(size) / 10)]
+    return list(size)
+
+
+def set_values(element: Any, **values: Any) -> list[tuple[Any, str, Any]]:
+    """Set a spec element's attributes; return (element, attribute, old value) to undo it."""
+    undo = [(element, name, np.array(getattr(element, name), copy=True)
+             if isinstance(getattr(element, name), np.ndarray) else getattr(element, name))
+            for name in values]
+    for name, value in values.items():
+        setattr(element, name, value)
+    return undo
+
+
+def arena_bytes(nbody: int, nv: int) -> int:
+    """The MjData arena a world of this size needs (the spec's ``memory``).
+
+    Every step, mj_collision and mj_broadphase each take nbody²/2 ints from the arena for
+    candidate pairs, however few there are: 4·nbody² bytes. MuJoCo's own default ignores
+    them (a few thousand static bodies overflowed it at the first step) and grows with nv²
+    instead (40·nv² bytes: 6 GB for 2,000 free spheres, "Could not allocate memory" past
+    about 4,000). What the solver needs beside the pairs: CG and PGS about 11 and 17 kB per
+    ball in a settled pile of 2,000; Newton factors each island, up to 4·nv² bytes. So: the
+    pairs, plus the larger of a linear budget and MuJoCo's default capped at ARENA_CAP. It is
+    address space: only the pages used are ever touched.
+    """
+    linear = ARENA_BASE + ARENA_PER_BODY * nbody + ARENA_PER_DOF * nv
+    mujoco_default = 40 * (500 + nv) ** 2
+    return 4 * nbody * nbody + max(linear, min(mujoco_default, ARENA_CAP))
+
+
+# -- loaded models -----------------------------------------------------------------------
+def parse_mjcf(text: str | None, path: str | None) -> mujoco.MjSpec:
+    """Parse an MJCF model, from its text when given (the path is then for information);
+    see ``ready_tops`` for what its top-level bodies need."""
+    if text is None and path is None:
+        raise InvalidArgumentError("give the MJCF model as text or a path")
+    try:
+        child = mujoco.MjSpec.from_string(text) if text is not None \
+            else mujoco.MjSpec.from_file(str(path))
+    except ValueError as exc:
+        raise InvalidArgumentError(f"the MJCF model does not parse: {exc}") from exc
+    return child
+
+
+def ready_tops(child: mujoco.MjSpec, fmt: str) -> None:
+    """Refuse geoms of the world itself; name the top-level bodies, and make jointless ones
+    mocap (a fixed base the World can still move)."""
+    if child.worldbody.geoms:
+        raise InvalidArgumentError(
+            f"the {fmt.upper()} model has geoms directly in its world; they would belong "
+            "to no entity: put them in a body (or spawn a plane for the ground)")
+    for i, body in enumerate(child.worldbody.bodies):
+        body.name = body.name or f"body{i}"
+        if not body.joints and not body.mocap:
+            body.mocap = True
+
+
+def model_names(child: mujoco.MjSpec, prefix: str, rename: Callable[[str], str] = str
+                ) -> tuple[list[str], list[tuple[str, ...]]]:
+    """The names a parsed model's bodies take once attached with this prefix (and renamed):
+    its top-level bodies (the roots), and the other bodies of each (its links)."""
+    tops = child.worldbody.bodies
+    parts = [tuple(prefix + rename(b.name) for b in top.find_all(mujoco.mjtObj.mjOBJ_BODY))
+             for top in tops]
+    return [prefix + rename(top.name) for top in tops], parts

@@ -1,0 +1,142 @@
+"""Snapshots of the ODE world as plain data, and their checks on the way back in.
+
+A moving body's 28 state doubles are stored as read and written back into ODE's memory as
+they were, so a restored body starts bit for bit where its source stood (``dBodySet-
+Quaternion`` would normalise the quaternion again and could change its last bits). What ODE
+keeps besides is each body's sleep flag and its idle counters: the flag is stored; the
+counters cannot be read, so a snapshot first restarts them in its source (``canonical``) or
+the restore goes on as the source would after ``reset_dynamics``, which restarts them too.
+Contact joints live one step and ``dWorldStep`` keeps no warm start: nothing else to carry.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from galton.daemon.engines.ode.native import STATE_LENGTH
+from galton.daemon.engines.ode.spawn import Body
+from galton.protocol import BODY_SHAPES, InvalidArgumentError
+
+FORMAT = "galton-ode-snapshot"
+VERSION = 1
+
+
+def body_data(body: Body, enabled: bool, wrench: list[float] | None) -> dict[str, Any]:
+    return {"name": body.name, "shape": body.shape, "size": list(body.size),
+            "static": body.static, "mass": None if body.static else body.mass,
+            "friction": body.friction, "restitution": body.restitution,
+            "follows": [body.follows_friction, body.follows_restitution],
+            "rgba": None if body.rgba is None else list(body.rgba),
+            "pose": list(body.pose), "state": [] if body.static else body.state.tolist(),
+            "enabled": enabled, "wrench": wrench}
+
+
+def _fail(where: str, what: str) -> InvalidArgumentError:
+    return InvalidArgumentError(f"not an ode snapshot: {where} {what}")
+
+
+def _numbers(value: Any, length: int, where: str) -> list[float]:
+    if not isinstance(value, list) or len(value) != length or not all(
+            isinstance(v, float | int) and not isinstance(v, bool) for v in value):
+        raise _fail(where, f"must be a list of {length} numbers")
+    return [float(v) for v in value]
+
+
+def check(data: Any) -> tuple[dict[str, Any], list[dict[str, Any]]]:
+    """The snapshot's parameters and bodies, every field checked; InvalidArgumentError
+    naming the first bad one."""
+    if not isinstance(data, dict) or data.get("format") != FORMAT:
+        raise InvalidArgumentError(f"not an ode snapshot (format must be {FORMAT!r})")
+    if data.get("version") != VERSION:
+        raise _fail("version", f"must be {VERSION}")
+    params, bodies = data.get("params"), data.get("bodies")
+    if not isinstance(params, dict):
+        raise _fail("params", "must be a map")
+    if not isinstance(bodies, list):
+        raise _fail("bodies", "must be a list")
+    names: set[str] = set()
+    for k, body in enumerate(bodies):
+        if isinstance(body, dict) and "model" in body:
+            check_model(body, f"bodies[{k}]")
+            continue
+        _check_body(body, f"bodies[{k}]")
+        if body["name"] in names:
+            raise _fail(f"bodies[{k}].name", "repeats another body's")
+        names.add(body["name"])
+    return params, bodies
+
+
+def _check_body(body: Any, where: str) -> None:
+    if not isinstance(body, dict):
+        raise _fail(where, "must be a map")
+    if not isinstance(body.get("name"), str) or not body["name"]:
+        raise _fail(f"{where}.name", "must be a non-empty string")
+    if body.get("shape") not in BODY_SHAPES:
+        raise _fail(f"{where}.shape", f"must be one of {BODY_SHAPES}")
+    size = body.get("size")
+    if not isinstance(size, list) or not 1 <= len(size) <= 3:
+        raise _fail(f"{where}.size", "must be a list of 1 to 3 numbers")
+    if not all(v > 0 and math.isfinite(v) for v in _numbers(size, len(size), f"{where}.size")):
+        raise _fail(f"{where}.size", "must be positive")
+    if not isinstance(body.get("static"), bool) or not isinstance(body.get("enabled"), bool):
+        raise _fail(where, "static and enabled must be true or false")
+    for key in ("friction", "restitution"):
+        value = _numbers([body.get(key)], 1, f"{where}.{key}")[0]
+        if not 0 <= value <= 100:
+            raise _fail(f"{where}.{key}", "must be within 0..100")
+    follows = body.get("follows")
+    if not isinstance(follows, list) or len(follows) != 2 or not all(
+            isinstance(f, bool) for f in follows):
+        raise _fail(f"{where}.follows", "must be two booleans")
+    if body.get("rgba") is not None:
+        _numbers(body["rgba"], 4, f"{where}.rgba")
+    if body["static"]:
+        _numbers(body.get("pose"), 7, f"{where}.pose")
+    else:
+        mass = _numbers([body.get("mass")], 1, f"{where}.mass")[0]
+        if not (mass > 0 and math.isfinite(mass)):
+            raise _fail(f"{where}.mass", "must be positive")
+        _numbers(body.get("state"), STATE_LENGTH, f"{where}.state")
+    if body.get("wrench") is not None:
+        _numbers(body["wrench"], 6, f"{where}.wrench")
+
+
+JOINT_FIELDS = ("target", "kp", "kd", "max_effort", "effort")
+
+
+def model_data(source: dict[str, Any], links: list[dict[str, Any]],
+               joints: list[dict[str, Any]]) -> dict[str, Any]:
+    """A loaded model: how it was loaded, then its links' states and its joints' targets."""
+    return {"model": dict(source), "links": links, "joints": joints}
+
+
+def check_model(entry: Any, where: str) -> None:
+    source = entry.get("model")
+    if not isinstance(source, dict) or not isinstance(source.get("prefix"), str) or \
+            not isinstance(source.get("fixed_base"), bool) or not all(
+                source.get(k) is None or isinstance(source.get(k), str)
+                for k in ("text", "path")):
+        raise _fail(f"{where}.model", "must say text or path, prefix and fixed_base")
+    links, joints = entry.get("links"), entry.get("joints")
+    if not isinstance(links, list) or not isinstance(joints, list):
+        raise _fail(where, "must hold lists of links and joints")
+    for k, link in enumerate(links):
+        if not isinstance(link, dict) or not isinstance(link.get("name"), str) or \
+                not isinstance(link.get("enabled"), bool):
+            raise _fail(f"{where}.links[{k}]", "must name the link and its sleep flag")
+        _numbers(link.get("state"), STATE_LENGTH, f"{where}.links[{k}].state")
+        for key in ("friction", "restitution"):
+            _numbers([link.get(key)], 1, f"{where}.links[{k}].{key}")
+        if link.get("wrench") is not None:
+            _numbers(link["wrench"], 6, f"{where}.links[{k}].wrench")
+        follows = link.get("follows")
+        if not isinstance(follows, list) or len(follows) != 2 or not all(
+                isinstance(f, bool) for f in follows):
+            raise _fail(f"{where}.links[{k}].follows", "must be two booleans")
+    for k, joint in enumerate(joints):
+        if not isinstance(joint, dict) or not isinstance(joint.get("name"), str) or \
+                joint.get("mode") not in ("none", "position", "velocity", "effort"):
+            raise _fail(f"{where}.joints[{k}]", "must name the joint and its mode")
+        _numbers([joint.get(f) for f in JOINT_FIELDS], len(JOINT_FIELDS),
+                 f"{where}.joints[{k}]")

@@ -1,0 +1,1 @@
+"""The PyBullet engine (``--engine pybullet``): a headless Bullet world (engine.py)."""

@@ -1,0 +1,396 @@
+"""The PyBullet engine: a headless Bullet world, one per BulletClient (several can live in
+one process, as during an engine switch).
+
+Spawned bodies are plain rigid bodies (``useMaximalCoordinates``): Bullet's continuous
+collision detection works only for those, they carry no default damping (a one-link
+multibody has 0.04, which slows a free fall by 7 % in one second), and they step and read
+faster. Loaded models are multibodies (their joints need it), with damping set to zero.
+
+Contacts: PyBullet multiplies the two bodies' values at a contact, for friction and for
+restitution alike, so a body with restitution 0.9 bounces off a body with restitution 0
+hardly at all. Restitution is also zero below ``pybullet.restitution_velocity_threshold``.
+The defaults (restitution 0.8275, friction 0.5 on every body: e = 0.685, mu = 0.25 for
+any pair; early contacts from 0.01 m instead of Bullet's 0.02, so that slow balls keep
+their bounce) are calibrated on the Galton board in both release modes; the solver
+settings (10 iterations, pyramid friction) are the cheapest that keep it.
+docs/physics/pybullet.md has the measurements. ``contactBreakingThreshold`` is a global of
+the PyBullet module: every engine sets its own value when it starts, and the last
+``set_params`` wins for all engines of the process.
+
+Memory: removeBody keeps about 0.9 kB per body even with shared collision shapes; only
+resetSimulation frees it, which ``clear`` does, and ``delete`` does when the world empties
+or, past a count of removed bodies, by rebuilding the world (rebuild.py). Visual
+meshes are made once per process (meshes.shared_mesh): createVisualShape never
+lets go of the lists it is given.
+
+Rewinding: ``reset_dynamics`` rebuilds the world too, every body made again as it was first
+made, so that a stopped world replays its first run bit for bit (Bullet would otherwise keep
+contact points and their warm starts across the teleport).
+
+The engine's parts: this module (bodies, models), ``Parameters``
+(params.py), ``Rebuilding`` (rebuild.py), ``Articulated`` (joints,
+articulated.py), ``Snapshots`` (snapshot.py) and ``Perception``
+(render, raycast, contacts: perception.py). Plain functions do the rest:
+states and the divergence check (state.py), a spawn group's values and books
+(spawn.py), a body's updates and properties
+(props.py), a model load's checks and names (models.py).
+"""
+
+from __future__ import annotations
+
+import importlib.metadata
+import itertools
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+import pybullet
+from pybullet_utils.bullet_client import BulletClient
+
+from galton.daemon.core.params import check_updates
+from galton.daemon.engines.base import (
+    FEATURE_CONTACTS,
+    FEATURE_DELETE,
+    FEATURE_JOINT_TARGETS,
+    FEATURE_JOINTS,
+    FEATURE_LOAD_MODEL,
+    FEATURE_MODEL_SHAPES,
+    FEATURE_RAYCAST,
+    FEATURE_RENDER,
+    FEATURE_SET_STATE,
+    FEATURE_SNAPSHOT,
+    FEATURE_SPAWN,
+    FEATURE_STATIC_POSE,
+    FEATURE_TARGET_EFFORT,
+    FEATURE_TARGET_POSITION,
+    FEATURE_TARGET_VELOCITY,
+    FEATURE_UPDATE_FRICTION,
+    FEATURE_UPDATE_MASS,
+    FEATURE_UPDATE_RESTITUTION,
+    FEATURE_UPDATE_RGBA,
+    FEATURE_WRENCH,
+    Engine,
+    Shape,
+    native_output_silenced,
+)
+from galton.daemon.engines.pybullet import collisions, rebuild
+from galton.daemon.engines.pybullet import props as bodyprops
+from galton.daemon.engines.pybullet import spawn as spawning
+from galton.daemon.engines.pybullet import state as states
+from galton.daemon.engines.pybullet.articulated import Articulated
+from galton.daemon.engines.pybullet.calls import engine_call
+from galton.daemon.engines.pybullet.frames import Offset
+from galton.daemon.engines.pybullet.models import MODEL_FORMATS
+from galton.daemon.engines.pybullet.params import SPECS, Parameters
+from galton.daemon.engines.pybullet.perception import Perception
+from galton.daemon.engines.pybullet.rebuild import Body as _Body
+from galton.daemon.engines.pybullet.rebuild import Rebuilding
+from galton.daemon.engines.pybullet.render import RENDER_BACKEND
+from galton.daemon.engines.pybullet.robots import Robots
+from galton.daemon.engines.pybullet.shapes import BodyMaker, ShapeCache
+from galton.daemon.engines.pybullet.snapshot import Snapshots
+from galton.protocol import (
+    PROTOCOL_VERSION,
+    BodyGroup,
+    BodyProperties,
+    Capabilities,
+    EntityInfo,
+    InvalidArgumentError,
+    NameNotUniqueError,
+    NotFoundError,
+)
+from galton.protocol.vocabulary import BODY_SHAPES, POSE_WIDTH, TWIST_WIDTH
+
+
+class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception, Engine):
+    """Named rigid bodies in a headless PyBullet world."""
+
+    name = "pybullet"
+
+    def __init__(self) -> None:
+        with native_output_silenced():  # "argv[0]=" when it connects
+            self._bc = BulletClient(connection_mode=pybullet.DIRECT)
+        self._closed = False
+        bc = self._bc
+        # Bound once: BulletClient builds a new functools.partial on every attribute access.
+        self._get_pose = bc.getBasePositionAndOrientation
+        self._get_velocity = bc.getBaseVelocity
+        self._reset_pose = bc.resetBasePositionAndOrientation
+        self._reset_velocity = bc.resetBaseVelocity
+        self._change = bc.changeDynamics
+        self._step = bc.stepSimulation
+        self._shapes = ShapeCache(bc)
+        self._bodies: dict[str, _Body] = {}
+        self._maker = BodyMaker(bc)
+        self._values: dict[str, Any] = {name: spec.default for name, spec in SPECS.items()}
+        self._removed = 0  # bodies removed since resetSimulation last ran
+        self._held: dict[str, rebuild.Held] = {}  # states a rebuild could not set bit for bit
+        # Poses given to PyBullet (spawn, set_states) since the last step: a rebuild sets
+        # them again as given, which reading them back (a rotation matrix) cannot promise.
+        self._given: dict[str, list[float]] = {}
+        self._batches = itertools.count()  # spawn groups and model loads, in order
+        self._robots = Robots()  # models' links, joints, targets, held wrenches
+        self._frames: dict[str, Offset] = {}  # roots whose inertial frame is offset
+        self.rebuilds = 0
+        self._configure_world()
+
+    # -- description ----------------------------------------------------------------------
+    def capabilities(self) -> Capabilities:
+        return Capabilities(
+            engine=self.name,
+            engine_version=importlib.metadata.version("pybullet"),
+            protocol_version=PROTOCOL_VERSION,
+            body_shapes=BODY_SHAPES,
+            model_formats=MODEL_FORMATS,
+            features=(FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDATE_MASS,
+                      FEATURE_UPDATE_FRICTION, FEATURE_UPDATE_RESTITUTION, FEATURE_UPDATE_RGBA,
+                      FEATURE_LOAD_MODEL, FEATURE_STATIC_POSE, FEATURE_JOINTS,
+                      FEATURE_JOINT_TARGETS, FEATURE_TARGET_POSITION, FEATURE_TARGET_VELOCITY,
+                      FEATURE_TARGET_EFFORT, FEATURE_WRENCH, FEATURE_SNAPSHOT, FEATURE_RENDER,
+                      FEATURE_RAYCAST, FEATURE_CONTACTS, FEATURE_MODEL_SHAPES),
+            params={name: spec.describe() for name, spec in SPECS.items()},
+            render_backend=RENDER_BACKEND,
+        )
+
+    @property
+    def timestep(self) -> float:
+        return float(self._values["timestep"])
+
+    # -- parameters -----------------------------------------------------------------------
+    def get_params(self) -> dict[str, Any]:
+        return {k: list(v) if isinstance(v, tuple) else v for k, v in self._values.items()}
+
+    @engine_call
+    def set_params(self, params: dict[str, Any]) -> None:
+        clean = check_updates(self.name, SPECS, params)
+        self._values.update(clean)
+        self._apply(clean)
+
+    # -- bodies ---------------------------------------------------------------------------
+    @engine_call
+    def spawn(self, groups: Sequence[BodyGroup]) -> None:
+        taken = [n for g in groups for n in g.names if n in self._bodies]
+        if taken:
+            raise NameNotUniqueError(f"an entity named {taken[0]!r} already exists")
+        made: list[int] = []
+        bodies: dict[str, _Body] = {}
+        try:
+            for group in groups:
+                if group.names:
+                    bodies.update(self._spawn_group(group, made, next(self._batches)))
+        except BaseException:
+            self._maker.remove(made)
+            raise
+        self._bodies.update(bodies)
+        for group in groups:
+            self._given.update(zip(group.names, np.asarray(
+                group.poses, dtype=float).reshape(-1, POSE_WIDTH).tolist(), strict=True))
+
+    def _spawn_group(self, group: BodyGroup, made: list[int], batch: int,
+                     redo: rebuild.Redo | None = None) -> dict[str, _Body]:
+        """The group's bodies in (at most) one createMultiBody call, all turned like the
+        first, then each one's own orientation where it differs, velocity and dynamics. A
+        rebuild (``redo``) makes them as they were first made."""
+        spawning.check_group(group)
+        size = tuple(float(s) for s in group.size)
+        poses = np.asarray(group.poses, dtype=float).reshape(-1, POSE_WIDTH).tolist()
+        if redo is None:
+            redo = spawning.first_redo(poses)
+        mass = spawning.group_mass(group, size)
+        ids = self._maker.create(mass, self._shapes.get(group.shape, size),
+                                 self._shapes.visual(group.shape, size, group.rgba),
+                                 [pose[:3] for pose in poses], list(redo.turn), self._owned(),
+                                 made)
+        friction, restitution, dynamics = spawning.dynamics(group, size, mass, self._values)
+        twists = None if group.twists is None else np.asarray(
+            group.twists, dtype=float).reshape(-1, TWIST_WIDTH).tolist()
+        for k, uid in enumerate(ids):
+            if redo.turned[k]:
+                self._reset_pose(uid, poses[k][:3], poses[k][3:])
+            if twists is not None:
+                self._reset_velocity(uid, twists[k][:3], twists[k][3:])
+            self._change(uid, -1, **dynamics)
+        self._set_margin(ids[0], group.shape, size)
+        return spawning.books(group, ids, size, mass, (friction, restitution), batch, redo)
+
+    @engine_call
+    def delete(self, names: Sequence[str]) -> None:
+        bodies = self._lookup(names)
+        self._maker.remove([b.uid for b in bodies])
+        self._removed += len(bodies)
+        for name in names:
+            del self._bodies[name]
+            self._held.pop(name, None)
+            self._given.pop(name, None)
+            self._frames.pop(name, None)
+        self._robots.forget(names)
+        # removeBody keeps about 0.9 kB per body (measured with shared shapes) until
+        # resetSimulation: an empty world is reset for free, a fuller one rebuilt now and then.
+        if not self._bodies:
+            self.clear()
+        elif rebuild.due(self._removed, self._bodies):
+            self._rebuild()
+
+    @engine_call
+    def clear(self) -> None:
+        """resetSimulation: the only call that frees PyBullet's collision shapes."""
+        self._bc.resetSimulation()
+        self._bodies.clear()
+        self._held.clear()
+        self._given.clear()
+        self._removed = 0
+        self._robots, self._frames = Robots(), {}
+        self._maker.forget()
+        self._shapes.forget()
+        self._configure_world()
+
+    @engine_call
+    def reset_dynamics(self) -> None:
+        """A new world, every body made again in order at the state just set: Bullet keeps
+        contact points and their warm-start impulses across a teleport, so a rewound world
+        would otherwise not replay its first run, and would replay it differently after a
+        longer run."""
+        if self._bodies:
+            self._rebuild()
+
+    @engine_call
+    def update(self, names: Sequence[str], props: BodyProperties) -> None:
+        bodies = self._lookup(names)
+        if props.mass is not None:
+            static = [n for n, b in zip(names, bodies, strict=True) if b.static]
+            if static:
+                raise InvalidArgumentError(f"entity {static[0]!r} is static: it has no mass")
+        for body in bodies:
+            if body.model is not None:
+                body.model.edits = rebuild.merged(body.model.edits, props)
+                self._edit_model(body, props)
+            else:
+                self._edit_spawned(body, props)
+
+    def _edit_spawned(self, body: _Body, props: BodyProperties) -> None:
+        bodyprops.edit_spawned(self._bc, self._change, body, props)
+
+    def _edit_model(self, body: _Body, props: BodyProperties) -> None:
+        bodyprops.edit_model(self._bc, self._change, body, props)
+
+    def _owned(self) -> set[int]:
+        return {b.uid for b in self._bodies.values()}
+
+    def _lookup(self, names: Sequence[str]) -> list[_Body]:
+        try:
+            return [self._bodies[n] for n in names]
+        except KeyError as exc:
+            raise NotFoundError(f"no entity named {exc.args[0]!r} in the PyBullet world") from None
+
+    # -- state (state.py) --------------------------------------------------------
+    @engine_call
+    def get_states(self, names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
+        """Link frames, not PyBullet's centres of mass (frames.py)."""
+        return states.get_states(self, names)
+
+    def bounds(self, names: Sequence[str]) -> np.ndarray:
+        """PyBullet's own box around each body's (or model link's) collision shapes."""
+        links = self._robots.links
+        rows = np.empty((len(names), 6))
+        for row, name in enumerate(names):
+            root, link = links.get(name, (name, -1))
+            [body] = self._lookup([root])
+            low, high = self._bc.getAABB(body.uid, link)
+            rows[row] = [*low, *high]
+        return rows
+
+    def shapes(self, names: Sequence[str]) -> list[list[Shape]]:
+        links = self._robots.links
+        found = []
+        for name in names:
+            root, link = links.get(name, (name, -1))
+            [body] = self._lookup([root])
+            found.append(collisions.link_shapes(self._bc, body.uid, link))
+        return found
+
+    def _read(self, ids: list[int]) -> tuple[np.ndarray, np.ndarray]:
+        return states.read(self, ids)
+
+    @engine_call
+    def set_states(self, names: Sequence[str], poses: np.ndarray | None,
+                   twists: np.ndarray | None) -> None:
+        states.set_states(self, names, poses, twists)
+
+    @engine_call
+    def step(self, count: int) -> None:
+        """stepSimulation alone, unless targets or wrenches are held: then they are
+        applied before each step (they last one step in PyBullet)."""
+        step = self._step
+        self._held.clear()
+        self._given.clear()
+        if self._robots.busy():
+            actuate, bc, uid_of, dt = self._robots.actuate, self._bc, self._uid_of, \
+                self.timestep
+            for _ in range(count):
+                actuate(bc, uid_of, dt)
+                step()
+            return
+        for _ in range(count):
+            step()
+
+    @engine_call
+    def state_within(self, max_position: float, max_speed: float) -> bool:
+        return states.state_within(self, max_position, max_speed)
+
+    @engine_call
+    def properties(self, names: Sequence[str]) -> np.ndarray:
+        """Spawned bodies from what the engine last gave PyBullet (getDynamicsInfo reports
+        a rigid body's restitution as 0); models from PyBullet, the mass summed over links."""
+        links = self._robots.links
+        self._lookup([name for name in names if name not in links])  # NotFound for others
+        rows = [self._link_properties(name) if name in links
+                else self._properties(self._bodies[name]) for name in names]
+        return np.array(rows, dtype=float).reshape(len(rows), 3)
+
+    def _properties(self, body: _Body) -> tuple[float, float, float]:
+        return bodyprops.properties(self._bc, body)
+
+    # -- models ---------------------------------------------------------------------------
+    @engine_call
+    def load_model(self, fmt: str, text: str | None, path: str | None,
+                   prefix: str, *, fixed_base: bool = True) -> list[EntityInfo]:
+        """URDF (one model) or MJCF (one model per top-level body, plus one for the world's
+        own geoms), roots and links (articulated.py). Text is loaded from a
+        temporary file, so relative mesh paths only work when a path is given."""
+        return self._load(fmt, text, path, prefix, fixed_base)
+
+    # -- snapshots (snapshot.py) ------------------------------------------------
+    @engine_call
+    def snapshot(self, *, canonical: bool = True) -> dict[str, Any]:
+        """The world as plain data: every body's books, model texts, articulations, targets,
+        wrenches, parameters and states. Bullet's contact points and warm starts cannot be
+        read out, so a restore starts without them, as ``reset_dynamics`` leaves a world.
+        The promise (on the same PyBullet build): a fresh engine restored from the
+        snapshot, given the same steps and requests, has the same states bit for bit as
+        this world, which ``canonical`` rebuilds now for that (its own continuation then
+        differs from the one it would have had, as after ``reset_dynamics``); with
+        ``canonical`` False this world is left untouched, and the restore goes on bit for
+        bit as this world would after ``reset_dynamics`` now."""
+        return self._snapshot(canonical)
+
+    @engine_call
+    def restore(self, data: dict[str, Any]) -> None:
+        """Make this fresh engine the world ``data`` describes (checked whole first:
+        InvalidArgumentError naming the field for anything malformed)."""
+        self._restore(data)
+
+    def entity_names(self) -> list[str]:
+        return [*self._bodies, *self._robots.links]
+
+    @engine_call
+    def clone(self) -> PybulletEngine:
+        """As ``restore(snapshot(canonical=False))`` into a fresh engine, without the plain
+        data between them (snapshot.py); this world is untouched."""
+        return self._clone_into(type(self)())
+
+    # -- life -----------------------------------------------------------------------------
+    def close(self) -> None:
+        if not self._closed:
+            self._closed = True
+            self._bc.disconnect()
+

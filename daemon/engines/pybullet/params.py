@@ -1,0 +1,143 @@
+"""The PyBullet engine's parameters: name, default, unit, meaning and check of each, and the
+setPhysicsEngineParameter keyword of those that are world settings.
+
+``Parameters``, a part of the engine, hands values to PyBullet and to the bodies they reach.
+
+The contact defaults are calibrated on the Galton board (docs/physics/pybullet.md): restitution
+0.8275 and friction 0.5 on every body (PyBullet multiplies both bodies' values: e = 0.685,
+mu = 0.25), contacts made from 0.01 m, 10 solver iterations and pyramid friction.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
+
+from galton.daemon.core.params import ParamSpec, flag, integer, number, vector
+from galton.daemon.engines.pybullet.shapes import margin_for
+
+if TYPE_CHECKING:
+    from pybullet_utils.bullet_client import BulletClient
+
+    from galton.daemon.engines.pybullet.rebuild import Body
+
+SPECS: dict[str, ParamSpec] = {spec.name: spec for spec in (
+    ParamSpec("timestep", 1 / 240, "s", "Simulated time per step.",
+              number(0, 1, low_open=True)),
+    ParamSpec("gravity", (0.0, 0.0, -9.81), "m/s²", "Gravity vector, world frame.",
+              vector(3, -1000, 1000)),
+    ParamSpec("solver_iterations", 10, "", "Constraint solver iterations per step "
+              "(numSolverIterations; PyBullet's own default is 50).", integer(1, 10_000)),
+    ParamSpec("default_friction", 0.5, "", "Lateral friction of moving bodies that set "
+              "none, now and after a change. PyBullet multiplies both bodies' values at a "
+              "contact: 0.5 on both is mu = 0.25.", number(0, 100)),
+    ParamSpec("default_restitution", 0.8275, "", "Restitution of moving bodies that set "
+              "none, now and after a change. PyBullet multiplies both bodies' values at a "
+              "contact: 0.8275 on both is e = 0.685.", number(0, 1)),
+    ParamSpec("default_static_friction", 0.5, "", "Lateral friction of static bodies (the "
+              "scenery) that set none, now and after a change; combined with the other body's "
+              "value as a product, like every PyBullet contact.", number(0, 100)),
+    ParamSpec("default_static_restitution", 0.8275, "", "Restitution of static bodies that "
+              "set none, now and after a change; combined as a product.", number(0, 1)),
+    ParamSpec("pybullet.restitution_velocity_threshold", 0.2, "m/s", "Contacts approaching "
+              "slower than this do not bounce.", number(0, 1000)),
+    ParamSpec("pybullet.contact_breaking_threshold", 0.01, "m", "Gap at which Bullet makes a "
+              "contact before two solids touch. Such early contacts lose their bounce once a "
+              "few steps old, so a slow ball bounces less off a plane, box or cylinder, the "
+              "more so at small timesteps; 0.001 gives the same bounce at every speed and step.",
+              number(0, 1, low_open=True)),
+    ParamSpec("pybullet.ccd_swept_sphere_radius", 0.0, "m", "Continuous collision detection "
+              "for every dynamic body (0 = off): about the smallest ball's radius. Acts on "
+              "spawned bodies only (Bullet has no CCD for the multibodies of models).",
+              number(0, 10)),
+    ParamSpec("pybullet.collision_margin", 0.001, "m", "Margin of spawned boxes, cylinders "
+              "and planes: rounds box edges, capped at half the smallest half size. Spheres "
+              "and capsules keep their radius as margin; models keep theirs.", number(0, 1)),
+    ParamSpec("pybullet.enable_cone_friction", False, "", "Implicit cone friction; false "
+              "(the default here, not PyBullet's) uses the cheaper pyramid approximation.", flag),
+    ParamSpec("pybullet.erp", 0.2, "", "Error reduction of non-contact constraints (the "
+              "joints of loaded models).", number(0, 1)),
+    ParamSpec("pybullet.contact_erp", 0.08, "", "Error reduction of contacts: the share of a "
+              "penetration corrected per step.", number(0, 1)),
+    ParamSpec("pybullet.deterministic_overlapping_pairs", True, "", "Sort overlapping pairs, "
+              "so that identical runs give identical results.", flag),
+)}
+
+# Parameters that are setPhysicsEngineParameter keywords (booleans go as 0/1).
+WORLD_PARAMS = {
+    "timestep": "fixedTimeStep",
+    "solver_iterations": "numSolverIterations",
+    "pybullet.restitution_velocity_threshold": "restitutionVelocityThreshold",
+    "pybullet.contact_breaking_threshold": "contactBreakingThreshold",
+    "pybullet.enable_cone_friction": "enableConeFriction",
+    "pybullet.erp": "erp",
+    "pybullet.contact_erp": "contactERP",
+    "pybullet.deterministic_overlapping_pairs": "deterministicOverlappingPairs",
+}
+
+SURFACE_DEFAULTS = frozenset({"default_friction", "default_restitution",
+                              "default_static_friction", "default_static_restitution"})
+
+
+def default_keys(static: bool) -> tuple[str, str]:
+    """The parameters a body that sets no friction or restitution follows."""
+    if static:
+        return "default_static_friction", "default_static_restitution"
+    return "default_friction", "default_restitution"
+
+
+class Parameters:
+    """The engine's part that applies parameters: world settings and per-body values."""
+
+    # What it uses of the engine it is a part of (PybulletEngine sets them).
+    _bc: BulletClient
+    _bodies: dict[str, Body]
+    _values: dict[str, Any]
+    _change: Callable[..., Any]
+
+    def _configure_world(self) -> None:
+        """Every setting of a fresh (or reset) world: resetSimulation forgets them all."""
+        # The file cache keys on file names and keeps every file read: with temporary files
+        # it only grows, and with a rewritten file it serves the old text.
+        self._bc.setPhysicsEngineParameter(enableFileCaching=0)
+        self._apply(self._values)
+
+    def _apply(self, values: dict[str, Any]) -> None:
+        """Hand changed values to PyBullet: world settings, then the bodies they reach."""
+        world = {WORLD_PARAMS[k]: int(v) if isinstance(v, bool) else v
+                 for k, v in values.items() if k in WORLD_PARAMS}
+        if world:
+            self._bc.setPhysicsEngineParameter(**world)
+        if "gravity" in values:
+            self._bc.setGravity(*values["gravity"])
+        bodies = list(self._bodies.values())
+        if values.keys() & SURFACE_DEFAULTS:
+            self._follow_surface_defaults(bodies, values)
+        if "pybullet.ccd_swept_sphere_radius" in values:
+            radius = values["pybullet.ccd_swept_sphere_radius"]
+            for body in bodies:
+                if not body.static:
+                    self._change(body.uid, -1, ccdSweptSphereRadius=radius)
+        if "pybullet.collision_margin" in values:
+            done: set[tuple[str, tuple[float, ...]]] = set()
+            for body in bodies:  # the shape is shared: one body per shape sets it for all
+                if (body.shape, body.size) not in done:
+                    done.add((body.shape, body.size))
+                    self._set_margin(body.uid, body.shape, body.size)
+
+    def _follow_surface_defaults(self, bodies: list[Body],
+                                 values: dict[str, Any]) -> None:
+        """Bodies spawned without a friction or restitution take their kind's new default."""
+        for body in bodies:
+            friction_key, restitution_key = default_keys(body.static)
+            if body.follows_friction and friction_key in values:
+                body.friction = values[friction_key]
+                self._change(body.uid, -1, lateralFriction=body.friction)
+            if body.follows_restitution and restitution_key in values:
+                body.restitution = values[restitution_key]
+                self._change(body.uid, -1, restitution=body.restitution)
+
+    def _set_margin(self, uid: int, shape: str, size: tuple[float, ...]) -> None:
+        margin = margin_for(shape, size, self._values["pybullet.collision_margin"])
+        if margin is not None:
+            self._change(uid, -1, collisionMargin=margin)

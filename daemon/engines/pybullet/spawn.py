@@ -1,0 +1,70 @@
+"""The pure parts of spawning into PyBullet: a group's checks, mass, dynamics and books.
+
+The engine's ``_spawn_group`` makes the bodies (one createMultiBody call for a group, all
+turned like its first body) and hands them these values; a rebuild makes them again from
+the books, through the same calls (rebuild).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from galton.daemon.engines.pybullet import rebuild
+from galton.daemon.engines.pybullet.params import default_keys
+from galton.daemon.engines.pybullet.rebuild import Body
+from galton.daemon.engines.pybullet.shapes import DENSITY, as_rgba, unit_inertia, volume
+from galton.protocol import BodyGroup, InvalidArgumentError
+from galton.protocol.vocabulary import BODY_SHAPES
+
+
+def check_group(group: BodyGroup) -> None:
+    """Refuse a shape PyBullet is not given here, and a plane that would move."""
+    if group.shape not in BODY_SHAPES:
+        raise InvalidArgumentError(f"unknown shape {group.shape!r}")
+    if group.shape == "plane" and not group.static:
+        raise InvalidArgumentError("a plane must be static")
+
+
+def first_redo(poses: list[list[float]]) -> rebuild.Redo:
+    """How a group is first made: every body turned like the first, then each one that
+    differs turned to its own."""
+    turn = tuple(poses[0][3:])
+    return rebuild.Redo(turn, [any(pose[3:] != poses[0][3:] for pose in poses)] * len(poses))
+
+
+def group_mass(group: BodyGroup, size: tuple[float, ...]) -> float:
+    """Each body's mass: 0 when static, else the given one or the protocol's
+    default density's."""
+    if group.static:
+        return 0.0
+    return group.mass if group.mass is not None else DENSITY * volume(group.shape, size)
+
+
+def dynamics(group: BodyGroup, size: tuple[float, ...], mass: float,
+             values: dict[str, Any]) -> tuple[float, float, dict[str, Any]]:
+    """A group's friction, restitution, and the changeDynamics arguments of its bodies."""
+    friction_key, restitution_key = default_keys(group.static)
+    friction = group.friction if group.friction is not None else values[friction_key]
+    restitution = group.restitution if group.restitution is not None else (
+        values[restitution_key])
+    changes: dict[str, Any] = {"lateralFriction": friction, "restitution": restitution}
+    if not group.static:
+        inertia = unit_inertia(group.shape, size)
+        # Mass and inertia together: an inertia alone sets a rigid body's mass to 0.
+        changes.update(mass=mass, localInertiaDiagonal=[mass * i for i in inertia],
+                       ccdSweptSphereRadius=values["pybullet.ccd_swept_sphere_radius"])
+    return friction, restitution, changes
+
+
+def books(group: BodyGroup, ids: list[int], size: tuple[float, ...], mass: float,
+          surface: tuple[float, float], batch: int, redo: rebuild.Redo) -> dict[str, Body]:
+    """The engine's books of a group's new bodies: everything needed to make them again."""
+    friction, restitution = surface
+    rgba = None if group.rgba is None else as_rgba(group.rgba)
+    inertia = None if group.static else unit_inertia(group.shape, size)
+    return {name: Body(uid, group.static, group.shape, size, inertia, batch,
+                       follows_friction=group.friction is None,
+                       follows_restitution=group.restitution is None, mass=mass,
+                       friction=friction, restitution=restitution, rgba=rgba,
+                       made_mass=mass, turn=redo.turn, turned=turned)
+            for name, uid, turned in zip(group.names, ids, redo.turned, strict=True)}

@@ -1,0 +1,191 @@
+"""The ROS 2 front: simulation_interfaces services, /clock, /tf and joint mirroring in
+rmw_zenoh's wire format, on the daemon's own Zenoh session.
+
+It reaches the physics thread only as the Zenoh front does: it hands ``Call`` objects
+(msgpack native requests) to the daemon's ``dispatch`` and reads their replies. A service
+request runs as a handler (daemon/fronts/ros2/services.py) that yields native requests; each reply
+is sent back into the handler on the front's one reply thread, so no thread waits for
+physics and the physics thread does no ROS work. Topics run on one thread of their own
+(daemon/fronts/ros2/topics.py).
+"""
+
+from __future__ import annotations
+
+import itertools
+import logging
+import queue
+import re
+import threading
+from collections.abc import Callable
+from typing import Any
+
+import zenoh
+
+from galton.daemon.core.calls import Call
+from galton.daemon.fronts.ros2 import codes, rmw_zenoh
+from galton.daemon.fronts.ros2.action import SimulateStepsServer
+from galton.daemon.fronts.ros2.interfaces import dds_type_name, service_type, type_hash
+from galton.daemon.fronts.ros2.messages import decode, encode, new
+from galton.daemon.fronts.ros2.native import Handler, NativeRequest, Refusal
+from galton.daemon.fronts.ros2.options import Ros2Options
+from galton.daemon.fronts.ros2.services import HANDLERS
+from galton.daemon.fronts.ros2.topics import Publisher, TopicLoop
+from galton.protocol import GaltonError, Reply, decode_reply, encode_request
+
+log = logging.getLogger("galton.daemon.fronts.ros2")
+Dispatch = Callable[[Call], None]
+
+
+def node_name(instance: str) -> str:
+    """The node's name: the instance name with what ROS forbids (``-``, ``.``) as ``_``."""
+    name = re.sub(r"[^A-Za-z0-9_]", "_", instance)
+    return name if name[0].isalpha() else f"galton_{name}"
+
+
+def service_name(type_name: str) -> str:
+    """``StepSimulation`` -> ``step_simulation`` (the names Gazebo and Isaac Sim use)."""
+    return re.sub(r"(?<!^)(?=[A-Z])", "_", type_name).lower()
+
+
+class Ros2Front:
+    """One ROS 2 node, named after the daemon's instance, with a server per service."""
+
+    def __init__(self, session: zenoh.Session, dispatch: Dispatch, node: str,
+                 options: Ros2Options) -> None:
+        self.session = session
+        self.dispatch = dispatch
+        self.options = options
+        self.identity = rmw_zenoh.NodeIdentity(
+            options.domain, str(session.info.zid()), 0,
+            rmw_zenoh.check_namespace(options.namespace), node_name(node))
+        self._entity_ids = itertools.count(1)
+        self._replies: queue.SimpleQueue[tuple[Callable[[Reply], None], bytes] | None] = \
+            queue.SimpleQueue()
+        self._reply_thread = threading.Thread(target=self._take_replies, name="ros2-replies",
+                                              daemon=True)
+        self._reply_thread.start()
+        self._declared: list[Any] = [session.liveliness().declare_token(
+            self.identity.node_token())]
+        for name, handler in HANDLERS.items():
+            self._serve(name, handler)
+        self.action = SimulateStepsServer(self)
+        self.topics = TopicLoop(self, options)
+
+    def qualified(self, name: str) -> str:
+        """A name in the node's namespace (an absolute name, ``/clock``, stays as it is)."""
+        return rmw_zenoh.qualified_name(self.identity.namespace, name)
+
+    def declare_entity(self, kind: str, qualified: str, ros_type: str) -> str:
+        """Announce a publisher, subscription or server by its liveliness token; return the
+        entity's key expression."""
+        dds, hashed = dds_type_name(ros_type), type_hash(ros_type)
+        qos = rmw_zenoh.SERVICE_QOS if kind == rmw_zenoh.SERVICE_SERVER else \
+            rmw_zenoh.TOPIC_QOS
+        token = self.identity.entity_token(next(self._entity_ids), kind, qualified, dds,
+                                           hashed, qos)
+        self._declared.append(self.session.liveliness().declare_token(token))
+        return rmw_zenoh.key_expr(self.identity.domain, qualified, dds, hashed)
+
+    def _serve(self, name: str, handler: Handler) -> None:
+        response_type = f"{service_type(name)}_Response"
+        self.serve_raw(self.qualified(f"{self.identity.node}/{service_name(name)}"),
+                       service_type(name),
+                       lambda request, answer: self.run(handler(request), answer,
+                                                        response_type))
+
+    def serve_raw(self, qualified: str, ros_type: str,
+                  take: Callable[[Any, Callable[[Any], None]], None]) -> None:
+        """A service server: ``take(request, answer)`` gets each decoded request and calls
+        ``answer(response)`` exactly once, from any thread, whenever it is ready."""
+        key = rmw_zenoh.key_expr(self.identity.domain, qualified, dds_type_name(ros_type),
+                                 type_hash(ros_type))
+        request_type, response_type = f"{ros_type}_Request", f"{ros_type}_Response"
+
+        def on_query(query: zenoh.Query) -> None:
+            read = _read_query(query, request_type)
+            if read is not None:
+                attachment, request = read
+                take(request, lambda response: _answer(query, attachment, response,
+                                                       response_type))
+        self._declared.append(self.session.declare_queryable(key, on_query, complete=True))
+        self.declare_entity(rmw_zenoh.SERVICE_SERVER, qualified, ros_type)  # then announce
+
+    def publisher(self, name: str, ros_type: str) -> Publisher:
+        return Publisher(self, name, ros_type)
+
+    def run(self, steps: Any, finish: Callable[[Any], None], response_type: str,
+            reply: Reply | None = None) -> None:
+        """Advance a handler by one native request (or to its response)."""
+        try:
+            asked: NativeRequest = steps.send(reply) if reply is not None else next(steps)
+        except StopIteration as done:
+            finish(done.value)
+            return
+        except Refusal as refusal:
+            finish(refused(response_type, refusal.code, refusal.message))
+            return
+        except Exception as exc:  # a handler's bug must still answer its caller
+            log.exception("ROS 2 handler for %s failed", response_type)
+            finish(refused(response_type, codes.OPERATION_FAILED, f"{type(exc).__name__}"))
+            return
+        op, args = asked
+        self.call(op, args, lambda answer: self.run(steps, finish, response_type, answer))
+
+    def call(self, op: str, args: dict[str, Any], then: Callable[[Reply], None]) -> None:
+        """One native request through the daemon's own dispatch; ``then`` gets its Reply
+        on the front's reply thread, so ROS-side work (CDR, the next request of a handler)
+        never holds the physics thread that answered."""
+        self.dispatch(Call(op, encode_request(op, args),
+                           lambda data: self._replies.put((then, data))))
+
+    def _take_replies(self) -> None:
+        while (item := self._replies.get()) is not None:
+            then, data = item
+            try:
+                then(decode_reply(data))
+            except Exception:  # one bad continuation must not end the others
+                log.exception("ROS 2 front: a reply's continuation failed")
+
+    def close(self) -> None:
+        self.topics.close()
+        self._replies.put(None)
+        self._reply_thread.join(timeout=5)
+        for declared in reversed(self._declared):
+            declared.undeclare()
+        self._declared.clear()
+
+
+def _read_query(query: zenoh.Query, request_type: str) -> tuple[rmw_zenoh.Attachment,
+                                                                  Any] | None:
+    """The attachment and decoded request of a query; one that cannot be read gets an error
+    reply (rcl would drop it), never silence, and None."""
+    try:
+        if query.attachment is None:
+            raise GaltonError("the query has no rmw_zenoh attachment (sequence number, "
+                              "timestamp, GID): docs/ROS2.md")
+        attachment = rmw_zenoh.Attachment.decode(query.attachment.to_bytes())
+        payload = query.payload.to_bytes() if query.payload is not None else b""
+        return attachment, decode(payload, request_type)
+    except GaltonError as error:
+        with query:
+            query.reply_err(str(error))
+        return None
+
+
+def _answer(query: zenoh.Query, attachment: rmw_zenoh.Attachment, response: Any,
+            response_type: str) -> None:
+    """Reply with the response and the request's sequence number and GID, then finish."""
+    try:
+        query.reply(query.key_expr, encode(response, response_type),
+                    attachment=attachment.reply().encode())
+    finally:
+        query.drop()
+
+
+def refused(response_type: str, code: int, message: str) -> Any:
+    """A response with only its Result set (GetSimulatorFeatures has none: left empty)."""
+    result = new("simulation_interfaces/msg/Result", result=code, error_message=message)
+    try:
+        return new(response_type, result=result)
+    except KeyError:
+        return new(response_type)

@@ -1,0 +1,168 @@
+"""Perception operations: render, add_camera, remove_camera, cameras, raycast, contacts
+(docs/protocol.md). Every argument is checked, and every limit, before the engine works."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from galton.daemon.world.cameras import Camera, parse_camera, view_of
+from galton.daemon.world.scene import World
+from galton.protocol import InvalidArgumentError, NotFoundError, ResourceLimitError, pack_f64
+from galton.protocol import requests as rq
+from galton.protocol.errors import brief
+from galton.protocol.model import check_names, check_type, decode_points, finite_number
+from galton.protocol.png import depth_png, encode_png, segmentation_png
+from galton.protocol.vocabulary import check_fields
+
+MAX_CAMERAS_PER_REQUEST = 16
+MAX_NAMED_CAMERAS = 32
+MAX_CAMERA_NAME = 64
+DEFAULT_MAX_LENGTH = 100.0  # m, a ray's reach when none is given
+
+
+def _cameras_of(world: World) -> dict[str, Camera]:
+    named: dict[str, Camera] = world.cameras
+    return named
+
+
+def _request_camera(world: World, raw: Any, where: str) -> Camera:
+    """A render request's camera: a full camera map, or {"camera": NAME[, "outputs"]}."""
+    body = check_type(raw, dict, where)
+    if "camera" not in body:
+        return parse_camera(body, where)
+    check_fields(body, ("camera", "outputs"), where)
+    name = check_type(body["camera"], str, f"{where}.camera")
+    named = _cameras_of(world).get(name)
+    if named is None:
+        raise NotFoundError(f"no camera named {brief(name)}; add_camera makes one")
+    if "outputs" not in body:
+        return named
+    spec = parse_camera({**named.to_wire(), "outputs": body["outputs"]}, where)
+    return spec
+
+
+def render(world: World, request: rq.Render) -> dict[str, Any]:
+    raw = request.cameras
+    if not 1 <= len(raw) <= MAX_CAMERAS_PER_REQUEST:
+        raise InvalidArgumentError(f"render.cameras must hold 1-{MAX_CAMERAS_PER_REQUEST} "
+                                   f"cameras, got {len(raw)}")
+    fmt = request.format or "raw"  # one of IMAGE_FORMATS: its declaration says so
+    cameras = [_request_camera(world, c, f"render.cameras[{i}]") for i, c in enumerate(raw)]
+    pixels = sum(c.pixels for c in cameras)
+    if pixels > world.limits.max_pixels:
+        raise ResourceLimitError(f"render asks for {pixels} pixels; at most "
+                                 f"{world.limits.max_pixels} a request",
+                                 {"limit": "max_pixels", "max": world.limits.max_pixels})
+    for camera in cameras:
+        if camera.attach is not None:
+            world.require_known([camera.attach])
+    world.verify()
+    images, labels = world.engine.render([view_of(world, c) for c in cameras])
+    return {"images": [_image(c, i, fmt) for c, i in zip(cameras, images, strict=True)],
+            "labels": labels, "format": fmt}
+
+
+def _image(camera: Camera, image: dict[str, np.ndarray], fmt: str) -> dict[str, Any]:
+    out: dict[str, Any] = {"width": camera.width, "height": camera.height}
+    for kind in camera.outputs:
+        pixels = image[kind]
+        if fmt == "raw":
+            out[kind] = np.ascontiguousarray(pixels, dtype=_raw_dtype(kind)).tobytes()
+        elif kind == "rgb":
+            out[kind] = encode_png(np.ascontiguousarray(pixels, dtype=np.uint8))
+        elif kind == "depth":
+            out[kind] = depth_png(pixels)
+        else:
+            out[kind] = segmentation_png(pixels)
+    return out
+
+
+def _raw_dtype(kind: str) -> str:
+    return {"rgb": "u1", "depth": "<f4", "segmentation": "<i4"}[kind]
+
+
+def add_camera(world: World, request: rq.AddCamera) -> dict[str, Any]:
+    name = request.name
+    if not 1 <= len(name) <= MAX_CAMERA_NAME or not name.isprintable():
+        raise InvalidArgumentError(f"add_camera.name {brief(name)} must be "
+                                   f"1-{MAX_CAMERA_NAME} printable characters")
+    camera = parse_camera(request.camera, "add_camera.camera")
+    if camera.attach is not None:
+        world.require_known([camera.attach])
+    cameras = _cameras_of(world)
+    if name not in cameras and len(cameras) >= MAX_NAMED_CAMERAS:
+        raise ResourceLimitError(f"the world holds {len(cameras)} named cameras, at most "
+                                 f"{MAX_NAMED_CAMERAS}", {"limit": "cameras",
+                                                          "max": MAX_NAMED_CAMERAS})
+    cameras[name] = camera
+    return {"name": name, "camera": camera.to_wire()}
+
+
+def remove_camera(world: World, request: rq.Named) -> dict[str, Any]:
+    name = request.name
+    if _cameras_of(world).pop(name, None) is None:
+        raise NotFoundError(f"no camera named {brief(name)}")
+    return {"count": 1}
+
+
+def cameras(world: World, request: rq.NoArgs) -> dict[str, Any]:
+    return {"cameras": [{"name": n, **c.to_wire()} for n, c in _cameras_of(world).items()]}
+
+
+def raycast(world: World, request: rq.Raycast) -> dict[str, Any]:
+    raw = request.origins
+    count = _row_count(raw)
+    if count > world.limits.max_rays:
+        raise ResourceLimitError(f"raycast casts {count} rays; at most {world.limits.max_rays}",
+                                 {"limit": "max_rays", "max": world.limits.max_rays})
+    origins = decode_points(raw, count, "raycast.origins")
+    if (request.directions is None) == (request.ends is None):
+        raise InvalidArgumentError("raycast needs exactly one of 'directions' or 'ends'")
+    max_length = finite_number(
+        DEFAULT_MAX_LENGTH if request.max_length is None else request.max_length,
+        "raycast.max_length", low=0.0, low_open=True)
+    if request.ends is not None:
+        vectors = decode_points(request.ends, count, "raycast.ends") - origins
+        lengths = np.linalg.norm(vectors, axis=1)
+    else:
+        vectors = decode_points(request.directions, count, "raycast.directions")
+        lengths = np.full(count, max_length)
+    norms = np.linalg.norm(vectors, axis=1)
+    if (norms < 1e-12).any():
+        raise InvalidArgumentError(f"raycast ray {int(np.argmax(norms < 1e-12))} has a zero "
+                                   "direction (or its end is its origin)")
+    world.verify()
+    hits, entities, points, normals, distances = world.engine.raycast(
+        origins, vectors / norms[:, None], float(lengths.max()) if count else max_length)
+    beyond = hits & (distances > lengths)  # a ray given an end stops there
+    if beyond.any():
+        hits = hits & ~beyond
+        points[beyond], normals[beyond], distances[beyond] = np.nan, np.nan, np.nan
+        entities = [("" if beyond[i] else e) for i, e in enumerate(entities)]
+    return {"hits": np.asarray(hits, dtype=np.uint8).tobytes(), "entities": entities,
+            "points": pack_f64(points), "normals": pack_f64(normals),
+            "distances": pack_f64(distances)}
+
+
+def _row_count(raw: Any) -> int:
+    if not isinstance(raw, bytes | bytearray):
+        raise InvalidArgumentError(f"raycast.origins must be msgpack bin of float64 rows of "
+                                   f"3, got {brief(raw)}")
+    if len(raw) % 24:
+        raise InvalidArgumentError(f"raycast.origins holds {len(raw)} bytes, not whole rows "
+                                   "of 3 float64")
+    return len(raw) // 24
+
+
+def contacts(world: World, request: rq.NamesOrAll) -> dict[str, Any]:
+    raw = request.names
+    names = None if raw is None else check_names(raw, "contacts.names")
+    if names is not None:
+        world.require_known(names)
+    world.verify()
+    a, b, positions, normals, forces, penetrations = world.engine.contacts(names)
+    return {"count": len(a), "a": a, "b": b, "positions": pack_f64(positions),
+            "normals": pack_f64(normals), "forces": pack_f64(forces),
+            "penetrations": pack_f64(penetrations)}

@@ -1,0 +1,159 @@
+"""Several worlds per daemon, and snapshots of them: list_worlds, create_world, fork_world,
+delete_world, snapshot, restore, snapshots, delete_snapshot (docs/protocol.md, "Worlds").
+
+The live world plays; side worlds move only by step requests, run after the live world's
+due steps (daemon/core/side_jobs.py). A world replaced by a restore is rebuilt on a fresh
+engine first, so a refused snapshot leaves it as it was.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import TYPE_CHECKING, Any
+
+from galton.daemon.core import time_control
+from galton.daemon.core.calls import Call
+from galton.daemon.world.scene import World
+from galton.daemon.world.slots import Slot
+from galton.daemon.world.snapshot import clone_of, decode, encode, snapshot_of, world_from
+from galton.protocol import (
+    InvalidArgumentError,
+    NameNotUniqueError,
+    OperationFailedError,
+    ResourceLimitError,
+    SimState,
+)
+from galton.protocol import requests as rq
+from galton.protocol.errors import brief
+
+if TYPE_CHECKING:
+    from galton.daemon.core.loop import SimLoop
+    from galton.daemon.engines.base import Engine
+
+MAX_WORLD_NAME = 64
+
+
+def world_row(loop: SimLoop, world: World) -> dict[str, Any]:
+    live = world is loop.world
+    state = loop.state if live else (SimState.STOPPED if world.step_index == 0
+                                     else SimState.PAUSED)
+    return {"name": world.name, "live": live, "engine": world.engine.name,
+            "state": state.value, "step": world.step_index, "sim_time": world.sim_time,
+            "entity_count": len(world.entities), "faulted": world.faulted}
+
+
+def list_worlds(loop: SimLoop, call: Call, request: rq.NoArgs) -> dict[str, Any]:
+    return {"worlds": [world_row(loop, w) for w in (loop.world, *loop.side.values())]}
+
+
+def _new_name(loop: SimLoop, name: str, where: str) -> str:
+    if not 1 <= len(name) <= MAX_WORLD_NAME or not name.isprintable():
+        raise InvalidArgumentError(f"{where}.name {brief(name)} must be 1-{MAX_WORLD_NAME} "
+                                   "printable characters")
+    if name == loop.world.name or name in loop.side:
+        raise NameNotUniqueError(f"a world named {name!r} exists; delete it first")
+    if 1 + len(loop.side) >= loop.limits.max_worlds:
+        raise ResourceLimitError(
+            f"the daemon holds {1 + len(loop.side)} worlds, its limit (galton-daemon "
+            "--limit max_worlds=N)", {"limit": "max_worlds", "max": loop.limits.max_worlds})
+    return name
+
+
+def _factory(loop: SimLoop) -> Any:
+    if loop.engine_factory is None:
+        raise OperationFailedError("this daemon cannot make engines")
+    return loop.engine_factory
+
+
+def create_world(loop: SimLoop, call: Call, request: rq.CreateWorld) -> dict[str, Any]:
+    name = _new_name(loop, request.name, "create_world")
+    kind = request.engine or loop.world.engine.name
+    params = request.params
+    engine: Engine = _factory(loop)(kind)
+    try:
+        if params:
+            engine.set_params(params)
+    except Exception:
+        engine.close()
+        raise
+    loop.side[name] = World(engine, name, loop.limits)
+    loop.emit({"kind": "world", "op": "create_world", "world": name})
+    return world_row(loop, loop.side[name])
+
+
+def fork_world(loop: SimLoop, call: Call, request: rq.ForkWorld) -> dict[str, Any]:
+    name = _new_name(loop, request.name, "fork_world")
+    source = loop.world_for({"world": request.source})
+    source.verify()
+    loop.side[name] = clone_of(source, name, loop.limits)
+    loop.emit({"kind": "world", "op": "fork_world", "world": name, "source": source.name})
+    return world_row(loop, loop.side[name])
+
+
+def delete_world(loop: SimLoop, call: Call, request: rq.Named) -> dict[str, Any]:
+    name = request.name
+    world = loop.world_for({"world": name})
+    if world is loop.world:
+        raise InvalidArgumentError("the live world cannot be deleted (load_world replaces it)")
+    if loop.job is not None and loop.job.world is world:
+        time_control.cancel_job(loop, "its world was deleted")
+    del loop.side[name]
+    world.engine.close()
+    loop.emit({"kind": "world", "op": "delete_world", "world": name})
+    return {"count": 1}
+
+
+def snapshot(loop: SimLoop, call: Call, request: rq.Snapshot) -> dict[str, Any]:
+    world = loop.world_for(request)
+    slot_name = request.slot
+    want_blob = bool(request.blob)
+    if slot_name is None and not want_blob:
+        raise InvalidArgumentError("snapshot needs a 'slot' to keep it in, 'blob': true to "
+                                   "return it, or both")
+    if slot_name is not None and (not 1 <= len(slot_name) <= MAX_WORLD_NAME
+                                  or not slot_name.isprintable()):
+        raise InvalidArgumentError(f"snapshot.slot {brief(slot_name)} must be "
+                                   f"1-{MAX_WORLD_NAME} printable characters")
+    world.verify()
+    blob = encode(snapshot_of(world), loop.snapshot_key)
+    kept = Slot(slot_name or "", world.name, world.engine.name, blob, world.step_index,
+                world.sim_time, len(world.entities))
+    if slot_name is not None:
+        loop.slots.keep(kept)
+    result = {**kept.to_wire(), "slot": slot_name}
+    if want_blob:
+        result["blob"] = blob
+    return result
+
+
+def restore(loop: SimLoop, call: Call, request: rq.Restore) -> dict[str, Any]:
+    world = loop.world_for(request)
+    slot_name, blob = request.slot, request.blob
+    if (slot_name is None) == (blob is None):
+        raise InvalidArgumentError("restore needs exactly one of 'slot' or 'blob'")
+    if slot_name is not None:
+        blob = loop.slots.get(slot_name).blob
+    data = decode(blob, loop.limits, loop.snapshot_key)
+    new = world_from(data, _factory(loop), world.name, loop.limits, world.engine.name)
+    if loop.job is not None and (loop.job.world or loop.world) is world:
+        time_control.cancel_job(loop, "its world was restored")
+    if world is loop.world:
+        loop.world = new
+        loop.tune_switch_interval()
+        loop.refresh_clock()
+        loop.rtf_window.clear()
+        loop.pacer.anchor(time.monotonic(), new.sim_time, loop.target_rtf)
+    else:
+        loop.side[world.name] = new
+    world.engine.close()
+    loop.emit({"kind": "scene", "op": "restore", "world": new.name, "step": new.step_index})
+    return world_row(loop, new)
+
+
+def snapshots(loop: SimLoop, call: Call, request: rq.NoArgs) -> dict[str, Any]:
+    return {"slots": [slot.to_wire() for slot in loop.slots.by_name.values()]}
+
+
+def delete_snapshot(loop: SimLoop, call: Call, request: rq.Slot) -> dict[str, Any]:
+    loop.slots.delete(request.slot)
+    return {"count": 1}

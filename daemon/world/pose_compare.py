@@ -1,0 +1,63 @@
+"""compare: observed poses (and twists) of named bodies against the world's, as errors and
+one anomaly score (docs/protocol.md, "compare"), optionally correcting the world."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from galton.daemon.world.scene import World
+from galton.protocol import pack_f64
+from galton.protocol import requests as rq
+from galton.protocol.model import (
+    check_names,
+    decode_poses,
+    decode_twists,
+    finite_number,
+)
+
+DEFAULT_SIGMA_POSITION = 0.01  # m
+DEFAULT_SIGMA_ANGLE = 0.05  # rad
+DEFAULT_SIGMA_SPEED = 0.1  # m/s
+
+
+def angle_between(q1: np.ndarray, q2: np.ndarray) -> np.ndarray:
+    """The angle (rad) of the rotation taking each unit quaternion of q1 to q2's."""
+    dots = np.abs(np.sum(q1 * q2, axis=1)).clip(0.0, 1.0)
+    angles: np.ndarray = 2.0 * np.arccos(dots)
+    return angles
+
+
+def compare(world: World, request: rq.Compare) -> dict[str, Any]:
+    names = check_names(request.names, "compare.names")
+    observed = decode_poses(request.poses, len(names), "compare.poses")
+    raw_twists = request.twists
+    twists = None if raw_twists is None else decode_twists(raw_twists, len(names),
+                                                           "compare.twists")
+    sigma_p = _sigma(request.sigma_position, "sigma_position", DEFAULT_SIGMA_POSITION)
+    sigma_a = _sigma(request.sigma_angle, "sigma_angle", DEFAULT_SIGMA_ANGLE)
+    sigma_v = _sigma(request.sigma_speed, "sigma_speed", DEFAULT_SIGMA_SPEED)
+    correct = bool(request.correct)
+    poses, world_twists = world.get_states(names)
+    position_errors = np.linalg.norm(observed[:, :3] - poses[:, :3], axis=1)
+    angle_errors = angle_between(observed[:, 3:7], poses[:, 3:7])
+    terms = (position_errors / sigma_p) ** 2 + (angle_errors / sigma_a) ** 2
+    result: dict[str, Any] = {"position_errors": pack_f64(position_errors),
+                              "angle_errors": pack_f64(angle_errors)}
+    if twists is not None:
+        speed_errors = np.linalg.norm(twists[:, :3] - world_twists[:, :3], axis=1)
+        terms = terms + (speed_errors / sigma_v) ** 2
+        result["speed_errors"] = pack_f64(speed_errors)
+    result["score"] = math.sqrt(float(np.mean(terms)))
+    if correct:
+        world.set_states(names, observed, twists)
+    result["corrected"] = correct
+    return result
+
+
+def _sigma(value: float | None, key: str, default: float) -> float:
+    if value is None:
+        return default
+    return finite_number(value, f"compare.{key}", low=0.0, low_open=True)

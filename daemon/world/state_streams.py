@@ -1,0 +1,194 @@
+"""State streams: the poses of all (or named) entities of a world, published at the rate
+a client asked (``stream_states``), beside telemetry on both transports.
+
+A stream belongs to the client that opened it (its liveliness token over Zenoh, its
+connection over ZeroMQ) and ends when that client goes, on ``close_stream``, or when the
+side world it watches is deleted. Samples are built on the physics thread between chunks of
+steps and handed to publishers that drop rather than wait (Zenoh's ``DROP`` congestion
+control, a non-blocking ZeroMQ send): a slow subscriber never slows the world.
+"""
+
+from __future__ import annotations
+
+import math
+import secrets
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import msgpack
+import numpy as np
+
+from galton.daemon.core.calls import Call
+from galton.daemon.world.scene import World, canonical_quaternions
+from galton.protocol import InvalidArgumentError, Keys, NotFoundError, ResourceLimitError
+from galton.protocol import requests as rq
+from galton.protocol.arrays import pack_f64
+from galton.protocol.errors import brief
+from galton.protocol.keys import STREAMS_CHUNK
+
+if TYPE_CHECKING:
+    from galton.daemon.core.loop import SimLoop
+
+MIN_RATE_HZ = 1.0
+MAX_RATE_HZ = 60.0
+MAX_STREAMS = 32  # open streams in one daemon, all clients together
+NO_OWNER = ("a state stream belongs to a client, and ends when it goes: the request needs "
+            "a 'client' id in its envelope (the SDK sends one)")
+
+Publish = Callable[[str, bytes], None]  # (topic "states/<id>", sample bytes)
+
+
+@dataclass
+class StateStream:
+    """One subscription's parameters and its clock."""
+
+    stream_id: str
+    owner: str
+    world: str | None  # None: the live world, whichever it is
+    names: tuple[str, ...] | None  # None: every entity
+    period: float
+    next_due: float
+    seq: int = 0
+
+    @property
+    def topic(self) -> str:
+        return f"{STREAMS_CHUNK}/{self.stream_id}"
+
+
+class StateStreams:
+    """Every open stream of one daemon; used on the physics thread only."""
+
+    def __init__(self, publish: Publish | None = None) -> None:
+        self.publish = publish
+        self.streams: dict[str, StateStream] = {}
+        self.next_due = math.inf
+
+    def open(self, loop: SimLoop, call: Call, request: rq.StreamStates) -> dict[str, Any]:
+        """Open a stream for the request's client; its first sample is due at once."""
+        rate = _check_rate(10.0 if request.rate is None else request.rate)
+        names = request.names
+        world = loop.world_for(request)
+        if names is not None:
+            world.require_known(names)
+        owner = _owner(loop, call)
+        if len(self.streams) >= MAX_STREAMS:
+            raise ResourceLimitError(
+                f"stream_states: {MAX_STREAMS} state streams are open already (each client's "
+                "end when it goes): close one with close_stream", {"limit": MAX_STREAMS})
+        named = request.world
+        stream = StateStream(secrets.token_hex(8), owner,
+                             named if isinstance(named, str) and world is not loop.world
+                             else None,
+                             tuple(names) if names is not None else None, 1.0 / rate,
+                             time.monotonic())
+        self.streams[stream.stream_id] = stream
+        self.next_due = min(self.next_due, stream.next_due)
+        return {"stream": stream.stream_id, "key": f"{Keys(loop.instance).prefix}/{stream.topic}",
+                "topic": stream.topic, "rate": rate, "world": world.name}
+
+    def close(self, call: Call, request: rq.CloseStream) -> dict[str, Any]:
+        """Close a stream; a client may close only its own."""
+        stream_id = request.stream
+        stream = self.streams.get(stream_id)
+        if stream is None or stream.owner != _caller(call):
+            raise NotFoundError(f"close_stream: no stream {brief(stream_id)} of this client is "
+                                f"open (it ends by itself when its client goes)")
+        self._end(stream)
+        return {"stream": stream_id, "closed": True}
+
+    def owner_gone(self, owner: str) -> None:
+        """Its client went: its streams end."""
+        for stream in [s for s in self.streams.values() if s.owner == owner]:
+            self._end(stream)
+
+    def publish_due(self, loop: SimLoop, now: float) -> None:
+        """Publish a sample of every stream that is due, and schedule each one's next."""
+        for stream in list(self.streams.values()):
+            if now < stream.next_due:
+                continue
+            stream.next_due = max(stream.next_due + stream.period, now)
+            self._sample(loop, stream)
+        self._reschedule()
+
+    def _sample(self, loop: SimLoop, stream: StateStream) -> None:
+        world = loop.world if stream.world is None else loop.side.get(stream.world)
+        if world is None:
+            self._end(stream, f"world {stream.world!r} was deleted")
+            return
+        if world.faulted:
+            return  # a diverged state is never published (as telemetry)
+        names = _present(world, stream.names)
+        poses = _poses(world, names) if names else None
+        stream.seq += 1
+        sample = {"stream": stream.stream_id, "seq": stream.seq, "world": world.name,
+                  "step": world.step_index, "sim_time": world.sim_time,
+                  "state": loop.state.value if world is loop.world else "paused",
+                  "rtf": loop.rtf if world is loop.world else 0.0, "names": names,
+                  "poses": pack_f64(poses) if poses is not None else b""}
+        self._send(stream, sample)
+
+    def _end(self, stream: StateStream, reason: str = "") -> None:
+        self.streams.pop(stream.stream_id, None)
+        if reason:
+            self._send(stream, {"stream": stream.stream_id, "seq": stream.seq + 1,
+                                "ended": reason})
+        self._reschedule()
+
+    def _send(self, stream: StateStream, sample: dict[str, Any]) -> None:
+        if self.publish is not None:
+            self.publish(stream.topic, msgpack.packb(sample))
+
+    def _reschedule(self) -> None:
+        self.next_due = min((s.next_due for s in self.streams.values()), default=math.inf)
+
+
+def _poses(world: World, names: list[str]) -> np.ndarray:
+    """What get_states reads, without its checks of names known to be there (a sample
+    costs the physics thread; docs/PERFORMANCE.md)."""
+    world.verify()
+    return canonical_quaternions(world.engine.get_states(names)[0])
+
+
+def _present(world: World, names: tuple[str, ...] | None) -> list[str]:
+    """The stream's entities still in the world (all of them when it named none)."""
+    if names is None:
+        return list(world.entities)
+    return [name for name in names if name in world.entities]
+
+
+def _check_rate(value: object) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float) \
+            or not MIN_RATE_HZ <= value <= MAX_RATE_HZ:
+        raise InvalidArgumentError(
+            f"stream_states: rate {brief(value)} is not a number of Hz from {MIN_RATE_HZ:g} "
+            f"to {MAX_RATE_HZ:g}")
+    return float(value)
+
+
+def _caller(call: Call) -> str | None:
+    """Who a request comes from: its connection over ZeroMQ, else its client id."""
+    return call.peer if call.peer is not None else call.client
+
+
+def _owner(loop: SimLoop, call: Call) -> str:
+    owner = _caller(call)
+    if owner is None:
+        raise InvalidArgumentError(NO_OWNER)
+    if call.peer is None and loop.client_alive is not None and not loop.client_alive(owner):
+        # A made-up id would keep its stream for ever: nothing would say it has gone.
+        raise InvalidArgumentError(
+            f"client {owner!r} holds no liveliness token galton/_clients/{owner}: a state "
+            "stream ends when that token goes (the SDK declares it)")
+    return owner
+
+
+def stream_states(loop: SimLoop, call: Call, request: rq.StreamStates) -> dict[str, Any]:
+    """The ``stream_states`` operation (docs/protocol.md, "State streams")."""
+    return loop.streams.open(loop, call, request)
+
+
+def close_stream(loop: SimLoop, call: Call, request: rq.CloseStream) -> dict[str, Any]:
+    """The ``close_stream`` operation."""
+    return loop.streams.close(call, request)
