@@ -293,7 +293,8 @@ class Client(WorldMethods, PerceptionMethods, ControlMethods, StreamMethods):
         rows = unpack_f64(reply.bounds, 6, "bounds")
         return dict(zip(reply.names, rows, strict=True))
 
-    def get_shapes(self, names: Sequence[str] | None = None) -> dict[str, list[ShapeInfo]]:
+    def get_shapes(self, names: Sequence[str] | None = None
+                   ) -> dict[str, builtins.list[ShapeInfo]]:
         """Each entity's collision shapes (all entities when None), in its own frame."""
         reply = decode_result(ShapesReply, self._ok("get_shapes",
                                                     sdk_joints.names_arg(names)).result)

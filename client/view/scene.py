@@ -69,7 +69,11 @@ def link_mesh(shapes: Sequence[ShapeInfo]) -> tuple[np.ndarray, np.ndarray]:
     for shape in shapes:
         part = _trimesh(shape.kind, shape.size)
         pose = np.asarray(shape.pose, dtype=float)
-        transform = trimesh.transformations.quaternion_matrix(pose[[6, 3, 4, 5]])
+        x, y, z, w = pose[3:] / np.linalg.norm(pose[3:])
+        transform = np.eye(4)
+        transform[:3, :3] = [[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                             [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                             [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]]
         transform[:3, 3] = pose[:3]
         part.apply_transform(transform)
         parts.append(part)
