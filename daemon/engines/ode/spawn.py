@@ -52,6 +52,10 @@ class Body:
     extra: list[int] = field(default_factory=list)  # a link's further collision geoms
     frame: Frame | None = None  # a link's centre of mass in its frame (None: at its origin)
     welded: bool = False  # a fixed-base model's root: kinematic, no force moves it
+    # A link's collision shapes in its frame, as get_shapes tells them (kind, half sizes,
+    # pose x y z qx qy qz qw); a spawned body's are its shape and size.
+    link_shapes: list[tuple[str, tuple[float, ...], tuple[float, ...]]] = \
+        field(default_factory=list)
 
     def geoms(self) -> list[int]:
         return ([self.geom] if self.geom else []) + self.extra
