@@ -32,7 +32,7 @@ def states_dict(states: States, **extra: Any) -> dict[str, Any]:
             "twists": states.twists.tolist()}
 
 
-def _numbers(row: np.ndarray) -> str:
+def _numbers(row: np.ndarray | tuple[float, ...]) -> str:
     return ", ".join(f"{value:.4g}" for value in row)
 
 
@@ -98,7 +98,7 @@ def get_shapes(
         table = Table("name", "kind", "half sizes (m)", "pose (x y z qx qy qz qw)")
         for name, found in shapes.items():
             for shape in found:
-                table.add_row(name, shape.kind, _numbers(np.asarray(shape.size)),
+                table.add_row(name, shape.kind, _numbers(shape.size),
                               _numbers(shape.pose))
         console.print(table)
     emit({name: [{"kind": s.kind, "size": list(s.size), "pose": s.pose.tolist()}
