@@ -114,6 +114,9 @@ class BallSpec:
     radius: float = 0.045
     mass: float = 0.3817
     count: int = 100
+    # A diagonal inertia (kg m², each axis) in place of a solid ball's 2/5 m r²: the
+    # paper's Gazebo draft gave 0.1 (a copy error); None keeps the solid ball's.
+    inertia: float | None = None
 
     @property
     def density(self) -> float:
@@ -184,6 +187,9 @@ class BoardSpec:
     release: ReleaseSpec = field(default_factory=ReleaseSpec)
     perturbation: PerturbationSpec = field(default_factory=PerturbationSpec)
     contacts: dict[str, EngineContacts] = field(default_factory=_default_contacts)
+    # How the board's solids are spawned: "primitives" (boxes and cylinders) or "mesh"
+    # (each part a triangle mesh: a pin a prism of PIN_SIDES sides, a box a box).
+    parts: str = "primitives"
 
     def __post_init__(self) -> None:
         problem = next(spec_problems(self), None)
@@ -307,13 +313,20 @@ def paper_gazebo_board() -> BoardSpec:
     1 ms step on every engine. DART (``--engine dart``) runs it as Gazebo Harmonic does;
     DART takes a pair's smaller friction and the product of restitutions, so 0 and 1 on
     every body are 0 and 1 for every pair, as on MuJoCo and PyBullet. The draft's ball
-    inertia 0.1 kg m² (a copy error: a solid ball has 0.00081) is not reproduced: spawned
-    bodies take their solid shape's inertia.
+    inertia 0.1 kg m² (a copy error: a solid ball has 0.00081) is an option, ``[ball]
+    inertia = 0.1`` in a board file (every engine sets it).
     """
     params = {**webots_params(0.0), "timestep": 0.001}
     return BoardSpec(name="paper-gazebo", ball=BallSpec(mass=1.0), contacts={
         engine: EngineContacts(params=dict(params)) for engine in ("mujoco", "pybullet",
                                                                     "dart")})
+
+
+def paper_mesh_board() -> BoardSpec:
+    """The paper board with every part a static triangle mesh, as the paper imported its
+    board into each simulator: what mesh collisions cost each engine in lost balls and χ²
+    beside the primitives of ``paper``. Engines without meshes (DART, ODE) refuse it."""
+    return BoardSpec(name="paper-mesh", parts="mesh")
 
 
 def webots_params(restitution: float) -> dict[str, float]:
@@ -324,7 +337,7 @@ def webots_params(restitution: float) -> dict[str, float]:
 
 PRESETS: dict[str, Callable[[], BoardSpec]] = {
     "paper": paper_board, "paper-webots": paper_webots_board,
-    "paper-gazebo": paper_gazebo_board, "small": small_board}
+    "paper-gazebo": paper_gazebo_board, "paper-mesh": paper_mesh_board, "small": small_board}
 
 
 # --- (de)serialisation ---------------------------------------------------------------------

@@ -139,6 +139,9 @@ def _integer(value: Any, where: str, low: int) -> Iterator[Problem]:
         yield where, f"must be at least {low}, got {value}"
 
 
+PARTS = ("primitives", "mesh")  # BoardSpec.parts
+
+
 def _scalar_problems(spec: BoardSpec) -> Iterator[Problem]:
     """Types and signs of every single-number field."""
     if not isinstance(spec.name, str) or not spec.name:
@@ -161,6 +164,10 @@ def _scalar_problems(spec: BoardSpec) -> Iterator[Problem]:
     for where, height in anywhere:
         yield from _number(height, where, -math.inf)
     yield from _number(spec.release.gap, "release.gap", 0.0, low_open=False)
+    if spec.ball.inertia is not None:
+        yield from _number(spec.ball.inertia, "ball.inertia", 0.0)
+    if spec.parts not in PARTS:
+        yield "parts", f"must be one of {', '.join(PARTS)}, got {spec.parts!r}"
     yield from _number(spec.perturbation.board_shift_std, "perturbation.board_shift_std", 0.0,
                        MAX_BOARD_SHIFT_STD, low_open=False)
     yield from _number(spec.perturbation.ball_jitter, "perturbation.ball_jitter", 0.0,

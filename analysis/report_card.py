@@ -38,6 +38,9 @@ CRITERIA: tuple[Criterion, ...] = (
     Criterion("board_pooled_p", "Galton board: pooled Monte Carlo p", "", False),
     Criterion("board_lost_percent", "Galton board: balls lost", "%", True,
               "; ".join(f"{r.simulator} {r.lost_percent:g} %" for r in PUBLISHED_TABLE2)),
+    Criterion("mesh_chi2_median", "Galton board as meshes: median χ² per trial (paper-mesh)",
+              "", True),
+    Criterion("mesh_lost_percent", "Galton board as meshes: balls lost", "%", True),
     Criterion("rtf_100", "real-time factor at 100 balls (as fast as possible)", "×", False,
               "; ".join(f"{r.simulator} {r.rtf_text}" for r in PUBLISHED_TABLE2)),
     Criterion("idle_rss_mb", "idle memory (RSS, board loaded)", "MB", True),
@@ -208,8 +211,10 @@ def about_lines(card: CardResults) -> list[str]:
             f"{int(host.get('memory_bytes', 0)) / 2**30:.0f} GiB, {host.get('os', '')}; "
             f"{config.get('machine_note', '')}",
             f"- command: `{config.get('command', 'galton-client report-card')}`",
-            "- the Galton board is built from primitives; the paper imported it as a mesh "
-            "(a mesh board is not built yet)"]
+            *([f"- the Galton trials ran on a pool of {len(config['pool'])} daemons: "
+               f"{', '.join(config['pool'])}"] if config.get("pool") else []),
+            "- the Galton board is built from primitives (paper) and, as the paper imported "
+            "it, from triangle meshes (paper-mesh; not measured on engines without meshes)"]
 
 
 def render_card(card: CardResults, plots: list[str] | None = None) -> str:

@@ -1,7 +1,7 @@
 """The state stream and the live view: what they cost a playing world (issue 41).
 
 Usage: python benchmarks/view_stream.py [--seconds 10] [--rounds 3] [--engine mujoco]
-       [--json FILE]
+       [--json FILE] [--sample-only]
 
 1. The view: 500 spheres resting on a plane, ``play(1.0)``, and the page of
    ``galton-client view`` (LiveView, in this process, its viser server serving no browser)
@@ -12,6 +12,11 @@ Usage: python benchmarks/view_stream.py [--seconds 10] [--rounds 3] [--engine mu
    goes); sim seconds per wall second without a stream and with a 60 Hz stream of all
    1,000 bodies read by a client, in alternating windows (``--rounds`` of each), so that
    the ratio is taken within one run. Target: the stream costs ≤ 2 %.
+3. What one sample costs the physics thread, in the daemon's own code in this process: the
+   time of a sample of 1,000 poses (the stream's path: its cached reader, the check, the
+   packing) over the time of one step of the same world, both medians of alternating
+   batches. A ratio of two timings taken side by side holds on a loaded machine; the
+   stream's share of a playing world is then 60 x that ratio x one step's wall time.
 """
 
 from __future__ import annotations
@@ -114,13 +119,56 @@ def stream_cost(engine: str, seconds: float, rounds: int) -> dict[str, float]:
             "samples_per_s": statistics.median(received)}
 
 
+def sample_in_steps(engine: str, rounds: int) -> dict[str, float]:
+    """Median time of one stream sample over that of one step (item 3 of the docstring)."""
+    from galton.daemon.engines import create_engine
+    from galton.daemon.world import state_streams as streams
+    from galton.daemon.world.scene import World
+
+    world = World(create_engine(engine))
+    world.spawn([plane(), spheres([f"b{i:04d}" for i in range(1000)], _grid(1000),
+                                       radius=RADIUS)])
+    world.step(250)
+    stream = streams.StateStream("bench", "bench", None, None, 1 / 60, 0.0)
+    shared: dict[tuple[int, int, tuple[str, ...] | None], bytes] = {}
+
+    def sample() -> None:
+        world.verified_step = -1  # as between the loop's checks
+        shared.clear()
+        reading = streams._reading(stream, world)
+        streams._pack_sample({"stream": "bench", "seq": 1,
+                              "poses": streams._pose_bytes(world, reading)},
+                             reading.packed_names)
+    steps, samples = [], []
+    for _ in range(rounds * 10):
+        started = time.perf_counter()
+        world.step(10)
+        steps.append((time.perf_counter() - started) / 10)
+        started = time.perf_counter()
+        for _ in range(10):
+            sample()
+        samples.append((time.perf_counter() - started) / 10)
+    world.engine.close()
+    step, one = statistics.median(steps), statistics.median(samples)
+    return {"step_s": step, "sample_s": one, "sample_in_steps": one / step}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seconds", type=float, default=10.0)
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--engine", default="mujoco")
     parser.add_argument("--json")
+    parser.add_argument("--sample-only", action="store_true",
+                        help="only item 3 (in-process, no daemon)")
     args = parser.parse_args()
+    sample = sample_in_steps(args.engine, args.rounds)
+    print(f"one sample of 1,000 poses: {sample['sample_s'] * 1e6:.0f} us = "
+          f"{sample['sample_in_steps']:.3f} steps of that world ({sample['step_s'] * 1e6:.0f} "
+          f"us); at 60 Hz: {60 * sample['sample_s'] * 100:.2f} % of the physics thread")
+    if args.sample_only:
+        write_json(args.json, {"sample": sample, "engine": args.engine})
+        return
     view = view_at_rtf_one(args.engine, args.seconds)
     cost = stream_cost(args.engine, args.seconds, args.rounds)
     print(f"# view and state stream on {machine()}, {args.engine}")
@@ -129,7 +177,8 @@ def main() -> None:
     print(f"1,000 bodies flat out: {cost['speed_without']:.3f} sim s/s without a stream, "
           f"{cost['speed_with']:.3f} with 60 Hz ({cost['samples_per_s']:.1f} samples/s "
           f"received): cost {cost['cost_percent']:.2f} %")
-    write_json(args.json, {"view": view, "stream_cost": cost, "engine": args.engine})
+    write_json(args.json, {"view": view, "stream_cost": cost, "sample": sample,
+                           "engine": args.engine})
 
 
 if __name__ == "__main__":

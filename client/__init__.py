@@ -19,6 +19,7 @@ if TYPE_CHECKING:
         Client,
         body_group,
         boxes,
+        meshes,
         plane,
         spheres,
     )
@@ -99,7 +100,7 @@ _SOURCES: dict[str, tuple[str, ...]] = {
     "galton.client.transport.discovery": (
         "DaemonInfo", "discover", "discover_at", "instances", "wait_for_daemon"),
     "galton.client.sdk.embedded": ("EmbeddedDaemon",),
-    "galton.client.sdk.client": ("Client", "body_group", "boxes", "plane", "spheres"),
+    "galton.client.sdk.client": ("Client", "body_group", "boxes", "meshes", "plane", "spheres"),
     "galton.client.sdk.perception": ("camera",),
     "galton.client.sdk.worlds": ("lockstep",),
     "galton.client.sdk.telemetry": ("Subscription", "TelemetryStream"),
@@ -174,6 +175,7 @@ __all__ = [
     "discover_at",
     "instances",
     "lockstep",
+    "meshes",
     "plane",
     "spheres",
     "wait_for_daemon",

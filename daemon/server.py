@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import logging
 import os
+import select
 import signal
 import threading
 from collections.abc import Callable, Iterator, Mapping
@@ -34,7 +35,8 @@ from galton.daemon.fronts.zenoh_config import file_says, listen_endpoints, merge
 from galton.daemon.fronts.zmq import PolledInbox, ZmqFront, parse_endpoint
 from galton.daemon.world import checkpoint
 from galton.daemon.world.scene import World
-from galton.protocol import InvalidArgumentError, Keys, Telemetry
+from galton.daemon.world.stream_sender import SampleSender
+from galton.protocol import InvalidArgumentError, Keys, OperationFailedError, Telemetry
 from galton.protocol.keys import (
     CLIENTS_PATTERN,
     client_from_token_key,
@@ -119,7 +121,10 @@ class Daemon:
                             options.telemetry_rate_hz, create_engine, options.limits)
         self.loop.snapshot_key = options.snapshot_key
         self.front = _zmq_front(options, self.loop)
-        self.loop.streams.publish = self._publish_states
+        # A state stream's samples: Zenoh's put off the physics thread, the ZeroMQ front's
+        # send on it (its sockets are that thread's).
+        self.loop.streams.sender = SampleSender(self._publish_states)
+        self.loop.streams.publish = self.front.publish if self.front is not None else None
         self.loop.client_alive = self._client_alive
         self._thread: threading.Thread | None = None
         self._queryable: Any = None
@@ -214,6 +219,7 @@ class Daemon:
             self._clients.undeclare()
         if self.ros2 is not None:
             self.ros2.close()
+        self.loop.streams.stop_sender()
         self.loop.world.engine.close()
         if self.front is not None:
             self.front.close()
@@ -241,11 +247,9 @@ class Daemon:
 
     def _publish_states(self, topic: str, data: bytes) -> None:
         """A state stream's sample (daemon/world/state_streams.py), dropped rather than queued
-        when the network is congested, as telemetry is."""
+        when the network is congested, as telemetry is; on the sender's thread."""
         self.session.put(f"{self.keys.prefix}/{topic}", data,
                          congestion_control=zenoh.CongestionControl.DROP)
-        if self.front is not None:
-            self.front.publish(topic, data)
 
     def _publish_event(self, event: dict[str, Any]) -> None:
         data = msgpack.packb({"instance": self.options.instance, **event})
@@ -293,14 +297,37 @@ def signal_wakeup_pipe() -> int:
     return wake_read
 
 
+class StopSignals:
+    """SIGINT and SIGTERM as the wakeup pipe delivers them: a watcher thread ``wait``s for
+    one, and a request about to hold the interpreter for seconds asks first whether one
+    came (``received``: also one still in the pipe, which the watcher has not read yet)."""
+
+    def __init__(self) -> None:
+        self._read = signal_wakeup_pipe()
+        self._received = threading.Event()
+
+    def wait(self) -> None:
+        os.read(self._read, 1)
+        self._received.set()
+
+    def received(self) -> bool:
+        return self._received.is_set() or bool(select.select([self._read], [], [], 0)[0])
+
+
 @contextmanager
-def sigterm_ends_at_once() -> Iterator[None]:
+def sigterm_ends_at_once(signals: StopSignals) -> Iterator[None]:
     """Inside a scene-changing request, SIGTERM takes its default action: the process ends
     at once. An engine call (a 100,000-body spawn, a compile) may hold the GIL for seconds,
     so no Python handler or watcher could run until it returns; outside such requests the
-    stop is graceful. Costs two signal() calls, about 3 µs."""
+    stop is graceful. A request that comes to its work after a stop signal (one that landed
+    while its payload was decoded) is refused, not begun: begun, it would hold the GIL past
+    SHUTDOWN_GRACE_S (5.8 s for a 100,000-body PyBullet spawn). Costs two signal() calls
+    and a poll of the pipe, about 5 µs."""
     previous = signal.signal(signal.SIGTERM, signal.SIG_DFL)
     try:
+        if signals.received():
+            raise OperationFailedError("the daemon is shutting down (SIGTERM or SIGINT); "
+                                       "the request was not begun")
         yield
     finally:
         signal.signal(signal.SIGTERM, previous)
@@ -316,16 +343,16 @@ def run_daemon(options: DaemonOptions, announce: Callable[[str], None] = print) 
     whichever thread the kernel chose, and a watcher thread waiting on that pipe stops the
     loop. No Python code runs inside a lock, so a second signal cannot deadlock shutdown.
     """
-    wake_read = signal_wakeup_pipe()
+    signals = StopSignals()
     daemon = Daemon(options)
-    daemon.loop.work_guard = sigterm_ends_at_once
+    daemon.loop.work_guard = lambda: sigterm_ends_at_once(signals)
     if options.state_dir is not None:
         options.state_dir.mkdir(parents=True, exist_ok=True)
         daemon.loop.schedule_checkpoints(daemon.save_checkpoint, options.checkpoint_period_s)
     daemon.open()
 
     def stop_on_signal() -> None:
-        os.read(wake_read, 1)
+        signals.wait()
         daemon.withdraw()
         if not daemon.finished.wait(SHUTDOWN_GRACE_S):
             log.warning("a request still held the physics thread %.1f s after the signal: "

@@ -12,6 +12,7 @@ from typing import Any, TypeVar, overload
 
 import numpy as np
 
+from galton.protocol import mesh as mesh_wire
 from galton.protocol.arrays import pack_f64, unpack_f64
 from galton.protocol.errors import InvalidArgumentError, brief
 from galton.protocol.vocabulary import (
@@ -222,11 +223,26 @@ class BodyGroup:
     restitution: float | None = None
     rgba: tuple[float, float, float, float] | None = None
     tags: tuple[str, ...] = ()
+    # A mesh's triangles in the body's frame: (n, 3) float64 vertices, (m, 3) int faces.
+    vertices: np.ndarray | None = None
+    faces: np.ndarray | None = None
+    # A diagonal inertia (kg m², about the body's centre of mass) in place of the shape's.
+    inertia: tuple[float, float, float] | None = None
 
     def __len__(self) -> int:
         return len(self.names)
 
     def to_wire(self) -> dict[str, Any]:
+        out = self._core_wire()
+        if self.vertices is not None and self.faces is not None:
+            out["size"] = []
+            out["vertices"] = mesh_wire.pack_vertices(self.vertices)
+            out["faces"] = mesh_wire.pack_faces(self.faces)
+        if self.inertia is not None:
+            out["inertia"] = [float(v) for v in self.inertia]
+        return out
+
+    def _core_wire(self) -> dict[str, Any]:
         return {
             "shape": self.shape,
             "size": [float(s) for s in self.size],
@@ -250,7 +266,12 @@ class BodyGroup:
         if shape not in BODY_SHAPES:
             raise InvalidArgumentError(
                 f"{where}.shape {brief(shape)} is not one of {', '.join(BODY_SHAPES)}")
-        size = _check_size(shape, require(body, "size", list, where), f"{where}.size")
+        vertices, faces = _check_mesh(shape, body, where)
+        size: tuple[float, ...]
+        if vertices is not None:
+            size = mesh_wire.half_extents(vertices)
+        else:
+            size = _check_size(shape, require(body, "size", list, where), f"{where}.size")
         names = check_names(require(body, "names", list, where), f"{where}.names")
         poses = decode_poses(require(body, "poses", (bytes, bytearray), where), len(names),
                              f"{where}.poses")
@@ -269,11 +290,50 @@ class BodyGroup:
             restitution=optional_number(body, "restitution", where, low=0, high=1),
             rgba=check_rgba(body.get("rgba"), f"{where}.rgba"),
             tags=check_tags(body.get("tags", []), f"{where}.tags"),
+            vertices=vertices, faces=faces,
+            inertia=_check_inertia(body.get("inertia"), static, f"{where}.inertia"),
         )
 
 
 GROUP_FIELDS = ("shape", "size", "names", "poses", "twists", "static", "mass", "friction",
-                "restitution", "rgba", "tags")
+                "restitution", "rgba", "tags", "vertices", "faces", "inertia")
+
+
+def _check_mesh(shape: str, body: dict[str, Any], where: str
+                ) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """A mesh group's vertices and faces, checked; none for the other shapes."""
+    if shape != "mesh":
+        for key in ("vertices", "faces"):
+            if body.get(key) is not None:
+                raise InvalidArgumentError(f"{where}.{key} is for a mesh, not a {shape}")
+        return None, None
+    if body.get("size") not in (None, []):
+        raise InvalidArgumentError(f"{where}.size must be left out for a mesh (its size is "
+                                   f"its vertices' reach), got {brief(body.get('size'))}")
+    vertices = mesh_wire.decode_vertices(require(body, "vertices", (bytes, bytearray), where),
+                                         f"{where}.vertices")
+    faces = mesh_wire.decode_faces(require(body, "faces", (bytes, bytearray), where),
+                                   len(vertices), f"{where}.faces")
+    mesh_wire.check_area(vertices, faces, where)
+    return vertices, faces
+
+
+def _check_inertia(value: Any, static: bool, where: str) -> tuple[float, float, float] | None:
+    """Three positive principal moments (kg m²); a static body has none to override."""
+    if value is None:
+        return None
+    check_type(value, list, where)
+    if len(value) != 3:
+        raise InvalidArgumentError(f"{where} must hold 3 numbers (ixx iyy izz, kg m²), "
+                                   f"got {len(value)}")
+    if static:
+        raise InvalidArgumentError(f"{where}: a static body has no inertia to set")
+    ixx, iyy, izz = (finite_number(v, f"{where}[{i}]", low=0, low_open=True, high=1e9)
+                     for i, v in enumerate(value))
+    if ixx + iyy < izz or iyy + izz < ixx or ixx + izz < iyy:
+        raise InvalidArgumentError(f"{where} {[ixx, iyy, izz]} breaks the triangle "
+                                   "inequality no rigid body's principal moments break")
+    return (ixx, iyy, izz)
 
 
 

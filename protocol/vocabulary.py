@@ -34,7 +34,7 @@ ModelFormat = Literal["mjcf", "urdf"]
 MODEL_FORMATS: tuple[str, ...] = get_args(ModelFormat)
 ImageFormat = Literal["raw", "png"]
 IMAGE_FORMATS: tuple[str, ...] = get_args(ImageFormat)
-BODY_SHAPES = ("sphere", "box", "cylinder", "capsule", "plane")
+BODY_SHAPES = ("sphere", "box", "cylinder", "capsule", "plane", "mesh")
 # What list reports for the bodies of a loaded model: its root, and every other link.
 MODEL_SHAPES = ("model", "link")
 JOINT_TYPES = ("revolute", "prismatic", "spherical", "free", "fixed")
@@ -52,7 +52,13 @@ SIZE_LAYOUT: dict[str, tuple[str, ...]] = {
     "cylinder": ("radius", "half_length"),
     "capsule": ("radius", "half_length"),
     "plane": ("half_x", "half_y"),
+    # A mesh's size is not sent: it is its vertices' reach from the body's origin.
+    "mesh": ("half_x", "half_y", "half_z"),
 }
+# A mesh's bounds (protocol/mesh.py): a board's part needs tens; these leave room for a
+# scanned object while keeping one group's decode and an engine's hull build in milliseconds.
+MAX_MESH_VERTICES = 20_000
+MAX_MESH_FACES = 40_000
 
 
 def check_fields(body: dict[str, Any], allowed: Sequence[str], where: str) -> None:

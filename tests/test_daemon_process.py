@@ -15,6 +15,7 @@ import pytest
 import zenoh
 
 from galton.client import Client, EmbeddedDaemon, instances, plane, spheres, wait_for_daemon
+from galton.daemon.server import SHUTDOWN_GRACE_S
 from galton.protocol import DaemonUnreachableError, GaltonError, OperationFailedError, Telemetry
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -189,3 +190,45 @@ def test_sigterm_in_the_middle_of_a_long_spawn_ends_the_daemon() -> None:
         request.join(30)  # its request ends with the daemon: before the client closes
         assert not request.is_alive()
     assert code == -signal.SIGTERM  # ended inside the spawn: not after it, gracefully
+
+
+def test_sigterm_while_a_long_spawn_is_decoded_refuses_it_and_exits_within_the_grace() -> None:
+    """SIGTERM that lands while a 100,000-body spawn is still being decoded (before its work
+    began) used to let the spawn begin: PyBullet's one createMultiBody call held the GIL
+    past the grace, and the exit took 5.8 s (issue 35). Now the spawn is refused ("shutting
+    down") and the daemon exits gracefully, well within the grace; or, had the work begun
+    before the signal, the signal ends it at once (or the request never reached it)."""
+    daemon = EmbeddedDaemon("pybullet", instance="decoded-spawn").start()
+    assert daemon.process is not None
+    process = psutil.Process(daemon.process.pid)
+    count = 100_000
+    grid = np.column_stack([np.arange(count) % 300 * 0.1, np.arange(count) // 300 * 0.1,
+                            np.zeros(count)])
+    group = spheres([f"s{i}" for i in range(count)], grid, 0.04, static=True)
+    replies: list[GaltonError] = []
+    with Client(daemon.instance, daemon.endpoint, timeout=120) as client:
+        cpu = sum(process.cpu_times()[:2])
+
+        def spawn() -> None:
+            try:
+                client.spawn(group, timeout=120)
+            except GaltonError as error:
+                replies.append(error)
+        request = threading.Thread(target=spawn, daemon=True)
+        request.start()
+        deadline = time.monotonic() + 60
+        while sum(process.cpu_times()[:2]) - cpu < 0.05:  # the payload is being decoded
+            assert request.is_alive() and time.monotonic() < deadline
+            request.join(0.002)
+        sent = time.monotonic()
+        daemon.process.send_signal(signal.SIGTERM)
+        code = daemon.process.wait(30)
+        took = time.monotonic() - sent
+        daemon.stop()
+        request.join(30)
+    assert took < SHUTDOWN_GRACE_S, f"exit took {took:.2f} s"  # the old path: 1.7-5.8 s
+    assert code in (0, -signal.SIGTERM)
+    if code == 0 and replies and not isinstance(replies[0], DaemonUnreachableError):
+        # refused, not begun (unreachable: the request never got to the daemon)
+        assert isinstance(replies[0], OperationFailedError), replies
+        assert "shutting down" in str(replies[0])

@@ -10,6 +10,7 @@ import numpy as np
 from galton.analysis.board import BoardSpec, SurfaceSpec
 from galton.analysis.board_geometry import Primitive, board_primitives
 from galton.protocol import BodyGroup
+from galton.protocol.mesh import box_mesh, half_extents, prism_mesh
 
 BALL_TAG = "ball"
 BOARD_TAG = "board"
@@ -31,12 +32,32 @@ def board_groups(spec: BoardSpec, engine: str, offset_x: float = 0.0) -> list[Bo
     groups = []
     for (shape, size, role, rgba), prims in grouped.items():
         material = surface(spec, engine, role)
-        groups.append(BodyGroup(
-            shape=shape, size=size, names=[p.name for p in prims],
+        groups.append(BodyGroup(**{
+            "shape": shape, "size": size, **_mesh_of(spec, shape, size)},
+            names=[p.name for p in prims],
             poses=np.array([p.pose for p in prims], dtype=float), static=True,
             friction=material.friction, restitution=material.restitution, rgba=rgba,
             tags=(BOARD_TAG, role)))
     return groups
+
+
+PIN_SIDES = 16  # a mesh board's pins: 16-sided prisms (2.5 % less cross-section than a disc)
+
+
+def _mesh_of(spec: BoardSpec, shape: str, size: tuple[float, ...]) -> dict[str, Any]:
+    """A mesh board's part as a mesh group's fields (shape, size, vertices, faces); none
+    for a board of primitives. A pin's prism has its corners on the pin's circle, as a
+    mesh exported from a CAD model has."""
+    if spec.parts != "mesh":
+        return {}
+    if shape == "cylinder":
+        vertices, faces = prism_mesh(size[0], size[1], PIN_SIDES)
+    elif shape == "box":
+        vertices, faces = box_mesh((size[0], size[1], size[2]))
+    else:
+        raise ValueError(f"a mesh board has no mesh for a {shape}")
+    return {"shape": "mesh", "size": half_extents(vertices), "vertices": vertices,
+            "faces": faces}
 
 
 def ball_group(spec: BoardSpec, engine: str, names: list[str],
@@ -46,8 +67,9 @@ def ball_group(spec: BoardSpec, engine: str, names: list[str],
     poses[:, :3] = positions
     poses[:, 6] = 1.0
     material = surface(spec, engine, BALL_TAG)
+    inertia = None if spec.ball.inertia is None else (spec.ball.inertia,) * 3
     return BodyGroup(shape="sphere", size=(spec.ball.radius,), names=names, poses=poses,
-                     mass=spec.ball.mass, friction=material.friction,
+                     mass=spec.ball.mass, inertia=inertia, friction=material.friction,
                      restitution=material.restitution, rgba=(0.9, 0.1, 0.1, 1.0),
                      tags=(BALL_TAG,))
 

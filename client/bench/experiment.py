@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import datetime as dt
 import importlib.metadata
 import os
@@ -12,7 +13,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from galton.analysis.board import BallSpec, BoardSpec, ReleaseSpec
+from galton.analysis.board import BoardSpec, ReleaseSpec
 from galton.analysis.board_release import nominal_positions
 from galton.analysis.errors import AnalysisError
 from galton.analysis.records import ExperimentResults, TrialRecord
@@ -29,6 +30,7 @@ from galton.client.bench.trial import (
     run_trial,
 )
 from galton.client.sdk.client import Client
+from galton.client.view.recording import SUFFIX as RECORDING_SUFFIX
 from galton.protocol import ENGINE_NAMES, GaltonError, InvalidArgumentError
 from galton.protocol.errors import did_you_mean
 
@@ -46,6 +48,8 @@ class ExperimentConfig:
     max_sim_time: float = DEFAULT_MAX_SIM_TIME_S
     check_interval: float = DEFAULT_CHECK_INTERVAL_S
     extra: dict[str, Any] = field(default_factory=dict)
+    # A folder to save each trial's recording in, for `galton-client view` (None: none).
+    recordings: Path | None = None
 
     def __post_init__(self) -> None:
         if self.repetitions < 1:
@@ -64,7 +68,7 @@ class ExperimentConfig:
 
     def board_for(self, balls: int) -> BoardSpec:
         """The board with this ball count and the release mode asked for."""
-        ball = BallSpec(self.board.ball.radius, self.board.ball.mass, balls)
+        ball = dataclasses.replace(self.board.ball, count=balls)
         release = self.board.release
         if self.release is not None:
             release = ReleaseSpec(self.release, release.interval, release.stream_height,
@@ -74,9 +78,16 @@ class ExperimentConfig:
     def trials(self) -> list[TrialConfig]:
         """The plan: for each engine, each ball count, each repetition."""
         return [TrialConfig(engine, self.board_for(balls), rep, self.seed, self.max_sim_time,
-                            self.check_interval)
+                            self.check_interval,
+                            recording=self.recording_of(engine, balls, rep))
                 for engine in self.engines for balls in self.balls
                 for rep in range(self.repetitions)]
+
+    def recording_of(self, engine: str, balls: int, repetition: int) -> Path | None:
+        """Where a trial's recording goes (one file per trial, named by what it ran)."""
+        if self.recordings is None:
+            return None
+        return self.recordings / f"{engine}_{balls}balls_rep{repetition + 1}{RECORDING_SUFFIX}"
 
 
 def check_engines(engines: tuple[str, ...]) -> None:

@@ -5,7 +5,9 @@ from __future__ import annotations
 
 import threading
 import time
+from contextlib import AbstractContextManager, nullcontext
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -17,6 +19,7 @@ from galton.analysis.records import TrialRecord
 from galton.client.bench.build import ball_group, ball_names, board_groups
 from galton.client.bench.defaults import DEFAULT_MAX_SIM_TIME_S
 from galton.client.sdk.client import Client, States
+from galton.client.view.recording import Recorder
 from galton.protocol import Telemetry
 
 DEFAULT_CHECK_INTERVAL_S = 0.5
@@ -36,6 +39,8 @@ class TrialConfig:
     max_sim_time: float = DEFAULT_MAX_SIM_TIME_S
     check_interval: float = DEFAULT_CHECK_INTERVAL_S
     settle_speed: float = DEFAULT_SETTLE_SPEED
+    # Where to save a recording of the trial that `galton-client view` replays (None: none).
+    recording: Path | None = None
 
     @property
     def balls(self) -> int:
@@ -146,7 +151,8 @@ def run_trial(sim: Client, config: TrialConfig) -> TrialRecord:
     with sim.on_telemetry(footprint.add):
         shake, names = prepare_world(sim, config)
         clock = PhysicsClock(sim)
-        outcomes = release_and_settle(sim, config, shake, names, clock)
+        with _recorded(sim, config.recording):
+            outcomes = release_and_settle(sim, config, shake, names, clock)
         sim_time = sim.status().sim_time
         settings = sim.get_params()
         version = sim.capabilities().engine_version
@@ -162,6 +168,11 @@ def run_trial(sim: Client, config: TrialConfig) -> TrialRecord:
         rtf=sim_time / clock.wall if clock.wall > 0 else None,
         cpu_percent_mean=footprint.cpu_mean(), peak_rss_bytes=footprint.peak_rss or None,
         settings=settings, config=trial_config_dict(config, shake))
+
+
+def _recorded(sim: Client, path: Path | None) -> AbstractContextManager[object]:
+    """A recording of the trial from its built board on (client/view/recording.py)."""
+    return nullcontext() if path is None else Recorder(sim, path)
 
 
 def trial_config_dict(config: TrialConfig, shake: Perturbation) -> dict[str, Any]:

@@ -96,7 +96,7 @@ def bench(
              "replaces a daemon's world, so without this (or --connect/--instances) the "
              "bench starts daemons of its own and touches no running one.")] = False,
     board: Annotated[str, typer.Option(
-        help="Preset (paper, paper-webots, paper-gazebo, small) or a TOML/JSON file.")
+        help="Preset (paper, paper-mesh, paper-webots, paper-gazebo, small) or a TOML/JSON file.")
                      ] = "paper",
     balls: Annotated[str, typer.Option(help="Ball count(s), e.g. 1,25,100.")] = ",".join(
         map(str, DEFAULT_BALLS)),
@@ -109,6 +109,9 @@ def bench(
     out: Annotated[Path, typer.Option(help="Output folder.")] = DEFAULT_OUT,
     animation: Annotated[bool, typer.Option(
         help="Also replay each engine's first trial as an animated PNG for the report.")
+    ] = False,
+    record: Annotated[bool, typer.Option(
+        help="Also record each trial (OUT/recordings/*.npz) for `galton-client view OUT`.")
     ] = False,
     pool: Annotated[bool, typer.Option(
         help="Spread the trials over every daemon found at --connect (or --instances), a "
@@ -129,7 +132,7 @@ def bench(
     config = checked(lambda: ExperimentConfig(
         board=load_board(board), engines=tuple(_csv(engines, "--engines")),
         balls=_ints(balls, "--balls"), repetitions=repetitions, release=release, seed=seed,
-        max_sim_time=max_sim_time))
+        max_sim_time=max_sim_time, recordings=out / "recordings" if record else None))
     endpoints = connect.split(",") if connect else ctx.obj.connect
     names = _csv(instances, "--instances") if instances else None
     shown = Animation() if animation else None

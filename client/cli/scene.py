@@ -19,7 +19,14 @@ from galton.client.cli.choices import (
     rows,
     split_list,
 )
-from galton.client.cli.common import JsonOpt, console, emit, show_stamp, with_client
+from galton.client.cli.common import (
+    JsonOpt,
+    console,
+    emit,
+    run_guarded,
+    show_stamp,
+    with_client,
+)
 from galton.client.cli.states import NamesArg
 from galton.protocol import TWIST_WIDTH
 from galton.protocol.vocabulary import SIZE_LAYOUT
@@ -60,6 +67,32 @@ def size_values(shape: str, size: str | None) -> tuple[float, ...]:
         return tuple(numbers(size, "--size"))
     half = DEFAULT_PLANE_HALF_SIZE if shape == "plane" else DEFAULT_HALF_SIZE
     return (half,) * len(SIZE_LAYOUT[shape])
+
+
+def mesh_fields(shape: str, size: str | None, mesh: Path | None) -> dict[str, Any]:
+    """A mesh's size, vertices and faces: the OBJ file's, else a box of --size half
+    sizes; none for the other shapes."""
+    if shape != "mesh":
+        if mesh is not None:
+            raise typer.BadParameter(f"--mesh is for a mesh, not a {shape}")
+        return {}
+    from galton.client.cli.mesh_files import read_obj
+    from galton.protocol.mesh import box_mesh, half_extents
+    if mesh is not None:
+        vertices, faces = run_guarded(lambda: read_obj(mesh))
+    else:
+        half = size_values("box", size)
+        vertices, faces = box_mesh((half[0], half[1], half[2]))
+    return {"size": half_extents(vertices), "vertices": vertices, "faces": faces}
+
+
+def inertia_values(inertia: str | None) -> tuple[float, float, float] | None:
+    if inertia is None:
+        return None
+    values = numbers(inertia, "--inertia")
+    if len(values) != 3:
+        raise typer.BadParameter(f"--inertia takes 3 numbers ixx,iyy,izz, got {len(values)}")
+    return (values[0], values[1], values[2])
 
 
 def default_position(shape: str) -> str:
@@ -117,17 +150,26 @@ def spawn(
     restitution: Restitution = None,
     rgba: Rgba = None,
     tags: Tags = None,
+    mesh: Annotated[Path | None, typer.Option(
+        help="For a mesh: a Wavefront OBJ file of its vertices and faces, in the body's "
+             "frame (default: a box of --size half sizes).", dir_okay=False, exists=True)
+    ] = None,
+    inertia: Annotated[str | None, typer.Option(
+        help="A moving body's diagonal inertia ixx,iyy,izz, kg m² (default: its shape's).")
+    ] = None,
     as_json: JsonOpt = False,
 ) -> None:
     """Spawn bodies of one shape and material, in a single request."""
     from galton.client.sdk.client import body_group
     every = body_names(names, count)
+    fields = mesh_fields(str(shape), size, mesh)
     group = body_group(
-        str(shape), size_values(shape, size), every,
+        str(shape), fields.pop("size", None) or size_values(shape, size), every,
         positions(pos or default_position(shape), len(every), spacing),
         twists=None if twists is None else rows(twists, len(every), TWIST_WIDTH, "--twists"),
         static=static or shape == "plane", mass=mass, friction=friction,
-        restitution=restitution, rgba=rgba_values(rgba), tags=tag_values(tags) or ())
+        restitution=restitution, rgba=rgba_values(rgba), tags=tag_values(tags) or (),
+        inertia=inertia_values(inertia), **fields)
     spawned = with_client(ctx, lambda c: c.spawn(group))
     emit({"names": spawned}, as_json, lambda: console.print(
         f"spawned {counted(len(spawned), 'body', 'bodies')}: {', '.join(spawned[:5])}"

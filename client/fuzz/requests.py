@@ -16,6 +16,7 @@ import msgpack
 import numpy as np
 
 from galton.protocol import PROTOCOL_VERSION, pack_f64
+from galton.protocol.mesh import box_mesh, pack_faces, pack_vertices
 from galton.protocol.operations import OPERATIONS, Arg, Operation
 
 T = TypeVar("T")
@@ -177,6 +178,8 @@ def _groups(maker: RequestMaker, arg: Arg) -> Any:
 
 
 def _group(maker: RequestMaker) -> dict[str, Any]:
+    if maker.chance(0.1):
+        return _mesh_group(maker)
     shape = maker.pick(list(SHAPES))
     count = int(maker.rng.integers(1, 9))
     poses = np.zeros((count, 7))
@@ -194,6 +197,26 @@ def _group(maker: RequestMaker) -> dict[str, Any]:
     if maker.chance(0.15):
         group[maker.pick(["mass", "size", "names", "poses", "shape", "colour"])] = \
             maker.pick(BAD_NUMBERS)
+    return group
+
+
+def _mesh_group(maker: RequestMaker) -> dict[str, Any]:
+    """A mesh box (shape ``mesh``), now and then with one of its parts broken: an index
+    out of range, a flat or non-finite vertex list, a ragged byte count."""
+    half = maker.rng.uniform(0.02, 0.2, 3)
+    vertices, faces = box_mesh((float(half[0]), float(half[1]), float(half[2])))
+    count = int(maker.rng.integers(1, 4))
+    poses = np.tile([0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0], (count, 1))
+    poses[:, :2] = maker.rng.uniform(-2, 2, (count, 2))
+    group: dict[str, Any] = {"shape": "mesh", "names": _group_names(maker, count),
+                             "poses": pack_f64(poses), "static": maker.chance(0.5),
+                             "vertices": pack_vertices(vertices), "faces": pack_faces(faces)}
+    if maker.chance(0.3):
+        broken = maker.pick([("faces", pack_faces(faces + 8)),
+                             ("vertices", pack_vertices(vertices * [1.0, 1.0, 0.0])),
+                             ("vertices", pack_vertices(vertices * math.nan)),
+                             ("faces", pack_faces(faces)[:-3]), ("size", [0.1])])
+        group[broken[0]] = broken[1]
     return group
 
 

@@ -14,9 +14,10 @@ from pathlib import Path
 from galton.analysis.board import BoardSpec
 from galton.analysis.laws import LawResults
 from galton.analysis.report_card import CardResults
-from galton.client.bench.experiment import ExperimentConfig, run_experiment
+from galton.client.bench.experiment import ExperimentConfig
 from galton.client.laws import choose, run_engine
 from galton.client.report_card import measure
+from galton.client.report_card.pooled import TrialRunner, local_trials
 from galton.client.sdk.client import Client
 from galton.client.sdk.embedded import EmbeddedDaemon
 
@@ -34,14 +35,17 @@ class CardPlan:
     round_trips: int = 500
     world_ops: int = 20
     laws: tuple[str, ...] | None = None  # None: the whole suite
+    mesh_balls: int = 100  # the paper-mesh board's trials
+    mesh_repetitions: int = 10
 
     @classmethod
     def quick(cls) -> CardPlan:
         return cls(repetitions=5, curve=(1, 10, 300), footprint_s=3.0, round_trips=100,
-                   world_ops=6)
+                   world_ops=6, mesh_balls=25, mesh_repetitions=2)
 
     def describe(self) -> str:
         return (f"paper, {self.fidelity_balls} balls × {self.repetitions}, all at once; "
+                f"paper-mesh, {self.mesh_balls} balls × {self.mesh_repetitions}; "
                 f"RTF curve at {', '.join(map(str, sorted({*self.curve, self.fidelity_balls})))} "
                 "balls")
 
@@ -55,7 +59,8 @@ def engine_daemon(engine: str, timeout: float) -> Iterator[tuple[Client, Client]
         yield zenoh_client, zmq_client
 
 
-def board_measures(sim: Client, engine: str, plan: CardPlan, seed: int
+def board_measures(sim: Client, engine: str, plan: CardPlan, seed: int,
+                   trials_of: TrialRunner = local_trials
                    ) -> tuple[dict[str, float | None], dict[int, float], int]:
     """Fidelity at the plan's ball count, the RTF curve (mean RTF per ball count), and
     the balls lost to a diverged (NaN) state."""
@@ -66,8 +71,7 @@ def board_measures(sim: Client, engine: str, plan: CardPlan, seed: int
                                 repetitions=plan.repetitions, seed=seed)
     curve = ExperimentConfig(board=board, engines=(engine,), balls=plan.curve, repetitions=1,
                              seed=seed)
-    trials = [*run_experiment({engine: sim}, fidelity).trials,
-              *run_experiment({engine: sim}, curve).trials]
+    trials = [*trials_of(sim, engine, fidelity), *trials_of(sim, engine, curve)]
     group = summarise_group([t for t in trials if t.balls == plan.fidelity_balls],
                             plan.fidelity_balls)
     rtfs: dict[int, list[float]] = {}
@@ -82,9 +86,24 @@ def board_measures(sim: Client, engine: str, plan: CardPlan, seed: int
             means, sum(t.lost_by_reason.get("nan", 0) for t in trials))
 
 
+def mesh_measures(sim: Client, engine: str, plan: CardPlan, seed: int,
+                  trials_of: TrialRunner = local_trials) -> dict[str, float | None]:
+    """The paper-mesh board's median χ² and balls lost, beside the primitives'."""
+    from galton.analysis.summary import summarise_group  # scipy: the [bench] extra
+
+    config = ExperimentConfig(board=BoardSpec.load("paper-mesh"), engines=(engine,),
+                              balls=(plan.mesh_balls,), repetitions=plan.mesh_repetitions,
+                              seed=seed)
+    group = summarise_group(trials_of(sim, engine, config), plan.mesh_balls)
+    return {"mesh_chi2_median": group.chi2_median,
+            "mesh_lost_percent": group.lost_percent_pooled}
+
+
 def run_card(engines: Sequence[str], plan: CardPlan, seed: int = 0, timeout: float = 30.0,
-             say: Say | None = None) -> tuple[CardResults, LawResults]:
-    """Every measure of every engine, each engine on a daemon of its own."""
+             say: Say | None = None, trials_of: TrialRunner = local_trials
+             ) -> tuple[CardResults, LawResults]:
+    """Every measure of every engine, each engine on a daemon of its own; the Galton
+    trials through ``trials_of`` (``report-card --pool``: over a pool)."""
     card = CardResults(measures={}, config={"plan": plan.describe(), "seed": seed})
     law_records = []
     tell = say or (lambda _: None)
@@ -111,9 +130,13 @@ def run_card(engines: Sequence[str], plan: CardPlan, seed: int = 0, timeout: flo
             law_records.append(laws)
             measures["laws_passed"] = float(laws.passed)
             tell(f"{engine}: the Galton board")
-            board_values, curve, diverged = board_measures(zmq_client, engine, plan, seed)
+            board_values, curve, diverged = board_measures(zmq_client, engine, plan, seed,
+                                                           trials_of)
             measures |= board_values
             card.curves[engine] = curve
+            if "mesh" in caps.body_shapes:
+                tell(f"{engine}: the Galton board as meshes")
+                measures |= mesh_measures(zmq_client, engine, plan, seed, trials_of)
             failed = [c for c in laws.checks if c.value is None]
             measures["physics_errors"] = float(len(failed) + diverged + restore_errors)
             notes = card.config.setdefault("notes", [])

@@ -57,6 +57,7 @@ from galton.protocol import (
     SimStatus,
     Telemetry,
 )
+from galton.protocol import mesh as mesh_wire
 from galton.protocol.arrays import unpack_f64
 from galton.protocol.errors import ClientClosedError, InvalidArgumentError
 from galton.protocol.operations import OPERATIONS
@@ -415,6 +416,18 @@ def spheres(names: Sequence[str], positions: Sequence[Sequence[float]] | np.ndar
 def boxes(names: Sequence[str], positions: Sequence[Sequence[float]] | np.ndarray,
           half_extents: Sequence[float], **options: Any) -> BodyGroup:
     return body_group("box", tuple(half_extents), names, positions, **options)
+
+
+def meshes(names: Sequence[str], positions: Sequence[Sequence[float]] | np.ndarray,
+           vertices: Sequence[Sequence[float]] | np.ndarray,
+           faces: Sequence[Sequence[int]] | np.ndarray, **options: Any) -> BodyGroup:
+    """A group of bodies of one triangle mesh (vertices in the body's frame, faces as
+    vertex-index triples wound outward) at these positions; how each engine collides it
+    (convex hull or triangles) is in docs/ENGINES.md."""
+    points = np.asarray(vertices, dtype=float).reshape(-1, 3)
+    return body_group("mesh", mesh_wire.half_extents(points), names, positions,
+                      vertices=points, faces=np.asarray(faces, dtype=np.int64).reshape(-1, 3),
+                      **options)
 
 
 def plane(name: str = "ground", height: float = 0.0, **options: Any) -> BodyGroup:

@@ -21,11 +21,11 @@ from numpy.typing import ArrayLike
 from galton.client.sdk.joints import float_array, given
 from galton.client.sdk.values import Contacts, Image, RayHits
 from galton.protocol import InvalidArgumentError, Reply, pack_f64
+from galton.protocol.vocabulary import IMAGE_FORMATS
 
 if TYPE_CHECKING:
     CameraMap = Mapping[str, Any]
 
-IMAGE_FORMATS = ("raw", "png")
 
 
 def camera(eye: ArrayLike, target: ArrayLike, *, up: ArrayLike | None = None,

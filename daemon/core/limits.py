@@ -28,7 +28,7 @@ class Limits:
     max_pixels: int = 4096 * 4096  # pixels one render request asks for, all cameras together
     max_rays: int = 1_000_000  # rays one raycast request casts
     max_steps: int = 1_000_000_000  # steps one step / run_until request may take
-    max_reply_bytes: int = 64 * MIB  # the samples one predict reply may carry
+    max_reply_bytes: int = 64 * MIB  # any one reply (daemon/core/reply_limit.py)
     max_position: float = 1e6  # metres from the origin beyond which a world has diverged
     max_speed: float = 1e5  # m/s (or rad/s) beyond which a world has diverged
 

@@ -22,6 +22,7 @@ from galton.daemon.core import job_results, loop_status, side_jobs, time_control
 from galton.daemon.core.calls import Call, Inbox, StepJob, Task, smoothed_step_cost
 from galton.daemon.core.limits import DEFAULT_LIMITS, Limits
 from galton.daemon.core.monitor import Pacer, ProcessMonitor, RtfWindow
+from galton.daemon.core.reply_limit import too_big
 from galton.daemon.ops.handlers import HANDLERS
 from galton.daemon.world.scene import World
 from galton.daemon.world.slots import SnapshotSlots
@@ -323,7 +324,13 @@ class SimLoop:
         world = self._stamping(call)
         reply = Reply(ResultCode.OK, result=result, step=world.step_index,
                       sim_time=world.sim_time)
-        self.send(call, encode_reply(reply))
+        data = encode_reply(reply)
+        if len(data) > self.limits.max_reply_bytes:  # never sent (daemon/core/reply_limit.py)
+            self.reply_error(call, too_big(f"the reply to {call.op or 'this request'}",
+                                           len(data), self.limits.max_reply_bytes,
+                                           "ask for less"))
+            return
+        self.send(call, data)
 
     def reply_error(self, call: Call, error: RemoteError) -> None:
         self.refresh_clock()

@@ -16,7 +16,7 @@ import contextlib
 import os
 import sys
 from abc import ABC, abstractmethod
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -52,6 +52,7 @@ FEATURE_RENDER = "render"
 FEATURE_RAYCAST = "raycast"
 FEATURE_CONTACTS = "contacts"
 FEATURE_MODEL_SHAPES = "model_shapes"  # get_shapes answers for a loaded model's bodies
+FEATURE_SPAWN_INERTIA = "spawn_inertia"  # spawn groups' own ``inertia``
 IMAGE_OUTPUTS = ("rgb", "depth", "segmentation")
 # Every feature flag the protocol knows: an engine lists those it has, and no other.
 KNOWN_FEATURES = (FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDATE_MASS,
@@ -59,7 +60,8 @@ KNOWN_FEATURES = (FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDA
                   FEATURE_LOAD_MODEL, FEATURE_STATIC_POSE, FEATURE_JOINTS,
                   FEATURE_JOINT_TARGETS, FEATURE_TARGET_POSITION, FEATURE_TARGET_VELOCITY,
                   FEATURE_TARGET_EFFORT, FEATURE_WRENCH, FEATURE_SNAPSHOT, FEATURE_RENDER,
-                  FEATURE_RAYCAST, FEATURE_CONTACTS, FEATURE_MODEL_SHAPES)
+                  FEATURE_RAYCAST, FEATURE_CONTACTS, FEATURE_SPAWN_INERTIA,
+                  FEATURE_MODEL_SHAPES)
 # One collision shape: kind (a BODY_SHAPES name or "mesh"), half sizes as SIZE_LAYOUT
 # (a mesh: the half sizes of a box around it), its pose in its body's frame (7 wide).
 Shape = tuple[str, tuple[float, ...], tuple[float, ...]]
@@ -128,6 +130,13 @@ class Engine(ABC):
     @abstractmethod
     def get_states(self, names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
         """Poses (n, 7: x y z qx qy qz qw) and world twists (n, 6: v, ω) of these bodies."""
+
+    def pose_reader(self, names: Sequence[str]) -> Callable[[], np.ndarray]:
+        """A function that reads these bodies' poses (n, 7), for a state stream that reads
+        the same names 60 times a second: an engine may work out once where they live. Valid
+        until the next spawn, load_model, delete or clear; by default, get_states."""
+        fixed = list(names)
+        return lambda: self.get_states(fixed)[0]
 
     @abstractmethod
     def set_states(self, names: Sequence[str], poses: np.ndarray | None,

@@ -7,6 +7,7 @@ from typing import Any
 
 import numpy as np
 
+from galton.daemon.core.reply_limit import RAW_PIXEL_BYTES, RAY_BYTES, require_room
 from galton.daemon.world.cameras import Camera, parse_camera, view_of
 from galton.daemon.world.scene import World
 from galton.protocol import InvalidArgumentError, NotFoundError, ResourceLimitError, pack_f64
@@ -55,6 +56,10 @@ def render(world: World, request: rq.Render) -> dict[str, Any]:
         raise ResourceLimitError(f"render asks for {pixels} pixels; at most "
                                  f"{world.limits.max_pixels} a request",
                                  {"limit": "max_pixels", "max": world.limits.max_pixels})
+    if fmt == "raw":
+        size = sum(c.pixels * RAW_PIXEL_BYTES[kind] for c in cameras for kind in c.outputs)
+        require_room("this render's reply", size, world.limits.max_reply_bytes,
+                     "ask for fewer pixels or outputs, or format png")
     for camera in cameras:
         if camera.attach is not None:
             world.require_known([camera.attach])
@@ -117,6 +122,8 @@ def raycast(world: World, request: rq.Raycast) -> dict[str, Any]:
     if count > world.limits.max_rays:
         raise ResourceLimitError(f"raycast casts {count} rays; at most {world.limits.max_rays}",
                                  {"limit": "max_rays", "max": world.limits.max_rays})
+    require_room("this raycast's reply", count * RAY_BYTES, world.limits.max_reply_bytes,
+                 "cast fewer rays a request")
     origins = decode_points(raw, count, "raycast.origins")
     if (request.directions is None) == (request.ends is None):
         raise InvalidArgumentError("raycast needs exactly one of 'directions' or 'ends'")

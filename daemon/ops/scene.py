@@ -16,6 +16,7 @@ import numpy as np
 
 from galton.daemon.core.host_info import host_info
 from galton.daemon.engines import ENGINE_CLASSES
+from galton.daemon.engines.base import FEATURE_SPAWN_INERTIA
 from galton.daemon.world.model_files import search_folders
 from galton.daemon.world.scene import World
 from galton.protocol import (
@@ -51,11 +52,14 @@ def spawn(world: World, request: rq.Spawn) -> dict[str, Any]:
 
 
 def _require_shapes(world: World, groups: list[BodyGroup]) -> None:
-    supported = world.engine.capabilities().body_shapes
+    caps = world.engine.capabilities()
     for group in groups:
-        if group.shape not in supported:
+        if group.shape not in caps.body_shapes:
             raise FeatureUnsupportedError(
                 f"the {world.engine.name} engine cannot spawn a {group.shape}")
+        if group.inertia is not None and not caps.supports(FEATURE_SPAWN_INERTIA):
+            raise FeatureUnsupportedError(
+                f"the {world.engine.name} engine cannot set a spawned body's inertia")
 
 
 def load_model(world: World, request: rq.LoadModel) -> dict[str, Any]:
@@ -178,7 +182,7 @@ def primitive_bounds(shape: str, size: tuple[float, ...], pose: np.ndarray) -> n
         radius, length, axis = size[0], size[1], np.abs(rotation[:, 2])
         across = radius if shape == "capsule" else radius * np.sqrt(np.clip(1 - axis**2, 0, 1))
         half = across + length * axis
-    else:  # box, plane
+    else:  # box, plane, mesh (its size: its vertices' reach about its origin)
         local = np.array([*size[:2], size[2] if len(size) > 2 else 0.0])
         half = np.abs(rotation) @ local
     centre = np.asarray(pose[:3], dtype=float)

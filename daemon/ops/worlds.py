@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Any
 
 from galton.daemon.core import time_control
 from galton.daemon.core.calls import Call
+from galton.daemon.core.reply_limit import require_room
 from galton.daemon.world.scene import World
 from galton.daemon.world.slots import Slot
 from galton.daemon.world.snapshot import clone_of, decode, encode, snapshot_of, world_from
@@ -116,6 +117,9 @@ def snapshot(loop: SimLoop, call: Call, request: rq.Snapshot) -> dict[str, Any]:
                                    f"1-{MAX_WORLD_NAME} printable characters")
     world.verify()
     blob = encode(snapshot_of(world), loop.snapshot_key)
+    if want_blob:  # checked before a slot is kept: a refused request changes nothing
+        require_room("this snapshot's blob", len(blob), loop.limits.max_reply_bytes,
+                     "keep it in a slot without 'blob'")
     kept = Slot(slot_name or "", world.name, world.engine.name, blob, world.step_index,
                 world.sim_time, len(world.entities))
     if slot_name is not None:

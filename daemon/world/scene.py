@@ -36,8 +36,7 @@ from galton.protocol import (
 )
 from galton.protocol.errors import brief, did_you_mean, unknown_names
 from galton.protocol.model import check_type
-
-ENTITY_KINDS = ("static", "dynamic")
+from galton.protocol.vocabulary import ENTITY_KINDS
 
 
 @dataclass
@@ -67,6 +66,9 @@ class World:
         self.joints = JointTable(engine)
         self.cameras: dict[str, Any] = {}  # named cameras (daemon/world/cameras.py Camera)
         self.wrenches = WrenchSchedule()
+        # Counts changes of which entities the engine holds (a state stream's cached reader
+        # of its names is good while this stays the same).
+        self.layout = 0
 
     # -- lookup -------------------------------------------------------------------------
     def require_known(self, names: Sequence[str]) -> None:
@@ -127,6 +129,7 @@ class World:
         if len(set(names)) != len(names):
             raise InvalidArgumentError("the request names the same entity in two groups")
         self.require_new(names)
+        self.layout += 1
         for group in (g for g in groups if not g.static):  # a static body cannot diverge
             check_state_values(self.limits, group.poses, group.twists, "spawn")
         self.engine.spawn(groups)
@@ -148,6 +151,7 @@ class World:
             assert path is not None
             text = Path(path).read_text(encoding="utf-8", errors="replace")
         text = resolve_model(fmt, text, path, search)
+        self.layout += 1
         infos = self.engine.load_model(fmt, text, path, prefix, fixed_base=fixed_base)
         names = [info.name for info in infos]
         try:
@@ -166,6 +170,7 @@ class World:
         """Delete entities; a model goes whole, by its root (its links with it)."""
         self.require_known(names)
         self.require_no_links(names, "delete", "a link is deleted with its model")
+        self.layout += 1
         self.engine.delete(names)
         roots = {n for n in names if self.entities[n].info.shape == "model"}
         gone = [*names, *(n for n, e in self.entities.items()
@@ -316,6 +321,7 @@ class World:
             self.verified_step = 0
             self._rebase_clock(0.0)
         if scope in ("spawned", "all"):
+            self.layout += 1
             self.engine.clear()
             self.entities.clear()
             self.joints.refresh()

@@ -167,6 +167,7 @@ def _restore_registry(world: World, data: dict[str, Any]) -> None:
         raise InvalidArgumentError("the snapshot's registry and initial states disagree")
     world.entities = {info.name: Entity(info, poses[i].copy(), twists[i].copy())
                       for i, info in enumerate(infos)}
+    world.layout += 1
     world.step_index, world._time_base = step, base
     world.verified_step = step
     world.joints.refresh()

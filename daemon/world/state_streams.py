@@ -6,6 +6,11 @@ connection over ZeroMQ) and ends when that client goes, on ``close_stream``, or 
 side world it watches is deleted. Samples are built on the physics thread between chunks of
 steps and handed to publishers that drop rather than wait (Zenoh's ``DROP`` congestion
 control, a non-blocking ZeroMQ send): a slow subscriber never slows the world.
+
+A sample is cheap for the physics thread (docs/PERFORMANCE.md, "State streams"): while its
+world holds the same entities a stream reuses its names, packed once, and the engine's pose
+reader of them (``Engine.pose_reader``); streams of the same world and names due together
+share one read; Zenoh's put runs on a thread of its own (daemon/world/stream_sender.py).
 """
 
 from __future__ import annotations
@@ -22,6 +27,7 @@ import numpy as np
 
 from galton.daemon.core.calls import Call
 from galton.daemon.world.scene import World, canonical_quaternions
+from galton.daemon.world.stream_sender import Publish, SampleSender
 from galton.protocol import InvalidArgumentError, Keys, NotFoundError, ResourceLimitError
 from galton.protocol import requests as rq
 from galton.protocol.arrays import pack_f64
@@ -37,7 +43,18 @@ MAX_STREAMS = 32  # open streams in one daemon, all clients together
 NO_OWNER = ("a state stream belongs to a client, and ends when it goes: the request needs "
             "a 'client' id in its envelope (the SDK sends one)")
 
-Publish = Callable[[str, bytes], None]  # (topic "states/<id>", sample bytes)
+
+
+@dataclass
+class Reading:
+    """What a stream's samples reuse while its world holds the same entities: the names
+    present, packed once, and the engine's reader of their poses."""
+
+    world: World
+    layout: int
+    names: list[str]
+    packed_names: bytes
+    read: Callable[[], np.ndarray]
 
 
 @dataclass
@@ -51,6 +68,7 @@ class StateStream:
     period: float
     next_due: float
     seq: int = 0
+    reading: Reading | None = None
 
     @property
     def topic(self) -> str:
@@ -61,7 +79,8 @@ class StateStreams:
     """Every open stream of one daemon; used on the physics thread only."""
 
     def __init__(self, publish: Publish | None = None) -> None:
-        self.publish = publish
+        self.publish = publish  # called on the physics thread (the ZeroMQ front's sockets)
+        self.sender: SampleSender | None = None  # off it (Zenoh)
         self.streams: dict[str, StateStream] = {}
         self.next_due = math.inf
 
@@ -105,29 +124,36 @@ class StateStreams:
 
     def publish_due(self, loop: SimLoop, now: float) -> None:
         """Publish a sample of every stream that is due, and schedule each one's next."""
+        shared: dict[tuple[int, int, tuple[str, ...] | None], bytes] = {}
         for stream in list(self.streams.values()):
             if now < stream.next_due:
                 continue
             stream.next_due = max(stream.next_due + stream.period, now)
-            self._sample(loop, stream)
+            self._sample(loop, stream, shared)
         self._reschedule()
 
-    def _sample(self, loop: SimLoop, stream: StateStream) -> None:
+    def _sample(self, loop: SimLoop, stream: StateStream,
+                shared: dict[tuple[int, int, tuple[str, ...] | None], bytes]) -> None:
+        """One sample; ``shared`` holds the poses this round already read, by world and
+        names, so that streams of the same world read it once."""
         world = loop.world if stream.world is None else loop.side.get(stream.world)
         if world is None:
             self._end(stream, f"world {stream.world!r} was deleted")
             return
         if world.faulted:
             return  # a diverged state is never published (as telemetry)
-        names = _present(world, stream.names)
-        poses = _poses(world, names) if names else None
+        reading = _reading(stream, world)
+        key = (id(world), world.layout, stream.names)
+        poses = shared.get(key)
+        if poses is None:
+            poses = shared[key] = _pose_bytes(world, reading)
         stream.seq += 1
-        sample = {"stream": stream.stream_id, "seq": stream.seq, "world": world.name,
+        live = world is loop.world
+        header = {"stream": stream.stream_id, "seq": stream.seq, "world": world.name,
                   "step": world.step_index, "sim_time": world.sim_time,
-                  "state": loop.state.value if world is loop.world else "paused",
-                  "rtf": loop.rtf if world is loop.world else 0.0, "names": names,
-                  "poses": pack_f64(poses) if poses is not None else b""}
-        self._send(stream, sample)
+                  "state": loop.state.value if live else "paused",
+                  "rtf": loop.rtf if live else 0.0, "poses": poses}
+        self._send_bytes(stream, _pack_sample(header, reading.packed_names))
 
     def _end(self, stream: StateStream, reason: str = "") -> None:
         self.streams.pop(stream.stream_id, None)
@@ -137,18 +163,62 @@ class StateStreams:
         self._reschedule()
 
     def _send(self, stream: StateStream, sample: dict[str, Any]) -> None:
+        self._send_bytes(stream, msgpack.packb(sample))
+
+    def _send_bytes(self, stream: StateStream, data: bytes) -> None:
         if self.publish is not None:
-            self.publish(stream.topic, msgpack.packb(sample))
+            self.publish(stream.topic, data)
+        if self.sender is not None:
+            self.sender.send(stream.topic, data)
+
+    def stop_sender(self) -> None:
+        """Stop the sender's thread (the daemon closes; the physics thread has stopped)."""
+        if self.sender is not None:
+            self.sender.close()
 
     def _reschedule(self) -> None:
         self.next_due = min((s.next_due for s in self.streams.values()), default=math.inf)
 
 
-def _poses(world: World, names: list[str]) -> np.ndarray:
-    """What get_states reads, without its checks of names known to be there (a sample
-    costs the physics thread; docs/PERFORMANCE.md)."""
-    world.verify()
-    return canonical_quaternions(world.engine.get_states(names)[0])
+def _reading(stream: StateStream, world: World) -> Reading:
+    """The stream's reading of this world, made anew when the world's entities changed."""
+    reading = stream.reading
+    if reading is None or reading.world is not world or reading.layout != world.layout:
+        names = _present(world, stream.names)
+        reading = stream.reading = Reading(world, world.layout, names, msgpack.packb(names),
+                                           world.engine.pose_reader(names))
+    return reading
+
+
+def _pose_bytes(world: World, reading: Reading) -> bytes:
+    """The packed poses of the reading's names, from a checked state."""
+    if not reading.names:
+        return b""
+    poses = reading.read()
+    if not _plausible(world, poses):
+        world.verify()  # the full check: it faults the world if the state diverged
+    return pack_f64(canonical_quaternions(poses))
+
+
+def _plausible(world: World, poses: np.ndarray) -> bool:
+    """Whether poses may leave the daemon without the full check of World.verify (every
+    body's position and speed), which the loop runs every VERIFY_PERIOD_S while stepping:
+    the state since it is checked here as far as the sample carries it, finite positions
+    within max_position and finite quaternions."""
+    if world.verified_step == world.step_index and not world.teleported:
+        return not world.faulted
+    return bool(np.isfinite(poses).all()) and \
+        float(np.abs(poses[:, :3]).max(initial=0.0)) <= world.limits.max_position
+
+
+def _pack_sample(header: dict[str, Any], packed_names: bytes) -> bytes:
+    """msgpack of the header's map with a "names" entry whose value is packed already."""
+    packer = msgpack.Packer()
+    parts = [packer.pack_map_header(len(header) + 1)]
+    for key, value in header.items():
+        parts += [packer.pack(key), packer.pack(value)]
+    parts += [packer.pack("names"), packed_names]
+    return b"".join(parts)
 
 
 def _present(world: World, names: tuple[str, ...] | None) -> list[str]:

@@ -39,6 +39,23 @@ def test_spawn_options_reach_the_world(target: list[str]) -> None:
     assert "box" in run([*target, "get-shapes"]).output
 
 
+def test_spawn_a_mesh_from_an_obj_file_and_a_box_mesh_with_an_inertia(
+        target: list[str], tmp_path: Path) -> None:
+    obj = tmp_path / "pyramid.obj"
+    obj.write_text("v -0.1 -0.1 -0.1\nv 0.1 -0.1 -0.1\nv 0.1 0.1 -0.1\nv -0.1 0.1 -0.1\n"
+                   "v 0 0 0.2\nf 1 3 2\nf 1 4 3\nf 1 2 5\nf 2 3 5\nf 3 4 5\nf 4/1 1/1 5/1\n")
+    invoke([*target, "spawn", "mesh", "pyramid", "--mesh", str(obj), "--static", "--json"])
+    invoke([*target, "spawn", "mesh", "crate", "--size", "0.1,0.2,0.3", "--inertia",
+            "0.1,0.1,0.1", "--json"])
+    found = {e["name"]: e for e in invoke([*target, "entities", "--json"])}
+    assert found["pyramid"]["shape"] == "mesh" and found["pyramid"]["size"] == [0.1, 0.1, 0.2]
+    assert found["crate"]["size"] == [0.1, 0.2, 0.3]
+    obj.write_text("v 0 0 0\nf 1 2 3\n")
+    result = run([*target, "spawn", "mesh", "bad", "--mesh", str(obj)])
+    assert result.exit_code != 0 and "line 2" in result.output
+    assert "bad" not in {e["name"] for e in invoke([*target, "entities", "--json"])}
+
+
 def test_spawn_with_twists_and_a_static_plane(target: list[str]) -> None:
     invoke([*target, "spawn", "plane", "ground", "--pos", "0,0,0", "--json"])
     invoke([*target, "spawn", "sphere", "a", "b", "--pos", "0,0,1,1,0,1",

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from cli_support import run, target_of
+from cli_support import invoke, run, target_of
 
 from galton.client import Client, EmbeddedDaemon, plane, spheres
 from galton.client.view.recording import Recorder, Recording, recordings_in
@@ -82,3 +82,36 @@ def test_stream_states_prints_samples_and_closes_its_stream(
     lines = [json.loads(line) for line in out.stdout.splitlines()]
     assert len(lines) == 2 and lines[0]["names"] == ["b"] and lines[0]["step"] == 10
     assert lines[0]["poses"] == mujoco_sim.get_states(["b"]).poses.tolist()
+
+
+def test_bench_record_saves_a_recording_per_trial_that_the_page_replays(
+        daemons: dict[str, EmbeddedDaemon], tmp_path: Path) -> None:
+    from support_daemons import start_daemon
+
+    daemon = start_daemon(daemons, "mujoco")
+    out = tmp_path / "run"
+    summary = invoke(["bench", "--connect", daemon.endpoint, "--instances", daemon.instance,
+                      "--engines", "mujoco", "--board", "small", "--balls", "5",
+                      "--repetitions", "2", "--out", str(out), "--record", "--json"])
+    assert [e["engine"] for e in summary["engines"]] == ["mujoco"]
+    paths = recordings_in(out)
+    assert [p.name for p in paths] == ["mujoco_5balls_rep1.npz", "mujoco_5balls_rep2.npz"]
+    first_trial_end = json.loads((out / "results.json").read_text())["trials"][0]["sim_time"]
+    recording = Recording.load(paths[1])
+    balls = [i for i, info in enumerate(recording.infos) if "ball" in info.tags]
+    assert len(balls) == 5 and {recording.infos[i].shape for i in balls} == {"sphere"}
+    assert len(recording.times) >= 2 and np.all(np.diff(recording.times) >= 0)
+    # From its own built board on, not the world the first trial left.
+    assert recording.times[0] < min(0.5, first_trial_end / 2)
+    assert not np.isnan(recording.poses[-1, balls]).any()  # every ball released by the end
+    released = [int(np.argmax(~np.isnan(recording.poses[:, i, 2]))) for i in balls]
+    assert all(recording.poses[-1, i, 2] < recording.poses[row, i, 2]  # each one fell
+               for i, row in zip(balls, released, strict=True))
+
+    from galton.client.view.replay import ReplayView
+    server = viser.ViserServer(host="127.0.0.1", port=_free_port(), verbose=False)
+    try:
+        page = ReplayView.open(out, server, None)
+        assert page.drawing.names == tuple(recording.names)
+    finally:
+        server.stop()

@@ -239,9 +239,12 @@ def _set(path: str, value: Any) -> Callable[[dict[str, Any]], None]:
      "finite numbers"),
     (_set("wrenches", {"nobody": None}), "nobody"),
     (lambda s: s.pop("pool"), "missing ['pool']"),
+    (lambda s: s["bodies"].reverse(), "another order"),
+    (_set("bodies", "all"), "another order"),
 ], ids=["other-engine", "format", "version", "truncated", "params-type", "param-value",
         "spec-type", "other-world", "entities-type", "dtype", "sleep-cycles", "target-type",
-        "target-nan", "wrench-name", "missing-key"])
+        "target-nan", "wrench-name", "missing-key", "body-order",
+        "body-order-type"])
 def test_a_malformed_snapshot_is_refused_with_a_typed_error(
         snapshot: dict[str, Any], change: Callable[[dict[str, Any]], None],
         words: str) -> None:

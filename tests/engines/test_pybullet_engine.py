@@ -81,7 +81,7 @@ def body_id(engine: PybulletEngine, name: str) -> int:
 def test_capabilities_name_every_shape_format_and_parameter(engine: PybulletEngine) -> None:
     caps = engine.capabilities()
     assert caps.engine == "pybullet" and caps.engine_version.startswith("3.")
-    assert set(caps.body_shapes) == {"sphere", "box", "cylinder", "capsule", "plane"}
+    assert set(caps.body_shapes) == {"sphere", "box", "cylinder", "capsule", "plane", "mesh"}
     assert caps.model_formats == ("urdf", "mjcf")
     assert set(caps.params) == set(engine.get_params())
     assert {"timestep", "gravity", "solver_iterations", "default_friction",

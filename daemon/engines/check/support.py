@@ -23,6 +23,7 @@ from galton.protocol import (
     GaltonError,
 )
 from galton.protocol.errors import brief
+from galton.protocol.mesh import box_mesh
 
 EngineFactory = Callable[[], Engine]
 IDENTITY = (0.0, 0.0, 0.0, 1.0)
@@ -31,7 +32,7 @@ STANDARD_GRAVITY = 9.81  # m/s², for an engine with no "gravity" parameter
 # Half sizes (metres) of each shape as the checks spawn it: none is a sphere in disguise.
 SIZES: dict[str, tuple[float, ...]] = {
     "sphere": (0.05,), "box": (0.05, 0.1, 0.15), "cylinder": (0.05, 0.1),
-    "capsule": (0.05, 0.1), "plane": (5.0, 5.0)}
+    "capsule": (0.05, 0.1), "plane": (5.0, 5.0), "mesh": (0.05, 0.1, 0.15)}
 # A turn of 0.8 rad about an axis off every coordinate axis: no component of it is special.
 _AXIS = np.array([1.0, 2.0, 1.0]) / math.sqrt(6.0)
 TURNED = (*(math.sin(0.4) * _AXIS).tolist(), math.cos(0.4))
@@ -187,6 +188,8 @@ def group(shape: str, names: Sequence[str], positions: Any, **options: Any) -> B
     twists = options.pop("twists", None)
     if twists is not None:
         twists = np.atleast_2d(np.asarray(twists, dtype=float)).reshape(-1, TWIST_WIDTH)
+    if shape == "mesh":  # a box as a triangle mesh
+        options["vertices"], options["faces"] = box_mesh((size[0], size[1], size[2]))
     return BodyGroup(shape, size, list(names), poses_at(positions, quaternion),
                      twists=twists, **options)
 
@@ -200,7 +203,7 @@ def volume(shape: str, size: Sequence[float]) -> float:
     ball = 4.0 / 3.0 * math.pi * size[0] ** 3
     if shape == "sphere":
         return ball
-    if shape == "box":
+    if shape in ("box", "mesh"):  # the checks' meshes are boxes
         return 8.0 * size[0] * size[1] * size[2]
     cylinder = math.pi * size[0] ** 2 * 2.0 * size[1]
     return cylinder + (ball if shape == "capsule" else 0.0)

@@ -34,6 +34,7 @@ from galton.daemon.engines.base import (
     FEATURE_SET_STATE,
     FEATURE_SNAPSHOT,
     FEATURE_SPAWN,
+    FEATURE_SPAWN_INERTIA,
     FEATURE_STATIC_POSE,
     FEATURE_TARGET_EFFORT,
     FEATURE_TARGET_POSITION,
@@ -70,7 +71,12 @@ FEATURES = (FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDATE_MAS
             FEATURE_UPDATE_FRICTION, FEATURE_UPDATE_RESTITUTION, FEATURE_UPDATE_RGBA,
             FEATURE_LOAD_MODEL, FEATURE_STATIC_POSE, FEATURE_JOINTS, FEATURE_JOINT_TARGETS,
             FEATURE_TARGET_POSITION, FEATURE_TARGET_VELOCITY, FEATURE_TARGET_EFFORT,
-            FEATURE_WRENCH, FEATURE_SNAPSHOT, FEATURE_CONTACTS, FEATURE_MODEL_SHAPES)
+            FEATURE_WRENCH, FEATURE_SNAPSHOT, FEATURE_CONTACTS, FEATURE_SPAWN_INERTIA,
+            FEATURE_MODEL_SHAPES)
+
+
+# No mesh shape: FEATURE_UNSUPPORTED at spawn (docs/ENGINES.md, "Meshes").
+SHAPES = tuple(shape for shape in BODY_SHAPES if shape != "mesh")
 
 
 class DartEngine(Scene, Snapshots, Engine):
@@ -91,7 +97,7 @@ class DartEngine(Scene, Snapshots, Engine):
     def capabilities(self) -> Capabilities:
         return Capabilities(
             engine=self.name, engine_version=importlib.metadata.version("dartpy"),
-            protocol_version=PROTOCOL_VERSION, body_shapes=BODY_SHAPES,
+            protocol_version=PROTOCOL_VERSION, body_shapes=SHAPES,
             model_formats=MODEL_FORMATS, features=FEATURES,
             params={name: spec.describe() for name, spec in SPECS.items()})
 
@@ -130,7 +136,8 @@ class DartEngine(Scene, Snapshots, Engine):
         for k, name in enumerate(group.names):
             body = books.Body(name, group.shape, size, group.static, mass, friction,
                               restitution, group.friction is None, group.restitution is None,
-                              None, None, group.rgba)
+                              None, None, group.rgba, unit_inertia=None if group.inertia is None
+                              else tuple(i / mass for i in group.inertia))
             books.build(body, positions[k], velocities[k])
             self._add(body)
 

@@ -63,7 +63,9 @@ class Snapshots:
                     "mass": None if body.static else body.mass, "friction": body.friction,
                     "restitution": body.restitution,
                     "follows": [body.follows_friction, body.follows_restitution],
-                    "rgba": None if body.rgba is None else list(body.rgba), **dynamic}
+                    "rgba": None if body.rgba is None else list(body.rgba),
+                    "unit_inertia": None if body.unit_inertia is None
+                    else list(body.unit_inertia), **dynamic}
         model = self._models[owner]
         return {"kind": "model", "root": owner, "fmt": model.fmt, "text": model.text,
                 "prefix": model.prefix, "fixed_base": model.fixed_base,
@@ -107,7 +109,8 @@ class Snapshots:
         rgba = None if item["rgba"] is None else tuple(float(c) for c in item["rgba"])
         body = books.Body(str(item["name"]), shape, size, static, mass,
                           float(item["friction"]), float(item["restitution"]),
-                          bool(follows[0]), bool(follows[1]), None, None, rgba)
+                          bool(follows[0]), bool(follows[1]), None, None, rgba,
+                          unit_inertia=_unit_inertia(item.get("unit_inertia"), static))
         self._check_new([body.name])  # type: ignore[attr-defined]
         if shape not in ("sphere", "box", "cylinder", "capsule", "plane"):
             raise ValueError(f"unknown shape {shape!r}")
@@ -135,3 +138,14 @@ def _vector(values: Any, length: int = 3) -> np.ndarray:
     if array.shape != (length,):
         raise ValueError(f"expected {length} numbers, got {array.shape[0]}")
     return array
+
+
+def _unit_inertia(value: Any, static: bool) -> tuple[float, ...] | None:
+    """A snapshot body's own inertia per kg: three positive finite numbers, or None."""
+    if value is None:
+        return None
+    moments = tuple(float(v) for v in _vector(value, 3))
+    if static or not all(math.isfinite(v) and v > 0 for v in moments):
+        raise ValueError(f"unit_inertia {moments} must be positive, and on a moving body")
+    return moments
+

@@ -41,6 +41,8 @@ class Body:
     rgba: tuple[float, ...] | None = None
     model: str | None = None  # the root's name, for a model's root and links
     links: list[str] = field(default_factory=list)  # a root's other links
+    # Principal moments per kg of a body spawned with its own ``inertia``; None: its shape's.
+    unit_inertia: tuple[float, ...] | None = None
 
 
 def make_shape(shape: str, size: tuple[float, ...]) -> Any:
@@ -115,9 +117,13 @@ def set_surface(body: Body) -> None:
 
 
 def set_mass(body: Body, mass: float) -> None:
-    """A spawned body's mass and the inertia of its solid shape at that mass."""
-    shape = body.node.getShapeNode(0).getShape()
-    inertia = dart.dynamics.Inertia(mass, np.zeros(3), shape.computeInertia(mass))
+    """A spawned body's mass and the inertia at that mass: its own (spawn's ``inertia``,
+    scaled with the mass) or its solid shape's."""
+    if body.unit_inertia is not None:
+        moment = np.diag(np.asarray(body.unit_inertia, dtype=float) * mass)
+    else:
+        moment = body.node.getShapeNode(0).getShape().computeInertia(mass)
+    inertia = dart.dynamics.Inertia(mass, np.zeros(3), moment)
     body.node.setInertia(inertia)
     body.mass = mass
 

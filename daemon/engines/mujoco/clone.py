@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Any
 import mujoco
 
 from galton.daemon.engines.mujoco import pool as mp
-from galton.daemon.engines.mujoco.entities import HOME, Assets, Entity
+from galton.daemon.engines.mujoco.entities import Assets, Entity
 from galton.daemon.engines.mujoco.joints import Joints
 from galton.daemon.engines.mujoco.wrench import Wrenches
 from galton.protocol import OperationFailedError
@@ -48,7 +48,6 @@ def _copy_compiled(source: MujocoEngine, engine: MujocoEngine) -> None:
     engine._values = dict(source._values)
     engine._spec = source._spec.copy()
     engine._spec.copy_during_attach = True  # (not carried by MjSpec.copy)
-    engine._home = engine._spec.frame(HOME)
     engine._builders = mp.Builders()
     engine._model = copy.copy(source._model)
     engine._data = mujoco.MjData(engine._model)

@@ -38,7 +38,7 @@ twice as many. Everything else here is linear in the bodies a call touches.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any, ClassVar
 
 import mujoco
@@ -57,6 +57,7 @@ from galton.daemon.engines.base import (
     FEATURE_SET_STATE,
     FEATURE_SNAPSHOT,
     FEATURE_SPAWN,
+    FEATURE_SPAWN_INERTIA,
     FEATURE_STATIC_POSE,
     FEATURE_TARGET_EFFORT,
     FEATURE_TARGET_POSITION,
@@ -84,8 +85,9 @@ from galton.daemon.engines.mujoco import spec as ms
 from galton.daemon.engines.mujoco import state as mst
 from galton.daemon.engines.mujoco import stepping as timing
 from galton.daemon.engines.mujoco.balance import BalanceGuard
-from galton.daemon.engines.mujoco.entities import HOME, Entity
+from galton.daemon.engines.mujoco.entities import Entity
 from galton.daemon.engines.mujoco.joints import Joints
+from galton.daemon.engines.mujoco.poses import PoseReader
 from galton.daemon.engines.mujoco.wrench import Wrenches
 from galton.protocol import (
     BODY_SHAPES,
@@ -104,7 +106,7 @@ FEATURES = (FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDATE_MAS
             FEATURE_LOAD_MODEL, FEATURE_STATIC_POSE, FEATURE_JOINTS, FEATURE_JOINT_TARGETS,
             FEATURE_TARGET_POSITION, FEATURE_TARGET_VELOCITY, FEATURE_TARGET_EFFORT,
             FEATURE_WRENCH, FEATURE_SNAPSHOT, FEATURE_RENDER, FEATURE_RAYCAST,
-            FEATURE_CONTACTS, FEATURE_MODEL_SHAPES)
+            FEATURE_CONTACTS, FEATURE_SPAWN_INERTIA, FEATURE_MODEL_SHAPES)
 # Contacts at which MuJoCo's worker threads start helping, and below which they stop.
 WORKERS_ON_CONTACTS = 400
 WORKERS_OFF_CONTACTS = 200
@@ -136,8 +138,6 @@ class MujocoEngine(Engine):
         self._spec = mujoco.MjSpec()
         self._spec.modelname = "galton"
         self._spec.copy_during_attach = True  # see spec.add_group
-        self._home = self._spec.worldbody.add_frame()  # where big spawned groups live
-        self._home.name = HOME
         self._litter: list[Any] = []  # empty frames, deleted with the next bodies removed
         self._builders = mp.Builders()
         self._spec.memory = ms.arena_bytes(1, 0)
@@ -276,6 +276,9 @@ class MujocoEngine(Engine):
     # -- Engine: state --------------------------------------------------------------------
     def get_states(self, names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
         return mst.read_states(self._model, self._data, self._index, self._body_ids(names))
+
+    def pose_reader(self, names: Sequence[str]) -> Callable[[], np.ndarray]:
+        return PoseReader(self, names)
 
     def set_states(self, names: Sequence[str], poses: np.ndarray | None,
                    twists: np.ndarray | None) -> None:

@@ -18,8 +18,6 @@ BODY = mujoco.mjtObj.mjOBJ_BODY
 MUJOCO_ERRORS = (ValueError, TypeError, RuntimeError, mujoco.FatalError)
 # Body names the engine keeps for itself: the world body's and the parked bodies'.
 WORLD = "world"
-# The frame big spawned groups live in, named so that a snapshot's spec finds it again.
-HOME = "galton.home"
 
 
 # The spec's lists of assets a model brings (meshes, ...): deleting its bodies leaves them.

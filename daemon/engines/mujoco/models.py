@@ -44,12 +44,13 @@ from galton.protocol import (
     GaltonError,
     NameNotUniqueError,
 )
+from galton.protocol.vocabulary import MODEL_FORMATS
 
 if TYPE_CHECKING:
     from galton.daemon.engines.mujoco.engine import MujocoEngine
 
 log = logging.getLogger(__name__)
-FORMATS = ("mjcf", "urdf")
+FORMATS = MODEL_FORMATS
 # MuJoCo warns that a model attached without a prefix may not save back to XML: this world
 # is never saved.
 EMPTY_PREFIX = "Attaching a spec with an empty prefix"

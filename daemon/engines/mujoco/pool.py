@@ -37,6 +37,7 @@ from typing import Any, NamedTuple
 import mujoco
 import numpy as np
 
+from galton.daemon.engines.mujoco import shapes
 from galton.daemon.engines.mujoco import spec as ms
 from galton.daemon.engines.mujoco import state as mst
 from galton.protocol import BodyGroup, ResourceLimitError
@@ -57,8 +58,11 @@ PREFIX = "galton.parked."  # parked bodies' names; no entity may take one
 Key = tuple[Any, ...]
 
 
-def key_of(group: BodyGroup, material: ms.Material) -> Key:
-    """What makes two spawned bodies interchangeable once compiled."""
+def key_of(group: BodyGroup, material: ms.Material) -> Key | None:
+    """What makes two spawned bodies interchangeable once compiled; None for bodies never
+    parked: meshes (each group its own mesh asset) and bodies with their own inertia."""
+    if group.vertices is not None or group.inertia is not None:
+        return None
     return (group.shape, tuple(float(s) for s in group.size), bool(group.static), material)
 
 
@@ -67,7 +71,7 @@ class Planned(NamedTuple):
 
     group: BodyGroup
     material: ms.Material
-    key: Key
+    key: Key | None
     spares: int
 
 
@@ -104,7 +108,7 @@ class Pool:
         for group in groups:
             material = ms.material(group, values)
             key = key_of(group, material)
-            if self.available(key) >= wanted.get(key, 0) + len(group):
+            if key is not None and self.available(key) >= wanted.get(key, 0) + len(group):
                 wanted[key] = wanted.get(key, 0) + len(group)
                 pooled.append((group, key))
             else:
@@ -123,6 +127,8 @@ class Pool:
                               values["mujoco.max_free_bodies"])
         spares = 0
         for i, planned in enumerate(compiled):
+            if planned.key is None:
+                continue  # never parked: no spare twins
             count = min(self.spares(len(planned.group), spares), ms.MAX_BODIES - nbody - spares)
             if not planned.group.static:  # spare twins of moving bodies are free bodies too
                 count = min(count, free_room)
@@ -204,11 +210,13 @@ class Additions:
     """Bodies added to a spec for one compile: ``add`` groups, compile, then ``bodies``
     (or ``undo`` if the compile failed)."""
 
-    def __init__(self, spec: mujoco.MjSpec, home: Any, builders: Builders) -> None:
-        self._spec, self._home, self._builders = spec, home, builders
+    def __init__(self, spec: mujoco.MjSpec, builders: Builders) -> None:
+        self._spec, self._builders = spec, builders
         self._groups: list[tuple[BodyGroup, list[Any] | None]] = []  # None: attached
         self._frames: list[Any] = []
+        self._homes: list[Any] = []  # a frame per attached group, made before the compile
         self._direct: list[Any] = []
+        self._meshes: list[str] = []  # mesh assets' names
         self._attached = 0
 
     def add(self, group: BodyGroup, material: ms.Material, parked: bool = False) -> None:
@@ -219,13 +227,17 @@ class Additions:
         touching one, so a board of mocap bodies would never let its piles sleep. A static
         body still moves without a compile: its pose lives in the model (body_pos, body_quat).
         """
-        if len(group) < ATTACH_MIN:
+        if len(group) < ATTACH_MIN or group.vertices is not None:
+            mesh = shapes.add_mesh(self._spec, group)
+            if mesh is not None:
+                self._meshes.append(mesh)
             bodies = _add_bodies(self._spec.worldbody, group, material, range(len(group)),
-                                 parked, group.names)
+                                 parked, group.names, mesh)
             self._direct += bodies
             self._groups.append((group, bodies))
             return
         block, chunks = self._builders.block, self._builders.chunks
+        self._homes.append(self._spec.worldbody.add_frame())
         try:
             for start in range(0, len(group), BLOCK):
                 for chunk, first in zip(chunks, range(start, min(start + BLOCK, len(group)),
@@ -243,23 +255,33 @@ class Additions:
         self._groups.append((group, None))
 
     def undo(self) -> None:
-        """Take every added body out of the spec again."""
-        _delete(self._spec, self._direct, self._frames)
+        """Take every added body (and mesh asset) out of the spec again."""
+        _delete(self._spec, self._direct, [*self._frames, *self._homes])
+        for name in self._meshes:
+            self._spec.delete(self._spec.mesh(name))
 
     def bodies(self) -> list[list[Any]]:
-        """Once compiled: each added group's bodies, named, attached ones gathered in the
-        home frame. All are found before any is renamed: a rename may drop MuJoCo's index of
-        names. The frames they leave empty are ``litter``: a delete costs a walk of the spec
-        (0.6 s at 60,000 bodies, 1.8 s right after a compile), so they go with the next
-        bodies deleted."""
+        """Once compiled: each added group's bodies, named, each attached group gathered in
+        a frame of its own. All are found before any is renamed: a rename may drop MuJoCo's
+        index of names. The frames they leave empty are ``litter``: a delete costs a walk of
+        the spec (0.6 s at 60,000 bodies, 1.8 s right after a compile), so they go with the
+        next bodies deleted. (The groups' frames were made before the compile: adding any
+        element to a spec drops the ids of its compiled bodies.)
+
+        One frame per group, not one for all: MJCF writes a frame's bodies together, where
+        its first body is, while a compile keeps the bodies' order; a frame shared by groups
+        spawned apart would make a snapshot's MJCF compile its bodies in another order than
+        the world's (whose arrays the snapshot holds by position)."""
         found = iter([self._spec.body(f"{_TEMPORARY * 2}{i}") for i in range(self._attached)])
+        homes = iter(self._homes)
         out = []
         for group, bodies in self._groups:
             if bodies is None:
                 bodies = [next(found) for _ in group.names]
+                frame = next(homes)
                 for body, name in zip(bodies, group.names, strict=True):
                     body.name = name
-                    body.set_frame(self._home)
+                    body.set_frame(frame)
             out.append(bodies)
         return out
 
@@ -279,7 +301,8 @@ def _attach(spec: mujoco.MjSpec, child: mujoco.MjSpec, frame: Any) -> None:
     _delete(child, [], child.worldbody.frames)  # they hold every body once attached
 
 
-def _geom(group: BodyGroup, material: ms.Material) -> dict[str, Any]:
+def _geom(group: BodyGroup, material: ms.Material, mesh: str | None = None
+          ) -> dict[str, Any]:
     geom: dict[str, Any] = {
         "type": ms.GEOM_TYPES[group.shape], "size": ms.geom_size(group.shape, group.size),
         "friction": [material.friction, *material.spin], "condim": material.condim,
@@ -287,6 +310,8 @@ def _geom(group: BodyGroup, material: ms.Material) -> dict[str, Any]:
         "priority": ms.STATIC_PRIORITY if group.static else 0}
     if material.rgba is not None:
         geom["rgba"] = list(material.rgba)
+    if mesh is not None:
+        geom["meshname"] = mesh
     if material.mass is not None and not group.static:
         geom["mass"] = material.mass
     else:
@@ -295,13 +320,14 @@ def _geom(group: BodyGroup, material: ms.Material) -> dict[str, Any]:
 
 
 def _add_bodies(parent: Any, group: BodyGroup, material: ms.Material, rows: range,
-                parked: bool, names: Sequence[str]) -> list[Any]:
-    geom = _geom(group, material)
+                parked: bool, names: Sequence[str], mesh: str | None = None) -> list[Any]:
+    geom = _geom(group, material, mesh)
+    inertial = shapes.inertial(group, material.mass)
     poses = np.asarray(group.poses, dtype=float)[rows.start:rows.stop]
     quats = mst.to_wxyz(poses[:, 3:7])
     bodies = []
     for i, name in enumerate(names):
-        body = parent.add_body(name=name, pos=poses[i, :3], quat=quats[i])
+        body = parent.add_body(name=name, pos=poses[i, :3], quat=quats[i], **inertial)
         bodies.append(body)
         if not group.static:
             body.add_freejoint()

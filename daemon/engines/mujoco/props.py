@@ -50,9 +50,9 @@ def set_masses(engine: MujocoEngine, names: Sequence[str], mass: float) -> None:
     undo: list[tuple[Any, str, Any]] = []
     for name in names:
         entity = engine._entities[name]
-        if entity.source == "spawn":
+        if entity.source == "spawn" and not entity.body.explicitinertial:
             undo += ms.set_values(entity.body.first_geom(), mass=mass)
-            continue
+            continue  # a body with its own inertia (spawn's) is scaled as a model's is
         scale = mass / max(float(m.body_subtreemass[engine._ids[name]]), 1e-12)
         for body in [entity.body, *entity.body.find_all(BODY)]:
             bid = body.id

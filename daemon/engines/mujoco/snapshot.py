@@ -24,7 +24,7 @@ import mujoco
 from galton.daemon.core.params import check_updates
 from galton.daemon.engines.mujoco import snapshot_arrays as arrays
 from galton.daemon.engines.mujoco import spec as ms
-from galton.daemon.engines.mujoco.entities import HOME, MUJOCO_ERRORS, Entity
+from galton.daemon.engines.mujoco.entities import MUJOCO_ERRORS, Entity
 from galton.daemon.engines.mujoco.snapshot_books import read_books
 from galton.protocol import InvalidArgumentError, OperationFailedError
 from galton.protocol.errors import brief
@@ -32,10 +32,11 @@ from galton.protocol.errors import brief
 if TYPE_CHECKING:
     from galton.daemon.engines.mujoco.engine import MujocoEngine
 
-FORMAT = 1
+FORMAT = 2  # 2: the bodies' order travels (format 1 could restore them permuted)
 ENGINE = "mujoco"
 SIZES = ("nbody", "ngeom", "njnt", "nq", "nv", "nu", "ntree", "nmocap")
 KEYS = frozenset({"format", "engine", "engine_version", "params", "spec", "memory", "sizes",
+                  "bodies",
                   "model", "data", "entities", "loads", "kinds", "pool", "joints", "targets",
                   "wrenches", "balance", "looks"})
 
@@ -58,6 +59,7 @@ def snapshot(engine: MujocoEngine) -> dict[str, Any]:
         "format": FORMAT, "engine": ENGINE, "engine_version": mujoco.__version__,
         "params": engine.get_params(), "spec": _xml(engine),
         "memory": int(engine._spec.memory), "sizes": {s: int(getattr(m, s)) for s in SIZES},
+        "bodies": _body_order(engine._spec),
         "model": arrays.model_numbers(m), "data": arrays.data_numbers(m, d),
         "entities": entities,
         "loads": [{"assets": sorted([k, n] for k, n in assets[i].names),
@@ -81,6 +83,12 @@ def _xml(engine: MujocoEngine) -> str:
     if engine._xml is None:
         engine._xml = engine._spec.to_xml()
     return engine._xml
+
+
+def _body_order(spec: mujoco.MjSpec) -> list[str]:
+    """The bodies' names in the compiled model's order (the spec's tree order; the model's
+    own names may still be the temporary ones of an attach)."""
+    return [body.name for body in spec.bodies]
 
 
 def _recompile(engine: MujocoEngine) -> None:
@@ -131,6 +139,7 @@ def restore(engine: MujocoEngine, data: Any) -> None:
     except MUJOCO_ERRORS as exc:
         raise InvalidArgumentError(f"snapshot.spec does not compile: {exc}") from exc
     _check_sizes(model, data["sizes"])
+    _check_order(model, data["bodies"])
     arrays.write_model_numbers(model, data["model"])
     try:
         spec.copy_back(model)
@@ -138,10 +147,7 @@ def restore(engine: MujocoEngine, data: Any) -> None:
         raise InvalidArgumentError(f"snapshot.model does not fit its spec: {exc}") from exc
     state = mujoco.MjData(model)
     arrays.write_data_numbers(model, state, data["data"])
-    home = spec.frame(HOME)
-    if home is None:
-        raise InvalidArgumentError(f"snapshot.spec has no frame {HOME!r}")
-    engine._values, engine._spec, engine._home = values, spec, home
+    engine._values, engine._spec = values, spec
     engine._model, engine._data, engine._litter = model, state, []
     engine._xml = data["spec"]  # compiles to this world as well as its own MJCF would
     read_books(engine, data)
@@ -197,3 +203,16 @@ def _check_sizes(model: mujoco.MjModel, sizes: Any) -> None:
     if sizes != made:
         raise InvalidArgumentError(f"snapshot.spec compiles to a world of {made}, not of its "
                                    f"sizes {brief(sizes)}")
+
+
+def _check_order(model: mujoco.MjModel, bodies: Any) -> None:
+    """The arrays are by position: the MJCF must compile the bodies in the order they were
+    taken in, or each body would get another's numbers."""
+    made = [model.body(i).name for i in range(model.nbody)]
+    if bodies != made:
+        first = next((i for i, (a, b) in enumerate(zip(made, bodies, strict=False)) if a != b),
+                     min(len(made), len(bodies) if isinstance(bodies, list) else 0))
+        raise InvalidArgumentError(
+            f"snapshot.spec compiles its bodies in another order than snapshot.bodies (the "
+            f"order its arrays were taken in), first at body {first}: "
+            f"{brief(made[first] if first < len(made) else None)}")

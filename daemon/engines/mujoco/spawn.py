@@ -54,7 +54,7 @@ def check_new(engine: MujocoEngine, names: Sequence[str]) -> None:
 def compile_groups(engine: MujocoEngine, compiled: Sequence[mp.Planned]) -> None:
     """Add the groups' bodies and spares, recompile; on any failure take them out."""
     snapshot = engine._pool.snapshot()
-    additions = mp.Additions(engine._spec, engine._home, engine._builders)
+    additions = mp.Additions(engine._spec, engine._builders)
     nbody, nv = engine._model.nbody, engine._model.nv
     try:
         for group, material, _, spares in compiled:
@@ -74,7 +74,7 @@ def compile_groups(engine: MujocoEngine, compiled: Sequence[mp.Planned]) -> None
         for name, body in zip(group.names, next(made), strict=True):
             engine._entities[name] = Entity(body, group.static, friction=group.friction,
                                             restitution=group.restitution, key=key)
-        if spares:
+        if spares and key is not None:
             engine._pool.adopt(key, next(made))
     engine._reindex()
 

@@ -27,6 +27,7 @@ GEOM_TYPES: dict[str, int] = {
     "cylinder": mujoco.mjtGeom.mjGEOM_CYLINDER,
     "capsule": mujoco.mjtGeom.mjGEOM_CAPSULE,
     "plane": mujoco.mjtGeom.mjGEOM_PLANE,
+    "mesh": mujoco.mjtGeom.mjGEOM_MESH,  # collides as its convex hull
 }
 SOLVERS = {"newton": mujoco.mjtSolver.mjSOL_NEWTON, "cg": mujoco.mjtSolver.mjSOL_CG,
            "pgs": mujoco.mjtSolver.mjSOL_PGS}
@@ -296,6 +297,8 @@ def geom_size(shape: str, size: tuple[float, ...]) -> list[float]:
         return [size[0], size[1], 0.0]
     if shape == "plane":
         return [size[0], size[1], max(0.01, min(size) / 10)]
+    if shape == "mesh":
+        return [0.0, 0.0, 0.0]  # the compiler sizes a mesh geom from its mesh
     return list(size)
 
 

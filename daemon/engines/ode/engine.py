@@ -33,6 +33,7 @@ from galton.daemon.engines.base import (
     FEATURE_SET_STATE,
     FEATURE_SNAPSHOT,
     FEATURE_SPAWN,
+    FEATURE_SPAWN_INERTIA,
     FEATURE_STATIC_POSE,
     FEATURE_TARGET_EFFORT,
     FEATURE_TARGET_POSITION,
@@ -74,7 +75,11 @@ FEATURES = (FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDATE_MAS
             FEATURE_STATIC_POSE, FEATURE_LOAD_MODEL, FEATURE_JOINTS, FEATURE_JOINT_TARGETS,
             FEATURE_TARGET_POSITION, FEATURE_TARGET_VELOCITY, FEATURE_TARGET_EFFORT,
             FEATURE_WRENCH, FEATURE_SNAPSHOT, FEATURE_RAYCAST,
-            FEATURE_CONTACTS, FEATURE_MODEL_SHAPES)
+            FEATURE_CONTACTS, FEATURE_SPAWN_INERTIA, FEATURE_MODEL_SHAPES)
+
+
+# No mesh shape: FEATURE_UNSUPPORTED at spawn (docs/ENGINES.md, "Meshes").
+SHAPES = tuple(shape for shape in BODY_SHAPES if shape != "mesh")
 
 
 class OdeEngine(Snapshots, Engine):
@@ -106,7 +111,7 @@ class OdeEngine(Snapshots, Engine):
     # -- description and parameters ---------------------------------------------------------
     def capabilities(self) -> Capabilities:
         return Capabilities(engine=self.name, engine_version=version(),
-                            protocol_version=PROTOCOL_VERSION, body_shapes=BODY_SHAPES,
+                            protocol_version=PROTOCOL_VERSION, body_shapes=SHAPES,
                             model_formats=MODEL_FORMATS, features=FEATURES,
                             params={n: s.describe() for n, s in SPECS.items()})
 

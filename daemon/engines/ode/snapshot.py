@@ -98,7 +98,8 @@ class Snapshots:
         group = BodyGroup(data["shape"], tuple(data["size"]), [data["name"]],
                           np.array([pose], dtype=float), static=static, mass=data["mass"],
                           friction=data["friction"], restitution=data["restitution"],
-                          rgba=None if data["rgba"] is None else tuple(data["rgba"]))
+                          rgba=None if data["rgba"] is None else tuple(data["rgba"]),
+                          inertia=_inertia(data))
         made = spawning.spawn_group(self._world, self._space, group, self._values)
         body = made[0]
         body.follows_friction, body.follows_restitution = data["follows"]
@@ -117,3 +118,13 @@ class Snapshots:
         if data["wrench"] is not None:
             self._wrenches[body.name] = [float(v) for v in data["wrench"]]
             LIB.dBodySetAutoDisableFlag(body.body, 0)
+
+
+def _inertia(data: dict[str, Any]) -> tuple[float, float, float] | None:
+    """A snapshot body's own inertia (kg m²) from its moments per kg and its mass."""
+    unit = data.get("unit_inertia")
+    if unit is None:
+        return None
+    ixx, iyy, izz = (float(data["mass"]) * float(i) for i in unit)
+    return (ixx, iyy, izz)
+

@@ -16,7 +16,7 @@ from typing import Any
 
 from galton.daemon.engines.ode.native import STATE_LENGTH
 from galton.daemon.engines.ode.spawn import Body
-from galton.protocol import BODY_SHAPES, InvalidArgumentError
+from galton.protocol import BODY_SHAPES, TARGET_MODES, InvalidArgumentError
 
 FORMAT = "galton-ode-snapshot"
 VERSION = 1
@@ -29,7 +29,8 @@ def body_data(body: Body, enabled: bool, wrench: list[float] | None) -> dict[str
             "follows": [body.follows_friction, body.follows_restitution],
             "rgba": None if body.rgba is None else list(body.rgba),
             "pose": list(body.pose), "state": [] if body.static else body.state.tolist(),
-            "enabled": enabled, "wrench": wrench}
+            "enabled": enabled, "wrench": wrench,
+            "unit_inertia": None if body.unit_inertia is None else list(body.unit_inertia)}
 
 
 def _fail(where: str, what: str) -> InvalidArgumentError:
@@ -100,6 +101,10 @@ def _check_body(body: Any, where: str) -> None:
         _numbers(body.get("state"), STATE_LENGTH, f"{where}.state")
     if body.get("wrench") is not None:
         _numbers(body["wrench"], 6, f"{where}.wrench")
+    if body.get("unit_inertia") is not None and (body["static"] or not all(
+            v > 0 and math.isfinite(v)
+            for v in _numbers(body["unit_inertia"], 3, f"{where}.unit_inertia"))):
+        raise _fail(f"{where}.unit_inertia", "must be 3 positive numbers, on a moving body")
 
 
 JOINT_FIELDS = ("target", "kp", "kd", "max_effort", "effort")
@@ -136,7 +141,7 @@ def check_model(entry: Any, where: str) -> None:
             raise _fail(f"{where}.links[{k}].follows", "must be two booleans")
     for k, joint in enumerate(joints):
         if not isinstance(joint, dict) or not isinstance(joint.get("name"), str) or \
-                joint.get("mode") not in ("none", "position", "velocity", "effort"):
+                joint.get("mode") not in TARGET_MODES:
             raise _fail(f"{where}.joints[{k}]", "must name the joint and its mode")
         _numbers([joint.get(f) for f in JOINT_FIELDS], len(JOINT_FIELDS),
                  f"{where}.joints[{k}]")

@@ -52,6 +52,8 @@ class Body:
     extra: list[int] = field(default_factory=list)  # a link's further collision geoms
     frame: Frame | None = None  # a link's centre of mass in its frame (None: at its origin)
     welded: bool = False  # a fixed-base model's root: kinematic, no force moves it
+    # Principal moments per kg of a body spawned with its own ``inertia``; None: its shape's.
+    unit_inertia: tuple[float, ...] | None = None
     # A link's collision shapes in its frame, as get_shapes tells them (kind, half sizes,
     # pose x y z qx qy qz qw); a spawned body's are its shape and size.
     link_shapes: list[tuple[str, tuple[float, ...], tuple[float, ...]]] = \
@@ -146,6 +148,8 @@ def spawn_group(world: int, space: int, group: BodyGroup, values: dict[str, Any]
             else:
                 total = group.mass if group.mass is not None else DENSITY * volume(
                     group.shape, size)
+                if group.inertia is not None:
+                    body.unit_inertia = tuple(i / total for i in group.inertia)
                 make_moving(world, space, body, float(total), poses[k],
                             None if twists is None else twists[k])
     except BaseException:
@@ -184,7 +188,14 @@ def make_moving(world: int, space: int, body: Body, total: float, pose: list[flo
 
 
 def set_mass(body: Body, total: float) -> None:
-    mass = mass_of(body.shape, body.size, total)
+    """The body's mass, and its inertia at that mass: its own (scaled) or its shape's."""
+    if body.unit_inertia is not None:
+        mass = Mass()
+        ixx, iyy, izz = (total * i for i in body.unit_inertia)
+        LIB.dMassSetParameters(ctypes.addressof(mass), total, 0.0, 0.0, 0.0, ixx, iyy, izz,
+                               0.0, 0.0, 0.0)
+    else:
+        mass = mass_of(body.shape, body.size, total)
     LIB.dBodySetMass(body.body, ctypes.addressof(mass))
     body.mass = total
 

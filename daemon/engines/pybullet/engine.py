@@ -40,7 +40,7 @@ from __future__ import annotations
 
 import importlib.metadata
 import itertools
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -60,6 +60,7 @@ from galton.daemon.engines.base import (
     FEATURE_SET_STATE,
     FEATURE_SNAPSHOT,
     FEATURE_SPAWN,
+    FEATURE_SPAWN_INERTIA,
     FEATURE_STATIC_POSE,
     FEATURE_TARGET_EFFORT,
     FEATURE_TARGET_POSITION,
@@ -147,7 +148,8 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
                       FEATURE_LOAD_MODEL, FEATURE_STATIC_POSE, FEATURE_JOINTS,
                       FEATURE_JOINT_TARGETS, FEATURE_TARGET_POSITION, FEATURE_TARGET_VELOCITY,
                       FEATURE_TARGET_EFFORT, FEATURE_WRENCH, FEATURE_SNAPSHOT, FEATURE_RENDER,
-                      FEATURE_RAYCAST, FEATURE_CONTACTS, FEATURE_MODEL_SHAPES),
+                      FEATURE_RAYCAST, FEATURE_CONTACTS, FEATURE_SPAWN_INERTIA,
+                      FEATURE_MODEL_SHAPES),
             params={name: spec.describe() for name, spec in SPECS.items()},
             render_backend=RENDER_BACKEND,
         )
@@ -197,8 +199,7 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
         if redo is None:
             redo = spawning.first_redo(poses)
         mass = spawning.group_mass(group, size)
-        ids = self._maker.create(mass, self._shapes.get(group.shape, size),
-                                 self._shapes.visual(group.shape, size, group.rgba),
+        ids = self._maker.create(mass, *self._group_shapes(group, size),
                                  [pose[:3] for pose in poses], list(redo.turn), self._owned(),
                                  made)
         friction, restitution, dynamics = spawning.dynamics(group, size, mass, self._values)
@@ -212,6 +213,16 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
             self._change(uid, -1, **dynamics)
         self._set_margin(ids[0], group.shape, size)
         return spawning.books(group, ids, size, mass, (friction, restitution), batch, redo)
+
+    def _group_shapes(self, group: BodyGroup, size: tuple[float, ...]) -> tuple[int, int]:
+        """A group's collision and visual shapes (shared through the cache)."""
+        if group.vertices is not None and group.faces is not None:
+            vertices = np.asarray(group.vertices, dtype=float)
+            faces = np.asarray(group.faces, dtype=np.int64)
+            return (self._shapes.mesh(vertices, faces, group.static),
+                    self._shapes.mesh_visual(vertices, faces, group.rgba))
+        return (self._shapes.get(group.shape, size),
+                self._shapes.visual(group.shape, size, group.rgba))
 
     @engine_call
     def delete(self, names: Sequence[str]) -> None:
@@ -298,6 +309,9 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
             low, high = self._bc.getAABB(body.uid, link)
             rows[row] = [*low, *high]
         return rows
+
+    def pose_reader(self, names: Sequence[str]) -> Callable[[], np.ndarray]:
+        return engine_call(states.PoseReader(self, names).__call__)
 
     def shapes(self, names: Sequence[str]) -> list[list[Shape]]:
         links = self._robots.links

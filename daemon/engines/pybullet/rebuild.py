@@ -123,6 +123,8 @@ class Body:
     restitution: float = 0.0
     rgba: tuple[float, float, float, float] | None = None  # None: the default look
     model: Model | None = None
+    mesh: tuple[np.ndarray, np.ndarray] | None = None  # a mesh's vertices and faces
+    own_inertia: bool = False  # unit_inertia came with the spawn (its ``inertia``)
 
 
 @dataclass(slots=True)
@@ -178,9 +180,20 @@ def as_group(names: list[str], bodies: dict[str, Body],
                       np.array([states[n][0] for n in names], dtype=float),
                       twists=np.array([states[n][1] for n in names], dtype=float),
                       static=body.static, mass=None if body.static else body.made_mass,
-                      friction=body.friction, restitution=body.restitution, rgba=body.rgba)
+                      friction=body.friction, restitution=body.restitution, rgba=body.rgba,
+                      vertices=None if body.mesh is None else body.mesh[0],
+                      faces=None if body.mesh is None else body.mesh[1],
+                      inertia=own_inertia(body))
     turned = [bodies[n].turned or tuple(states[n][0][3:]) != body.turn for n in names]
     return group, Redo(body.turn, turned)
+
+
+def own_inertia(body: Body) -> tuple[float, float, float] | None:
+    """The inertia a body was spawned with (kg m²), None where it is its shape's."""
+    if not body.own_inertia or body.unit_inertia is None:
+        return None
+    ixx, iyy, izz = (body.made_mass * i for i in body.unit_inertia)
+    return (ixx, iyy, izz)
 
 
 def changes(old: Body, new: Body) -> BodyProperties | None:

@@ -137,6 +137,7 @@ class ShapeCache:
         self._create_visual = bc.createVisualShape
         self._ids: dict[tuple[str, tuple[float, ...]], int] = {}
         self._visual_ids: dict[tuple[str, tuple[float, ...], tuple[float, ...]], int] = {}
+        self._mesh_ids: dict[tuple[Any, ...], int] = {}
 
     def get(self, shape: str, size: tuple[float, ...]) -> int:
         key = (shape, tuple(float(s) for s in size))
@@ -162,10 +163,44 @@ class ShapeCache:
             self._visual_ids[key] = uid
         return uid
 
+    def mesh(self, vertices: np.ndarray, faces: np.ndarray, static: bool) -> int:
+        """A mesh's collision shape, one per mesh and kind: a static body's collides as its
+        triangles (Bullet's concave triangle mesh is for bodies that never move), a moving
+        one's as the convex hull of its vertices."""
+        key = ("mesh", static, vertices.tobytes(), faces.tobytes())
+        uid = self._mesh_ids.get(key)
+        if uid is None:
+            points = vertices.tolist()
+            if static:
+                uid = self._create(pybullet.GEOM_MESH, vertices=points,
+                                   indices=faces.reshape(-1).tolist())
+            else:
+                uid = self._create(pybullet.GEOM_MESH, vertices=points)
+            if uid < 0:
+                raise OperationFailedError("PyBullet could not make a collision mesh of "
+                                           f"{len(vertices)} vertices")
+            self._mesh_ids[key] = uid
+        return uid
+
+    def mesh_visual(self, vertices: np.ndarray, faces: np.ndarray,
+                    rgba: tuple[float, ...] | None) -> int:
+        colour = tuple(float(c) for c in (rgba if rgba is not None else WHITE))
+        key = ("look", colour, vertices.tobytes(), faces.tobytes())
+        uid = self._mesh_ids.get(key)
+        if uid is None:
+            uid = self._create_visual(pybullet.GEOM_MESH, vertices=vertices.tolist(),
+                                      indices=faces.reshape(-1).tolist(),
+                                      rgbaColor=list(colour))
+            if uid < 0:
+                raise OperationFailedError("PyBullet could not make the look of a mesh")
+            self._mesh_ids[key] = uid
+        return uid
+
     def forget(self) -> None:
         """Drop every id, after resetSimulation has freed the shapes themselves."""
         self._ids.clear()
         self._visual_ids.clear()
+        self._mesh_ids.clear()
 
     def __len__(self) -> int:
         return len(self._ids)

@@ -28,10 +28,11 @@ from galton.daemon.engines.pybullet import snapshot_data as sd
 from galton.daemon.engines.pybullet.joints import Articulation
 from galton.daemon.engines.pybullet.models import MODEL_FORMATS
 from galton.daemon.engines.pybullet.params import SPECS
-from galton.daemon.engines.pybullet.rebuild import Body, Model, Plan, batches
+from galton.daemon.engines.pybullet.rebuild import Body, Model, Plan, batches, own_inertia
 from galton.daemon.engines.pybullet.robots import JointStates, Robots
 from galton.daemon.engines.pybullet.shapes import unit_inertia
 from galton.protocol import BodyProperties, InvalidArgumentError, JointInfo
+from galton.protocol import mesh as mesh_wire
 from galton.protocol.errors import brief
 from galton.protocol.model import check_type
 from galton.protocol.vocabulary import (
@@ -49,7 +50,7 @@ TOP = ("format", "engine", "engine_version", "params", "next_batch", "runs", "po
        "twists", "exact", "models", "wrenches")
 SPAWN_RUN = ("kind", "batch", "names", "shape", "size", "static", "made_mass", "turn",
              "turned", "mass", "friction", "restitution", "rgba", "follows_friction",
-             "follows_restitution")
+             "follows_restitution", "vertices", "faces", "inertia")
 MODEL_RUN = ("kind", "batch", "names", "fmt", "text", "path", "fixed_base", "index", "links",
              "loaded", "edits")
 ARTICULATION = ("root", "links", "joints", "indices", "loaded", "law", "active", "state")
@@ -104,6 +105,9 @@ def spawn_run(names: list[str], bodies: dict[str, Body]) -> dict[str, Any]:
         "rgba": sd.pack([b.rgba or nan for b in run]),
         "follows_friction": [b.follows_friction for b in run],
         "follows_restitution": [b.follows_restitution for b in run],
+        "vertices": None if first.mesh is None else mesh_wire.pack_vertices(first.mesh[0]),
+        "faces": None if first.mesh is None else mesh_wire.pack_faces(first.mesh[1]),
+        "inertia": None if (own := own_inertia(first)) is None else list(own),
     }
 
 
@@ -224,12 +228,38 @@ def read_spawn(value: dict[str, Any], where: str) -> dict[str, Body]:
     turned = sd.flags(run["turned"], n, f"{where}.turned")
     follows = (sd.flags(run["follows_friction"], n, f"{where}.follows_friction"),
                sd.flags(run["follows_restitution"], n, f"{where}.follows_restitution"))
-    inertia = None if static else unit_inertia(shape, size)
-    return {name: Body(-1, static, shape, size, inertia, batch, follows_friction=follows[0][k],
+    mesh = read_mesh(run, shape, where)
+    own = read_inertia(run["inertia"], static, f"{where}.inertia")
+    inertia = None if static else unit_inertia("box" if shape == "mesh" else shape, size)
+    if own is not None:
+        inertia = (own[0] / made_mass, own[1] / made_mass, own[2] / made_mass)
+    return {name: Body(-1, static, shape, size, inertia, batch, mesh=mesh,
+                       own_inertia=own is not None, follows_friction=follows[0][k],
                        follows_restitution=follows[1][k], mass=float(mass[k]),
                        made_mass=made_mass, turn=turn, turned=turned[k],
                        friction=float(surface[0][k]), restitution=float(surface[1][k]),
                        rgba=rgba[k]) for k, name in enumerate(names)}
+
+
+def read_mesh(run: dict[str, Any], shape: str, where: str
+              ) -> tuple[np.ndarray, np.ndarray] | None:
+    """A mesh run's vertices and faces, checked as spawn checks them; none for the rest."""
+    if shape != "mesh":
+        if run["vertices"] is not None or run["faces"] is not None:
+            raise InvalidArgumentError(f"{where}: only a mesh has vertices and faces")
+        return None
+    vertices = mesh_wire.decode_vertices(run["vertices"], f"{where}.vertices")
+    faces = mesh_wire.decode_faces(run["faces"], len(vertices), f"{where}.faces")
+    return vertices, faces
+
+
+def read_inertia(value: Any, static: bool, where: str) -> tuple[float, float, float] | None:
+    if value is None:
+        return None
+    if static:
+        raise InvalidArgumentError(f"{where}: a static body has no inertia")
+    ixx, iyy, izz = sd.numbers(value, 3, where, low=1e-300, high=MAX_MASS)
+    return (ixx, iyy, izz)
 
 
 def in_range(values: np.ndarray, high: float, where: str) -> np.ndarray:

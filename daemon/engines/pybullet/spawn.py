@@ -9,11 +9,14 @@ from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
+
 from galton.daemon.engines.pybullet import rebuild
 from galton.daemon.engines.pybullet.params import default_keys
 from galton.daemon.engines.pybullet.rebuild import Body
 from galton.daemon.engines.pybullet.shapes import DENSITY, as_rgba, unit_inertia, volume
 from galton.protocol import BodyGroup, InvalidArgumentError
+from galton.protocol import mesh as mesh_wire
 from galton.protocol.vocabulary import BODY_SHAPES
 
 
@@ -37,7 +40,23 @@ def group_mass(group: BodyGroup, size: tuple[float, ...]) -> float:
     default density's."""
     if group.static:
         return 0.0
-    return group.mass if group.mass is not None else DENSITY * volume(group.shape, size)
+    if group.mass is not None:
+        return group.mass
+    if group.vertices is not None and group.faces is not None:
+        return DENSITY * mesh_wire.volume(group.vertices, group.faces)
+    return DENSITY * volume(group.shape, size)
+
+
+def group_unit_inertia(group: BodyGroup, size: tuple[float, ...], mass: float
+                       ) -> tuple[float, float, float] | None:
+    """Principal moments per kilogram: the spawn's own inertia, else the shape's (a mesh's
+    is its bounding box's, as Bullet's own estimate); None for a static body."""
+    if group.static:
+        return None
+    if group.inertia is not None:
+        ixx, iyy, izz = (i / mass for i in group.inertia)
+        return (ixx, iyy, izz)
+    return unit_inertia("box" if group.shape == "mesh" else group.shape, size)
 
 
 def dynamics(group: BodyGroup, size: tuple[float, ...], mass: float,
@@ -48,8 +67,8 @@ def dynamics(group: BodyGroup, size: tuple[float, ...], mass: float,
     restitution = group.restitution if group.restitution is not None else (
         values[restitution_key])
     changes: dict[str, Any] = {"lateralFriction": friction, "restitution": restitution}
-    if not group.static:
-        inertia = unit_inertia(group.shape, size)
+    inertia = group_unit_inertia(group, size, mass)
+    if inertia is not None:
         # Mass and inertia together: an inertia alone sets a rigid body's mass to 0.
         changes.update(mass=mass, localInertiaDiagonal=[mass * i for i in inertia],
                        ccdSweptSphereRadius=values["pybullet.ccd_swept_sphere_radius"])
@@ -61,8 +80,11 @@ def books(group: BodyGroup, ids: list[int], size: tuple[float, ...], mass: float
     """The engine's books of a group's new bodies: everything needed to make them again."""
     friction, restitution = surface
     rgba = None if group.rgba is None else as_rgba(group.rgba)
-    inertia = None if group.static else unit_inertia(group.shape, size)
-    return {name: Body(uid, group.static, group.shape, size, inertia, batch,
+    inertia = group_unit_inertia(group, size, mass)
+    mesh = None if group.vertices is None or group.faces is None else (
+        np.asarray(group.vertices, dtype=float), np.asarray(group.faces, dtype=np.int64))
+    return {name: Body(uid, group.static, group.shape, size, inertia, batch, mesh=mesh,
+                       own_inertia=group.inertia is not None,
                        follows_friction=group.friction is None,
                        follows_restitution=group.restitution is None, mass=mass,
                        friction=friction, restitution=restitution, rgba=rgba,

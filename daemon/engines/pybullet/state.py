@@ -95,3 +95,33 @@ def state_within(engine: PybulletEngine, max_position: float, max_speed: float) 
     return bool(np.isfinite(poses).all() and np.isfinite(twists).all()
                 and np.abs(poses[:, :3]).max() <= max_position
                 and np.abs(twists).max() <= max_speed)
+
+
+class PoseReader:
+    """A state stream's reader of fixed names: base poses only (no velocities), the bodies
+    looked up once, again after each rebuild. Models' links, bodies whose frame is not their
+    centre of mass, and states held over a rebuild read as get_states reads them."""
+
+    def __init__(self, engine: PybulletEngine, names: Sequence[str]) -> None:
+        self.engine = engine
+        self.names = list(names)
+        self.rebuilds = -1
+        self.plain = False
+        self.ids: list[int] = []
+
+    def __call__(self) -> np.ndarray:
+        engine = self.engine
+        if self.rebuilds != engine.rebuilds:
+            self._locate()
+        if not self.plain or engine._held:
+            return get_states(engine, self.names)[0]
+        n, flat = len(self.ids), itertools.chain.from_iterable
+        poses = np.fromiter(flat(flat(map(engine._get_pose, self.ids))), float, n * POSE_WIDTH)
+        return poses.reshape(n, POSE_WIDTH)
+
+    def _locate(self) -> None:
+        engine = self.engine
+        self.rebuilds = engine.rebuilds
+        self.plain = not any(n in engine._robots.links or n in engine._frames
+                             for n in self.names)
+        self.ids = [b.uid for b in engine._lookup(self.names)] if self.plain else []

@@ -1,0 +1,79 @@
+"""Every reply is bounded by ``max_reply_bytes`` (issue 35, item 6): a raw render, a raycast
+and a snapshot blob over it are refused up front (a refused snapshot keeps no slot); any
+other reply over it (states of many bodies) is refused once encoded, never sent; the daemon
+keeps serving and small replies pass. One MuJoCo daemon with a 200 kB limit, over Zenoh and
+over ZeroMQ (the limit is the daemon's, the same for every engine)."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+
+import numpy as np
+import pytest
+
+from galton.client import Client, EmbeddedDaemon, camera, spheres
+from galton.protocol import ResourceLimitError
+
+LIMIT = 200_000
+BALLS = 2_000  # their states: 2,000 x 13 float64 and the names, over LIMIT
+
+
+@pytest.fixture(scope="module")
+def bounded() -> Iterator[EmbeddedDaemon]:
+    daemon = EmbeddedDaemon("mujoco", instance="reply-limit", zmq=True,
+                            extra_args=["--limit", f"max_reply_bytes={LIMIT}"]).start()
+    yield daemon
+    daemon.stop()
+
+
+@pytest.fixture(params=["zenoh", "zmq"])
+def sim(bounded: EmbeddedDaemon, request: pytest.FixtureRequest) -> Iterator[Client]:
+    endpoint = bounded.endpoint if request.param == "zenoh" else bounded.zmq_endpoint
+    with Client(bounded.instance, endpoint, timeout=30.0) as client:
+        client.load_world("mujoco")
+        yield client
+
+
+def _refused(error: pytest.ExceptionInfo[ResourceLimitError]) -> None:
+    assert error.value.details["limit"] == "max_reply_bytes"
+    assert error.value.details["max"] == LIMIT
+    assert error.value.details["size"] > LIMIT
+
+
+def test_a_raw_render_and_a_raycast_over_the_limit_are_refused_up_front(sim: Client) -> None:
+    sim.spawn(spheres(["ball"], [[0, 0, 0.5]], 0.05, static=True))
+    big = camera((0, -2, 1), (0, 0, 0), size=(300, 300), outputs=["rgb", "depth"])
+    with pytest.raises(ResourceLimitError, match="max_reply_bytes") as refused:
+        sim.render(big)
+    _refused(refused)
+    rays = np.tile([0.0, 0.0, 2.0], (10_000, 1))
+    with pytest.raises(ResourceLimitError, match="max_reply_bytes") as refused:
+        sim.raycast(rays, np.tile([0.0, 0.0, -1.0], (10_000, 1)))
+    _refused(refused)
+    assert sim.raycast([[0, 0, 2]], [[0, 0, -1]]).entities == ["ball"]
+
+
+def test_a_snapshot_blob_over_the_limit_is_refused_and_keeps_no_slot(sim: Client) -> None:
+    sim.spawn(spheres([f"b{i}" for i in range(BALLS)], np.zeros((BALLS, 3)), 0.01,
+                      static=True))
+    slots = sim.snapshots()
+    with pytest.raises(ResourceLimitError, match="blob") as refused:
+        sim.call("snapshot", {"slot": "big", "blob": True})
+    _refused(refused)
+    assert sim.snapshots() == slots
+    assert sim.snapshot("big").slot == "big"  # without the blob it is kept
+    sim.call("delete_snapshot", {"slot": "big"})
+
+
+def test_any_other_reply_over_the_limit_is_refused_once_encoded(sim: Client) -> None:
+    names = [f"b{i}" for i in range(BALLS)]
+    sim.spawn(spheres(names, np.column_stack([np.arange(BALLS) * 0.1, np.zeros((BALLS, 2))]),
+                      0.01, static=True))
+    before = sim.status().step
+    with pytest.raises(ResourceLimitError, match="get_states") as refused:
+        sim.get_states()
+    _refused(refused)
+    assert sim.get_states(names[:10]).poses.shape == (10, 7)
+    with pytest.raises(ResourceLimitError, match="list"):
+        sim.list()  # 2,000 entities' rows: over the limit too
+    assert sim.status().step == before  # still serving
