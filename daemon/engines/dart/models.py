@@ -19,6 +19,7 @@ from xml.etree import ElementTree
 import dartpy as dart
 import numpy as np
 
+from galton.daemon.engines.mjcf_inertia import infer_inertials
 from galton.protocol import (
     FeatureUnsupportedError,
     InvalidArgumentError,
@@ -108,14 +109,16 @@ def _parse_mjcf(text: str) -> list[Any]:
 
 
 def apply_inertials(skeletons: list[Any], text: str) -> None:
-    """Each body's ``<inertial>`` as the file gives it: dartpy 6.20's MJCF parser leaves a
-    body's inertia at the identity and drops the centre of mass of a body with no geom."""
+    """Each body's ``<inertial>`` as the file gives it, or as MuJoCo infers it from the
+    body's primitive geoms where it gives none: dartpy 6.20's MJCF parser leaves a body's
+    inertia at the identity and drops the centre of mass of a body with no geom."""
     nodes = {str(node.getName()): node for skeleton in skeletons
              for node in skeleton.getBodyNodes()}
     try:
         root = ElementTree.fromstring(text)
     except ElementTree.ParseError as exc:
         raise InvalidArgumentError(f"the mjcf model does not parse: {exc}") from None
+    infer_inertials(root)
     for body in root.iter("body"):
         inertial, node = body.find("inertial"), nodes.get(body.get("name", ""))
         if inertial is None or node is None:

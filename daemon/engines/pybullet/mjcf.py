@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 
 from pybullet_utils.bullet_client import BulletClient
 
-from galton.daemon.engines.pybullet import mjcf_inertia as inertia
+from galton.daemon.engines import mjcf_inertia as inertia
 from galton.protocol import FeatureUnsupportedError
 
 DEFAULT_DENSITY = inertia.DEFAULT_DENSITY  # kg/m³, MuJoCo's and the importer's
@@ -51,7 +51,7 @@ def plan(text: str) -> MjcfPlan:
     compiler = root.find("compiler")
     angles = inertia.Angles() if compiler is None else inertia.Angles(
         compiler.get("angle", "degree"), compiler.get("eulerseq", "xyz"))
-    classes = _default_classes(root)
+    classes = inertia.default_classes(root)
     result = MjcfPlan(text)
     for world in root.iter("worldbody"):
         for body in world.findall("body"):
@@ -82,32 +82,8 @@ def apply(bc: BulletClient, ids: list[int], wanted: MjcfPlan) -> None:
                 bc.changeDynamics(uid, link, jointDamping=wanted.damping[joint])
 
 
-def _default_classes(root: ElementTree.Element) -> dict[str, dict[str, Attrs]]:
-    """Each default class's attributes per element tag, inherited from its parents."""
-    classes: dict[str, dict[str, Attrs]] = {}
-
-    def walk(default: ElementTree.Element, inherited: dict[str, Attrs], name: str) -> None:
-        own = {tag: dict(attrs) for tag, attrs in inherited.items()}
-        for child in default:
-            if child.tag != "default":
-                own.setdefault(child.tag, {}).update(child.attrib)
-        classes[name] = own
-        for child in default.findall("default"):
-            walk(child, own, child.get("class", ""))
-
-    for top in root.findall("default"):
-        walk(top, {}, top.get("class", "main"))
-    return classes
-
-
-def _resolved(element: ElementTree.Element, childclass: str,
-              classes: dict[str, dict[str, Attrs]]) -> Attrs:
-    cls = element.get("class", childclass)
-    return {**classes.get(cls, {}).get(element.tag, {}), **element.attrib}
-
-
 def _read_body(body: ElementTree.Element, childclass: str,
-               classes: dict[str, dict[str, Attrs]], angles: inertia.Angles,
+               classes: inertia.Classes, angles: inertia.Angles,
                result: MjcfPlan) -> None:
     name = body.get("name", "")
     geoms: list[Attrs] = []
@@ -115,9 +91,9 @@ def _read_body(body: ElementTree.Element, childclass: str,
         if child.tag == "body":
             _read_body(child, child.get("childclass", childclass), classes, angles, result)
         elif child.tag == "geom":
-            geoms.append(_resolved(child, childclass, classes))
+            geoms.append(inertia.resolved(child, childclass, classes))
         elif child.tag == "joint":
-            joint = _resolved(child, childclass, classes)
+            joint = inertia.resolved(child, childclass, classes)
             _read_joint(joint, name, result)
             if "type" not in child.attrib:  # the importer drops a joint without one
                 child.set("type", joint.get("type", "hinge"))

@@ -1,12 +1,14 @@
 """A body's mass, centre of mass and inertia as MuJoCo computes them from its primitive geoms
-(spheres, boxes, capsules, cylinders, ellipsoids), for PyBullet's MJCF importer, which puts a
-body's centre of mass at its origin, takes every geom's inertia as its bounding box's and
-gives every geom a density of 1000. Written into the text as an ``<inertial>`` that the
-importer honours (mjcf.py)."""
+(spheres, boxes, capsules, cylinders, ellipsoids), for engines whose MJCF importers do not:
+PyBullet's puts a body's centre of mass at its origin, takes every geom's inertia as its
+bounding box's and gives every geom a density of 1000 (pybullet/mjcf.py); dartpy's leaves
+every inertia at the identity (dart/models.py). Pure computation on the file's text, shared
+by the engine packages like the base."""
 
 from __future__ import annotations
 
 import math
+import xml.etree.ElementTree as ElementTree
 from collections.abc import Sequence
 
 import numpy as np
@@ -14,6 +16,7 @@ import numpy as np
 DEFAULT_DENSITY = 1000.0  # kg/m³, MuJoCo's
 PRIMITIVES = ("sphere", "box", "capsule", "cylinder", "ellipsoid")
 Attrs = dict[str, str]
+Classes = dict[str, dict[str, Attrs]]  # default class -> tag -> attributes
 
 
 class Angles:
@@ -186,3 +189,49 @@ def _quaternion(turn: np.ndarray) -> np.ndarray:
 
 def _text(values: np.ndarray) -> str:
     return " ".join(f"{float(v)!r}" for v in values)
+
+
+def default_classes(root: ElementTree.Element) -> Classes:
+    """Each default class's attributes per element tag, inherited from its parents."""
+    classes: dict[str, dict[str, Attrs]] = {}
+
+    def walk(default: ElementTree.Element, inherited: dict[str, Attrs], name: str) -> None:
+        own = {tag: dict(attrs) for tag, attrs in inherited.items()}
+        for child in default:
+            if child.tag != "default":
+                own.setdefault(child.tag, {}).update(child.attrib)
+        classes[name] = own
+        for child in default.findall("default"):
+            walk(child, own, child.get("class", ""))
+
+    for top in root.findall("default"):
+        walk(top, {}, top.get("class", "main"))
+    return classes
+
+
+def resolved(element: ElementTree.Element, childclass: str, classes: Classes) -> Attrs:
+    """An element's attributes with its default class's filled in."""
+    cls = element.get("class", childclass)
+    return {**classes.get(cls, {}).get(element.tag, {}), **element.attrib}
+
+
+def infer_inertials(root: ElementTree.Element) -> None:
+    """Write into each body of the file that has no ``<inertial>`` and whose geoms are all
+    primitives the one MuJoCo infers (its inertiafromgeom="auto")."""
+    compiler = root.find("compiler")
+    angles = Angles() if compiler is None else Angles(
+        compiler.get("angle", "degree"), compiler.get("eulerseq", "xyz"))
+    classes = default_classes(root)
+    for world in root.iter("worldbody"):
+        for body in world.findall("body"):
+            _infer(body, body.get("childclass", "main"), classes, angles)
+
+
+def _infer(body: ElementTree.Element, childclass: str, classes: Classes, angles: Angles) -> None:
+    geoms = [resolved(g, childclass, classes) for g in body.findall("geom")]
+    if body.find("inertial") is None and geoms:
+        found = inertial(geoms, angles)
+        if found is not None:
+            body.insert(0, ElementTree.Element("inertial", found))
+    for child in body.findall("body"):
+        _infer(child, child.get("childclass", childclass), classes, angles)
