@@ -40,6 +40,7 @@ if TYPE_CHECKING:
         JointStates,
         Prediction,
         RayHits,
+        ShapeInfo,
         SnapshotInfo,
         Stamp,
         States,
@@ -105,7 +106,7 @@ _SOURCES: dict[str, tuple[str, ...]] = {
     "galton.client.sdk.telemetry": ("Subscription", "TelemetryStream"),
     "galton.client.sdk.values": (
         "Comparison", "Contacts", "Image", "JointStates", "Prediction", "RayHits",
-        "SnapshotInfo", "Stamp", "States", "WorldInfo"),
+        "ShapeInfo", "SnapshotInfo", "Stamp", "States", "WorldInfo"),
     "galton.client.transport.zmq_keys": ("ZmqKeys",),
     "galton.protocol": (
         "AccessDeniedError", "BodyGroup", "BodyProperties", "Capabilities",
@@ -154,6 +155,7 @@ __all__ = [
     "ResourceLimitError",
     "ResultCode",
     "RoleDeniedError",
+    "ShapeInfo",
     "SimState",
     "SimStatus",
     "SnapshotInfo",

@@ -129,6 +129,7 @@ OPERATIONS: dict[str, Operation] = {op.name: op for op in (
     Operation("list", rq.List, reply=rq.EntitiesReply),
     Operation("get_states", rq.NamesOrAll, reply=rq.StatesReply),
     Operation("get_bounds", rq.NamesOrAll, reply=rq.BoundsReply),
+    Operation("get_shapes", rq.NamesOrAll, reply=rq.ShapesReply),
     Operation("set_states", rq.SetStates, mutates=True, reply=rq.CountReply),
     Operation("update", rq.Update, mutates=True, reply=rq.CountReply),
     Operation("delete", rq.NamedOnly, mutates=True, timeout_floor_s=_REBUILDS, reply=rq.CountReply),

@@ -276,6 +276,18 @@ class BoundsReply(Reply, kw_only=True, forbid_unknown_fields=True):
                                                          "min x y z, max x y z")]
 
 
+class ShapesReply(Reply, kw_only=True, forbid_unknown_fields=True):
+    """Each entity's collision shapes, flat: ``counts[i]`` rows belong to ``names[i]``."""
+
+    names: list[str]
+    counts: list[int]
+    kinds: list[str]
+    sizes: Annotated[bytes, _kind("sizes", description="packed float64 rows, 3 wide: half "
+                                                       "sizes as SIZE_LAYOUT, zero padded")]
+    poses: Annotated[bytes, _kind("poses", description="packed float64 rows, 7 wide: each "
+                                                       "shape's pose in its entity's frame")]
+
+
 class StatusReply(Reply, kw_only=True, forbid_unknown_fields=True):
     """A world's clock and state (``status``, and what time control answers)."""
 

@@ -144,7 +144,7 @@ def test_a_viewer_may_ask_only_read_only_operations() -> None:
              if "query" in by_id[rule_id]["messages"] and by_id[rule_id]["flows"] == ["ingress"]}
     assert asked == {f"galton/robot/@ctl/{op}" for op in (
         "status", "capabilities", "list", "list_worlds", "contacts", "stream_states",
-        "close_stream")}
+        "close_stream", "get_shapes")}
     assert "client-token" not in ROLE_RULES["viewer"]
     assert by_id["viewer-token"]["key_exprs"] == ["galton/_clients/viewer-$*"]
 

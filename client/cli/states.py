@@ -32,7 +32,7 @@ def states_dict(states: States, **extra: Any) -> dict[str, Any]:
             "twists": states.twists.tolist()}
 
 
-def _numbers(row: np.ndarray) -> str:
+def _numbers(row: np.ndarray | tuple[float, ...]) -> str:
     return ", ".join(f"{value:.4g}" for value in row)
 
 
@@ -81,6 +81,28 @@ def get_bounds(
             table.add_row(name, _numbers(row[:3]), _numbers(row[3:]))
         console.print(table)
     emit({name: row.tolist() for name, row in bounds.items()}, as_json, render)
+
+
+@commands.command("get-shapes", rich_help_panel=PANEL)
+def get_shapes(
+    ctx: typer.Context,
+    names: Annotated[list[str] | None, typer.Argument(
+        help="Entity names, as separate arguments; none: every entity.",
+        show_default=False)] = None,
+    as_json: JsonOpt = False,
+) -> None:
+    """Show each entity's collision shapes: kind, half sizes, pose in the entity's frame."""
+    shapes = with_client(ctx, lambda c: c.get_shapes(names or None))
+
+    def render() -> None:
+        table = Table("name", "kind", "half sizes (m)", "pose (x y z qx qy qz qw)")
+        for name, found in shapes.items():
+            for shape in found:
+                table.add_row(name, shape.kind, _numbers(shape.size),
+                              _numbers(shape.pose))
+        console.print(table)
+    emit({name: [{"kind": s.kind, "size": list(s.size), "pose": s.pose.tolist()}
+                 for s in found] for name, found in shapes.items()}, as_json, render)
 
 
 @commands.command("set-states", rich_help_panel=PANEL)

@@ -31,7 +31,14 @@ from galton.client.sdk.joints import SearchPath
 from galton.client.sdk.perception import PerceptionMethods
 from galton.client.sdk.streams import StateSample, StateStream, StreamMethods
 from galton.client.sdk.telemetry import Subscription, TelemetryStream, subscribe_events
-from galton.client.sdk.values import FloatArray, JointStates, Stamp, States
+from galton.client.sdk.values import (
+    FloatArray,
+    JointStates,
+    ShapeInfo,
+    Stamp,
+    States,
+    shapes_of,
+)
 from galton.client.sdk.worlds import WorldMethods
 from galton.client.transport.base import Transport, ZenohTransport, zmq_endpoint
 from galton.client.transport.credentials import Credentials
@@ -54,7 +61,7 @@ from galton.protocol import mesh as mesh_wire
 from galton.protocol.arrays import unpack_f64
 from galton.protocol.errors import ClientClosedError, InvalidArgumentError
 from galton.protocol.operations import OPERATIONS
-from galton.protocol.requests import BoundsReply, decode_result
+from galton.protocol.requests import BoundsReply, ShapesReply, decode_result
 
 DEFAULT_TIMEOUT_S = 5.0
 
@@ -286,6 +293,13 @@ class Client(WorldMethods, PerceptionMethods, ControlMethods, StreamMethods):
                                                     sdk_joints.names_arg(names)).result)
         rows = unpack_f64(reply.bounds, 6, "bounds")
         return dict(zip(reply.names, rows, strict=True))
+
+    def get_shapes(self, names: Sequence[str] | None = None
+                   ) -> dict[str, builtins.list[ShapeInfo]]:
+        """Each entity's collision shapes (all entities when None), in its own frame."""
+        reply = decode_result(ShapesReply, self._ok("get_shapes",
+                                                    sdk_joints.names_arg(names)).result)
+        return shapes_of(reply.names, reply.counts, reply.kinds, reply.sizes, reply.poses)
 
     def set_states(self, names: Sequence[str], poses: ArrayLike | None = None,
                    twists: ArrayLike | None = None) -> Stamp:

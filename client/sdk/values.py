@@ -365,3 +365,30 @@ class Contacts:
         """Which contacts join ``first`` and ``second`` (either way round)."""
         return np.array([{x, y} == {first, second} for x, y in zip(self.a, self.b,
                                                                    strict=True)], dtype=bool)
+
+
+@dataclass(frozen=True)
+class ShapeInfo:
+    """One collision shape of an entity (``get_shapes``): kind (a body shape or "mesh"),
+    half sizes as the protocol's SIZE_LAYOUT (a mesh: a box around it), pose (7) in the
+    entity's frame."""
+
+    kind: str
+    size: tuple[float, ...]
+    pose: FloatArray
+
+
+def shapes_of(names: list[str], counts: list[int], kinds: list[str], sizes: bytes,
+              poses: bytes) -> dict[str, list[ShapeInfo]]:
+    """A ``get_shapes`` reply's flat rows grouped by entity."""
+    size_rows = unpack_f64(sizes, 3, "sizes")
+    pose_rows = unpack_f64(poses, POSE_WIDTH, "poses")
+    if sum(counts) != len(kinds) or len(kinds) != len(size_rows) or len(kinds) != len(pose_rows):
+        raise OperationFailedError("get_shapes: counts, kinds, sizes and poses disagree")
+    found: dict[str, list[ShapeInfo]] = {}
+    start = 0
+    for name, count in zip(names, counts, strict=True):
+        found[name] = [ShapeInfo(kinds[i], tuple(float(v) for v in size_rows[i]), pose_rows[i])
+                       for i in range(start, start + count)]
+        start += count
+    return found

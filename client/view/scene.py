@@ -5,7 +5,7 @@ group a frame, not one a body: 500 bodies stay cheap at 20 Hz)."""
 from __future__ import annotations
 
 from collections import defaultdict
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -13,10 +13,13 @@ import numpy as np
 import trimesh
 import viser
 
+from galton.client.sdk.values import ShapeInfo
 from galton.client.view.palette import Rgb, colour_of, opacity_of
-from galton.protocol import EntityInfo
+from galton.protocol import MODEL_SHAPES, EntityInfo
 
-LINK_HALF = 0.02  # a loaded model's link has no shape in `list`: a small cube marks it
+Shapes = Mapping[str, Sequence[ShapeInfo]]  # get_shapes' answer for a world's links
+
+LINK_HALF = 0.02  # a link whose shapes the engine does not tell: a small cube marks it
 PLANE_HALF = 5.0  # an unbounded plane is drawn this far from its origin
 PLANE_THICKNESS = 0.002
 
@@ -29,6 +32,7 @@ class GroupKey:
     size: tuple[float, ...]
     colour: Rgb
     opacity: float | None
+    link: str = ""  # a loaded model's body drawn as its own shapes (one mesh per link)
 
 
 def shape_mesh(shape: str, size: Sequence[float]) -> tuple[np.ndarray, np.ndarray]:
@@ -45,7 +49,7 @@ def _trimesh(shape: str, size: Sequence[float]) -> Any:  # a trimesh.Trimesh (un
     creation = trimesh.creation
     if shape == "sphere":
         return creation.icosphere(subdivisions=2, radius=size[0])
-    if shape == "box":
+    if shape in ("box", "mesh"):  # a mesh: the box the engine keeps around it
         return creation.box(extents=[2 * h for h in size[:3]])
     if shape == "cylinder":
         return creation.cylinder(radius=size[0], height=2 * size[1], sections=24)
@@ -57,6 +61,23 @@ def _trimesh(shape: str, size: Sequence[float]) -> Any:  # a trimesh.Trimesh (un
         mesh.apply_translation([0.0, 0.0, -PLANE_THICKNESS / 2])
         return mesh
     return creation.box(extents=[2 * LINK_HALF] * 3)  # a link, a model's root
+
+
+def link_mesh(shapes: Sequence[ShapeInfo]) -> tuple[np.ndarray, np.ndarray]:
+    """A link's collision shapes as one mesh in the link's frame."""
+    parts = []
+    for shape in shapes:
+        part = _trimesh(shape.kind, shape.size)
+        pose = np.asarray(shape.pose, dtype=float)
+        x, y, z, w = pose[3:] / np.linalg.norm(pose[3:])
+        transform = np.eye(4)
+        transform[:3, :3] = [[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                             [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                             [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]]
+        transform[:3, 3] = pose[:3]
+        part.apply_transform(transform)
+        parts.append(part)
+    return _as_arrays(trimesh.util.concatenate(parts))
 
 
 def wxyz(poses: np.ndarray) -> np.ndarray:
@@ -79,11 +100,13 @@ class WorldDrawing:
         self._groups: list[tuple[viser.BatchedMeshHandle, np.ndarray]] = []
 
     def rebuild(self, infos: Sequence[EntityInfo], names: Sequence[str],
-                poses: np.ndarray) -> None:
-        """Draw these entities afresh (the scene changed): one batched mesh per group."""
+                poses: np.ndarray, shapes: Shapes | None = None) -> None:
+        """Draw these entities afresh (the scene changed): one batched mesh per group; a
+        loaded model's body is drawn as its ``shapes`` (a small cube where none are told)."""
         self.clear()
         self.infos = list(infos)
         by_name = {info.name: info for info in infos}
+        shapes = shapes or {}
         members: dict[GroupKey, list[int]] = defaultdict(list)
         for index, name in enumerate(names):
             info = by_name.get(name, EntityInfo(name, "link"))
@@ -91,11 +114,13 @@ class WorldDrawing:
                 continue
             colour = self.tint or colour_of(info.tags, info.static)
             opacity = min(self.opacity or 1.0, opacity_of(info.tags) or 1.0)
+            link = name if info.shape in MODEL_SHAPES and shapes.get(name) else ""
             members[GroupKey(info.shape, tuple(info.size), colour,
-                             None if opacity >= 1.0 else opacity)].append(index)
+                             None if opacity >= 1.0 else opacity, link)].append(index)
         for number, (key, indices) in enumerate(members.items()):
             rows = np.asarray(indices)
-            vertices, faces = shape_mesh(key.shape, key.size)
+            vertices, faces = link_mesh(shapes[key.link]) if key.link \
+                else shape_mesh(key.shape, key.size)
             handle = self.scene.add_batched_meshes_simple(
                 f"{self.root}/group{number}", vertices, faces,
                 batched_wxyzs=wxyz(poses[rows]), batched_positions=poses[rows, :3],
@@ -109,6 +134,14 @@ class WorldDrawing:
         for handle, rows in self._groups:
             handle.batched_positions = poses[rows, :3]
             handle.batched_wxyzs = wxyz(poses[rows])
+
+    def vertices_of(self, name: str) -> np.ndarray:
+        """The vertices (in its own frame) of the mesh that draws entity ``name``."""
+        index = self.names.index(name)
+        for handle, rows in self._groups:
+            if index in rows:
+                return np.asarray(handle.vertices)
+        raise KeyError(name)
 
     def clear(self) -> None:
         for handle, _ in self._groups:

@@ -8,7 +8,7 @@ from galton.daemon.access.users import OPERATOR, VIEWER
 # Read-only operations a viewer may ask: discovery (`galton-client daemons`) asks the
 # first two; `galton-client view` the others (a state stream changes no world).
 VIEWER_OPERATIONS = ("status", "capabilities", "list", "list_worlds", "contacts",
-                     "stream_states", "close_stream")
+                     "stream_states", "close_stream", "get_shapes")
 
 
 def may_ask(role: str | None, op: str) -> bool:

@@ -51,6 +51,7 @@ FEATURE_SNAPSHOT = "snapshot"
 FEATURE_RENDER = "render"
 FEATURE_RAYCAST = "raycast"
 FEATURE_CONTACTS = "contacts"
+FEATURE_MODEL_SHAPES = "model_shapes"  # get_shapes answers for a loaded model's bodies
 FEATURE_SPAWN_INERTIA = "spawn_inertia"  # spawn groups' own ``inertia``
 IMAGE_OUTPUTS = ("rgb", "depth", "segmentation")
 # Every feature flag the protocol knows: an engine lists those it has, and no other.
@@ -59,7 +60,11 @@ KNOWN_FEATURES = (FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDA
                   FEATURE_LOAD_MODEL, FEATURE_STATIC_POSE, FEATURE_JOINTS,
                   FEATURE_JOINT_TARGETS, FEATURE_TARGET_POSITION, FEATURE_TARGET_VELOCITY,
                   FEATURE_TARGET_EFFORT, FEATURE_WRENCH, FEATURE_SNAPSHOT, FEATURE_RENDER,
-                  FEATURE_RAYCAST, FEATURE_CONTACTS, FEATURE_SPAWN_INERTIA)
+                  FEATURE_RAYCAST, FEATURE_CONTACTS, FEATURE_SPAWN_INERTIA,
+                  FEATURE_MODEL_SHAPES)
+# One collision shape: kind (a BODY_SHAPES name or "mesh"), half sizes as SIZE_LAYOUT
+# (a mesh: the half sizes of a box around it), its pose in its body's frame (7 wide).
+Shape = tuple[str, tuple[float, ...], tuple[float, ...]]
 
 
 @dataclass(frozen=True)
@@ -293,6 +298,11 @@ class Engine(ABC):
         """World-frame axis-aligned bounds (rows ``min xyz, max xyz``) of a loaded model's
         bodies, from their collision shapes; spawned primitives need no engine."""
         raise self._unsupported("bounds of loaded models")
+
+    def shapes(self, names: Sequence[str]) -> list[list[Shape]]:
+        """Each of a loaded model's bodies' collision shapes in its own frame (engines that
+        answer list FEATURE_MODEL_SHAPES); spawned primitives need no engine."""
+        raise self._unsupported("shapes of loaded models")
 
     def contacts(self, names: Sequence[str] | None
                  ) -> ContactPoints:

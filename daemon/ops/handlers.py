@@ -73,6 +73,7 @@ HANDLERS: dict[str, Handler] = {
     "list": _scene("list", ops.list_entities),
     "get_states": _scene("get_states", ops.get_states),
     "get_bounds": _scene("get_bounds", ops.get_bounds),
+    "get_shapes": _scene("get_shapes", ops.get_shapes),
     "set_states": _scene("set_states", ops.set_states),
     "update": _scene("update", ops.update),
     "delete": _scene("delete", ops.delete),

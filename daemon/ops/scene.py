@@ -147,6 +147,27 @@ def get_bounds(world: World, request: rq.NamesOrAll) -> dict[str, Any]:
     return {"names": names, "bounds": pack_f64(np.array(rows, dtype=float).reshape(-1, 6))}
 
 
+def get_shapes(world: World, request: rq.NamesOrAll) -> dict[str, Any]:
+    """Each entity's collision shapes in its own frame: a spawned primitive is its one
+    shape at its origin; a loaded model's bodies are asked of the engine."""
+    names = _names_or_all(world, request.names, "get_shapes")
+    world.get_states(names)  # unknown names: NOT_FOUND, as get_states
+    infos = [world.entities[n].info for n in names]
+    modelled = [n for n, info in zip(names, infos, strict=True) if info.shape in MODEL_SHAPES]
+    from_engine = dict(zip(modelled, world.engine.shapes(modelled), strict=True)) \
+        if modelled else {}
+    origin = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0)
+    shapes = [from_engine[info.name] if info.name in from_engine
+              else [(info.shape, tuple(info.size), origin)] for info in infos]
+    rows = [shape for entity in shapes for shape in entity]
+    sizes = [[*size, 0.0, 0.0, 0.0][:3] for _, size, _ in rows]
+    return {"names": names, "counts": [len(entity) for entity in shapes],
+            "kinds": [kind for kind, _, _ in rows],
+            "sizes": pack_f64(np.array(sizes, dtype=float).reshape(-1, 3)),
+            "poses": pack_f64(np.array([pose for _, _, pose in rows], dtype=float)
+                              .reshape(-1, 7))}
+
+
 def primitive_bounds(shape: str, size: tuple[float, ...], pose: np.ndarray) -> np.ndarray:
     """The world-frame box around a primitive (half sizes as SIZE_LAYOUT; a cylinder's
     and a capsule's axis is their local z; a plane is a box of no thickness)."""

@@ -33,6 +33,10 @@ def test_spawn_options_reach_the_world(target: list[str]) -> None:
         (2.0, 0.7, 0.1, ("cargo", "red"))}
     states = invoke([*target, "get-states", "--json"])
     assert [p[:3] for p in states["poses"]] == [[1.0, 2.0, 3.0], [1.5, 2.0, 3.0]]
+    shapes = invoke([*target, "get-shapes", "crate_1", "--json"])
+    assert shapes == {"crate_1": [{"kind": "box", "size": [0.1, 0.2, 0.3],
+                                   "pose": [0, 0, 0, 0, 0, 0, 1]}]}
+    assert "box" in run([*target, "get-shapes"]).output
 
 
 def test_spawn_a_mesh_from_an_obj_file_and_a_box_mesh_with_an_inertia(

@@ -229,6 +229,7 @@ CALLS: dict[str, Callable[[Client], object]] = {
     "list": Client.list,
     "get_states": Client.get_states,
     "get_bounds": Client.get_bounds,
+    "get_shapes": Client.get_shapes,
     "set_states": lambda c: c.set_states(["a"]),
     "update": lambda c: c.update(["a"], mass=1.0),
     "delete": lambda c: c.delete(["a"]),

@@ -78,3 +78,22 @@ def test_compare_scores_are_charted_and_a_prediction_is_drawn(
     step = mujoco_sim.status().step
     page._act(page._step)
     assert mujoco_sim.status().step == step + 100
+
+
+CRATE = """<robot name="crate"><link name="base">
+  <inertial><mass value="1"/><inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/>
+  </inertial>
+  <collision><origin xyz="0 0 0.1" rpy="0 0 1.5707963267948966"/>
+    <geometry><box size="0.2 0.4 0.6"/></geometry></collision>
+</link></robot>"""
+
+
+def test_a_loaded_models_link_is_drawn_as_its_collision_shapes(
+        mujoco_sim: Client, page: LiveView) -> None:
+    [crate] = mujoco_sim.load_model("urdf", text=CRATE, prefix="u_")
+    _until(page, lambda: page.live.draw() is not None and crate in page.live.drawing.names)
+    vertices = page.live.drawing.vertices_of(crate)  # turned a quarter: x and y swap
+    np.testing.assert_allclose(vertices.min(axis=0), [-0.2, -0.1, -0.2], atol=1e-5)
+    np.testing.assert_allclose(vertices.max(axis=0), [0.2, 0.1, 0.4], atol=1e-5)
+    # A spawned ball keeps its own shape.
+    assert np.ptp(page.live.drawing.vertices_of("a"), axis=0) == pytest.approx([0.1] * 3, abs=1e-3)

@@ -20,7 +20,8 @@ def test_real_replies_fit_their_declarations(sim: Client) -> None:
     pose = pack_f64(np.tile([0, 0, 1, 0, 0, 0, 1.0], (1, 1)))
     calls: list[tuple[str, dict[str, Any]]] = [
         ("spawn", {"groups": [group.to_wire()]}), ("list", {}), ("get_states", {}),
-        ("get_bounds", {"names": names}), ("set_states", {"names": names[:1], "poses": pose}),
+        ("get_bounds", {"names": names}), ("get_shapes", {}),
+        ("set_states", {"names": names[:1], "poses": pose}),
         ("update", {"names": names, "properties": {"friction": 0.5}}), ("get_params", {}),
         ("apply_wrench", {"names": names[:1], "wrenches": pack_f64(np.zeros((1, 6)))}),
         ("clear_wrenches", {}), ("delete", {"names": names[1:]}), ("status", {}),

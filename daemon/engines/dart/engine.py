@@ -29,6 +29,7 @@ from galton.daemon.engines.base import (
     FEATURE_JOINT_TARGETS,
     FEATURE_JOINTS,
     FEATURE_LOAD_MODEL,
+    FEATURE_MODEL_SHAPES,
     FEATURE_SET_STATE,
     FEATURE_SNAPSHOT,
     FEATURE_SPAWN,
@@ -44,6 +45,7 @@ from galton.daemon.engines.base import (
     FEATURE_WRENCH,
     ContactPoints,
     Engine,
+    Shape,
 )
 from galton.daemon.engines.dart import contacts as contact_points
 from galton.daemon.engines.dart import frames, state
@@ -52,6 +54,7 @@ from galton.daemon.engines.dart.joints import Robots, Target
 from galton.daemon.engines.dart.models import MODEL_FORMATS
 from galton.daemon.engines.dart.params import SPECS
 from galton.daemon.engines.dart.scene import Scene
+from galton.daemon.engines.dart.shapes import node_shapes
 from galton.daemon.engines.dart.snapshot import Snapshots
 from galton.daemon.engines.params import check_updates
 from galton.protocol import (
@@ -69,7 +72,8 @@ FEATURES = (FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDATE_MAS
             FEATURE_UPDATE_FRICTION, FEATURE_UPDATE_RESTITUTION, FEATURE_UPDATE_RGBA,
             FEATURE_LOAD_MODEL, FEATURE_STATIC_POSE, FEATURE_JOINTS, FEATURE_JOINT_TARGETS,
             FEATURE_TARGET_POSITION, FEATURE_TARGET_VELOCITY, FEATURE_TARGET_EFFORT,
-            FEATURE_WRENCH, FEATURE_SNAPSHOT, FEATURE_CONTACTS, FEATURE_SPAWN_INERTIA)
+            FEATURE_WRENCH, FEATURE_SNAPSHOT, FEATURE_CONTACTS, FEATURE_SPAWN_INERTIA,
+            FEATURE_MODEL_SHAPES)
 
 
 # No mesh shape: FEATURE_UNSUPPORTED at spawn (docs/ENGINES.md, "Meshes").
@@ -171,6 +175,9 @@ class DartEngine(Scene, Snapshots, Engine):
         return np.array(rows, dtype=float).reshape(len(rows), 3)
 
     # -- states ---------------------------------------------------------------------------
+    def shapes(self, names: Sequence[str]) -> list[list[Shape]]:
+        return [node_shapes(body.node) for body in self._lookup(names)]
+
     def get_states(self, names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
         return state.read(self._lookup(names))
 

@@ -27,6 +27,7 @@ from galton.daemon.engines.base import (
     FEATURE_JOINT_TARGETS,
     FEATURE_JOINTS,
     FEATURE_LOAD_MODEL,
+    FEATURE_MODEL_SHAPES,
     FEATURE_RAYCAST,
     FEATURE_SET_STATE,
     FEATURE_SNAPSHOT,
@@ -44,6 +45,7 @@ from galton.daemon.engines.base import (
     ContactPoints,
     Engine,
     RayHits,
+    Shape,
 )
 from galton.daemon.engines.ode import spawn as spawning
 from galton.daemon.engines.ode import state as states
@@ -75,7 +77,7 @@ FEATURES = (FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDATE_MAS
             FEATURE_STATIC_POSE, FEATURE_LOAD_MODEL, FEATURE_JOINTS, FEATURE_JOINT_TARGETS,
             FEATURE_TARGET_POSITION, FEATURE_TARGET_VELOCITY, FEATURE_TARGET_EFFORT,
             FEATURE_WRENCH, FEATURE_SNAPSHOT, FEATURE_RAYCAST,
-            FEATURE_CONTACTS, FEATURE_SPAWN_INERTIA)
+            FEATURE_CONTACTS, FEATURE_SPAWN_INERTIA, FEATURE_MODEL_SHAPES)
 
 
 # No mesh shape: FEATURE_UNSUPPORTED at spawn (docs/ENGINES.md, "Meshes").
@@ -211,6 +213,10 @@ class OdeEngine(Snapshots, Engine):
             return [self._bodies[n] for n in names]
         except KeyError as exc:
             raise NotFoundError(f"no entity named {exc.args[0]!r} in the ODE world") from None
+
+    def shapes(self, names: Sequence[str]) -> list[list[Shape]]:
+        """A link's collision shapes as loaded (urdf.py: a mesh is already its box)."""
+        return [list(body.link_shapes) for body in self._lookup(names)]
 
     def update(self, names: Sequence[str], props: BodyProperties) -> None:
         bodies = self._lookup(names)

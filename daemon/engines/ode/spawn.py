@@ -54,6 +54,10 @@ class Body:
     welded: bool = False  # a fixed-base model's root: kinematic, no force moves it
     # Principal moments per kg of a body spawned with its own ``inertia``; None: its shape's.
     unit_inertia: tuple[float, ...] | None = None
+    # A link's collision shapes in its frame, as get_shapes tells them (kind, half sizes,
+    # pose x y z qx qy qz qw); a spawned body's are its shape and size.
+    link_shapes: list[tuple[str, tuple[float, ...], tuple[float, ...]]] = \
+        field(default_factory=list)
 
     def geoms(self) -> list[int]:
         return ([self.geom] if self.geom else []) + self.extra

@@ -198,6 +198,7 @@ def _link_body(world: int, space: int, link: Any, name: str, root: str,
     LIB.dBodySetQuaternion(body.body, quaternion(at[1]))
     body.state = np.ctypeslib.as_array(body_state(body.body))
     for shape, size, where in shapes:
+        body.link_shapes.append((shape, size, (*map(float, where[0]), *map(float, where[1]))))
         geom = make_geom(space, shape, size)
         LIB.dGeomSetBody(geom, body.body)
         offset = frames.compose(frames.inverse(centre), where)

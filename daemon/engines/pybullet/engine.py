@@ -53,6 +53,7 @@ from galton.daemon.engines.base import (
     FEATURE_JOINT_TARGETS,
     FEATURE_JOINTS,
     FEATURE_LOAD_MODEL,
+    FEATURE_MODEL_SHAPES,
     FEATURE_RAYCAST,
     FEATURE_RENDER,
     FEATURE_SET_STATE,
@@ -69,11 +70,12 @@ from galton.daemon.engines.base import (
     FEATURE_UPDATE_RGBA,
     FEATURE_WRENCH,
     Engine,
+    Shape,
     native_output_silenced,
 )
 from galton.daemon.engines.params import check_updates
+from galton.daemon.engines.pybullet import collisions, rebuild
 from galton.daemon.engines.pybullet import props as bodyprops
-from galton.daemon.engines.pybullet import rebuild
 from galton.daemon.engines.pybullet import spawn as spawning
 from galton.daemon.engines.pybullet import state as states
 from galton.daemon.engines.pybullet.articulated import Articulated
@@ -146,7 +148,8 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
                       FEATURE_LOAD_MODEL, FEATURE_STATIC_POSE, FEATURE_JOINTS,
                       FEATURE_JOINT_TARGETS, FEATURE_TARGET_POSITION, FEATURE_TARGET_VELOCITY,
                       FEATURE_TARGET_EFFORT, FEATURE_WRENCH, FEATURE_SNAPSHOT, FEATURE_RENDER,
-                      FEATURE_RAYCAST, FEATURE_CONTACTS, FEATURE_SPAWN_INERTIA),
+                      FEATURE_RAYCAST, FEATURE_CONTACTS, FEATURE_SPAWN_INERTIA,
+                      FEATURE_MODEL_SHAPES),
             params={name: spec.describe() for name, spec in SPECS.items()},
             render_backend=RENDER_BACKEND,
         )
@@ -309,6 +312,15 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
 
     def pose_reader(self, names: Sequence[str]) -> Callable[[], np.ndarray]:
         return engine_call(states.PoseReader(self, names).__call__)
+
+    def shapes(self, names: Sequence[str]) -> list[list[Shape]]:
+        links = self.robots.links
+        found = []
+        for name in names:
+            root, link = links.get(name, (name, -1))
+            [body] = self.lookup([root])
+            found.append(collisions.link_shapes(self._bc, body.uid, link))
+        return found
 
     def _read(self, ids: list[int]) -> tuple[np.ndarray, np.ndarray]:
         return states.read(self, ids)
