@@ -28,9 +28,10 @@ from common import write_json
 
 from galton.client import Client, plane, spheres
 from galton.client.sdk.embedded import free_loopback_port
-from galton.daemon import server
 from galton.daemon.core import loop
 from galton.daemon.engines import ENGINE_CLASSES
+from galton.daemon.fronts import zenoh as zenoh_front
+from galton.daemon.fronts.zenoh import ZenohFront
 from galton.daemon.server import Daemon, DaemonOptions
 from galton.daemon.world.scene import World
 
@@ -54,13 +55,13 @@ def timed(owner: Any, name: str, label: str) -> None:
 
 
 def instrument(engine: str) -> None:
-    timed(Daemon, "_on_query", "callback")
+    timed(ZenohFront, "_on_query", "callback")
     timed(loop.SimLoop, "handle", "handle")
     timed(loop.SimLoop, "_run_steps", "run_steps")
     timed(World, "step", "world_step")
     module, name = ENGINE_CLASSES[engine].split(":")
     timed(getattr(importlib.import_module(module), name), "step", "engine_step")
-    make_responder = server._responder
+    make_responder = zenoh_front._responder
 
     def responder(query: Any) -> Callable[[bytes], None]:
         respond = make_responder(query)
@@ -70,7 +71,7 @@ def instrument(engine: str) -> None:
             respond(data)
             SPANS["respond"].append((started, time.perf_counter()))
         return timed_respond
-    server._responder = responder
+    zenoh_front._responder = responder
 
 
 def stages(calls: int) -> dict[str, np.ndarray]:

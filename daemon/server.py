@@ -1,8 +1,8 @@
-"""The daemon's Zenoh side: session, control queryable, publishers, liveliness token."""
+"""The composition root: options, engine, core, fronts and signal handling, wired here and
+nowhere else. The fronts themselves live in daemon/fronts/ (Zenoh, ZeroMQ, ROS 2)."""
 
 from __future__ import annotations
 
-import json
 import logging
 import os
 import select
@@ -18,39 +18,27 @@ import msgpack
 import zenoh
 
 from galton.daemon.access.users import User
-from galton.daemon.access.zenoh_security import (
-    TlsFiles,
-    remove_private_files,
-    security_settings,
-    tls_settings,
-)
+from galton.daemon.access.zenoh_security import TlsFiles, security_settings, tls_settings
 from galton.daemon.access.zmq_auth import ZmqSecurity
-from galton.daemon.core.calls import Call, Task
 from galton.daemon.core.limits import DEFAULT_LIMITS, Limits
 from galton.daemon.core.loop import SimLoop
 from galton.daemon.engines import ENGINE_CLASSES, create_engine
 from galton.daemon.engines.base import Engine
+from galton.daemon.fronts.base import EVENTS, TELEMETRY, Fronts
 from galton.daemon.fronts.ros2.options import Ros2Options
-from galton.daemon.fronts.zenoh_config import file_says, listen_endpoints, merge
-from galton.daemon.fronts.zmq import PolledInbox, ZmqFront, parse_endpoint
+from galton.daemon.fronts.zenoh import ZenohFront, merged_config
+from galton.daemon.fronts.zenoh_config import listen_endpoints
+from galton.daemon.fronts.zmq import ZmqFront, parse_endpoint
 from galton.daemon.world import checkpoint
 from galton.daemon.world.scene import World
 from galton.daemon.world.stream_sender import SampleSender
-from galton.protocol import InvalidArgumentError, Keys, OperationFailedError, Telemetry
-from galton.protocol.keys import (
-    CLIENTS_PATTERN,
-    client_from_token_key,
-    client_token_key,
-    op_from_control_key,
-)
-from galton.protocol.operations import OPERATIONS
+from galton.protocol import InvalidArgumentError, OperationFailedError, Telemetry
 
 log = logging.getLogger("galton.daemon")
 
 # After SIGTERM the daemon answers what is pending and closes; if a request still holds the
 # physics thread this long after the signal, the process exits without waiting for it.
 SHUTDOWN_GRACE_S = 1.5
-CLIENT_TOKEN_TIMEOUT_S = 1.0
 
 
 @dataclass
@@ -93,48 +81,39 @@ def listening_on(options: DaemonOptions) -> list[str]:
 def _merged_config(options: DaemonOptions, security: dict[str, Any]) -> zenoh.Config:
     path = options.zenoh_config
     config = zenoh.Config.from_file(str(path)) if path is not None else zenoh.Config()
-    inserts = merge(file_says(config), options.listen, options.connect, options.multicast,
-                    security)
-    for key, value in inserts.items():
-        config.insert_json5(key, json.dumps(value))
-    return config
+    return merged_config(config, options.listen, options.connect, options.multicast, security)
 
 
 class Daemon:
-    """One daemon instance: a SimLoop on its own thread, served over one Zenoh session."""
+    """One daemon instance: a SimLoop (the core) served by its fronts -- Zenoh always,
+    ZeroMQ with --zmq, ROS 2 with --ros2 -- published to as one list."""
 
     def __init__(self, options: DaemonOptions) -> None:
         self.options = options
-        self.keys = Keys(options.instance)
         engine = create_engine(options.engine)
         if options.params:
             engine.set_params(options.params)
+        self.zmq = _zmq_front(options)
         try:
-            self.session = zenoh.open(zenoh_config(options))
-        finally:
-            remove_private_files()  # the usrpwd dictionary: Zenoh has read it
-        self._telemetry_pub = self.session.declare_publisher(
-            self.keys.telemetry, congestion_control=zenoh.CongestionControl.DROP)
-        self._events_pub = self.session.declare_publisher(self.keys.events)
+            self.zenoh = ZenohFront(zenoh_config(options), options.instance)
+        except BaseException:
+            if self.zmq is not None:
+                self.zmq.close()
+            raise
+        self.fronts = Fronts([self.zenoh] if self.zmq is None else [self.zenoh, self.zmq])
         self.loop = SimLoop(self._first_world(engine), options.instance,
                             self._publish_telemetry, self._publish_event,
-                            options.telemetry_rate_hz, create_engine, options.limits)
+                            options.telemetry_rate_hz, create_engine, options.limits,
+                            polled=self.zmq)
         self.loop.snapshot_key = options.snapshot_key
-        self.front = _zmq_front(options, self.loop)
-        # A state stream's samples: Zenoh's put off the physics thread, the ZeroMQ front's
-        # send on it (its sockets are that thread's).
-        self.loop.streams.sender = SampleSender(self._publish_states)
-        self.loop.streams.publish = self.front.publish if self.front is not None else None
-        self.loop.client_alive = self._client_alive
+        self.loop.advertised = self.fronts.advertised()
+        # A state stream's samples: Zenoh's put off the physics thread (a thread of the
+        # stream's own), the ZeroMQ front's send on it (its sockets are that thread's).
+        self.loop.streams.sender = SampleSender(self.zenoh.publish)
+        self.loop.streams.publish = self.zmq.publish if self.zmq is not None else None
+        self.loop.client_alive = self.zenoh.client_alive
         self._thread: threading.Thread | None = None
-        self._queryable: Any = None
-        self._token: Any = None
-        self._clients: Any = None
-        self.ros2: Any = None  # the ROS 2 front, with --ros2
         self.finished = threading.Event()
-        # Client ids whose liveliness token this daemon has seen come and not go (updated on
-        # Zenoh's thread; a set's add and discard are atomic under the GIL).
-        self._live_clients: set[str] = set()
 
     def _first_world(self, engine: Engine) -> World:
         """The checkpointed world when --state-dir holds one, else an empty world."""
@@ -161,38 +140,18 @@ class Daemon:
             log.exception("could not save a checkpoint to %s", path)
 
     def open(self) -> None:
-        """Declare the control queryable and the liveliness token: clients can reach us.
-        Watch the clients' tokens: a step job whose client vanishes ends (docs/protocol.md)."""
-        self._clients = self.session.liveliness().declare_subscriber(
-            CLIENTS_PATTERN, self._on_client_token, history=True)
-        self._queryable = self.session.declare_queryable(self.keys.control_all, self._on_query)
-        self._token = self.session.liveliness().declare_token(self.keys.alive)
+        """Open every front on the core's call interface: clients can reach us. The ROS 2
+        front (its extra imported only here) serves on the Zenoh front's session."""
+        for front in self.fronts.fronts:
+            front.open(self.loop)
         if self.options.ros2 is not None:
             from galton.daemon.fronts.ros2.front import (
                 Ros2Front,  # [ros2] extra: imported here only
             )
-            self.ros2 = Ros2Front(self.session, self.dispatch, self.options.instance,
-                                  self.options.ros2)
-
-    def _client_alive(self, client: str) -> bool:
-        """Whether the client's liveliness token is there: seen by the subscriber (no wait),
-        else asked once (a token declared a moment ago may not have reached us yet; the get
-        holds the physics thread, under a millisecond on loopback)."""
-        if client in self._live_clients:
-            return True
-        replies = self.session.liveliness().get(client_token_key(client),
-                                                timeout=CLIENT_TOKEN_TIMEOUT_S)
-        return any(reply.ok is not None for reply in replies)
-
-    def _on_client_token(self, sample: zenoh.Sample) -> None:
-        client = client_from_token_key(str(sample.key_expr))
-        if client is None:
-            return
-        if sample.kind == zenoh.SampleKind.PUT:
-            self._live_clients.add(client)
-        else:
-            self._live_clients.discard(client)
-            self.loop.submit(Task(lambda: self.loop.client_gone(client)))
+            ros2 = Ros2Front(self.zenoh.session, self.loop.dispatch, self.options.instance,
+                             self.options.ros2)
+            ros2.open(self.loop)
+            self.fronts.fronts.append(ros2)
 
     def start(self) -> None:
         """Serve with the physics loop on a thread of its own (for embedding in a process
@@ -202,65 +161,31 @@ class Daemon:
         self.open()
 
     def withdraw(self) -> None:
-        """Withdraw liveliness and stop the physics loop; it answers what is pending."""
-        if self._token is not None:
-            self._token.undeclare()
-            self._token = None
+        """Withdraw from every front and stop the physics loop; it answers what is pending."""
+        self.fronts.withdraw()
         self.loop.stop()
 
     def close(self) -> None:
-        """Withdraw liveliness first, answer what is pending, then close the session."""
+        """Withdraw first, answer what is pending, then close the fronts (last opened
+        first) and the engine."""
         self.withdraw()
         if self._thread is not None:
             self._thread.join(timeout=10)
-        if self._queryable is not None:
-            self._queryable.undeclare()
-        if self._clients is not None:
-            self._clients.undeclare()
-        if self.ros2 is not None:
-            self.ros2.close()
         self.loop.streams.stop_sender()
         self.loop.world.engine.close()
-        if self.front is not None:
-            self.front.close()
-        self.session.close()
-
-    def _on_query(self, query: zenoh.Query) -> None:
-        op = op_from_control_key(str(query.key_expr))
-        payload = query.payload.to_bytes() if query.payload is not None else b""
-        self.dispatch(Call(op, payload, _responder(query)))
-
-    def dispatch(self, call: Call) -> None:
-        """Hand a request to the physics thread, or answer a fast one on this thread: the
-        one path of every Zenoh front (this one's queryable, the ROS 2 front's)."""
-        declared = OPERATIONS.get(call.op)
-        if declared is not None and declared.fast:
-            self.loop.handle_readonly(call)
-        else:
-            self.loop.submit(call)
+        self.fronts.close()
 
     def _publish_telemetry(self, sample: Telemetry) -> None:
-        data = msgpack.packb(sample.to_wire())
-        self._telemetry_pub.put(data)
-        if self.front is not None:
-            self.front.publish("telemetry", data)
-
-    def _publish_states(self, topic: str, data: bytes) -> None:
-        """A state stream's sample (daemon/world/state_streams.py), dropped rather than queued
-        when the network is congested, as telemetry is; on the sender's thread."""
-        self.session.put(f"{self.keys.prefix}/{topic}", data,
-                         congestion_control=zenoh.CongestionControl.DROP)
+        self.fronts.publish(TELEMETRY, msgpack.packb(sample.to_wire()))
 
     def _publish_event(self, event: dict[str, Any]) -> None:
-        data = msgpack.packb({"instance": self.options.instance, **event})
-        self._events_pub.put(data)
-        if self.front is not None:
-            self.front.publish("events", data)
+        self.fronts.publish(EVENTS, msgpack.packb({"instance": self.options.instance,
+                                                   **event}))
 
 
-def _zmq_front(options: DaemonOptions, loop: SimLoop) -> ZmqFront | None:
-    """With --zmq: the ZeroMQ sockets, polled by the physics thread through its inbox, and
-    advertised by ``capabilities``."""
+def _zmq_front(options: DaemonOptions) -> ZmqFront | None:
+    """With --zmq: the ZeroMQ sockets, polled by the physics thread (the core's
+    ``PolledInbox``), and advertised by ``capabilities``."""
     if not options.zmq:
         return None
     if options.users is not None and options.zmq_key is None:
@@ -270,20 +195,8 @@ def _zmq_front(options: DaemonOptions, loop: SimLoop) -> ZmqFront | None:
             "DIR`)")
     security = (ZmqSecurity.load(options.zmq_key, options.users)
                 if options.zmq_key is not None else None)
-    front = ZmqFront([parse_endpoint(endpoint) for endpoint in options.zmq], options.instance,
-                     security)
-    loop.inbox = PolledInbox(front, lambda peer: Task(lambda: loop.client_gone(peer)))
-    loop.advertised = {"zmq": front.advertised()}
-    return front
-
-
-def _responder(query: zenoh.Query) -> Callable[[bytes], None]:
-    def respond(data: bytes) -> None:
-        try:
-            query.reply(query.key_expr, data)
-        finally:
-            query.drop()
-    return respond
+    return ZmqFront([parse_endpoint(endpoint) for endpoint in options.zmq], options.instance,
+                    security)
 
 
 def signal_wakeup_pipe() -> int:
@@ -359,7 +272,7 @@ def run_daemon(options: DaemonOptions, announce: Callable[[str], None] = print) 
                         "exiting without it", SHUTDOWN_GRACE_S)
             os._exit(0)
     threading.Thread(target=stop_on_signal, name="signals", daemon=True).start()
-    zmq = f" zmq={','.join(daemon.front.control)}" if daemon.front is not None else ""
+    zmq = f" zmq={','.join(daemon.zmq.control)}" if daemon.zmq is not None else ""
     announce(f"galton-daemon ready: instance={options.instance} engine={options.engine} "
              f"listen={','.join(listening_on(options))}{zmq} engines={','.join(ENGINE_CLASSES)}")
     try:

@@ -21,14 +21,12 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from galton.daemon.core.calls import Call
+from galton.daemon.core.context import OpContext
 from galton.protocol import ControlHeldError, InvalidArgumentError
 from galton.protocol.operations import Operation
-
-if TYPE_CHECKING:
-    from galton.daemon.core.loop import SimLoop
 
 NO_IDENTITY = (
     "take_control needs to know who asks: send the envelope's 'client' (the id of your "
@@ -78,7 +76,7 @@ class Lease:
         return None if holder is None else holder.name
 
 
-def check(loop: SimLoop, call: Call, op: Operation) -> None:
+def check(loop: OpContext, call: Call, op: Operation) -> None:
     """Refuse a request that would change or step a world while another client holds
     control (called before its handler runs, so a refused request changed nothing)."""
     holder = loop.lease.holder
@@ -87,7 +85,7 @@ def check(loop: SimLoop, call: Call, op: Operation) -> None:
     raise _held(holder, f"{op.name} from {_asker(call)} would change the world and is refused")
 
 
-def take_control(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+def take_control(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any]:
     """Take the lease, or keep it (taking it again is no change); refused while another
     client holds it."""
     if call.client is None and call.peer is None:
@@ -114,7 +112,7 @@ def take_control(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, A
     return {"controller": taker.name, "taken": True}
 
 
-def release_control(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+def release_control(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any]:
     """Give the lease back (its holder only); with nobody holding it, nothing to do."""
     holder = loop.lease.holder
     if holder is None:
@@ -126,7 +124,7 @@ def release_control(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str
     return {"controller": None, "released": True}
 
 
-def client_gone(loop: SimLoop, who: str) -> None:
+def client_gone(loop: OpContext, who: str) -> None:
     """A client's token went, or a ZeroMQ connection closed: if it held control, the lease
     ends now."""
     holder = loop.lease.holder
@@ -150,5 +148,5 @@ def _asker(call: Call) -> str:
     return "an anonymous request (no 'client' in its envelope)"
 
 
-def _announce(loop: SimLoop, holder: Holder, change: str) -> None:
+def _announce(loop: OpContext, holder: Holder, change: str) -> None:
     loop.emit({"kind": "control", "holder": holder.name, "change": change})

@@ -94,11 +94,37 @@ def smoothed_step_cost(cost: float, seconds: float, count: int) -> float:
 
 
 class Inbox(Protocol):
-    """Where requests wait for the physics thread: a queue.SimpleQueue, or with ZeroMQ a
-    daemon/zmq_front.PolledInbox that also polls the sockets."""
+    """Where requests wait for the physics thread: a queue.SimpleQueue, or with a polled
+    front (ZeroMQ) a daemon/core/inbox.PolledInbox that also polls its sockets."""
 
     def put(self, item: Call | Task | None) -> None: ...
 
     def get(self, block: bool = True, timeout: float | None = None) -> Call | Task | None: ...
 
     def get_nowait(self) -> Call | Task | None: ...
+
+
+class CallPort(Protocol):
+    """The core's call interface: all a front (daemon/fronts/) may reach of the core. Calls
+    in (answered exactly once through ``Call.respond``), and word that a client has gone."""
+
+    def dispatch(self, call: Call) -> None:
+        """Hand a request to the physics thread, or answer a fast one on the caller's."""
+
+    def lose_client(self, client: str) -> None:
+        """A client has gone (its token or connection): end what it held, on the physics
+        thread."""
+
+
+class PolledSource(Protocol):
+    """A front whose sockets the physics thread polls itself (ZeroMQ): no thread hand-off
+    for its calls. ``daemon/core/inbox.PolledInbox`` takes turns between it and the queue."""
+
+    def wake(self) -> None:
+        """Called from any thread: make a waiting ``wait`` return."""
+
+    def wait(self, timeout: float | None) -> None:
+        """Block until the source may have input, it is woken, or ``timeout`` seconds."""
+
+    def receive(self, gone: Callable[[str], Task]) -> list[Call | Task]:
+        """What is readable now, without blocking (closed connections as ``gone`` Tasks)."""

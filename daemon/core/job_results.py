@@ -3,18 +3,16 @@ for the live world's jobs and for side worlds' and predictions' (daemon/core/sid
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from galton.daemon.core.calls import StepJob
+from galton.daemon.core.context import OpContext
 from galton.daemon.ops.joints import joint_states
 from galton.daemon.world.scene import World
 from galton.protocol import NotFoundError, RemoteError, pack_f64
 from galton.protocol.errors import brief
-
-if TYPE_CHECKING:
-    from galton.daemon.core.loop import SimLoop
 
 
 def resting(twists: np.ndarray, job: StepJob) -> bool:
@@ -49,7 +47,7 @@ def job_result(world: World, job: StepJob) -> dict[str, Any]:
     return result
 
 
-def answer_if_reads_gone(loop: SimLoop) -> None:
+def answer_if_reads_gone(loop: OpContext) -> None:
     """A step job whose read entities (or joints) were deleted is answered now with
     NOT_FOUND, not after its steps (a prediction's scratch world cannot lose them)."""
     job = loop.job
@@ -59,7 +57,7 @@ def answer_if_reads_gone(loop: SimLoop) -> None:
     gone = [name for name in job.read or () if name not in world.entities]
     gone += [name for name in job.read_joints or () if name not in world.joints.by_name]
     if gone:
-        loop.job = None
+        loop.end_job()
         loop.reply_error(job.call, NotFoundError(
             f"{brief(gone[0])}, which this step request reads, was deleted after "
             f"{job.done} of {job.total} steps", {"missing": gone[:100],

@@ -19,7 +19,15 @@ from typing import Any
 from galton.daemon.access import lease
 from galton.daemon.access.zmq_auth import refuse_by_role
 from galton.daemon.core import job_results, loop_status, side_jobs, time_control
-from galton.daemon.core.calls import Call, Inbox, StepJob, Task, smoothed_step_cost
+from galton.daemon.core.calls import (
+    Call,
+    Inbox,
+    PolledSource,
+    StepJob,
+    Task,
+    smoothed_step_cost,
+)
+from galton.daemon.core.inbox import PolledInbox
 from galton.daemon.core.limits import DEFAULT_LIMITS, Limits
 from galton.daemon.core.monitor import Pacer, ProcessMonitor, RtfWindow
 from galton.daemon.core.reply_limit import too_big
@@ -74,7 +82,8 @@ class SimLoop:
                  publish_event: Callable[[dict[str, Any]], None],
                  telemetry_rate_hz: float = 10.0,
                  engine_factory: Callable[[str], Any] | None = None,
-                 limits: Limits = DEFAULT_LIMITS) -> None:
+                 limits: Limits = DEFAULT_LIMITS,
+                 polled: PolledSource | None = None) -> None:
         self.world = world
         self.instance = instance
         self.limits = limits
@@ -83,8 +92,9 @@ class SimLoop:
             max_string=limits.max_string_bytes,
             long_text_keys=frozenset(a.name for op in OPERATIONS.values() for a in op.args
                                      if a.long_text))
-        queued: queue.SimpleQueue[Call | Task | None] = queue.SimpleQueue()
-        self.inbox: Inbox = queued  # galton-daemon --zmq: a PolledInbox
+        # A polled front (galton-daemon --zmq) is read on this thread: the core's PolledInbox.
+        self.inbox: Inbox = (PolledInbox(polled, self._gone_task) if polled is not None
+                             else queue.SimpleQueue())
         self.advertised: dict[str, Any] = {}  # what capabilities adds (ZeroMQ endpoints)
         # Whether a Zenoh client's liveliness token is there (the daemon asks Zenoh; None
         # when embedded without a session): take_control ties the lease to that token.
@@ -138,6 +148,23 @@ class SimLoop:
         """Called from Zenoh's threads: hand a request (or a task) to the physics thread."""
         self.inbox.put(call)
 
+    def dispatch(self, call: Call) -> None:
+        """The core's call interface (``CallPort``): hand a request to the physics thread,
+        or answer a fast one on the caller's thread -- the one path of every front."""
+        declared = OPERATIONS.get(call.op)
+        if declared is not None and declared.fast:
+            self.handle_readonly(call)
+        else:
+            self.submit(call)
+
+    def lose_client(self, client: str) -> None:
+        """The core's call interface: a client has gone; its step job and lease end on the
+        physics thread."""
+        self.submit(Task(lambda: self.client_gone(client)))
+
+    def _gone_task(self, client: str) -> Task:
+        return Task(lambda: self.client_gone(client))
+
     def stop(self) -> None:
         self._stopping = True
         self.inbox.put(None)
@@ -179,8 +206,8 @@ class SimLoop:
         log.exception("the physics loop caught an unexpected error; the world is paused")
         error = OperationFailedError(f"the engine failed: {type(exc).__name__}: "
                                      f"{brief(str(exc))}")
-        if self.job is not None:
-            job, self.job = self.job, None
+        job = self.end_job()
+        if job is not None:
             self.reply_error(job.call, error)
         self.set_state(SimState.PAUSED)
         self.emit({"kind": "error", "message": error.message})
@@ -231,9 +258,9 @@ class SimLoop:
 
     def _answer_leftovers(self) -> None:
         closing = OperationFailedError("the daemon is shutting down")
-        if self.job is not None:
-            self.reply_error(self.job.call, closing)
-            self.job = None
+        job = self.end_job()
+        if job is not None:
+            self.reply_error(job.call, closing)
         while True:
             try:
                 call = self.inbox.get_nowait()
@@ -401,8 +428,18 @@ class SimLoop:
         if job is not None:
             job.remaining -= count
             if job_done or (checking and job_results.at_rest(self.world, job)):
-                self.job = None
+                self.end_job()
                 self.finish_job(job)
+
+    def start_job(self, job: StepJob) -> None:
+        """Make ``job`` the step job: the one place it is set (``OpContext``)."""
+        self.job = job
+
+    def end_job(self) -> StepJob | None:
+        """End the step job, if any, and return it for its caller to answer: the one place
+        it is cleared."""
+        job, self.job = self.job, None
+        return job
 
     def finish_job(self, job: StepJob) -> None:
         """Answer a finished step request: {steps}, and the states it asked to read (after
@@ -434,8 +471,9 @@ class SimLoop:
         self.set_state(SimState.PAUSED)
         self.emit({"kind": "physics_error", "message": error.message,
                    "step": self.world.step_index, "sim_time": self.world.sim_time})
-        if self.job is not None and self.job.world is None:
-            job, self.job = self.job, None
+        job = self.job
+        if job is not None and job.world is None:
+            self.end_job()
             self.reply_error(job.call, error)
 
     # -- status & telemetry -------------------------------------------------------------

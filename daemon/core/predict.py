@@ -6,11 +6,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from galton.daemon.core.calls import Call, StepJob
+from galton.daemon.core.context import OpContext
 from galton.daemon.core.limits import MIB
 from galton.daemon.ops import joints as ops_joints
 from galton.daemon.ops import scene as ops
@@ -26,9 +27,6 @@ from galton.protocol import (
 )
 from galton.protocol.arrays import pack_f64
 from galton.protocol.model import check_names, check_type, finite_number
-
-if TYPE_CHECKING:
-    from galton.daemon.core.loop import SimLoop
 
 
 @dataclass
@@ -68,7 +66,7 @@ class PredictSampler:
         return out
 
 
-def predict(loop: SimLoop, call: Call, args: dict[str, Any]) -> None:
+def predict(loop: OpContext, call: Call, args: dict[str, Any]) -> None:
     """Start a prediction job (answered when its horizon is done)."""
     if loop.job is not None:
         raise IncorrectStateError("another step request is still running; wait for it")
@@ -91,10 +89,10 @@ def predict(loop: SimLoop, call: Call, args: dict[str, Any]) -> None:
         copy.engine.close()
         raise
     job.source = source
-    loop.job = job
+    loop.start_job(job)
 
 
-def _job(loop: SimLoop, call: Call, copy: World, horizon: float,
+def _job(loop: OpContext, call: Call, copy: World, horizon: float,
          args: dict[str, Any]) -> StepJob:
     dt = copy.engine.timestep
     steps = horizon_steps(horizon, dt, loop.limits.max_steps)

@@ -6,15 +6,12 @@ from __future__ import annotations
 
 import logging
 import time
-from typing import TYPE_CHECKING
 
 from galton.daemon.core import job_results
 from galton.daemon.core.calls import StepJob, smoothed_step_cost
+from galton.daemon.core.context import OpContext
 from galton.protocol import OperationFailedError, PhysicsError, RemoteError
 from galton.protocol.errors import brief
-
-if TYPE_CHECKING:
-    from galton.daemon.core.loop import SimLoop
 
 log = logging.getLogger("galton.daemon")
 
@@ -22,7 +19,7 @@ log = logging.getLogger("galton.daemon")
 CHUNK_WALL_S = 0.002
 
 
-def run_chunk(loop: SimLoop, job: StepJob) -> None:
+def run_chunk(loop: OpContext, job: StepJob) -> None:
     """One chunk of a side job's steps; answers it when done, at rest, or failed."""
     world = job.world
     assert world is not None
@@ -49,14 +46,14 @@ def run_chunk(loop: SimLoop, job: StepJob) -> None:
                                             f"{brief(str(exc))}"))
         return
     if finished or resting:
-        loop.job = None
+        loop.end_job()
         loop.finish_job(job)
 
 
-def end(loop: SimLoop, job: StepJob, error: RemoteError) -> None:
+def end(loop: OpContext, job: StepJob, error: RemoteError) -> None:
     """Answer a side job with an error and release what it held."""
     if loop.job is job:
-        loop.job = None
+        loop.end_job()
     if isinstance(error, PhysicsError):
         error.details["steps_done"] = job.done
     job.release()

@@ -11,10 +11,11 @@ from __future__ import annotations
 
 import math
 import time
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from galton.daemon.access import lease
 from galton.daemon.core.calls import Call, RestCheck, StepJob
+from galton.daemon.core.context import OpContext
 from galton.daemon.world.scene import World, check_scope
 from galton.protocol import (
     IncorrectStateError,
@@ -24,9 +25,6 @@ from galton.protocol import (
 )
 from galton.protocol.model import check_names, check_type, finite_number, integer_in
 from galton.protocol.vocabulary import SimState, check_fields
-
-if TYPE_CHECKING:
-    from galton.daemon.core.loop import SimLoop
 
 MAX_RTF = 1e6
 
@@ -52,14 +50,14 @@ def _rest_check(args: dict[str, Any], read: list[str] | None,
     return RestCheck(speed, max(1, round(every / timestep)))
 
 
-def status(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+def status(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any]:
     world = loop.world_for(args)
     if world is loop.world:
         return loop.status().to_wire()
     return side_status(loop, world).to_wire()
 
 
-def side_status(loop: SimLoop, world: World) -> SimStatus:
+def side_status(loop: OpContext, world: World) -> SimStatus:
     """A side world's status: it never plays."""
     return SimStatus(
         state=SimState.STOPPED if world.step_index == 0 else SimState.PAUSED,
@@ -69,13 +67,13 @@ def side_status(loop: SimLoop, world: World) -> SimStatus:
         controller=loop.lease.controller)
 
 
-def _live_only(loop: SimLoop, args: dict[str, Any], op: str) -> None:
+def _live_only(loop: OpContext, args: dict[str, Any], op: str) -> None:
     if loop.world_for(args) is not loop.world:
         raise IncorrectStateError(f"{op}: only the live world {loop.world.name!r} plays; a "
                                   "side world moves by step and run_until")
 
 
-def play(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+def play(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any]:
     _live_only(loop, args, "play")
     rtf = args.get("rtf")
     target = loop.target_rtf if rtf is None else _check_rtf(rtf, "play.rtf")
@@ -87,14 +85,14 @@ def play(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
     return loop.status().to_wire()
 
 
-def set_rtf(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+def set_rtf(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any]:
     _live_only(loop, args, "set_rtf")
     loop.target_rtf = _check_rtf(args.get("rtf"), "set_rtf.rtf")
     loop.pacer.anchor(time.monotonic(), loop.world.sim_time, loop.target_rtf)
     return loop.status().to_wire()
 
 
-def pause(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+def pause(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any]:
     world = loop.world_for(args)
     _cancel_job_on(loop, world, "paused")
     if world is not loop.world:
@@ -103,7 +101,7 @@ def pause(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
     return loop.status().to_wire()
 
 
-def stop(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+def stop(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any]:
     """Pause and rewind: time to 0 and every entity back to the state it was created in."""
     world = loop.world_for(args)
     _cancel_job_on(loop, world, "stopped")
@@ -116,7 +114,7 @@ def stop(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
     return loop.status().to_wire()
 
 
-def step(loop: SimLoop, call: Call, args: dict[str, Any]) -> None:
+def step(loop: OpContext, call: Call, args: dict[str, Any]) -> None:
     if "until_rest" in args:
         raise InvalidArgumentError("step takes no until_rest: use run_until with "
                                    "until_rest and read to stop once bodies rest")
@@ -126,7 +124,7 @@ def step(loop: SimLoop, call: Call, args: dict[str, Any]) -> None:
                read_joints=_read_joint_list(world, args, "step"))
 
 
-def run_until(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any] | None:
+def run_until(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any] | None:
     target = finite_number(args.get("sim_time"), "run_until.sim_time", low=0.0)
     world = loop.world_for(args)
     dt = world.engine.timestep
@@ -148,7 +146,7 @@ def run_until(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]
     return None
 
 
-def reset(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+def reset(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any]:
     scope = check_scope(args.get("scope", "all"))
     world = loop.world_for(args)
     _cancel_job_on(loop, world, "reset")
@@ -163,7 +161,7 @@ def reset(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
     return loop.status().to_wire()
 
 
-def load_world(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+def load_world(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any]:
     """Replace the world with a fresh one on the named engine, in this process."""
     _live_only(loop, args, "load_world")
     name = check_type(args.get("engine"), str, "load_world.engine")
@@ -209,7 +207,7 @@ def _read_joint_list(world: World, args: dict[str, Any], where: str) -> list[str
     return names
 
 
-def _start_job(loop: SimLoop, call: Call, world: World, count: int,
+def _start_job(loop: OpContext, call: Call, world: World, count: int,
                read: list[str] | None = None, rest: RestCheck | None = None,
                read_joints: list[str] | None = None) -> None:
     live = world is loop.world
@@ -220,11 +218,11 @@ def _start_job(loop: SimLoop, call: Call, world: World, count: int,
     world.require_valid()
     if live and loop.state == SimState.STOPPED:
         loop.set_state(SimState.PAUSED)
-    loop.job = StepJob(call, count, count, read, rest, read_joints,
-                       world=None if live else world)
+    loop.start_job(StepJob(call, count, count, read, rest, read_joints,
+                           world=None if live else world))
 
 
-def client_gone(loop: SimLoop, client: str) -> None:
+def client_gone(loop: OpContext, client: str) -> None:
     """A client's liveliness token vanished, or its ZeroMQ connection closed: the step
     request it is waiting for ends now (its reply has nowhere to go), the world stays paused
     where it got to, and control it held is released (daemon/access/lease.py). The event names the
@@ -240,7 +238,7 @@ def client_gone(loop: SimLoop, client: str) -> None:
     lease.client_gone(loop, client)
 
 
-def _cancel_job_on(loop: SimLoop, world: World, reason: str) -> None:
+def _cancel_job_on(loop: OpContext, world: World, reason: str) -> None:
     """Cancel the running step request if it steps this world, or predicts from it (a
     prediction is long work on the world's behalf: pause, stop and reset end it too)."""
     job = loop.job
@@ -248,17 +246,17 @@ def _cancel_job_on(loop: SimLoop, world: World, reason: str) -> None:
         cancel_job(loop, reason)
 
 
-def cancel_job(loop: SimLoop, reason: str) -> None:
-    if loop.job is None:
+def cancel_job(loop: OpContext, reason: str) -> None:
+    job = loop.end_job()
+    if job is None:
         return
-    job, loop.job = loop.job, None
     job.release()
     loop.reply_error(job.call, OperationFailedError(
         f"step request interrupted ({reason}) after {job.done} of {job.total} steps",
         {"steps_done": job.done}))
 
 
-def _after_reset(loop: SimLoop) -> None:
+def _after_reset(loop: OpContext) -> None:
     loop.refresh_clock()
     loop.rtf_window.clear()
     loop.pacer.anchor(time.monotonic(), loop.world.sim_time, loop.target_rtf)

@@ -1,2 +1,2 @@
-"""The ways requests come in and telemetry goes out: ZeroMQ (zmq.py), the Zenoh
-configuration (zenoh_config.py; the Zenoh side itself is still daemon/server.py), ROS 2 (ros2/)."""
+"""The ways requests come in and telemetry goes out, each a Front (base.py): Zenoh
+(zenoh.py, its configuration rules in zenoh_config.py), ZeroMQ (zmq.py), ROS 2 (ros2/)."""

@@ -2,7 +2,8 @@
 and events, beside Zenoh, on the same host or a trusted link (docs/protocol.md, "ZeroMQ").
 
 No thread of its own and no hand-off: the physics thread polls the sockets between steps
-(``PolledInbox``), reads a request, answers it, and sends the reply itself. ZeroMQ sockets
+(the core's ``PolledInbox``, daemon/core/inbox.py, given this front as its ``PolledSource``),
+reads a request, answers it, and sends the reply itself. ZeroMQ sockets
 are not thread-safe, so every socket here is used on the physics thread only; requests that
 come over Zenoh are queued as before and wake the poll through a pipe.
 
@@ -15,12 +16,10 @@ from __future__ import annotations
 import contextlib
 import errno
 import os
-import queue
 import select
 import socket as sockets
 import stat
 import time
-from collections import deque
 from collections.abc import Callable, Iterator
 from typing import Any
 
@@ -29,7 +28,7 @@ from zmq.backend.cython._zmq import Socket as BaseSocket
 from zmq.utils.monitor import parse_monitor_message
 
 from galton.daemon.access.zmq_auth import ZmqSecurity, start_authenticator
-from galton.daemon.core.calls import Call, Task
+from galton.daemon.core.calls import Call, CallPort, Task
 from galton.protocol import InvalidArgumentError
 from galton.protocol.errors import brief
 
@@ -88,7 +87,8 @@ def telemetry_endpoint(control: str) -> str:
 
 
 class ZmqFront:
-    """The bound sockets, the monitor of each ROUTER and the pipe that wakes the poll."""
+    """The ZeroMQ ``Front`` (daemon/fronts/base.py) and the core's ``PolledSource``: the bound
+    sockets, the monitor of each ROUTER and the pipe that wakes the poll."""
 
     def __init__(self, endpoints: list[str], instance: str,
                  security: ZmqSecurity | None = None) -> None:
@@ -170,6 +170,13 @@ class ZmqFront:
                 found = os.stat(bound[len("ipc://"):])
                 self.files[bound] = (found.st_dev, found.st_ino)
 
+    def open(self, core: CallPort) -> None:
+        """Nothing to start: the core polls this front (as its ``PolledSource``) from the
+        moment its physics thread runs, and answers each call on that thread."""
+
+    def withdraw(self) -> None:
+        """Nothing to withdraw: ZeroMQ has no liveliness; the sockets close at ``close``."""
+
     def advertised(self) -> dict[str, Any]:
         """The endpoints as ``capabilities`` names them, with the CURVE public key (Z85) a
         client needs when the front is encrypted."""
@@ -177,7 +184,7 @@ class ZmqFront:
                                  "telemetry": list(self.telemetry)}
         if self.security is not None:
             found["server_key"] = self.security.public_key.decode()
-        return found
+        return {"zmq": found}
 
     def wake(self) -> None:
         """Called from any thread: make a waiting ``wait`` return."""
@@ -356,54 +363,3 @@ def _refuse_if_served(endpoint: str) -> None:
         f"--zmq {endpoint}: a running process serves that socket already (another "
         "galton-daemon?): stop it, or give another path")
 
-
-NOTHING = object()
-
-
-class PolledInbox:
-    """The physics loop's inbox when ZeroMQ is on: Zenoh's calls in a queue that wakes the
-    poll, ZeroMQ's read straight from the sockets. Same interface as ``queue.SimpleQueue``."""
-
-    def __init__(self, front: ZmqFront, gone: Callable[[str], Task]) -> None:
-        self.front = front
-        self.gone = gone
-        self.queue: queue.SimpleQueue[Call | Task | None] = queue.SimpleQueue()
-        self.pending: deque[Call | Task] = deque()
-        self._zmq_first = False  # whose turn it is: Zenoh's queue or the ZeroMQ sockets
-
-    def put(self, item: Call | Task | None) -> None:
-        self.queue.put(item)
-        self.front.wake()
-
-    def _take(self) -> object:  # a Call, a Task, None (stop) or NOTHING
-        """The next item, or NOTHING: Zenoh's queue and the ZeroMQ sockets take turns, so
-        that neither front's load starves the other (only this thread takes from either)."""
-        self._zmq_first = not self._zmq_first
-        if self._zmq_first:
-            item = self._from_zmq()
-            return item if item is not NOTHING or self.queue.empty() else self.queue.get_nowait()
-        if not self.queue.empty():
-            return self.queue.get_nowait()
-        return self._from_zmq()
-
-    def _from_zmq(self) -> object:
-        if not self.pending:
-            self.pending.extend(self.front.receive(self.gone))
-        return self.pending.popleft() if self.pending else NOTHING
-
-    def get_nowait(self) -> Call | Task | None:
-        item = self._take()
-        if item is NOTHING:
-            raise queue.Empty
-        return item  # type: ignore[return-value]
-
-    def get(self, block: bool = True, timeout: float | None = None) -> Call | Task | None:
-        if not block:
-            return self.get_nowait()
-        deadline = None if timeout is None else time.monotonic() + timeout
-        while (item := self._take()) is NOTHING:
-            remaining = None if deadline is None else deadline - time.monotonic()
-            if remaining is not None and remaining <= 0:
-                raise queue.Empty
-            self.front.wait(remaining)  # receive() has just looked: see ZmqFront.wait
-        return item  # type: ignore[return-value]

@@ -12,11 +12,12 @@ bound here too, so that a status that does reach the physics thread is answered 
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from galton.daemon.access import lease
 from galton.daemon.core import predict, time_control
 from galton.daemon.core.calls import Call
+from galton.daemon.core.context import OpContext
 from galton.daemon.ops import joints as ops_joints
 from galton.daemon.ops import perception as ops_perception
 from galton.daemon.ops import scene as ops
@@ -25,11 +26,8 @@ from galton.daemon.world import pose_compare as compare
 from galton.daemon.world import state_streams
 from galton.protocol.operations import OPERATIONS
 
-if TYPE_CHECKING:
-    from galton.daemon.core.loop import SimLoop
-
 Result = dict[str, Any] | None  # None: the reply comes later (a step job)
-Handler = Callable[["SimLoop", Call, dict[str, Any]], Result]
+Handler = Callable[[OpContext, Call, dict[str, Any]], Result]
 
 
 def _scene(name: str, apply: ops.SceneOp) -> Handler:
@@ -37,7 +35,7 @@ def _scene(name: str, apply: ops.SceneOp) -> Handler:
     the scene is announced, and a step job reading a deleted entity is answered now."""
     mutates = OPERATIONS[name].mutates
 
-    def handle(loop: SimLoop, call: Call, args: dict[str, Any]) -> Result:
+    def handle(loop: OpContext, call: Call, args: dict[str, Any]) -> Result:
         world = loop.world_for(args)
         result = apply(world, args)
         if mutates:
@@ -51,7 +49,7 @@ def _scene(name: str, apply: ops.SceneOp) -> Handler:
     return handle
 
 
-def _capabilities(loop: SimLoop, call: Call, args: dict[str, Any]) -> Result:
+def _capabilities(loop: OpContext, call: Call, args: dict[str, Any]) -> Result:
     """The engine's capabilities, with what the daemon adds (its ZeroMQ endpoints)."""
     return {**ops.capabilities(loop.world_for(args), args), **loop.advertised}
 

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Any
 
 from galton.daemon.core import time_control
 from galton.daemon.core.calls import Call
+from galton.daemon.core.context import OpContext
 from galton.daemon.core.reply_limit import require_room
 from galton.daemon.world.scene import World
 from galton.daemon.world.slots import Slot
@@ -28,13 +29,12 @@ from galton.protocol.errors import brief
 from galton.protocol.model import check_type, require
 
 if TYPE_CHECKING:
-    from galton.daemon.core.loop import SimLoop
     from galton.daemon.engines.base import Engine
 
 MAX_WORLD_NAME = 64
 
 
-def world_row(loop: SimLoop, world: World) -> dict[str, Any]:
+def world_row(loop: OpContext, world: World) -> dict[str, Any]:
     live = world is loop.world
     state = loop.state if live else (SimState.STOPPED if world.step_index == 0
                                      else SimState.PAUSED)
@@ -43,11 +43,11 @@ def world_row(loop: SimLoop, world: World) -> dict[str, Any]:
             "entity_count": len(world.entities), "faulted": world.faulted}
 
 
-def list_worlds(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+def list_worlds(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any]:
     return {"worlds": [world_row(loop, w) for w in (loop.world, *loop.side.values())]}
 
 
-def _new_name(loop: SimLoop, args: dict[str, Any], where: str) -> str:
+def _new_name(loop: OpContext, args: dict[str, Any], where: str) -> str:
     name: str = require(args, "name", str, where)
     if not 1 <= len(name) <= MAX_WORLD_NAME or not name.isprintable():
         raise InvalidArgumentError(f"{where}.name {brief(name)} must be 1-{MAX_WORLD_NAME} "
@@ -61,13 +61,13 @@ def _new_name(loop: SimLoop, args: dict[str, Any], where: str) -> str:
     return name
 
 
-def _factory(loop: SimLoop) -> Any:
+def _factory(loop: OpContext) -> Any:
     if loop.engine_factory is None:
         raise OperationFailedError("this daemon cannot make engines")
     return loop.engine_factory
 
 
-def create_world(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+def create_world(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any]:
     name = _new_name(loop, args, "create_world")
     kind = check_type(args.get("engine", loop.world.engine.name), str, "create_world.engine")
     params = args.get("params")
@@ -85,7 +85,7 @@ def create_world(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, A
     return world_row(loop, loop.side[name])
 
 
-def fork_world(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+def fork_world(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any]:
     name = _new_name(loop, args, "fork_world")
     source_name = args.get("source")
     source = loop.world_for({} if source_name is None else {"world": source_name})
@@ -95,7 +95,7 @@ def fork_world(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any
     return world_row(loop, loop.side[name])
 
 
-def delete_world(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+def delete_world(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any]:
     name = require(args, "name", str, "delete_world")
     world = loop.world_for({"world": name})
     if world is loop.world:
@@ -108,7 +108,7 @@ def delete_world(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, A
     return {"count": 1}
 
 
-def snapshot(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+def snapshot(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any]:
     world = loop.world_for(args)
     slot_name = args.get("slot")
     want_blob = check_type(args.get("blob", False), bool, "snapshot.blob")
@@ -135,7 +135,7 @@ def snapshot(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
     return result
 
 
-def restore(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+def restore(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any]:
     world = loop.world_for(args)
     slot_name, blob = args.get("slot"), args.get("blob")
     if (slot_name is None) == (blob is None):
@@ -159,10 +159,10 @@ def restore(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
     return world_row(loop, new)
 
 
-def snapshots(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+def snapshots(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any]:
     return {"slots": [slot.to_wire() for slot in loop.slots.by_name.values()]}
 
 
-def delete_snapshot(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+def delete_snapshot(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any]:
     loop.slots.delete(require(args, "slot", str, "delete_snapshot"))
     return {"count": 1}

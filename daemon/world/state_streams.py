@@ -20,21 +20,19 @@ import secrets
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import msgpack
 import numpy as np
 
 from galton.daemon.core.calls import Call
+from galton.daemon.core.context import OpContext
 from galton.daemon.world.scene import World, canonical_quaternions
 from galton.daemon.world.stream_sender import Publish, SampleSender
 from galton.protocol import InvalidArgumentError, Keys, NotFoundError, ResourceLimitError
 from galton.protocol.arrays import pack_f64
 from galton.protocol.errors import brief
 from galton.protocol.keys import STREAMS_CHUNK
-
-if TYPE_CHECKING:
-    from galton.daemon.core.loop import SimLoop
 
 MIN_RATE_HZ = 1.0
 MAX_RATE_HZ = 60.0
@@ -83,7 +81,7 @@ class StateStreams:
         self.streams: dict[str, StateStream] = {}
         self.next_due = math.inf
 
-    def open(self, loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+    def open(self, loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any]:
         """Open a stream for the request's client; its first sample is due at once."""
         rate = _check_rate(args.get("rate", 10.0))
         names = args.get("names")
@@ -121,7 +119,7 @@ class StateStreams:
         for stream in [s for s in self.streams.values() if s.owner == owner]:
             self._end(stream)
 
-    def publish_due(self, loop: SimLoop, now: float) -> None:
+    def publish_due(self, loop: OpContext, now: float) -> None:
         """Publish a sample of every stream that is due, and schedule each one's next."""
         shared: dict[tuple[int, int, tuple[str, ...] | None], bytes] = {}
         for stream in list(self.streams.values()):
@@ -131,7 +129,7 @@ class StateStreams:
             self._sample(loop, stream, shared)
         self._reschedule()
 
-    def _sample(self, loop: SimLoop, stream: StateStream,
+    def _sample(self, loop: OpContext, stream: StateStream,
                 shared: dict[tuple[int, int, tuple[str, ...] | None], bytes]) -> None:
         """One sample; ``shared`` holds the poses this round already read, by world and
         names, so that streams of the same world read it once."""
@@ -241,7 +239,7 @@ def _caller(call: Call) -> str | None:
     return call.peer if call.peer is not None else call.client
 
 
-def _owner(loop: SimLoop, call: Call) -> str:
+def _owner(loop: OpContext, call: Call) -> str:
     owner = _caller(call)
     if owner is None:
         raise InvalidArgumentError(NO_OWNER)
@@ -253,11 +251,11 @@ def _owner(loop: SimLoop, call: Call) -> str:
     return owner
 
 
-def stream_states(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+def stream_states(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any]:
     """The ``stream_states`` operation (docs/protocol.md, "State streams")."""
     return loop.streams.open(loop, call, args)
 
 
-def close_stream(loop: SimLoop, call: Call, args: dict[str, Any]) -> dict[str, Any]:
+def close_stream(loop: OpContext, call: Call, args: dict[str, Any]) -> dict[str, Any]:
     """The ``close_stream`` operation."""
     return loop.streams.close(call, args)

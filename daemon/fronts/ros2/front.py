@@ -21,7 +21,7 @@ from typing import Any
 
 import zenoh
 
-from galton.daemon.core.calls import Call
+from galton.daemon.core.calls import Call, CallPort
 from galton.daemon.fronts.ros2 import codes, rmw_zenoh
 from galton.daemon.fronts.ros2.action import SimulateStepsServer
 from galton.daemon.fronts.ros2.interfaces import dds_type_name, service_type, type_hash
@@ -48,7 +48,9 @@ def service_name(type_name: str) -> str:
 
 
 class Ros2Front:
-    """One ROS 2 node, named after the daemon's instance, with a server per service."""
+    """One ROS 2 node, named after the daemon's instance, with a server per service: a
+    ``Front`` (daemon/fronts/base.py) that serves from construction, on the Zenoh front's
+    session, and publishes its own topics (so the core's samples are not its business)."""
 
     def __init__(self, session: zenoh.Session, dispatch: Dispatch, node: str,
                  options: Ros2Options) -> None:
@@ -145,6 +147,18 @@ class Ros2Front:
                 then(decode_reply(data))
             except Exception:  # one bad continuation must not end the others
                 log.exception("ROS 2 front: a reply's continuation failed")
+
+    def open(self, core: CallPort) -> None:
+        """Nothing more to start: the node serves from construction (it needs the session)."""
+
+    def publish(self, topic: str, data: bytes) -> None:
+        """Not this front's: /clock, /tf and joint states are read by its own topic loop."""
+
+    def advertised(self) -> dict[str, Any]:
+        return {}
+
+    def withdraw(self) -> None:
+        """The node's token goes at ``close``, after pending requests are answered."""
 
     def close(self) -> None:
         self.topics.close()

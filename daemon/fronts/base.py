@@ -1,0 +1,65 @@
+"""What every front is: calls in, telemetry and events out, opened and closed by the
+composition root (daemon/server.py).
+
+A front turns a transport's requests into ``Call`` objects and hands them to the core's
+call interface (``CallPort``: daemon/core/calls.py), the only part of the core it may
+import; the reply comes back through ``Call.respond``. Everything the core publishes
+(telemetry, events, state streams) goes once to the list of fronts, each of which puts it
+on its own wire or ignores it. A new front is one module (or package) here with this shape.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any, Protocol
+
+from galton.daemon.core.calls import CallPort
+
+TELEMETRY = "telemetry"
+EVENTS = "events"
+
+
+class Front(Protocol):
+    """One transport the daemon serves on."""
+
+    def open(self, core: CallPort) -> None:
+        """Start taking calls: from now on requests go to ``core.dispatch``."""
+
+    def publish(self, topic: str, data: bytes) -> None:
+        """Put one sample on ``galton/<instance>/<topic>`` (``telemetry``, ``events`` or a
+        state stream's topic), msgpack already; never block the physics thread on it."""
+
+    def advertised(self) -> dict[str, Any]:
+        """What ``capabilities`` tells clients about this front (empty: nothing)."""
+
+    def withdraw(self) -> None:
+        """Stop being found (the first step of a shutdown); pending calls still get answers."""
+
+    def close(self) -> None:
+        """Release the front's sockets, after the physics thread has stopped."""
+
+
+class Fronts:
+    """The fronts of one daemon, published to as one: no hand copy per transport."""
+
+    def __init__(self, fronts: Sequence[Front] = ()) -> None:
+        self.fronts: list[Front] = list(fronts)
+
+    def publish(self, topic: str, data: bytes) -> None:
+        for front in self.fronts:
+            front.publish(topic, data)
+
+    def advertised(self) -> dict[str, Any]:
+        found: dict[str, Any] = {}
+        for front in self.fronts:
+            found.update(front.advertised())
+        return found
+
+    def withdraw(self) -> None:
+        for front in self.fronts:
+            front.withdraw()
+
+    def close(self) -> None:
+        """Close in reverse order: a front built on another's session closes before it."""
+        for front in reversed(self.fronts):
+            front.close()
