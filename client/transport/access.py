@@ -1,7 +1,7 @@
 """Telling "access denied" from "not reachable": Zenoh says neither in words.
 
 What a refusal looks like to a client, found by experiment with zenoh 1.10.2 on loopback
-(tests/test_security_zenoh.py shows each):
+(tests/daemon/access/test_security_zenoh.py shows each):
 
 - A daemon started with ``--users`` closes a session that brings no credentials, a wrong
   password or an unknown user during the handshake, and a TLS handshake fails when either

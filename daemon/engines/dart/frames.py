@@ -2,7 +2,7 @@
 
 A free joint's six positions are the rotation vector (log map) of its child's orientation,
 then its position in the world; its six velocities are the child's angular and linear
-velocity in the world frame (dartpy 6.20; tests/engines/test_dart_engine.py checks it).
+velocity in the world frame (dartpy 6.20; tests/daemon/engines/test_dart_engine.py checks it).
 Converting them with numpy for a whole batch costs two DART calls per body (positions,
 velocities) instead of one per quantity.
 """

@@ -10,7 +10,7 @@ The same freeze holds arches. A ball on a pin's shoulder (15-25 degrees from its
 pinned there by a neighbour wedged against the side of the pin above; the neighbour slides
 down that side at about the sleep tolerance (5 mm/s), so the pair falls asleep, and stays
 for good. Awake, the same pair collapses within 3 s (paper board, MuJoCo all-at-once, 500
-balls: 3 of 190 trials ended with such a pair; tests/engines/test_mujoco_engine.py rebuilds
+balls: 3 of 190 trials ended with such a pair; tests/daemon/engines/test_mujoco_engine.py rebuilds
 one).
 
 So every few steps the engine looks at the balls that fell asleep since its last look. One

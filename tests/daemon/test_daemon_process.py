@@ -18,7 +18,7 @@ from galton.client import Client, EmbeddedDaemon, instances, plane, spheres, wai
 from galton.daemon.server import SHUTDOWN_GRACE_S
 from galton.protocol import DaemonUnreachableError, GaltonError, OperationFailedError, Telemetry
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def load_example(name: str):  # type: ignore[no-untyped-def]

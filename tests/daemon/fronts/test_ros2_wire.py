@@ -17,7 +17,7 @@ from galton.daemon.fronts.ros2 import interfaces, rmw_zenoh
 from galton.daemon.fronts.ros2.messages import decode, encode, header, new, tf_cdr, vector
 from galton.protocol import InvalidArgumentError
 
-ROSIDL = json.loads((Path(__file__).parent / "ros2_rosidl_hashes.json").read_text())
+ROSIDL = json.loads((Path(__file__).parents[2] / "ros2_rosidl_hashes.json").read_text())
 # From rmw_zenoh docs/design.md.
 STRING_HASH = "RIHS01_df668c740482bbd48fb39d76a70dfd4bd59db1288021743503259e948f6b1a18"
 ADD_TWO_INTS_HASH = "RIHS01_e118de6bf5eeb66a2491b5bda11202e7b68f198d6f67922cf30364858239c81a"

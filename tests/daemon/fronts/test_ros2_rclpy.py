@@ -4,8 +4,8 @@ for every standard message type it sends or takes. Needs Kilted's wheels in the 
     pip install ros-rclpy ros-rmw-fastrtps-cpp ros-std-msgs ros-rosgraph-msgs \\
         ros-geometry-msgs ros-sensor-msgs
 
-(~280 MB and ~80 s to install, so not in [test]; tests/test_ros2_wire.py holds fixed bytes
-rclpy made once.) Byte equality is checked on every byte that is the message's: Fast-CDR
+(~280 MB and ~80 s to install, so not in [test]; tests/daemon/fronts/test_ros2_wire.py holds
+fixed bytes rclpy made once.) Byte equality is checked on every byte that is the message's: Fast-CDR
 leaves alignment padding uninitialised, so those bytes are compared by decoding instead."""
 
 from __future__ import annotations

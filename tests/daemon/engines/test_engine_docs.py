@@ -7,7 +7,7 @@ from pathlib import Path
 
 from galton.daemon.engines import ENGINE_CLASSES
 
-GENERATOR = Path(__file__).parents[1] / "docs" / "make_engines_md.py"
+GENERATOR = Path(__file__).parents[3] / "docs" / "make_engines_md.py"
 
 
 def test_engines_page_tables_match_the_engines_specs() -> None:

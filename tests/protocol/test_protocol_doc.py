@@ -16,8 +16,8 @@ from galton.daemon.core.limits import Limits
 from galton.protocol import ResultCode
 from galton.protocol.operations import LONG_RUNNING_TIMEOUT_S, OPERATIONS, Operation
 
-PAGE = (Path(__file__).resolve().parents[1] / "docs" / "protocol.md").read_text()
-DAEMON = Path(__file__).resolve().parents[1] / "daemon"
+PAGE = (Path(__file__).resolve().parents[2] / "docs" / "protocol.md").read_text()
+DAEMON = Path(__file__).resolve().parents[2] / "daemon"
 
 
 def section(op: str) -> str:

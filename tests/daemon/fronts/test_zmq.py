@@ -22,7 +22,7 @@ from galton.client.sdk.embedded import daemon_command, free_loopback_port
 from galton.daemon.fronts.zmq import telemetry_endpoint
 from galton.protocol import DaemonUnreachableError, InvalidArgumentError
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[3]
 REPLY_WAIT_MS = 20_000
 
 

@@ -19,6 +19,7 @@ import pytest
 import zenoh
 from support_certs import Certificates, make_certificates
 from support_daemons import start_daemon
+from support_users import ALICE, BOB, users_file
 from typer.testing import CliRunner
 
 from galton.client import (
@@ -39,27 +40,7 @@ from galton.protocol.auth import wire_password
 
 INSTANCE = "secured"
 WAIT_S = 20.0
-USERS = """
-[users.alice]
-role = "operator"
-password = "alice-secret-1"
-tls_name = "alice.robot"
-
-[users.bob]
-role = "viewer"
-password_sha256 = "{bob_hash}"
-tls_name = "bob.view"
-"""
-ALICE = Credentials("alice", "alice-secret-1")
-BOB = Credentials("bob", "bob-secret-2")
 FORGED = b"forged by the viewer"
-
-
-def users_file(folder: Path) -> Path:
-    path = folder / "users.toml"
-    path.write_text(USERS.format(bob_hash=wire_password("bob", "bob-secret-2")))
-    path.chmod(0o600)
-    return path
 
 
 @pytest.fixture(scope="module")
