@@ -110,6 +110,23 @@ class Operation:
         return max(default_s, self.timeout_floor_s)
 
 
+# -- operations declared whole here: request type, reply type and entry side by side. A new
+# operation is one such block (docs/ARCHITECTURE.md, "How to add an operation"); the shared
+# types it may reuse sit in protocol/requests.py.
+
+
+class GetEntities(rq.Args, kw_only=True, forbid_unknown_fields=True):
+    """get_entities' filters, as ROS 2 simulation_interfaces' GetEntities: a regex searched
+    in each name, and a box (two points: min corner, max corner) each entity's bounds must
+    touch. An entity passes every filter sent; none sent: every entity."""
+
+    pattern: rq.Text | None = None
+    region: rq.Points | None = None
+
+
+GET_ENTITIES = Operation("get_entities", GetEntities, reply=rq.NamesReply)
+
+
 _REBUILDS = 30.0  # operations that may rebuild the engine's world wait at least this long
 OPERATIONS: dict[str, Operation] = {op.name: op for op in (
     Operation("status", rq.NoArgs, fast=True, reply=rq.StatusReply),
@@ -130,6 +147,7 @@ OPERATIONS: dict[str, Operation] = {op.name: op for op in (
     Operation("get_states", rq.NamesOrAll, reply=rq.StatesReply),
     Operation("get_bounds", rq.NamesOrAll, reply=rq.BoundsReply),
     Operation("get_shapes", rq.NamesOrAll, reply=rq.ShapesReply),
+    GET_ENTITIES,
     Operation("set_states", rq.SetStates, mutates=True, reply=rq.CountReply),
     Operation("update", rq.Update, mutates=True, reply=rq.CountReply),
     Operation("delete", rq.NamedOnly, mutates=True, timeout_floor_s=_REBUILDS, reply=rq.CountReply),

@@ -56,12 +56,13 @@ from galton.protocol import (
     Reply,
     SimStatus,
     Telemetry,
+    pack_f64,
 )
 from galton.protocol import mesh as mesh_wire
 from galton.protocol.arrays import unpack_f64
 from galton.protocol.errors import ClientClosedError, InvalidArgumentError
 from galton.protocol.operations import OPERATIONS
-from galton.protocol.requests import BoundsReply, ShapesReply, decode_result
+from galton.protocol.requests import BoundsReply, NamesReply, ShapesReply, decode_result
 
 DEFAULT_TIMEOUT_S = 5.0
 
@@ -293,6 +294,15 @@ class Client(WorldMethods, PerceptionMethods, ControlMethods, StreamMethods):
                                                     sdk_joints.names_arg(names)).result)
         rows = unpack_f64(reply.bounds, 6, "bounds")
         return dict(zip(reply.names, rows, strict=True))
+
+    def get_entities(self, pattern: str | None = None,
+                     region: ArrayLike | None = None) -> builtins.list[str]:
+        """The entities passing every filter given (all when none): names the regex
+        ``pattern`` is found in; bounds touching ``region``, a box as two points
+        ``[[min_x, min_y, min_z], [max_x, max_y, max_z]]``."""
+        box = None if region is None else pack_f64(np.asarray(region, dtype=float).ravel())
+        result = self._ok("get_entities", sdk_joints.given(pattern=pattern, region=box)).result
+        return decode_result(NamesReply, result).names
 
     def get_shapes(self, names: Sequence[str] | None = None
                    ) -> dict[str, builtins.list[ShapeInfo]]:

@@ -1,6 +1,10 @@
 """What the daemon does for each operation: protocol/operations.py declares every operation
-(its arguments, whether it mutates, steps or is fast, how long a client waits); this table
+(its arguments, whether it mutates, steps or is fast, how long a client waits); this module
 binds each one to the function that serves it, and refuses to load when the two drift.
+
+A handler is bound where it is written, marked ``@handles("op")`` or ``@scene_op("op")``
+(daemon/ops/binding.py), in one of the modules ``OP_MODULES`` lists; the operations that
+predate the marks are still bound in ``_TABLE`` below (the same checks hold for both).
 
 Time-control operations (daemon/core/time_control.py) act on the loop; scene operations
 (daemon/ops/scene.py) act on its World and, when they change it, publish a ``scene`` event. The
@@ -11,7 +15,8 @@ bound here too, so that a status that does reach the physics thread is answered 
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
+from types import ModuleType
 from typing import Any
 
 from galton.daemon.access import lease
@@ -22,6 +27,7 @@ from galton.daemon.ops import joints as ops_joints
 from galton.daemon.ops import perception as ops_perception
 from galton.daemon.ops import scene as ops
 from galton.daemon.ops import worlds
+from galton.daemon.ops.binding import binding_of
 from galton.daemon.world import pose_compare as compare
 from galton.daemon.world import state_streams
 from galton.protocol.operations import OPERATIONS
@@ -57,7 +63,7 @@ def _capabilities(loop: OpContext, call: Call, request: Args) -> Result:
     return {**ops.capabilities(loop.world_for(request), request), **loop.advertised}
 
 
-HANDLERS: dict[str, Handler] = {
+_TABLE: dict[str, Handler] = {
     "status": time_control.status,
     "capabilities": _capabilities,
     "play": time_control.play,
@@ -106,6 +112,32 @@ HANDLERS: dict[str, Handler] = {
     "stream_states": state_streams.stream_states,
     "close_stream": state_streams.close_stream,
 }
+
+
+# The modules whose marked functions are handlers (daemon/ops/binding.py): a module that
+# serves operations is listed here once, then each new handler in it binds itself.
+OP_MODULES: tuple[ModuleType, ...] = (ops, ops_joints, ops_perception, worlds, time_control,
+                                      predict, compare, lease, state_streams)
+
+
+def collect(modules: Iterable[ModuleType], table: dict[str, Handler]) -> dict[str, Handler]:
+    """``table`` and the functions marked in ``modules`` (each where it is defined), as one
+    map; an operation bound twice is refused."""
+    found = dict(table)
+    for module in modules:
+        for value in vars(module).values():
+            binding = binding_of(value)
+            if binding is None or getattr(value, "__module__", None) != module.__name__:
+                continue
+            if binding.operation in found:
+                raise RuntimeError(f"operation {binding.operation!r} is bound twice (a "
+                                   f"marked handler in {module.__name__} and another)")
+            found[binding.operation] = (_scene(binding.operation, value) if binding.scene
+                                        else value)
+    return found
+
+
+HANDLERS: dict[str, Handler] = collect(OP_MODULES, _TABLE)
 
 
 # What the transport's thread can answer from the loop's snapshot (SimLoop.handle_readonly).

@@ -8,6 +8,7 @@ checks happen before anything is changed, so a bad request leaves the scene as i
 from __future__ import annotations
 
 import os
+import re
 import stat
 from collections.abc import Callable
 from typing import Any
@@ -17,6 +18,7 @@ import numpy as np
 from galton.daemon.core.host_info import host_info
 from galton.daemon.engines import ENGINE_CLASSES
 from galton.daemon.engines.base import FEATURE_SPAWN_INERTIA
+from galton.daemon.ops.binding import scene_op
 from galton.daemon.world.model_files import search_folders
 from galton.daemon.world.scene import World
 from galton.protocol import (
@@ -29,7 +31,8 @@ from galton.protocol import (
 )
 from galton.protocol import requests as rq
 from galton.protocol.errors import brief
-from galton.protocol.model import check_names, decode_poses, decode_twists
+from galton.protocol.model import check_names, decode_points, decode_poses, decode_twists
+from galton.protocol.operations import GetEntities
 from galton.protocol.vocabulary import MAX_BATCH, MODEL_SHAPES
 
 SceneOp = Callable[[World, Any], dict[str, Any]]  # Any: the op's declared request
@@ -136,6 +139,45 @@ def get_bounds(world: World, request: rq.NamesOrAll) -> dict[str, Any]:
     """Each entity's axis-aligned bounds in the world frame (simulation_interfaces'
     GetEntityBounds): rows of ``min_x min_y min_z max_x max_y max_z``."""
     names = _names_or_all(world, request.names, "get_bounds")
+    return {"names": names, "bounds": pack_f64(bounds_of(world, names))}
+
+
+@scene_op("get_entities")
+def get_entities(world: World, request: GetEntities) -> dict[str, Any]:
+    """The entities that pass every filter sent (simulation_interfaces' GetEntities): a
+    name the regex ``pattern`` is found in, bounds that touch the box ``region``."""
+    found = _regex(request.pattern).search if request.pattern is not None else None
+    region = _region(request.region) if request.region is not None else None
+    names = [name for name in world.entities if found is None or found(name)]
+    if region is not None and names:
+        low, high = region
+        rows = bounds_of(world, names)
+        touch = np.all((rows[:, :3] <= high) & (rows[:, 3:] >= low), axis=1)
+        names = [name for name, inside in zip(names, touch, strict=True) if inside]
+    return {"names": names}
+
+
+def _regex(pattern: str) -> re.Pattern[str]:
+    try:
+        return re.compile(pattern)
+    except re.error as exc:
+        raise InvalidArgumentError(
+            f"get_entities.pattern {brief(pattern)} is not a regular expression: {exc}"
+        ) from None
+
+
+def _region(raw: bytes) -> tuple[np.ndarray, np.ndarray]:
+    low, high = decode_points(raw, 2, "get_entities.region")
+    if (low > high).any():
+        raise InvalidArgumentError(
+            f"get_entities.region's min corner {low.tolist()} exceeds its max corner "
+            f"{high.tolist()} on some axis")
+    return low, high
+
+
+def bounds_of(world: World, names: list[str]) -> np.ndarray:
+    """The (n, 6) world-frame bounds of these entities: a primitive's from its shape, a
+    model's asked of the engine (FEATURE_UNSUPPORTED where it cannot say)."""
     poses, _ = world.get_states(names)  # unknown names: NOT_FOUND, as get_states
     infos = [world.entities[n].info for n in names]
     modelled = [n for n, info in zip(names, infos, strict=True) if info.shape in MODEL_SHAPES]
@@ -144,7 +186,7 @@ def get_bounds(world: World, request: rq.NamesOrAll) -> dict[str, Any]:
     rows = [from_engine[info.name] if info.name in from_engine
             else primitive_bounds(info.shape, info.size, pose)
             for info, pose in zip(infos, poses, strict=True)]
-    return {"names": names, "bounds": pack_f64(np.array(rows, dtype=float).reshape(-1, 6))}
+    return np.array(rows, dtype=float).reshape(-1, 6)
 
 
 def get_shapes(world: World, request: rq.NamesOrAll) -> dict[str, Any]:
