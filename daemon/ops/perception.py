@@ -131,18 +131,22 @@ def raycast(world: World, request: rq.Raycast) -> dict[str, Any]:
         DEFAULT_MAX_LENGTH if request.max_length is None else request.max_length,
         "raycast.max_length", low=0.0, low_open=True)
     if request.ends is not None:
-        vectors = decode_points(request.ends, count, "raycast.ends") - origins
-        lengths = np.linalg.norm(vectors, axis=1)
+        with np.errstate(over="ignore", invalid="ignore"):
+            vectors = decode_points(request.ends, count, "raycast.ends") - origins
+        if not np.isfinite(vectors).all():
+            raise InvalidArgumentError(
+                f"raycast ray {int(np.argmin(np.isfinite(vectors).all(axis=1)))}: its end is "
+                "too far from its origin (the difference overflows)")
     else:
         vectors = decode_points(request.directions, count, "raycast.directions")
-        lengths = np.full(count, max_length)
-    norms = np.linalg.norm(vectors, axis=1)
-    if (norms < 1e-12).any():
-        raise InvalidArgumentError(f"raycast ray {int(np.argmax(norms < 1e-12))} has a zero "
-                                   "direction (or its end is its origin)")
+    units, norms = unit_rows(vectors)
+    lengths = norms if request.ends is not None else np.full(count, max_length)
+    if not np.isfinite(lengths).all():
+        raise InvalidArgumentError(f"raycast ray {int(np.argmin(np.isfinite(lengths)))}: its "
+                                   "end is too far from its origin (the length overflows)")
     world.verify()
     hits, entities, points, normals, distances = world.engine.raycast(
-        origins, vectors / norms[:, None], float(lengths.max()) if count else max_length)
+        origins, units, float(lengths.max()) if count else max_length)
     beyond = hits & (distances > lengths)  # a ray given an end stops there
     if beyond.any():
         hits = hits & ~beyond
@@ -151,6 +155,23 @@ def raycast(world: World, request: rq.Raycast) -> dict[str, Any]:
     return {"hits": np.asarray(hits, dtype=np.uint8).tobytes(), "entities": entities,
             "points": pack_f64(points), "normals": pack_f64(normals),
             "distances": pack_f64(distances)}
+
+
+def unit_rows(vectors: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each row scaled to length 1 and its length (inf where it overflows), refusing a zero
+    one; scaled by its largest component
+    first, so that a huge direction (1e200) does not overflow its norm to inf and become
+    zero (MuJoCo's mj_ray aborts the process on a zero direction)."""
+    largest = np.abs(vectors).max(axis=1, initial=0.0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        scaled = vectors / largest[:, None]
+    with np.errstate(over="ignore"):
+        norms = largest * np.linalg.norm(scaled, axis=1)
+    tiny = ~(norms >= 1e-12)
+    if tiny.any():
+        raise InvalidArgumentError(f"raycast ray {int(np.argmax(tiny))} has a zero "
+                                   "direction (or its end is its origin)")
+    return scaled / np.linalg.norm(scaled, axis=1)[:, None], norms
 
 
 def _row_count(raw: Any) -> int:

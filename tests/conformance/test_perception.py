@@ -69,7 +69,8 @@ NEEDS = {"test_depth_and_labels_at_known_pixels": "render",
          "test_rays_hit_where_the_geometry_is": "raycast",
          "test_rays_stop_at_their_ends_and_max_length": "raycast",
          "test_too_many_rays_is_refused_with_the_limit_named": "raycast",
-         "test_a_ray_does_not_see_the_shape_it_starts_in": "raycast"}
+         "test_a_ray_does_not_see_the_shape_it_starts_in": "raycast",
+         "test_huge_and_tiny_ray_vectors_are_directions_or_refused": "raycast"}
 
 
 def features(engine: str) -> tuple[str, ...]:
@@ -370,6 +371,24 @@ def test_bad_rays_are_refused(scene: Client) -> None:
         scene.raycast([[0, 0, 1]], directions=[[0, 0, -1]], max_length=-1.0)
     with pytest.raises(InvalidArgumentError, match="exactly one"):
         scene.call("raycast", {"origins": np.zeros(3).tobytes()}).raise_for_code()
+
+
+def test_huge_and_tiny_ray_vectors_are_directions_or_refused(scene: Client) -> None:
+    """A direction's length does not matter, however far from 1: its norm once overflowed
+    to inf, the ray became zero, and MuJoCo's mj_ray aborted the daemon."""
+    origins = [[2.0, 0.0, 1.0]] * 3
+    down = scene.raycast(origins, directions=[[0, 0, -1]] * 3)
+    scaled = scene.raycast(origins, directions=[[0, 0, -1e300], [1e-300, 0, -1e300],
+                                                [0, 0, -1e-6]])
+    np.testing.assert_array_equal(scaled.hits, down.hits)
+    np.testing.assert_allclose(scaled.distances, down.distances, atol=RAY_TOL)
+    with pytest.raises(InvalidArgumentError, match="zero direction"):
+        scene.raycast([[0, 0, 1]], directions=[[0, 0, -1e-200]])  # shorter than 1e-12
+    with pytest.raises(InvalidArgumentError, match="too far from its origin"):
+        scene.raycast([[0, 0, -1e308]], ends=[[0, 0, 1e308]])
+    with pytest.raises(InvalidArgumentError, match="too far from its origin"):
+        scene.raycast([[0, 0, 0]], ends=[[1.5e308, 1.5e308, 1.5e308]])  # its length: inf
+    assert scene.status().entity_count == 3 and not scene.status().faulted  # still serving
 
 
 def test_too_many_rays_is_refused_with_the_limit_named(engine: str) -> None:
