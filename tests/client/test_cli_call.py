@@ -45,6 +45,15 @@ def test_call_with_no_args_and_the_whole_reply(target: list[str]) -> None:
     assert reply["code"] == 0 and reply["code_name"] == "OK" and reply["step"] == 4
 
 
+def test_call_reaches_an_operation_with_no_command_of_its_own(target: list[str]) -> None:
+    group = {"shape": "sphere", "size": [0.25], "names": ["near", "far"], "static": True,
+             "poses": [[0, 0, 1, 0, 0, 0, 1], [5, 0, 1, 0, 0, 0, 1]]}
+    invoke([*target, "call", "spawn", json.dumps({"groups": [group]})])
+    region = [[-1, -1, 0], [1, 1, 2]]  # nested rows, packed as the wire's points
+    assert invoke([*target, "call", "get_entities",
+                   json.dumps({"pattern": "a", "region": region})]) == {"names": ["near"]}
+
+
 def test_a_failed_call_names_the_wire_code(target: list[str]) -> None:
     result = run([*target, "call", "delete", '{"names": ["ghost"]}'])
     assert result.exit_code == 1 and result.stdout == ""

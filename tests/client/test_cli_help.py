@@ -16,6 +16,9 @@ from galton.protocol.operations import OPERATIONS
 # Operations whose command is not the operation's name with dashes (README, "CLI").
 COMMAND_OF_OPERATION = {"list": "entities", "get_params": "params", "set_params": "params",
                         "close_stream": "stream-states"}
+# Operations reached only through `galton-client call` (docs/ARCHITECTURE.md: a new
+# operation needs no command of its own; tests/client/test_cli_call.py calls it).
+CALL_ONLY = {"get_entities"}
 RST_MARKUP = re.compile(r"``|:[a-z]+:`")
 
 
@@ -25,8 +28,8 @@ def commands() -> list[str]:
 
 def test_every_operation_has_a_command_besides_call() -> None:
     named = set(commands()) - {"call"}
-    missing = [op for op in OPERATIONS
-               if COMMAND_OF_OPERATION.get(op, op.replace("_", "-")) not in named]
+    missing = [op for op in OPERATIONS if op not in CALL_ONLY
+               and COMMAND_OF_OPERATION.get(op, op.replace("_", "-")) not in named]
     assert not missing, f"operations without a CLI command: {missing}"
 
 

@@ -4,9 +4,11 @@ default timeouts come from the same declarations."""
 
 from __future__ import annotations
 
+import types
+
 import pytest
 
-from galton.daemon.ops.handlers import HANDLERS, check_bindings
+from galton.daemon.ops.handlers import HANDLERS, check_bindings, collect
 from galton.protocol.operations import LONG_RUNNING_TIMEOUT_S, OPERATIONS, Operation, operation
 
 
@@ -25,6 +27,18 @@ def test_a_handler_without_a_declaration_stops_the_daemon_loading() -> None:
     extra = {**HANDLERS, "teleport": HANDLERS["set_states"]}
     with pytest.raises(RuntimeError, match=r"without a declaration .*\['teleport'\]"):
         check_bindings(extra)
+
+
+def test_a_marked_handler_binds_itself_and_twice_is_refused() -> None:
+    assert HANDLERS["get_entities"] is not HANDLERS["get_bounds"]  # collected from scene.py
+    module = types.ModuleType("marked_ops")
+    exec("from galton.daemon.ops.binding import handles\n"
+         "@handles('get_bounds')\ndef bounds_again(context, call, request): return None",
+         module.__dict__)
+    with pytest.raises(RuntimeError, match="'get_bounds' is bound twice"):
+        collect([module], HANDLERS)
+    fresh = {name: h for name, h in HANDLERS.items() if name != "get_bounds"}
+    assert collect([module], fresh)["get_bounds"] is module.bounds_again
 
 
 @pytest.mark.parametrize("op", OPERATIONS.values(), ids=list(OPERATIONS))
