@@ -230,6 +230,7 @@ CALLS: dict[str, Callable[[Client], object]] = {
     "get_states": Client.get_states,
     "get_bounds": Client.get_bounds,
     "get_shapes": Client.get_shapes,
+    "get_entities": Client.get_entities,
     "set_states": lambda c: c.set_states(["a"]),
     "update": lambda c: c.update(["a"], mass=1.0),
     "delete": lambda c: c.delete(["a"]),
