@@ -1,4 +1,5 @@
-"""Every operation of the protocol, declared once: its request (protocol/requests.py), and
+"""Every operation of the protocol, declared once: its request and reply types (shared ones
+in protocol/requests.py; a newer operation's beside its entry here, in one block), and
 what it does to a world.
 
 The daemon refuses an argument not declared here (INVALID_ARGUMENT, with a "did you mean"),
