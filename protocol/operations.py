@@ -117,9 +117,9 @@ class Operation:
 
 
 class GetEntities(rq.Args, kw_only=True, forbid_unknown_fields=True):
-    """get_entities' filters, as ROS 2 simulation_interfaces' GetEntities: a regex searched
-    in each name, and a box (two points: min corner, max corner) each entity's bounds must
-    touch. An entity passes every filter sent; none sent: every entity."""
+    """get_entities' filters, as ROS 2 simulation_interfaces' GetEntities: a glob (as
+    ``list``'s) matched against each name, and a box (two points: min corner, max corner)
+    each entity's bounds must touch. An entity passes every filter sent; none: every one."""
 
     pattern: rq.Text | None = None
     region: rq.Points | None = None

@@ -297,8 +297,8 @@ class Client(WorldMethods, PerceptionMethods, ControlMethods, StreamMethods):
 
     def get_entities(self, pattern: str | None = None,
                      region: ArrayLike | None = None) -> builtins.list[str]:
-        """The entities passing every filter given (all when none): names the regex
-        ``pattern`` is found in; bounds touching ``region``, a box as two points
+        """The entities passing every filter given (all when none): names the glob
+        ``pattern`` matches (as ``list``'s); bounds touching ``region``, a box as two points
         ``[[min_x, min_y, min_z], [max_x, max_y, max_z]]``."""
         box = None if region is None else pack_f64(np.asarray(region, dtype=float).ravel())
         result = self._ok("get_entities", sdk_joints.given(pattern=pattern, region=box)).result
