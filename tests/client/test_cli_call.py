@@ -51,7 +51,7 @@ def test_call_reaches_an_operation_with_no_command_of_its_own(target: list[str])
     invoke([*target, "call", "spawn", json.dumps({"groups": [group]})])
     region = [[-1, -1, 0], [1, 1, 2]]  # nested rows, packed as the wire's points
     assert invoke([*target, "call", "get_entities",
-                   json.dumps({"pattern": "a", "region": region})]) == {"names": ["near"]}
+                   json.dumps({"pattern": "*a*", "region": region})]) == {"names": ["near"]}
 
 
 def test_a_failed_call_names_the_wire_code(target: list[str]) -> None:
