@@ -37,17 +37,20 @@ class CardPlan:
     laws: tuple[str, ...] | None = None  # None: the whole suite
     mesh_balls: int = 100  # the paper-mesh board's trials
     mesh_repetitions: int = 10
+    # Sim seconds each RTF-curve trial may run (its RTF needs no settled board): a 300-ball
+    # board on a slow engine (DART, ~0.01 × real time) would otherwise outrun a request.
+    curve_sim_time: float = 10.0
 
     @classmethod
     def quick(cls) -> CardPlan:
         return cls(repetitions=5, curve=(1, 10, 300), footprint_s=3.0, round_trips=100,
-                   world_ops=6, mesh_balls=25, mesh_repetitions=2)
+                   world_ops=6, mesh_balls=25, mesh_repetitions=2, curve_sim_time=2.0)
 
     def describe(self) -> str:
         return (f"paper, {self.fidelity_balls} balls × {self.repetitions}, all at once; "
                 f"paper-mesh, {self.mesh_balls} balls × {self.mesh_repetitions}; "
                 f"RTF curve at {', '.join(map(str, sorted({*self.curve, self.fidelity_balls})))} "
-                "balls")
+                f"balls (curve trials at most {self.curve_sim_time:g} s of sim time)")
 
 
 @contextmanager
@@ -70,7 +73,7 @@ def board_measures(sim: Client, engine: str, plan: CardPlan, seed: int,
     fidelity = ExperimentConfig(board=board, engines=(engine,), balls=(plan.fidelity_balls,),
                                 repetitions=plan.repetitions, seed=seed)
     curve = ExperimentConfig(board=board, engines=(engine,), balls=plan.curve, repetitions=1,
-                             seed=seed)
+                             seed=seed, max_sim_time=plan.curve_sim_time)
     trials = [*trials_of(sim, engine, fidelity), *trials_of(sim, engine, curve)]
     group = summarise_group([t for t in trials if t.balls == plan.fidelity_balls],
                             plan.fidelity_balls)
