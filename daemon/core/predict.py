@@ -12,7 +12,7 @@ import numpy as np
 
 from galton.daemon.core.calls import Call, StepJob
 from galton.daemon.core.context import OpContext
-from galton.daemon.core.limits import MIB
+from galton.daemon.core.reply_limit import require_room
 from galton.daemon.ops import joints as ops_joints
 from galton.daemon.ops import scene as ops
 from galton.daemon.world.scene import World
@@ -23,7 +23,6 @@ from galton.protocol import (
     IncorrectStateError,
     InvalidArgumentError,
     OperationFailedError,
-    ResourceLimitError,
 )
 from galton.protocol import requests as rq
 from galton.protocol.arrays import pack_f64
@@ -118,12 +117,8 @@ def _require_reply_room(limit: int, samples: int, bodies: int, joints: int) -> N
     """Refuse, before a step, a prediction whose reply would pass ``max_reply_bytes``:
     each sample is its time, a pose and a twist per body, two values per joint."""
     size = samples * 8 * (1 + bodies * (POSE_WIDTH + TWIST_WIDTH) + joints * 2)
-    if size > limit:
-        raise ResourceLimitError(
-            f"this prediction's reply would carry {samples} samples, about {size / MIB:.0f} "
-            f"MiB; at most {limit / MIB:.0f} MiB (sample less often with 'every', read "
-            "fewer bodies, or galton-daemon --limit max_reply_bytes=N)",
-            {"limit": "max_reply_bytes", "max": limit, "size": size})
+    require_room(f"this prediction's reply ({samples} samples)", size, limit,
+                 "sample less often with 'every', read fewer bodies")
 
 
 def horizon_steps(horizon: float, dt: float, max_steps: int) -> int:
