@@ -21,6 +21,9 @@ if TYPE_CHECKING:
 commands = typer.Typer()
 
 PANEL = "Scene"
+# Entity names as separate arguments, none meaning every entity (get-states, -bounds, -shapes).
+EntityNames = Annotated[list[str] | None, typer.Argument(
+    help="Entity names, as separate arguments; none: every entity.", show_default=False)]
 NamesArg = Annotated[list[str], typer.Argument(
     help="Entity names, as separate arguments.", show_default=False)]
 
@@ -54,9 +57,7 @@ def show_states(states: States, as_json: bool, **extra: Any) -> None:
 @commands.command("get-states", rich_help_panel=PANEL)
 def get_states(
     ctx: typer.Context,
-    names: Annotated[list[str] | None, typer.Argument(
-        help="Entity names, as separate arguments; none: every entity.",
-        show_default=False)] = None,
+    names: EntityNames = None,
     as_json: JsonOpt = False,
 ) -> None:
     """Show poses (x y z qx qy qz qw) and world-frame twists of bodies, in one request."""
@@ -67,9 +68,7 @@ def get_states(
 @commands.command("get-bounds", rich_help_panel=PANEL)
 def get_bounds(
     ctx: typer.Context,
-    names: Annotated[list[str] | None, typer.Argument(
-        help="Entity names, as separate arguments; none: every entity.",
-        show_default=False)] = None,
+    names: EntityNames = None,
     as_json: JsonOpt = False,
 ) -> None:
     """Show each entity's axis-aligned bounds in the world frame (min and max x y z)."""
@@ -86,9 +85,7 @@ def get_bounds(
 @commands.command("get-shapes", rich_help_panel=PANEL)
 def get_shapes(
     ctx: typer.Context,
-    names: Annotated[list[str] | None, typer.Argument(
-        help="Entity names, as separate arguments; none: every entity.",
-        show_default=False)] = None,
+    names: EntityNames = None,
     as_json: JsonOpt = False,
 ) -> None:
     """Show each entity's collision shapes: kind, half sizes, pose in the entity's frame."""
