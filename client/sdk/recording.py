@@ -27,6 +27,10 @@ if TYPE_CHECKING:
     from galton.client.sdk.streams import StateStream
 
 SUFFIX = ".npz"  # galton.client.cli.view.RECORDING_SUFFIX
+# How long a recorder waits for its stream's first sample before its block runs: samples
+# come every 1/rate s of wall time; a faulted world publishes none, and is recorded from
+# its first sample after it recovers.
+FIRST_SAMPLE_WAIT_S = 5.0
 
 
 @dataclass
@@ -100,7 +104,11 @@ class Recorder:
             return self._lock.wait_for(lambda: len(self.samples) >= count, timeout)
 
     def __enter__(self) -> Recorder:
+        """Open the stream and wait for its first sample, so the recording starts with the
+        world as the block finds it (a world run flat out inside the block may otherwise
+        be far along before the subscription sees its first sample)."""
         self._stream = self.client.stream_states(rate=self.rate, callback=self._take)
+        self.wait_for(1, FIRST_SAMPLE_WAIT_S)
         return self
 
     def __exit__(self, *exc: object) -> None:

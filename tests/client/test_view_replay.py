@@ -61,6 +61,20 @@ def test_a_recording_keeps_every_entity_and_replays_in_the_page(
         server.stop()
 
 
+def test_a_recording_starts_where_its_block_finds_the_world(
+        mujoco_sim: Client, tmp_path: Path) -> None:
+    """Run flat out from the first line of the block, the world is far along before a late
+    subscription would see it: the recorder holds the block until its first sample."""
+    mujoco_sim.spawn(plane(), spheres(["ball"], [[0.0, 0.0, 1.0]], radius=0.05))
+    start = mujoco_sim.status().sim_time
+    with Recorder(mujoco_sim, tmp_path / "flat-out.npz", rate=60) as recorder:
+        assert len(recorder.samples) >= 1
+        mujoco_sim.run_until(start + 20.0)
+    recording = Recording.load(tmp_path / "flat-out.npz")
+    assert recording.times[0] == pytest.approx(start)
+    assert recording.poses[0, recording.names.index("ball"), 2] == pytest.approx(1.0)
+
+
 def test_a_file_that_is_no_recording_is_refused(tmp_path: Path) -> None:
     bad = tmp_path / "bad.npz"
     bad.write_bytes(b"not a zip")
