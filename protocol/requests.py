@@ -7,13 +7,18 @@ classes; the daemon converts a request's ``args`` map into its class before any 
 their JSON Schema. Each field's wire kind (docs/protocol.md) rides in its type's metadata,
 so that the fuzzer and the CLI keep reading kinds. A field that is ``None`` was not sent.
 
-Type and range errors become INVALID_ARGUMENT with the "op.field" path and the offending
-value; the deeper checks (finite rows, unit quaternions, names known to the world) stay
-with the handlers, which run after this.
+A field's range rides in its type too (``msgspec.Meta``: every number is finite, a rate
+in [1, 60] Hz, a horizon > 0), and so does its default; a field sent as nil is as if it
+was not sent. Type and range errors become INVALID_ARGUMENT with the "op.field" path, the
+range and the offending value; the deeper checks (finite rows, unit quaternions, names
+known to the world, the daemon's configurable limits) stay with the handlers, which run
+after this.
 """
 
 from __future__ import annotations
 
+import math
+import sys
 from types import UnionType
 from typing import Annotated, Any, Literal, TypeVar, Union, get_args, get_origin
 
@@ -26,6 +31,15 @@ from galton.protocol.errors import (
     did_you_mean,
 )
 from galton.protocol.vocabulary import (
+    DEFAULT_MAX_LENGTH,
+    DEFAULT_RATE_HZ,
+    DEFAULT_SIGMA_ANGLE,
+    DEFAULT_SIGMA_POSITION,
+    DEFAULT_SIGMA_SPEED,
+    MAX_CAMERAS_PER_REQUEST,
+    MAX_RATE_HZ,
+    MAX_RTF,
+    MIN_RATE_HZ,
     MODEL_FORMATS,
     EngineName,
     EntityKind,
@@ -43,15 +57,22 @@ def _kind(kind: str, **extra: Any) -> msgspec.Meta:
     return msgspec.Meta(extra={"kind": kind, **extra})
 
 
-Number = Annotated[float, _kind("number")]
-Count = Annotated[int, _kind("count")]
+# Every number is finite: NaN and the infinities fail these bounds (msgspec checks them in C).
+_BIG = sys.float_info.max
+Number = Annotated[float, _kind("number"), msgspec.Meta(ge=-_BIG, le=_BIG)]
+Positive = Annotated[float, _kind("number"), msgspec.Meta(gt=0.0, le=_BIG)]
+NonNegative = Annotated[float, _kind("number"), msgspec.Meta(ge=0.0, le=_BIG)]
+Rtf = Annotated[float, _kind("number"), msgspec.Meta(ge=0.0, le=MAX_RTF)]
+RateHz = Annotated[float, _kind("number"), msgspec.Meta(ge=MIN_RATE_HZ, le=MAX_RATE_HZ)]
+Count = Annotated[int, _kind("count"), msgspec.Meta(ge=1)]
 Text = Annotated[str, _kind("string")]
 LongText = Annotated[str, _kind("string", long_text=True)]
 Flag = Annotated[bool, _kind("bool")]
 Names = Annotated[list[str], _kind("names")]
 Fields = Annotated[dict[str, Any], _kind("map")]
 Groups = Annotated[list[dict[str, Any]], _kind("groups")]
-Cameras = Annotated[list[dict[str, Any]], _kind("cameras")]
+Cameras = Annotated[list[dict[str, Any]], _kind("cameras"),
+                    msgspec.Meta(min_length=1, max_length=MAX_CAMERAS_PER_REQUEST)]
 Poses = Annotated[bytes, _kind("poses", description="packed float64 rows, 7 wide")]
 Twists = Annotated[bytes, _kind("twists", description="packed float64 rows, 6 wide")]
 Wrenches = Annotated[bytes, _kind("wrenches", description="packed float64 rows, 6 wide")]
@@ -80,28 +101,28 @@ class NoArgs(Args, kw_only=True, forbid_unknown_fields=True):
 
 
 class Play(Args, kw_only=True, forbid_unknown_fields=True):
-    rtf: Number | None = None
+    rtf: Rtf | None = None  # None: the target it had
 
 
 class SetRtf(Args, kw_only=True, forbid_unknown_fields=True):
-    rtf: Number
+    rtf: Rtf
 
 
 class Step(Args, kw_only=True, forbid_unknown_fields=True):
-    count: Count | None = None
+    count: Count = 1  # at most the daemon's max_steps (its handler checks)
     read: Names | None = None
     read_joints: Names | None = None
 
 
 class RunUntil(Args, kw_only=True, forbid_unknown_fields=True):
-    sim_time: Number
+    sim_time: NonNegative
     read: Names | None = None
     until_rest: Fields | None = None
     read_joints: Names | None = None
 
 
 class Reset(Args, kw_only=True, forbid_unknown_fields=True):
-    scope: Scope | None = None
+    scope: Scope = "all"
 
 
 class LoadWorld(Args, kw_only=True, forbid_unknown_fields=True):
@@ -117,8 +138,8 @@ class LoadModel(Args, kw_only=True, forbid_unknown_fields=True):
     format: Format
     text: LongText | None = None
     path: Text | None = None
-    prefix: Text | None = None
-    fixed_base: Flag | None = None
+    prefix: Text = ""
+    fixed_base: Flag = True
     search_path: Text | None = None
 
 
@@ -174,7 +195,7 @@ class ApplyWrench(Args, kw_only=True, forbid_unknown_fields=True):
     names: Names
     wrenches: Wrenches
     points: Points | None = None
-    duration: Number | None = None
+    duration: Positive | None = None  # None: until clear_wrenches
 
 
 class Snapshot(Args, kw_only=True, forbid_unknown_fields=True):
@@ -207,8 +228,8 @@ class Named(Args, kw_only=True, forbid_unknown_fields=True):
 
 
 class Predict(Args, kw_only=True, forbid_unknown_fields=True):
-    horizon: Number
-    every: Number | None = None
+    horizon: Positive
+    every: Positive | None = None  # None: every step
     read: Names | None = None
     read_joints: Names | None = None
     slot: Text | None = None
@@ -221,15 +242,15 @@ class Compare(Args, kw_only=True, forbid_unknown_fields=True):
     names: Names
     poses: Poses
     twists: Twists | None = None
-    sigma_position: Number | None = None
-    sigma_angle: Number | None = None
-    sigma_speed: Number | None = None
-    correct: Flag | None = None
+    sigma_position: Positive = DEFAULT_SIGMA_POSITION
+    sigma_angle: Positive = DEFAULT_SIGMA_ANGLE
+    sigma_speed: Positive = DEFAULT_SIGMA_SPEED
+    correct: Flag = False
 
 
 class Render(Args, kw_only=True, forbid_unknown_fields=True):
     cameras: Cameras
-    format: Image | None = None
+    format: Image = "raw"
 
 
 class AddCamera(Args, kw_only=True, forbid_unknown_fields=True):
@@ -241,7 +262,7 @@ class Raycast(Args, kw_only=True, forbid_unknown_fields=True):
     origins: Points
     directions: Points | None = None
     ends: Points | None = None
-    max_length: Number | None = None
+    max_length: Positive = DEFAULT_MAX_LENGTH
 
 
 class SetParams(Args, kw_only=True, forbid_unknown_fields=True):
@@ -249,7 +270,7 @@ class SetParams(Args, kw_only=True, forbid_unknown_fields=True):
 
 
 class StreamStates(Args, kw_only=True, forbid_unknown_fields=True):
-    rate: Number | None = None
+    rate: RateHz = DEFAULT_RATE_HZ
     names: Names | None = None
 
 
@@ -334,9 +355,11 @@ def decode_result(declared: type[R], result: dict[str, Any]) -> R:
 def decode_args(op: str, declared: type[A], args: dict[str, Any]) -> A:
     """``args`` as the operation's typed request. A field it does not declare is refused
     naming the closest one; a value of the wrong type or out of range is INVALID_ARGUMENT
-    naming "op.field" and quoting the value."""
+    naming "op.field" and quoting the value. A field sent as nil takes its default."""
     named = [f for f in declared.__struct_fields__ if f != "world"]
     check_fields(args, (*named, "world"), op)
+    if None in args.values():
+        args = {key: value for key, value in args.items() if value is not None}
     try:
         return msgspec.convert(args, declared)
     except msgspec.ValidationError as exc:
@@ -359,8 +382,48 @@ def explain(op: str, declared: type[Args], error: str, args: dict[str, Any]) -> 
                 f"{did_you_mean(str(value)[:64], choices)}")
     if what.startswith("Expected `"):  # "Expected `int | null`, got `str`"
         expected = what.split("`")[1].removesuffix(" | null")  # None means "not sent"
+        if ", got `" not in what and len(steps) == 1:  # "Expected `float` >= 0.0": a range
+            expected = range_text(declared, str(steps[0]))
         return f"{where} must be {expected}, got {brief(value)}"
     return f"{where}: {what[:1].lower()}{what[1:]}, got {brief(value)}"  # ranges, lengths
+
+
+def range_text(declared: type[Args], name: str) -> str:
+    """A field's declared range in words: "a finite number in [0, 1e+06]", "an integer
+    >= 1", "a list of 1 to 16 items"."""
+    meta = _constraints(declared, name)
+    if "min_length" in meta or "max_length" in meta:
+        shortest, longest = meta.get("min_length", 0), meta.get("max_length", math.inf)
+        return f"a list of {shortest:g} to {longest:g} items"
+    what = "a finite number" if field_kind(declared, name)[0] == "number" else "an integer"
+    low = [f"{sign} {meta[k]:g}" for k, sign in (("ge", ">="), ("gt", ">"))
+           if meta.get(k, -_BIG) != -_BIG]  # the finite bounds of every number say nothing
+    high = [f"{sign} {meta[k]:g}" for k, sign in (("le", "<="), ("lt", "<"))
+            if meta.get(k, _BIG) != _BIG]
+    if low and high:
+        return (f"{what} in {'[' if 'ge' in meta else '('}{low[0].split()[1]}, "
+                f"{high[0].split()[1]}{']' if 'le' in meta else ')'}")
+    return " ".join([what, *low, *high])
+
+
+def _constraints(declared: type[Args], name: str) -> dict[str, Any]:
+    """The bounds (ge, gt, le, lt, min_length, max_length) a field's type declares."""
+    found: dict[str, Any] = {}
+    for meta in _metas(declared, name)[1]:
+        for key in ("ge", "gt", "le", "lt", "min_length", "max_length"):
+            if getattr(meta, key) is not None:
+                found[key] = getattr(meta, key)
+    return found
+
+
+def _metas(declared: type[Args], name: str) -> tuple[Any, list[msgspec.Meta]]:
+    """A field's base type and the msgspec.Meta annotations on it (through ``X | None``)."""
+    field = next(f for f in msgspec.structs.fields(declared) if f.name == name)
+    tp = field.type
+    if get_origin(tp) in (Union, UnionType):  # X | None
+        tp = next(a for a in get_args(tp) if a is not type(None))
+    base, *metas = get_args(tp)
+    return base, [m for m in metas if isinstance(m, msgspec.Meta)]
 
 
 def _path_steps(path: str) -> list[str | int]:
@@ -386,11 +449,7 @@ def _value_at(args: Any, steps: list[str | int]) -> Any:
 def field_kind(declared: type[Args], name: str) -> tuple[str, tuple[str, ...], bool]:
     """A field's wire kind, its choices and whether it may exceed the string limit, read
     from its declared type."""
-    field = next(f for f in msgspec.structs.fields(declared) if f.name == name)
-    tp = field.type
-    if get_origin(tp) in (Union, UnionType):  # X | None
-        tp = next(a for a in get_args(tp) if a is not type(None))
-    base, *metas = get_args(tp)
+    base, metas = _metas(declared, name)
     extra: dict[str, Any] = {}
     for meta in metas:
         extra.update(meta.extra or {})

@@ -13,6 +13,14 @@ POSE_WIDTH = 7
 TWIST_WIDTH = 6
 MAX_BATCH = 100_000
 MAX_NAME_LENGTH = 128
+# Ranges and defaults of request fields that are the protocol's, not a daemon's option
+# (protocol/requests.py declares them; the daemon's own limits stay in its Limits).
+MAX_RTF = 1e6  # play / set_rtf
+MIN_RATE_HZ, MAX_RATE_HZ, DEFAULT_RATE_HZ = 1.0, 60.0, 10.0  # stream_states
+MAX_CAMERAS_PER_REQUEST = 16  # render
+DEFAULT_MAX_LENGTH = 100.0  # m, raycast: a ray's reach when none is given
+# compare's default sigmas: how far off a pose may be before its score grows past 1.
+DEFAULT_SIGMA_POSITION, DEFAULT_SIGMA_ANGLE, DEFAULT_SIGMA_SPEED = 0.01, 0.05, 0.1  # m, rad, m/s
 
 
 class SimState(StrEnum):

@@ -26,7 +26,7 @@ from galton.protocol import (
 )
 from galton.protocol import requests as rq
 from galton.protocol.arrays import pack_f64
-from galton.protocol.model import check_names, finite_number
+from galton.protocol.model import check_names
 
 
 @dataclass
@@ -72,7 +72,7 @@ def predict(loop: OpContext, call: Call, request: rq.Predict) -> None:
         raise IncorrectStateError("another step request is still running; wait for it")
     if loop.engine_factory is None:
         raise OperationFailedError("this daemon cannot make engines")
-    horizon = finite_number(request.horizon, "predict.horizon", low=0.0, low_open=True)
+    horizon = request.horizon
     source = loop.world_for(request)
     slot = request.slot
     name = f"{source.name}:prediction"
@@ -96,9 +96,7 @@ def _job(loop: OpContext, call: Call, copy: World, horizon: float,
          request: rq.Predict) -> StepJob:
     dt = copy.engine.timestep
     steps = horizon_steps(horizon, dt, loop.limits.max_steps)
-    every_s = request.every
-    every = 1 if every_s is None else sample_period(
-        finite_number(every_s, "predict.every", low=0.0, low_open=True), dt, steps)
+    every = 1 if request.every is None else sample_period(request.every, dt, steps)
     read = _names(request.read, "read")
     joints = _names(request.read_joints, "read_joints")
     if read is not None:

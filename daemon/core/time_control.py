@@ -16,7 +16,7 @@ from typing import Any
 from galton.daemon.access import lease
 from galton.daemon.core.calls import Call, RestCheck, StepJob
 from galton.daemon.core.context import OpContext
-from galton.daemon.world.scene import World, check_scope
+from galton.daemon.world.scene import World
 from galton.protocol import (
     IncorrectStateError,
     InvalidArgumentError,
@@ -26,12 +26,6 @@ from galton.protocol import (
 from galton.protocol import requests as rq
 from galton.protocol.model import check_names, finite_number, integer_in
 from galton.protocol.vocabulary import SimState, check_fields
-
-MAX_RTF = 1e6
-
-
-def _check_rtf(value: Any, where: str) -> float:
-    return finite_number(value, where, low=0.0, high=MAX_RTF)
 
 
 def _rest_check(rest: dict[str, Any] | None, read: list[str] | None,
@@ -74,8 +68,7 @@ def _live_only(loop: OpContext, request: rq.Args, op: str) -> None:
 
 def play(loop: OpContext, call: Call, request: rq.Play) -> dict[str, Any]:
     _live_only(loop, request, "play")
-    rtf = request.rtf
-    target = loop.target_rtf if rtf is None else _check_rtf(rtf, "play.rtf")
+    target = loop.target_rtf if request.rtf is None else request.rtf
     if loop.job is not None and loop.job.world is None:
         raise IncorrectStateError("a step request is still running; wait for it or pause")
     loop.world.require_valid()
@@ -86,7 +79,7 @@ def play(loop: OpContext, call: Call, request: rq.Play) -> dict[str, Any]:
 
 def set_rtf(loop: OpContext, call: Call, request: rq.SetRtf) -> dict[str, Any]:
     _live_only(loop, request, "set_rtf")
-    loop.target_rtf = _check_rtf(request.rtf, "set_rtf.rtf")
+    loop.target_rtf = request.rtf
     loop.pacer.anchor(time.monotonic(), loop.world.sim_time, loop.target_rtf)
     return loop.status().to_wire()
 
@@ -114,15 +107,14 @@ def stop(loop: OpContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
 
 
 def step(loop: OpContext, call: Call, request: rq.Step) -> None:
-    count = integer_in(1 if request.count is None else request.count, "step.count", 1,
-                       loop.limits.max_steps)
+    count = integer_in(request.count, "step.count", 1, loop.limits.max_steps)
     world = loop.world_for(request)
     _start_job(loop, call, world, count, _read_list(world, request.read, "step"),
                read_joints=_read_joint_list(world, request.read_joints, "step"))
 
 
 def run_until(loop: OpContext, call: Call, request: rq.RunUntil) -> dict[str, Any] | None:
-    target = finite_number(request.sim_time, "run_until.sim_time", low=0.0)
+    target = request.sim_time
     world = loop.world_for(request)
     dt = world.engine.timestep
     steps = (target - world.sim_time) / dt - 1e-9
@@ -144,7 +136,7 @@ def run_until(loop: OpContext, call: Call, request: rq.RunUntil) -> dict[str, An
 
 
 def reset(loop: OpContext, call: Call, request: rq.Reset) -> dict[str, Any]:
-    scope = check_scope(request.scope or "all")
+    scope = request.scope
     world = loop.world_for(request)
     _cancel_job_on(loop, world, "reset")
     world.reset(scope)

@@ -19,7 +19,6 @@ from galton.protocol.model import (
     decode_points,
     decode_values,
     decode_wrenches,
-    finite_number,
 )
 
 
@@ -102,9 +101,7 @@ def apply_wrench(world: World, request: rq.ApplyWrench) -> dict[str, Any]:
     raw_points = request.points
     points = None if raw_points is None else decode_points(raw_points, len(names),
                                                           "apply_wrench.points")
-    raw_duration = request.duration
-    duration = None if raw_duration is None else finite_number(
-        raw_duration, "apply_wrench.duration", low=0.0, low_open=True)
+    duration = request.duration
     world.require_valid()
     world.wrenches.apply(world.engine, names, wrenches, points, duration, world.step_index)
     return {"count": len(names)}

@@ -82,8 +82,8 @@ def load_model(world: World, request: rq.LoadModel) -> dict[str, Any]:
                                      f"{limit}", {"limit": "max_model_bytes", "max": limit})
     elif path is not None:
         path = model_file(path, limit)
-    prefix = check_prefix(request.prefix or "")
-    fixed_base = True if request.fixed_base is None else request.fixed_base
+    prefix = check_prefix(request.prefix)
+    fixed_base = request.fixed_base
     search = search_folders(request.search_path)
     world.require_room(1)
     return {"names": world.load_model(fmt, text, path, prefix, fixed_base=fixed_base,

@@ -15,12 +15,7 @@ from galton.protocol.model import (
     check_names,
     decode_poses,
     decode_twists,
-    finite_number,
 )
-
-DEFAULT_SIGMA_POSITION = 0.01  # m
-DEFAULT_SIGMA_ANGLE = 0.05  # rad
-DEFAULT_SIGMA_SPEED = 0.1  # m/s
 
 
 def angle_between(q1: np.ndarray, q2: np.ndarray) -> np.ndarray:
@@ -36,10 +31,8 @@ def compare(world: World, request: rq.Compare) -> dict[str, Any]:
     raw_twists = request.twists
     twists = None if raw_twists is None else decode_twists(raw_twists, len(names),
                                                            "compare.twists")
-    sigma_p = _sigma(request.sigma_position, "sigma_position", DEFAULT_SIGMA_POSITION)
-    sigma_a = _sigma(request.sigma_angle, "sigma_angle", DEFAULT_SIGMA_ANGLE)
-    sigma_v = _sigma(request.sigma_speed, "sigma_speed", DEFAULT_SIGMA_SPEED)
-    correct = bool(request.correct)
+    sigma_p, sigma_a, sigma_v = request.sigma_position, request.sigma_angle, request.sigma_speed
+    correct = request.correct
     poses, world_twists = world.get_states(names)
     position_errors = np.linalg.norm(observed[:, :3] - poses[:, :3], axis=1)
     angle_errors = angle_between(observed[:, 3:7], poses[:, 3:7])
@@ -55,9 +48,3 @@ def compare(world: World, request: rq.Compare) -> dict[str, Any]:
         world.set_states(names, observed, twists)
     result["corrected"] = correct
     return result
-
-
-def _sigma(value: float | None, key: str, default: float) -> float:
-    if value is None:
-        return default
-    return finite_number(value, f"compare.{key}", low=0.0, low_open=True)

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import base64
 import json
+import math
 from typing import Any
 
 import jsonschema
@@ -28,6 +29,17 @@ REFUSED = {
     "unknown field": ("step", {"cuont": 3}, r"step takes no field 'cuont'.*did you mean 'count'"),
     "nested path": ("spawn", {"groups": ["x"]}, r"spawn\.groups\[0\] must be object, got 'x'"),
     "list item": ("delete", {"names": ["a", 7]}, r"delete\.names\[1\] must be str, got 7"),
+    "above a range": ("set_rtf", {"rtf": 2e6},
+                      r"set_rtf\.rtf must be a finite number in \[0, 1e\+06\], got 2000000\.0"),
+    "NaN": ("play", {"rtf": math.nan}, r"play\.rtf must be a finite number in .*, got nan"),
+    "infinity": ("predict", {"horizon": math.inf},
+                 r"predict\.horizon must be a finite number > 0, got inf"),
+    "zero horizon": ("predict", {"horizon": 0}, r"predict\.horizon must be .* > 0, got 0"),
+    "count below one": ("step", {"count": 0}, r"step\.count must be an integer >= 1, got 0"),
+    "rate": ("stream_states", {"rate": 61},
+             r"stream_states\.rate must be a finite number in \[1, 60\], got 61"),
+    "no cameras": ("render", {"cameras": []},
+                   r"render\.cameras must be a list of 1 to 16 items, got \[\]"),
 }
 
 
@@ -42,6 +54,13 @@ def test_a_good_request_decodes_to_its_declared_type() -> None:
     step = OPERATIONS["step"].decode({"count": 5, "read": ["a"], "world": "side"})
     assert isinstance(step, rq.Step)
     assert (step.count, step.read, step.read_joints, step.world) == (5, ["a"], None, "side")
+
+
+def test_a_field_sent_as_nil_takes_its_declared_default() -> None:
+    step = OPERATIONS["step"].decode({"count": None})
+    assert isinstance(step, rq.Step) and step.count == 1
+    stream = OPERATIONS["stream_states"].decode({})
+    assert isinstance(stream, rq.StreamStates) and stream.rate == 10.0
 
 
 def as_json(value: Any) -> Any:
@@ -82,6 +101,15 @@ def test_the_schema_takes_real_requests_and_refuses_bad_ones(schema: dict[str, A
            "set_states": {"poses": poses}, "get_bounds": {"nmaes": ["a"]}}
     for op, args in bad.items():
         assert not validator(schema, op, "request").is_valid(as_json(args)), op
+
+
+def test_the_schema_shows_ranges_and_defaults(schema: dict[str, Any]) -> None:
+    rate = schema["$defs"]["StreamStates"]["properties"]["rate"]
+    assert (rate["minimum"], rate["maximum"], rate["default"]) == (1.0, 60.0, 10.0)
+    horizon = schema["$defs"]["Predict"]["properties"]["horizon"]
+    assert horizon["exclusiveMinimum"] == 0.0
+    validator(schema, "step", "request").validate({"count": 1})
+    assert not validator(schema, "step", "request").is_valid({"count": 0})
 
 
 def test_the_schema_holds_declared_replies(schema: dict[str, Any]) -> None:
