@@ -24,6 +24,7 @@ from typing import Any
 
 import msgspec
 
+from galton.protocol import replies as rp
 from galton.protocol import requests as rq
 from galton.protocol.errors import UnknownOperationError, did_you_mean
 from galton.protocol.vocabulary import check_fields
@@ -82,7 +83,7 @@ class Operation:
     steps: bool = False
     fast: bool = False
     timeout_floor_s: float = 0.0
-    reply: type[rq.Reply] | None = None  # its result map's declaration, where declared
+    reply: type[rp.Reply] | None = None  # its result map (protocol/replies.py); every op has one
     args: tuple[Arg, ...] = field(init=False, default=())
 
     def __post_init__(self) -> None:
@@ -125,63 +126,67 @@ class GetEntities(rq.Args, kw_only=True, forbid_unknown_fields=True):
     region: rq.Points | None = None
 
 
-GET_ENTITIES = Operation("get_entities", GetEntities, reply=rq.NamesReply)
+GET_ENTITIES = Operation("get_entities", GetEntities, reply=rp.NamesReply)
 
 
 _REBUILDS = 30.0  # operations that may rebuild the engine's world wait at least this long
 OPERATIONS: dict[str, Operation] = {op.name: op for op in (
-    Operation("status", rq.NoArgs, fast=True, reply=rq.StatusReply),
-    Operation("capabilities", rq.NoArgs),
-    Operation("play", rq.Play, mutates=True, reply=rq.StatusReply),
-    Operation("set_rtf", rq.SetRtf, mutates=True, reply=rq.StatusReply),
-    Operation("pause", rq.NoArgs, mutates=True, reply=rq.StatusReply),
-    Operation("stop", rq.NoArgs, mutates=True, reply=rq.StatusReply),
-    Operation("step", rq.Step, mutates=True, steps=True),
-    Operation("run_until", rq.RunUntil, mutates=True, steps=True),
-    Operation("reset", rq.Reset, mutates=True, reply=rq.StatusReply),
+    Operation("status", rq.NoArgs, fast=True, reply=rp.StatusReply),
+    Operation("capabilities", rq.NoArgs, reply=rp.CapabilitiesReply),
+    Operation("play", rq.Play, mutates=True, reply=rp.StatusReply),
+    Operation("set_rtf", rq.SetRtf, mutates=True, reply=rp.StatusReply),
+    Operation("pause", rq.NoArgs, mutates=True, reply=rp.StatusReply),
+    Operation("stop", rq.NoArgs, mutates=True, reply=rp.StatusReply),
+    Operation("step", rq.Step, mutates=True, steps=True, reply=rp.StepReply),
+    Operation("run_until", rq.RunUntil, mutates=True, steps=True,
+              reply=rp.StepReply),
+    Operation("reset", rq.Reset, mutates=True, reply=rp.StatusReply),
     Operation("load_world", rq.LoadWorld, mutates=True, timeout_floor_s=_REBUILDS,
-              reply=rq.StatusReply),
-    Operation("spawn", rq.Spawn, mutates=True, timeout_floor_s=_REBUILDS, reply=rq.NamesReply),
+              reply=rp.StatusReply),
+    Operation("spawn", rq.Spawn, mutates=True, timeout_floor_s=_REBUILDS, reply=rp.NamesReply),
     Operation("load_model", rq.LoadModel, mutates=True, timeout_floor_s=_REBUILDS,
-              reply=rq.NamesReply),
-    Operation("list", rq.List, reply=rq.EntitiesReply),
-    Operation("get_states", rq.NamesOrAll, reply=rq.StatesReply),
-    Operation("get_bounds", rq.NamesOrAll, reply=rq.BoundsReply),
-    Operation("get_shapes", rq.NamesOrAll, reply=rq.ShapesReply),
+              reply=rp.NamesReply),
+    Operation("list", rq.List, reply=rp.EntitiesReply),
+    Operation("get_states", rq.NamesOrAll, reply=rp.StatesReply),
+    Operation("get_bounds", rq.NamesOrAll, reply=rp.BoundsReply),
+    Operation("get_shapes", rq.NamesOrAll, reply=rp.ShapesReply),
     GET_ENTITIES,
-    Operation("set_states", rq.SetStates, mutates=True, reply=rq.CountReply),
-    Operation("update", rq.Update, mutates=True, reply=rq.CountReply),
-    Operation("delete", rq.NamedOnly, mutates=True, timeout_floor_s=_REBUILDS, reply=rq.CountReply),
-    Operation("joints", rq.Joints),
-    Operation("get_joint_states", rq.NamesOrAll),
-    Operation("set_joint_states", rq.SetJointStates, mutates=True),
-    Operation("set_joint_targets", rq.SetJointTargets, mutates=True, reply=rq.CountReply),
-    Operation("apply_wrench", rq.ApplyWrench, mutates=True, reply=rq.CountReply),
-    Operation("clear_wrenches", rq.NamesOrAll, mutates=True, reply=rq.CountReply),
-    Operation("snapshot", rq.Snapshot),
-    Operation("restore", rq.Restore, mutates=True, timeout_floor_s=_REBUILDS),
-    Operation("snapshots", rq.NoArgs),
-    Operation("delete_snapshot", rq.Slot, reply=rq.CountReply),
-    Operation("list_worlds", rq.NoArgs),
-    Operation("create_world", rq.CreateWorld, timeout_floor_s=_REBUILDS),
-    Operation("fork_world", rq.ForkWorld, timeout_floor_s=_REBUILDS),
-    Operation("delete_world", rq.Named, reply=rq.CountReply),
-    Operation("predict", rq.Predict, steps=True),
-    Operation("compare", rq.Compare, mutates=True),
-    Operation("render", rq.Render),
-    Operation("add_camera", rq.AddCamera, mutates=True),
-    Operation("remove_camera", rq.Named, mutates=True, reply=rq.CountReply),
-    Operation("cameras", rq.NoArgs),
-    Operation("raycast", rq.Raycast),
-    Operation("contacts", rq.NamesOrAll),
-    Operation("get_params", rq.NoArgs, reply=rq.ParamsReply),
-    Operation("set_params", rq.SetParams, mutates=True, reply=rq.ParamsReply),
+    Operation("set_states", rq.SetStates, mutates=True, reply=rp.CountReply),
+    Operation("update", rq.Update, mutates=True, reply=rp.CountReply),
+    Operation("delete", rq.NamedOnly, mutates=True, timeout_floor_s=_REBUILDS, reply=rp.CountReply),
+    Operation("joints", rq.Joints, reply=rp.JointsReply),
+    Operation("get_joint_states", rq.NamesOrAll, reply=rp.JointStatesReply),
+    Operation("set_joint_states", rq.SetJointStates, mutates=True,
+              reply=rp.SetJointStatesReply),
+    Operation("set_joint_targets", rq.SetJointTargets, mutates=True, reply=rp.CountReply),
+    Operation("apply_wrench", rq.ApplyWrench, mutates=True, reply=rp.CountReply),
+    Operation("clear_wrenches", rq.NamesOrAll, mutates=True, reply=rp.CountReply),
+    Operation("snapshot", rq.Snapshot, reply=rp.SnapshotReply),
+    Operation("restore", rq.Restore, mutates=True, timeout_floor_s=_REBUILDS,
+              reply=rp.WorldReply),
+    Operation("snapshots", rq.NoArgs, reply=rp.SnapshotsReply),
+    Operation("delete_snapshot", rq.Slot, reply=rp.CountReply),
+    Operation("list_worlds", rq.NoArgs, reply=rp.WorldsReply),
+    Operation("create_world", rq.CreateWorld, timeout_floor_s=_REBUILDS,
+              reply=rp.WorldReply),
+    Operation("fork_world", rq.ForkWorld, timeout_floor_s=_REBUILDS, reply=rp.WorldReply),
+    Operation("delete_world", rq.Named, reply=rp.CountReply),
+    Operation("predict", rq.Predict, steps=True, reply=rp.PredictReply),
+    Operation("compare", rq.Compare, mutates=True, reply=rp.CompareReply),
+    Operation("render", rq.Render, reply=rp.RenderReply),
+    Operation("add_camera", rq.AddCamera, mutates=True, reply=rp.CameraReply),
+    Operation("remove_camera", rq.Named, mutates=True, reply=rp.CountReply),
+    Operation("cameras", rq.NoArgs, reply=rp.CamerasReply),
+    Operation("raycast", rq.Raycast, reply=rp.RaycastReply),
+    Operation("contacts", rq.NamesOrAll, reply=rp.ContactsReply),
+    Operation("get_params", rq.NoArgs, reply=rp.ParamsReply),
+    Operation("set_params", rq.SetParams, mutates=True, reply=rp.ParamsReply),
     # The control lease (daemon/access/lease.py): they change who may mutate, not the world.
-    Operation("take_control", rq.NoArgs),
-    Operation("release_control", rq.NoArgs),
+    Operation("take_control", rq.NoArgs, reply=rp.TakeControlReply),
+    Operation("release_control", rq.NoArgs, reply=rp.ReleaseControlReply),
     # State streams (daemon/world/state_streams.py): poses published at a client's rate.
-    Operation("stream_states", rq.StreamStates),
-    Operation("close_stream", rq.CloseStream),
+    Operation("stream_states", rq.StreamStates, reply=rp.StreamReply),
+    Operation("close_stream", rq.CloseStream, reply=rp.StreamClosedReply),
 )}
 
 

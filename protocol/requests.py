@@ -24,12 +24,7 @@ from typing import Annotated, Any, Literal, TypeVar, Union, get_args, get_origin
 
 import msgspec
 
-from galton.protocol.errors import (
-    InvalidArgumentError,
-    MalformedRequestError,
-    brief,
-    did_you_mean,
-)
+from galton.protocol.errors import InvalidArgumentError, brief, did_you_mean
 from galton.protocol.vocabulary import (
     DEFAULT_MAX_LENGTH,
     DEFAULT_RATE_HZ,
@@ -49,7 +44,6 @@ from galton.protocol.vocabulary import (
     check_fields,
 )
 
-R = TypeVar("R", bound="Reply")
 A = TypeVar("A", bound="Args")
 
 
@@ -276,80 +270,6 @@ class StreamStates(Args, kw_only=True, forbid_unknown_fields=True):
 
 class CloseStream(Args, kw_only=True, forbid_unknown_fields=True):
     stream: Text
-
-
-# -- replies: what a result map holds (declared for the operations converted so far) ------
-
-
-class Reply(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
-    """A reply's ``result`` map."""
-
-
-class StatesReply(Reply, kw_only=True, forbid_unknown_fields=True):
-    names: list[str]
-    poses: Poses
-    twists: Twists
-
-
-class BoundsReply(Reply, kw_only=True, forbid_unknown_fields=True):
-    names: list[str]
-    bounds: Annotated[bytes, _kind("bounds", description="packed float64 rows, 6 wide: "
-                                                         "min x y z, max x y z")]
-
-
-class ShapesReply(Reply, kw_only=True, forbid_unknown_fields=True):
-    """Each entity's collision shapes, flat: ``counts[i]`` rows belong to ``names[i]``."""
-
-    names: list[str]
-    counts: list[int]
-    kinds: list[str]
-    sizes: Annotated[bytes, _kind("sizes", description="packed float64 rows, 3 wide: half "
-                                                       "sizes as SIZE_LAYOUT, zero padded")]
-    poses: Annotated[bytes, _kind("poses", description="packed float64 rows, 7 wide: each "
-                                                       "shape's pose in its entity's frame")]
-
-
-class StatusReply(Reply, kw_only=True, forbid_unknown_fields=True):
-    """A world's clock and state (``status``, and what time control answers)."""
-
-    state: Literal["stopped", "playing", "paused"]
-    step: int
-    sim_time: float
-    timestep: float
-    target_rtf: float
-    rtf: float
-    entity_count: int
-    engine: str
-    instance: str
-    world: str
-    faulted: bool
-    controller: str | None
-
-
-class CountReply(Reply, kw_only=True, forbid_unknown_fields=True):
-    count: int
-
-
-class NamesReply(Reply, kw_only=True, forbid_unknown_fields=True):
-    names: list[str]
-
-
-class ParamsReply(Reply, kw_only=True, forbid_unknown_fields=True):
-    params: dict[str, Any]
-
-
-class EntitiesReply(Reply, kw_only=True, forbid_unknown_fields=True):
-    entities: list[dict[str, Any]]
-
-
-def decode_result(declared: type[R], result: dict[str, Any]) -> R:
-    """A reply's result map as its declared type; one that does not fit is a daemon that
-    speaks another protocol (MalformedRequestError on the client's side)."""
-    try:
-        return msgspec.convert(result, declared)
-    except msgspec.ValidationError as exc:
-        raise MalformedRequestError(f"the daemon's reply does not fit its declaration: "
-                                    f"{exc}") from None
 
 
 def decode_args(op: str, declared: type[A], args: dict[str, Any]) -> A:

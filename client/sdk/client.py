@@ -62,7 +62,7 @@ from galton.protocol import mesh as mesh_wire
 from galton.protocol.arrays import unpack_f64
 from galton.protocol.errors import ClientClosedError, InvalidArgumentError
 from galton.protocol.operations import OPERATIONS
-from galton.protocol.requests import BoundsReply, NamesReply, ShapesReply, decode_result
+from galton.protocol.replies import BoundsReply, NamesReply, ShapesReply, decode_result
 
 DEFAULT_TIMEOUT_S = 5.0
 

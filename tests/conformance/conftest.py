@@ -19,7 +19,7 @@ from support_daemons import ENGINES, STATED_GAPS
 from galton.client import Client, EmbeddedDaemon
 from galton.protocol import FeatureUnsupportedError, Reply
 from galton.protocol.operations import OPERATIONS
-from galton.protocol.requests import decode_result
+from galton.protocol.replies import decode_result
 
 TRANSPORTS = ("zenoh", "zmq")
 # Each engine's transport in the suite: the transports alternate over the engines.

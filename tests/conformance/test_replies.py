@@ -12,7 +12,7 @@ from support import ball_row
 from galton.client import Client
 from galton.protocol import pack_f64
 from galton.protocol.operations import OPERATIONS
-from galton.protocol.requests import decode_result
+from galton.protocol.replies import decode_result
 
 
 def test_real_replies_fit_their_declarations(sim: Client) -> None:

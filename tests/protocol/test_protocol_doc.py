@@ -46,8 +46,15 @@ def test_every_declared_reply_field_is_documented(op: Operation) -> None:
 
 
 # Replies several operations share are described once: status and time control answer a
-# status map (docs/protocol.md, "status").
-REPLY_SHAPES = {"StatusReply": section("status")}
+# status map (docs/protocol.md, "status"), run_until replies as step does, and a world's
+# row is list_worlds'.
+REPLY_SHAPES = {"StatusReply": section("status"),
+                "StepReply": section("step") + section("run_until"),
+                "WorldReply": section("list_worlds")}
+
+
+def test_every_operation_declares_its_reply() -> None:
+    assert [name for name, op in OPERATIONS.items() if op.reply is None] == []
 
 
 def test_every_result_code_is_in_the_table() -> None:

@@ -16,6 +16,7 @@ from typer.testing import CliRunner
 from galton.client import spheres
 from galton.client.cli.app import app
 from galton.protocol import InvalidArgumentError, MalformedRequestError, pack_f64
+from galton.protocol import replies as rp
 from galton.protocol import requests as rq
 from galton.protocol.operations import OPERATIONS
 
@@ -116,12 +117,13 @@ def test_the_schema_holds_declared_replies(schema: dict[str, Any]) -> None:
     bounds = {"names": ["a"], "bounds": pack_f64(np.zeros((1, 6)))}
     validator(schema, "get_bounds", "reply").validate(as_json(bounds))
     assert not validator(schema, "get_bounds", "reply").is_valid({"names": ["a"]})
-    assert schema["operations"]["capabilities"]["reply"] == {}  # not declared yet: any map
+    status = schema["$defs"]["StatusReply"]
+    assert sorted(status["properties"]["state"]["enum"]) == ["paused", "playing", "stopped"]
 
 
 def test_a_reply_that_does_not_fit_its_declaration_is_refused() -> None:
     fits = {"names": ["a"], "bounds": pack_f64(np.zeros((1, 6)))}
-    assert rq.decode_result(rq.BoundsReply, fits).names == ["a"]
+    assert rp.decode_result(rp.BoundsReply, fits).names == ["a"]
     for wrong in ({"names": ["a"]}, {**fits, "extra": 1}, {**fits, "names": "a"}):
         with pytest.raises(MalformedRequestError, match="does not fit its declaration"):
-            rq.decode_result(rq.BoundsReply, wrong)
+            rp.decode_result(rp.BoundsReply, wrong)

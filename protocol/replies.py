@@ -1,0 +1,273 @@
+"""Every operation's reply, declared once as a msgspec Struct: the fields of its ``result``
+map (docs/protocol.md describes each beside its operation).
+
+protocol/operations.py names each operation's reply type; ``galton-client schema`` prints
+them as JSON Schema; the SDK decodes replies with them (``decode_result``), and the
+conformance suite holds every reply the daemon gives to its declaration, exactly: no field
+missing, none extra. A field that is ``None`` by default is one the daemon leaves out
+unless the request asked for it.
+
+The daemon builds its replies as plain maps and does not convert them through these types:
+converting costs more than the reply it checks (docs/PERFORMANCE.md, "Replies").
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Any, Literal, TypeVar
+
+import msgspec
+
+from galton.protocol.errors import MalformedRequestError
+
+R = TypeVar("R", bound="Reply")
+
+
+def _rows(width: int, what: str = "") -> msgspec.Meta:
+    return msgspec.Meta(description=f"packed float64 rows, {width} wide{what}")
+
+
+Poses = Annotated[bytes, _rows(7)]
+Twists = Annotated[bytes, _rows(6)]
+Vectors = Annotated[bytes, _rows(3)]
+Numbers = Annotated[bytes, msgspec.Meta(description="packed float64, one per row")]
+Blob = bytes  # a field named `bytes` below shadows the type in its class
+
+
+class Reply(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
+    """A reply's ``result`` map."""
+
+
+# -- shared by several operations -----------------------------------------------------------
+
+
+class StatusReply(Reply, kw_only=True, forbid_unknown_fields=True):
+    """A world's clock and state (``status``, and what time control answers)."""
+
+    state: Literal["stopped", "playing", "paused"]
+    step: int
+    sim_time: float
+    timestep: float
+    target_rtf: float
+    rtf: float
+    entity_count: int
+    engine: str
+    instance: str
+    world: str
+    faulted: bool
+    controller: str | None
+
+
+class CountReply(Reply, kw_only=True, forbid_unknown_fields=True):
+    count: int
+
+
+class NamesReply(Reply, kw_only=True, forbid_unknown_fields=True):
+    names: list[str]
+
+
+class ParamsReply(Reply, kw_only=True, forbid_unknown_fields=True):
+    params: dict[str, Any]
+
+
+class WorldReply(Reply, kw_only=True, forbid_unknown_fields=True):
+    """One world (``list_worlds``' rows; what create_world, fork_world and restore answer)."""
+
+    name: str
+    live: bool
+    engine: str
+    state: Literal["stopped", "playing", "paused"]
+    step: int
+    sim_time: float
+    entity_count: int
+    faulted: bool
+
+
+class JointSamples(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
+    """Joint positions and velocities read back by a step request or a prediction."""
+
+    names: list[str]
+    positions: Numbers
+    velocities: Numbers
+
+
+class JointStatesReply(Reply, kw_only=True, forbid_unknown_fields=True):
+    names: list[str]
+    positions: Numbers
+    velocities: Numbers
+    efforts: Numbers
+
+
+# -- one operation each ---------------------------------------------------------------------
+
+
+class CapabilitiesReply(Reply, kw_only=True, forbid_unknown_fields=True):
+    engine: str
+    engine_version: str
+    protocol_version: int
+    body_shapes: list[str]
+    model_formats: list[str]
+    features: list[str]
+    params: dict[str, dict[str, Any]]
+    engines_available: list[str]
+    render_backend: str | None
+    zmq: dict[str, Any]
+    host: dict[str, Any]
+
+
+class EntitiesReply(Reply, kw_only=True, forbid_unknown_fields=True):
+    entities: list[dict[str, Any]]
+
+
+class StatesReply(Reply, kw_only=True, forbid_unknown_fields=True):
+    names: list[str]
+    poses: Poses
+    twists: Twists
+
+
+class BoundsReply(Reply, kw_only=True, forbid_unknown_fields=True):
+    names: list[str]
+    bounds: Annotated[bytes, _rows(6, ": min x y z, max x y z")]
+
+
+class ShapesReply(Reply, kw_only=True, forbid_unknown_fields=True):
+    """Each entity's collision shapes, flat: ``counts[i]`` rows belong to ``names[i]``."""
+
+    names: list[str]
+    counts: list[int]
+    kinds: list[str]
+    sizes: Annotated[bytes, _rows(3, ": half sizes as SIZE_LAYOUT, zero padded")]
+    poses: Annotated[bytes, _rows(7, ": each shape's pose in its entity's frame")]
+
+
+class StepReply(Reply, kw_only=True, forbid_unknown_fields=True):
+    """What ``step`` and ``run_until`` answer when their steps are done."""
+
+    steps: int
+    names: list[str] | None = None
+    poses: Poses | None = None
+    twists: Twists | None = None
+    at_rest: bool | None = None
+    joints: JointStatesReply | None = None
+
+
+class JointsReply(Reply, kw_only=True, forbid_unknown_fields=True):
+    joints: list[dict[str, Any]]
+
+
+class SetJointStatesReply(Reply, kw_only=True, forbid_unknown_fields=True):
+    count: int
+    names: list[str] | None = None
+    poses: Poses | None = None
+    twists: Twists | None = None
+
+
+class SnapshotReply(Reply, kw_only=True, forbid_unknown_fields=True):
+    slot: str | None
+    world: str
+    engine: str
+    bytes: int
+    step: int
+    sim_time: float
+    entity_count: int
+    blob: Blob | None = None
+
+
+class SlotRow(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
+    slot: str
+    world: str
+    engine: str
+    bytes: int
+    step: int
+    sim_time: float
+    entity_count: int
+
+
+class SnapshotsReply(Reply, kw_only=True, forbid_unknown_fields=True):
+    slots: list[SlotRow]
+
+
+class WorldsReply(Reply, kw_only=True, forbid_unknown_fields=True):
+    worlds: list[WorldReply]
+
+
+class PredictReply(Reply, kw_only=True, forbid_unknown_fields=True):
+    steps: int
+    times: Numbers
+    names: list[str] | None = None
+    poses: Poses | None = None
+    twists: Twists | None = None
+    joints: JointSamples | None = None
+
+
+class CompareReply(Reply, kw_only=True, forbid_unknown_fields=True):
+    position_errors: Numbers
+    angle_errors: Numbers
+    speed_errors: Numbers | None = None
+    score: float
+    corrected: bool
+
+
+class RenderReply(Reply, kw_only=True, forbid_unknown_fields=True):
+    images: list[dict[str, Any]]
+    labels: Any
+    format: Literal["raw", "png"]
+
+
+class CameraReply(Reply, kw_only=True, forbid_unknown_fields=True):
+    name: str
+    camera: dict[str, Any]
+
+
+class CamerasReply(Reply, kw_only=True, forbid_unknown_fields=True):
+    cameras: list[dict[str, Any]]
+
+
+class RaycastReply(Reply, kw_only=True, forbid_unknown_fields=True):
+    hits: Annotated[bytes, msgspec.Meta(description="one byte per ray: 1 hit, 0 missed")]
+    entities: list[str]  # "" for a miss
+    points: Vectors
+    normals: Vectors
+    distances: Numbers
+
+
+class ContactsReply(Reply, kw_only=True, forbid_unknown_fields=True):
+    count: int
+    a: list[str]
+    b: list[str]
+    positions: Vectors
+    normals: Vectors
+    forces: Numbers
+    penetrations: Numbers
+
+
+class TakeControlReply(Reply, kw_only=True, forbid_unknown_fields=True):
+    controller: str
+    taken: bool
+
+
+class ReleaseControlReply(Reply, kw_only=True, forbid_unknown_fields=True):
+    controller: None
+    released: bool
+
+
+class StreamReply(Reply, kw_only=True, forbid_unknown_fields=True):
+    stream: str
+    key: str
+    topic: str
+    rate: float
+    world: str
+
+
+class StreamClosedReply(Reply, kw_only=True, forbid_unknown_fields=True):
+    stream: str
+    closed: bool
+
+
+def decode_result(declared: type[R], result: dict[str, Any]) -> R:
+    """A reply's result map as its declared type; one that does not fit is a daemon that
+    speaks another protocol (MalformedRequestError on the client's side)."""
+    try:
+        return msgspec.convert(result, declared)
+    except msgspec.ValidationError as exc:
+        raise MalformedRequestError(f"the daemon's reply does not fit its declaration: "
+                                    f"{exc}") from None
