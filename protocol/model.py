@@ -7,14 +7,16 @@ quaternion, as ROS and scipy), a twist 6 floats ``vx vy vz wx wy wz`` in the wor
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, field, fields
+from dataclasses import MISSING, asdict, dataclass, field, fields
 from typing import Any, TypeVar, overload
 
+import msgspec
 import numpy as np
 
 from galton.protocol import mesh as mesh_wire
 from galton.protocol.arrays import pack_f64, unpack_f64
 from galton.protocol.errors import InvalidArgumentError, brief
+from galton.protocol.replies import CapabilitiesReply, StatusReply, decode_result
 from galton.protocol.vocabulary import (
     BODY_SHAPES,
     MAX_BATCH,
@@ -410,6 +412,17 @@ class JointInfo:
                       "axis": (float(axis[0]), float(axis[1]), float(axis[2]))})
 
 
+def older_defaults(cls: type) -> dict[str, Any]:
+    """The defaults of a record's fields that an older daemon's reply may leave out."""
+    found: dict[str, Any] = {}
+    for spec in fields(cls):
+        if spec.default is not MISSING:
+            found[spec.name] = spec.default
+        elif spec.default_factory is not MISSING:
+            found[spec.name] = spec.default_factory()
+    return found
+
+
 def known_fields(cls: type, body: dict[str, Any]) -> dict[str, Any]:
     """The fields of ``body`` the dataclass knows: a newer daemon's extra fields (a reply
     that grew, as ``status`` grew ``controller``) are left out, not an error."""
@@ -439,7 +452,9 @@ class SimStatus:
 
     @classmethod
     def from_wire(cls, body: dict[str, Any]) -> SimStatus:
-        return cls(**{**known_fields(cls, body), "state": SimState(body["state"])})
+        """A status reply, through its declaration (protocol/replies.py)."""
+        status = decode_result(StatusReply, {**older_defaults(cls), **body})
+        return cls(**{**msgspec.structs.asdict(status), "state": SimState(status.state)})
 
 
 @dataclass
@@ -500,8 +515,9 @@ class Capabilities:
 
     @classmethod
     def from_wire(cls, body: dict[str, Any]) -> Capabilities:
-        """Parse a reply; fields this client does not know (a newer daemon's) are left out,
-        and ``host`` may be absent (an older daemon's)."""
-        return cls(**{**known_fields(cls, body), **{
-            k: tuple(body.get(k, ())) for k in (
-                "body_shapes", "model_formats", "features", "engines_available")}})
+        """Parse a reply through its declaration; fields this client does not know (a newer
+        daemon's) are left out, and ``host`` may be absent (an older daemon's)."""
+        caps = msgspec.structs.asdict(
+            decode_result(CapabilitiesReply, {**older_defaults(cls), **body}))
+        return cls(**{**caps, **{k: tuple(caps[k]) for k in (
+            "body_shapes", "model_formats", "features", "engines_available")}})

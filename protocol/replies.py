@@ -33,14 +33,16 @@ Numbers = Annotated[bytes, msgspec.Meta(description="packed float64, one per row
 Blob = bytes  # a field named `bytes` below shadows the type in its class
 
 
-class Reply(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
-    """A reply's ``result`` map."""
+class Reply(msgspec.Struct, kw_only=True):
+    """A reply's ``result`` map (or a row of one). A field it does not declare is left out
+    when the SDK decodes (a newer daemon's reply that grew, as ``status`` grew
+    ``controller``); the conformance suite refuses one (``decode_result(exact=True)``)."""
 
 
 # -- shared by several operations -----------------------------------------------------------
 
 
-class StatusReply(Reply, kw_only=True, forbid_unknown_fields=True):
+class StatusReply(Reply, kw_only=True):
     """A world's clock and state (``status``, and what time control answers)."""
 
     state: Literal["stopped", "playing", "paused"]
@@ -57,19 +59,19 @@ class StatusReply(Reply, kw_only=True, forbid_unknown_fields=True):
     controller: str | None
 
 
-class CountReply(Reply, kw_only=True, forbid_unknown_fields=True):
+class CountReply(Reply, kw_only=True):
     count: int
 
 
-class NamesReply(Reply, kw_only=True, forbid_unknown_fields=True):
+class NamesReply(Reply, kw_only=True):
     names: list[str]
 
 
-class ParamsReply(Reply, kw_only=True, forbid_unknown_fields=True):
+class ParamsReply(Reply, kw_only=True):
     params: dict[str, Any]
 
 
-class WorldReply(Reply, kw_only=True, forbid_unknown_fields=True):
+class WorldReply(Reply, kw_only=True):
     """One world (``list_worlds``' rows; what create_world, fork_world and restore answer)."""
 
     name: str
@@ -82,7 +84,7 @@ class WorldReply(Reply, kw_only=True, forbid_unknown_fields=True):
     faulted: bool
 
 
-class JointSamples(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
+class JointSamples(Reply, kw_only=True):
     """Joint positions and velocities read back by a step request or a prediction."""
 
     names: list[str]
@@ -90,7 +92,7 @@ class JointSamples(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     velocities: Numbers
 
 
-class JointStatesReply(Reply, kw_only=True, forbid_unknown_fields=True):
+class JointStatesReply(Reply, kw_only=True):
     names: list[str]
     positions: Numbers
     velocities: Numbers
@@ -100,7 +102,7 @@ class JointStatesReply(Reply, kw_only=True, forbid_unknown_fields=True):
 # -- one operation each ---------------------------------------------------------------------
 
 
-class CapabilitiesReply(Reply, kw_only=True, forbid_unknown_fields=True):
+class CapabilitiesReply(Reply, kw_only=True):
     engine: str
     engine_version: str
     protocol_version: int
@@ -114,22 +116,22 @@ class CapabilitiesReply(Reply, kw_only=True, forbid_unknown_fields=True):
     host: dict[str, Any]
 
 
-class EntitiesReply(Reply, kw_only=True, forbid_unknown_fields=True):
+class EntitiesReply(Reply, kw_only=True):
     entities: list[dict[str, Any]]
 
 
-class StatesReply(Reply, kw_only=True, forbid_unknown_fields=True):
+class StatesReply(Reply, kw_only=True):
     names: list[str]
     poses: Poses
     twists: Twists
 
 
-class BoundsReply(Reply, kw_only=True, forbid_unknown_fields=True):
+class BoundsReply(Reply, kw_only=True):
     names: list[str]
     bounds: Annotated[bytes, _rows(6, ": min x y z, max x y z")]
 
 
-class ShapesReply(Reply, kw_only=True, forbid_unknown_fields=True):
+class ShapesReply(Reply, kw_only=True):
     """Each entity's collision shapes, flat: ``counts[i]`` rows belong to ``names[i]``."""
 
     names: list[str]
@@ -139,7 +141,7 @@ class ShapesReply(Reply, kw_only=True, forbid_unknown_fields=True):
     poses: Annotated[bytes, _rows(7, ": each shape's pose in its entity's frame")]
 
 
-class StepReply(Reply, kw_only=True, forbid_unknown_fields=True):
+class StepReply(Reply, kw_only=True):
     """What ``step`` and ``run_until`` answer when their steps are done."""
 
     steps: int
@@ -150,18 +152,18 @@ class StepReply(Reply, kw_only=True, forbid_unknown_fields=True):
     joints: JointStatesReply | None = None
 
 
-class JointsReply(Reply, kw_only=True, forbid_unknown_fields=True):
+class JointsReply(Reply, kw_only=True):
     joints: list[dict[str, Any]]
 
 
-class SetJointStatesReply(Reply, kw_only=True, forbid_unknown_fields=True):
+class SetJointStatesReply(Reply, kw_only=True):
     count: int
     names: list[str] | None = None
     poses: Poses | None = None
     twists: Twists | None = None
 
 
-class SnapshotReply(Reply, kw_only=True, forbid_unknown_fields=True):
+class SnapshotReply(Reply, kw_only=True):
     slot: str | None
     world: str
     engine: str
@@ -172,7 +174,7 @@ class SnapshotReply(Reply, kw_only=True, forbid_unknown_fields=True):
     blob: Blob | None = None
 
 
-class SlotRow(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
+class SlotRow(Reply, kw_only=True):
     slot: str
     world: str
     engine: str
@@ -182,15 +184,15 @@ class SlotRow(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     entity_count: int
 
 
-class SnapshotsReply(Reply, kw_only=True, forbid_unknown_fields=True):
+class SnapshotsReply(Reply, kw_only=True):
     slots: list[SlotRow]
 
 
-class WorldsReply(Reply, kw_only=True, forbid_unknown_fields=True):
+class WorldsReply(Reply, kw_only=True):
     worlds: list[WorldReply]
 
 
-class PredictReply(Reply, kw_only=True, forbid_unknown_fields=True):
+class PredictReply(Reply, kw_only=True):
     steps: int
     times: Numbers
     names: list[str] | None = None
@@ -199,7 +201,7 @@ class PredictReply(Reply, kw_only=True, forbid_unknown_fields=True):
     joints: JointSamples | None = None
 
 
-class CompareReply(Reply, kw_only=True, forbid_unknown_fields=True):
+class CompareReply(Reply, kw_only=True):
     position_errors: Numbers
     angle_errors: Numbers
     speed_errors: Numbers | None = None
@@ -207,22 +209,22 @@ class CompareReply(Reply, kw_only=True, forbid_unknown_fields=True):
     corrected: bool
 
 
-class RenderReply(Reply, kw_only=True, forbid_unknown_fields=True):
+class RenderReply(Reply, kw_only=True):
     images: list[dict[str, Any]]
     labels: Any
     format: Literal["raw", "png"]
 
 
-class CameraReply(Reply, kw_only=True, forbid_unknown_fields=True):
+class CameraReply(Reply, kw_only=True):
     name: str
     camera: dict[str, Any]
 
 
-class CamerasReply(Reply, kw_only=True, forbid_unknown_fields=True):
+class CamerasReply(Reply, kw_only=True):
     cameras: list[dict[str, Any]]
 
 
-class RaycastReply(Reply, kw_only=True, forbid_unknown_fields=True):
+class RaycastReply(Reply, kw_only=True):
     hits: Annotated[bytes, msgspec.Meta(description="one byte per ray: 1 hit, 0 missed")]
     entities: list[str]  # "" for a miss
     points: Vectors
@@ -230,7 +232,7 @@ class RaycastReply(Reply, kw_only=True, forbid_unknown_fields=True):
     distances: Numbers
 
 
-class ContactsReply(Reply, kw_only=True, forbid_unknown_fields=True):
+class ContactsReply(Reply, kw_only=True):
     count: int
     a: list[str]
     b: list[str]
@@ -240,17 +242,17 @@ class ContactsReply(Reply, kw_only=True, forbid_unknown_fields=True):
     penetrations: Numbers
 
 
-class TakeControlReply(Reply, kw_only=True, forbid_unknown_fields=True):
+class TakeControlReply(Reply, kw_only=True):
     controller: str
     taken: bool
 
 
-class ReleaseControlReply(Reply, kw_only=True, forbid_unknown_fields=True):
+class ReleaseControlReply(Reply, kw_only=True):
     controller: None
     released: bool
 
 
-class StreamReply(Reply, kw_only=True, forbid_unknown_fields=True):
+class StreamReply(Reply, kw_only=True):
     stream: str
     key: str
     topic: str
@@ -258,16 +260,35 @@ class StreamReply(Reply, kw_only=True, forbid_unknown_fields=True):
     world: str
 
 
-class StreamClosedReply(Reply, kw_only=True, forbid_unknown_fields=True):
+class StreamClosedReply(Reply, kw_only=True):
     stream: str
     closed: bool
 
 
-def decode_result(declared: type[R], result: dict[str, Any]) -> R:
+def decode_result(declared: type[R], result: dict[str, Any], *, exact: bool = False) -> R:
     """A reply's result map as its declared type; one that does not fit is a daemon that
-    speaks another protocol (MalformedRequestError on the client's side)."""
+    speaks another protocol (MalformedRequestError on the client's side). ``exact``: a field
+    the declaration lacks, at any depth, does not fit either."""
     try:
-        return msgspec.convert(result, declared)
+        decoded = msgspec.convert(result, declared)
     except msgspec.ValidationError as exc:
         raise MalformedRequestError(f"the daemon's reply does not fit its declaration: "
                                     f"{exc}") from None
+    extra = _undeclared(decoded, result, "$") if exact else []
+    if extra:
+        raise MalformedRequestError(f"the daemon's reply does not fit its declaration: "
+                                    f"{', '.join(extra)} not declared in {declared.__name__}")
+    return decoded
+
+
+def _undeclared(decoded: Any, raw: Any, path: str) -> list[str]:
+    """The paths of the fields in ``raw`` that ``decoded`` (its Struct) does not declare."""
+    if isinstance(decoded, list):
+        return [p for i, (d, r) in enumerate(zip(decoded, raw, strict=True))
+                for p in _undeclared(d, r, f"{path}[{i}]")]
+    if not isinstance(decoded, msgspec.Struct):
+        return []
+    known = decoded.__struct_fields__
+    return [f"{path}.{key}" for key in raw if key not in known] + [
+        p for key in known if key in raw
+        for p in _undeclared(getattr(decoded, key), raw[key], f"{path}.{key}")]

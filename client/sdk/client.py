@@ -62,7 +62,16 @@ from galton.protocol import mesh as mesh_wire
 from galton.protocol.arrays import unpack_f64
 from galton.protocol.errors import ClientClosedError, InvalidArgumentError
 from galton.protocol.operations import OPERATIONS
-from galton.protocol.replies import BoundsReply, NamesReply, ShapesReply, decode_result
+from galton.protocol.replies import (
+    BoundsReply,
+    EntitiesReply,
+    JointsReply,
+    NamesReply,
+    ParamsReply,
+    ShapesReply,
+    StepReply,
+    decode_result,
+)
 
 DEFAULT_TIMEOUT_S = 5.0
 
@@ -240,7 +249,7 @@ class Client(WorldMethods, PerceptionMethods, ControlMethods, StreamMethods):
         reply = self._ok("run_until", {"sim_time": sim_time, "read": list(names),
                                        "until_rest": {"speed": speed, "every": every}},
                          timeout)
-        return States.from_reply(reply), bool(reply.result["at_rest"])
+        return States.from_reply(reply), bool(decode_result(StepReply, reply.result).at_rest)
 
     def reset(self, scope: str = "all") -> SimStatus:
         """Scopes: time, state (entities to their created state), spawned, all."""
@@ -254,16 +263,16 @@ class Client(WorldMethods, PerceptionMethods, ControlMethods, StreamMethods):
         return self._status("load_world", args)
 
     def get_params(self) -> dict[str, Any]:
-        return _map(self.call("get_params"), "params")
+        return decode_result(ParamsReply, self.call("get_params")).params
 
     def set_params(self, params: dict[str, Any]) -> dict[str, Any]:
-        return _map(self.call("set_params", {"params": params}), "params")
+        return decode_result(ParamsReply, self.call("set_params", {"params": params})).params
 
     # -- scene --------------------------------------------------------------------------
     def spawn(self, *groups: BodyGroup, timeout: float | None = None) -> list[str]:
         """Create every body of every group in one request (one engine rebuild)."""
         args = {"groups": [g.to_wire() for g in groups]}
-        return _names(self.call("spawn", args, timeout))
+        return decode_result(NamesReply, self.call("spawn", args, timeout)).names
 
     def load_model(self, fmt: str, *, text: str | None = None,
                    path: str | os.PathLike[str] | None = None, prefix: str = "",
@@ -273,14 +282,16 @@ class Client(WorldMethods, PerceptionMethods, ControlMethods, StreamMethods):
         return its entities, each root before its links. ``fixed_base`` (URDF; daemon's
         default True) welds the root to the world; ``search_path``: folders (a list, or one
         str joined by ':') where the files the model names are looked for."""
-        return _names(self.call("load_model", sdk_joints.load_model_args(
-            fmt, text, path, prefix, fixed_base, search_path)))
+        result = self.call("load_model", sdk_joints.load_model_args(
+            fmt, text, path, prefix, fixed_base, search_path))
+        return decode_result(NamesReply, result).names
 
     def list(self, name: str | None = None, tag: str | None = None,
              kind: str | None = None) -> list[EntityInfo]:
         """Entities matching a name glob, a tag and/or a kind ("static"/"dynamic")."""
         args = sdk_joints.given(name=name, tag=tag, kind=kind)
-        return [EntityInfo.from_wire(e) for e in self.call("list", args)["entities"]]
+        rows = decode_result(EntitiesReply, self.call("list", args)).entities
+        return [EntityInfo.from_wire(e) for e in rows]
 
     def get_states(self, names: Sequence[str] | None = None) -> States:
         """States of these bodies (all when None) in one request."""
@@ -332,7 +343,7 @@ class Client(WorldMethods, PerceptionMethods, ControlMethods, StreamMethods):
         """Every joint of every loaded model, or of one ``model`` (its root entity), or
         these ``names``; in load order."""
         result = self.call("joints", sdk_joints.joints_args(model, names))
-        return [JointInfo.from_wire(joint) for joint in result["joints"]]
+        return [JointInfo.from_wire(joint) for joint in decode_result(JointsReply, result).joints]
 
     def get_joint_states(self, names: Sequence[str] | None = None) -> JointStates:
         """Positions, velocities, efforts of these 1-DOF joints (all when None)."""
@@ -407,14 +418,6 @@ def _transport(keys: Keys, client_id: str, connect: str | Sequence[str] | None,
             "a ZeroMQ endpoint takes no Zenoh session, config file or credentials: its "
             "security is CURVE keys (zmq_keys)")
     return ZmqTransport(endpoint, keys=zmq_keys or ZmqKeys.from_env())
-
-
-def _names(result: dict[str, Any]) -> list[str]:
-    return [str(name) for name in result["names"]]
-
-
-def _map(result: dict[str, Any], key: str) -> dict[str, Any]:
-    return dict(result[key])
 
 
 def spheres(names: Sequence[str], positions: Sequence[Sequence[float]] | np.ndarray,

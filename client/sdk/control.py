@@ -18,6 +18,7 @@ from contextlib import contextmanager, suppress
 from typing import TYPE_CHECKING, Any
 
 from galton.protocol import GaltonError
+from galton.protocol.replies import ReleaseControlReply, TakeControlReply, decode_result
 
 if TYPE_CHECKING:
     from galton.protocol import Reply
@@ -34,12 +35,12 @@ class ControlMethods:
         """Hold control of the daemon until ``release_control``, or until this client
         closes or its process dies. True when taken now, False when this client already
         held it; ControlHeldError (naming the holder) when another client holds it."""
-        return bool(self._ok("take_control").result["taken"])
+        return decode_result(TakeControlReply, self._ok("take_control").result).taken
 
     def release_control(self) -> bool:
         """Give control back: True when this client held it, False when nobody did;
         ControlHeldError when another client holds it."""
-        return bool(self._ok("release_control").result["released"])
+        return decode_result(ReleaseControlReply, self._ok("release_control").result).released
 
     @contextmanager
     def control(self) -> Iterator[None]:

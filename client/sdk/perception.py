@@ -21,6 +21,7 @@ from numpy.typing import ArrayLike
 from galton.client.sdk.joints import float_array, given
 from galton.client.sdk.values import Contacts, Image, RayHits
 from galton.protocol import InvalidArgumentError, Reply, pack_f64
+from galton.protocol.replies import CamerasReply, RenderReply, decode_result
 from galton.protocol.vocabulary import IMAGE_FORMATS
 
 if TYPE_CHECKING:
@@ -83,10 +84,10 @@ class PerceptionMethods:
         given = [cameras] if isinstance(cameras, Mapping) else list(cameras)
         reply = self._ok("render", {"cameras": [dict(c) for c in given], "format": format},
                          timeout)
-        labels = [str(n) for n in reply.result["labels"]]
-        fmt = str(reply.result.get("format", format))
-        return [Image.from_wire(image, labels, fmt, reply)
-                for image in reply.result["images"]]
+        rendered = decode_result(RenderReply, reply.result)
+        labels = [str(n) for n in rendered.labels]
+        return [Image.from_wire(image, labels, rendered.format, reply)
+                for image in rendered.images]
 
     def add_camera(self, name: str, camera: CameraMap) -> dict[str, Any]:
         """Keep a named camera in the world (replacing one of that name); render it with
@@ -100,7 +101,7 @@ class PerceptionMethods:
 
     def cameras(self) -> dict[str, dict[str, Any]]:
         """The world's named cameras: name -> camera map."""
-        rows = self._ok("cameras").result["cameras"]
+        rows = decode_result(CamerasReply, self._ok("cameras").result).cameras
         return {str(row["name"]): {k: v for k, v in row.items() if k != "name"}
                 for row in rows}
 

@@ -2,7 +2,9 @@
 images, ray hits and contacts.
 
 Each value is built from the reply that carried it, so a value never mixes one request's
-numbers with another's (a Client may be used from several threads at once).
+numbers with another's (a Client may be used from several threads at once), and through
+its operation's declared reply type (protocol/replies.py): a reply that does not fit is
+MalformedRequestError, a field a newer daemon added is left out.
 """
 
 from __future__ import annotations
@@ -14,6 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from galton.protocol import POSE_WIDTH, TWIST_WIDTH, OperationFailedError, Reply, unpack_f64
+from galton.protocol import replies as rp
 from galton.protocol.png import decode_png
 
 FloatArray = NDArray[np.float64]
@@ -46,9 +49,9 @@ class States:
     @classmethod
     def from_reply(cls, reply: Reply) -> States:
         """The states a ``get_states`` or reading step reply holds, stamped by it."""
-        result = reply.result
-        return cls(list(result["names"]), unpack_f64(result["poses"], POSE_WIDTH, "poses"),
-                   unpack_f64(result["twists"], TWIST_WIDTH, "twists"), reply.step,
+        result = rp.decode_result(rp.StatesReply, reply.result)
+        return cls(result.names, unpack_f64(result.poses, POSE_WIDTH, "poses"),
+                   unpack_f64(result.twists, TWIST_WIDTH, "twists"), reply.step,
                    reply.sim_time)
 
     @property
@@ -90,9 +93,10 @@ class JointStates:
 
     @classmethod
     def from_result(cls, result: dict[str, Any], reply: Reply) -> JointStates:
-        return cls(list(result["names"]), _column(result, "positions"),
-                   _column(result, "velocities"), _column(result, "efforts"), reply.step,
-                   reply.sim_time)
+        states = rp.decode_result(rp.JointStatesReply, result)
+        return cls(states.names, _column(states.positions, "positions"),
+                   _column(states.velocities, "velocities"), _column(states.efforts, "efforts"),
+                   reply.step, reply.sim_time)
 
     @property
     def stamp(self) -> Stamp:
@@ -102,8 +106,8 @@ class JointStates:
         return len(self.names)
 
 
-def _column(result: dict[str, Any], key: str) -> FloatArray:
-    return unpack_f64(result[key], 1, key)[:, 0]
+def _column(data: bytes, key: str) -> FloatArray:
+    return unpack_f64(data, 1, key)[:, 0]
 
 
 # -- worlds, snapshots, predictions, comparisons (issue 25) ------------------------------
@@ -123,9 +127,12 @@ class WorldInfo:
 
     @classmethod
     def from_wire(cls, row: dict[str, Any]) -> WorldInfo:
-        return cls(str(row["name"]), bool(row["live"]), str(row["engine"]), str(row["state"]),
-                   int(row["step"]), float(row["sim_time"]), int(row["entity_count"]),
-                   bool(row["faulted"]))
+        return cls.of(rp.decode_result(rp.WorldReply, row))
+
+    @classmethod
+    def of(cls, world: rp.WorldReply) -> WorldInfo:
+        return cls(world.name, world.live, world.engine, world.state, world.step,
+                   world.sim_time, world.entity_count, world.faulted)
 
 
 @dataclass(frozen=True)
@@ -145,14 +152,11 @@ class SnapshotInfo:
 
     @classmethod
     def from_wire(cls, row: dict[str, Any], world: str = "", engine: str = "") -> SnapshotInfo:
-        """A ``snapshots`` row, or a ``snapshot`` result (which names neither world nor
-        engine when they are not given here)."""
-        blob = row.get("blob")
-        slot = row.get("slot")
-        return cls(None if slot is None else str(slot), str(row.get("world", world)),
-                   str(row.get("engine", engine)), int(row["bytes"]), int(row["step"]),
-                   float(row["sim_time"]), int(row["entity_count"]),
-                   None if blob is None else bytes(blob))
+        """A ``snapshots`` row, or a ``snapshot`` result (an older daemon's named neither
+        world nor engine: ``world`` and ``engine`` stand in for them)."""
+        info = rp.decode_result(rp.SnapshotReply, {"world": world, "engine": engine, **row})
+        return cls(info.slot, info.world, info.engine, info.bytes, info.step, info.sim_time,
+                   info.entity_count, info.blob)
 
 
 @dataclass
@@ -175,19 +179,19 @@ class Prediction:
 
     @classmethod
     def from_reply(cls, reply: Reply) -> Prediction:
-        result = reply.result
-        times = unpack_f64(result["times"], 1, "times")[:, 0]
+        result = rp.decode_result(rp.PredictReply, reply.result)
+        times = _column(result.times, "times")
         samples = len(times)
-        names = [str(n) for n in result.get("names", [])]
-        joints = result.get("joints") or {"names": []}
-        joint_names = [str(n) for n in joints["names"]]
-        return cls(times, int(result["steps"]), names,
-                   _samples(result.get("poses"), samples, len(names), POSE_WIDTH, "poses"),
-                   _samples(result.get("twists"), samples, len(names), TWIST_WIDTH, "twists"),
+        names = result.names or []
+        joints = result.joints or rp.JointSamples(names=[], positions=b"", velocities=b"")
+        joint_names = joints.names
+        return cls(times, result.steps, names,
+                   _samples(result.poses, samples, len(names), POSE_WIDTH, "poses"),
+                   _samples(result.twists, samples, len(names), TWIST_WIDTH, "twists"),
                    joint_names,
-                   _samples(joints.get("positions"), samples, len(joint_names), 1,
+                   _samples(joints.positions, samples, len(joint_names), 1,
                             "positions")[:, :, 0],
-                   _samples(joints.get("velocities"), samples, len(joint_names), 1,
+                   _samples(joints.velocities, samples, len(joint_names), 1,
                             "velocities")[:, :, 0],
                    reply.step, reply.sim_time)
 
@@ -199,9 +203,10 @@ class Prediction:
         return self.poses[:, self.names.index(name)]
 
 
-def _samples(data: Any, samples: int, count: int, width: int, key: str) -> FloatArray:
+def _samples(data: bytes | None, samples: int, count: int, width: int, key: str
+             ) -> FloatArray:
     """Rows of ``width`` sample after sample, as (samples, count, width); empty if absent."""
-    if data is None:
+    if data is None or count == 0:
         return np.zeros((samples, count, width))
     return unpack_f64(data, width, key).reshape(samples, count, width)
 
@@ -224,12 +229,12 @@ class Comparison:
 
     @classmethod
     def from_reply(cls, reply: Reply, names: list[str]) -> Comparison:
-        result = reply.result
-        speeds = result.get("speed_errors")
-        return cls(names, _column(result, "position_errors"), _column(result, "angle_errors"),
-                   None if speeds is None else _column(result, "speed_errors"),
-                   float(result["score"]), bool(result["corrected"]), reply.step,
-                   reply.sim_time)
+        result = rp.decode_result(rp.CompareReply, reply.result)
+        speeds = result.speed_errors
+        return cls(names, _column(result.position_errors, "position_errors"),
+                   _column(result.angle_errors, "angle_errors"),
+                   None if speeds is None else _column(speeds, "speed_errors"),
+                   result.score, result.corrected, reply.step, reply.sim_time)
 
 
 # -- perception (issue 26) ----------------------------------------------------------------
@@ -325,11 +330,10 @@ class RayHits:
 
     @classmethod
     def from_reply(cls, reply: Reply) -> RayHits:
-        result = reply.result
-        return cls(np.frombuffer(result["hits"], np.uint8).astype(bool),
-                   [str(e) for e in result["entities"]], unpack_f64(result["points"], 3),
-                   unpack_f64(result["normals"], 3), _column(result, "distances"),
-                   reply.step, reply.sim_time)
+        result = rp.decode_result(rp.RaycastReply, reply.result)
+        return cls(np.frombuffer(result.hits, np.uint8).astype(bool), result.entities,
+                   unpack_f64(result.points, 3), unpack_f64(result.normals, 3),
+                   _column(result.distances, "distances"), reply.step, reply.sim_time)
 
     def __len__(self) -> int:
         return len(self.entities)
@@ -352,11 +356,10 @@ class Contacts:
 
     @classmethod
     def from_reply(cls, reply: Reply) -> Contacts:
-        result = reply.result
-        return cls([str(n) for n in result["a"]], [str(n) for n in result["b"]],
-                   unpack_f64(result["positions"], 3), unpack_f64(result["normals"], 3),
-                   _column(result, "forces"), _column(result, "penetrations"), reply.step,
-                   reply.sim_time)
+        result = rp.decode_result(rp.ContactsReply, reply.result)
+        return cls(result.a, result.b, unpack_f64(result.positions, 3),
+                   unpack_f64(result.normals, 3), _column(result.forces, "forces"),
+                   _column(result.penetrations, "penetrations"), reply.step, reply.sim_time)
 
     def __len__(self) -> int:
         return len(self.a)

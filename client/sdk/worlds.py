@@ -23,6 +23,7 @@ from numpy.typing import ArrayLike
 from galton.client.sdk import joints as sdk_joints
 from galton.client.sdk.values import Comparison, Prediction, SnapshotInfo, Stamp, WorldInfo
 from galton.protocol import POSE_WIDTH, TWIST_WIDTH, InvalidArgumentError, Reply
+from galton.protocol.replies import SnapshotsReply, WorldsReply, decode_result
 
 if TYPE_CHECKING:
     from galton.client.sdk.client import Client
@@ -67,7 +68,8 @@ class WorldMethods:
     # -- worlds ---------------------------------------------------------------------------
     def list_worlds(self) -> list[WorldInfo]:
         """Every world of the daemon, the live one first."""
-        return [WorldInfo.from_wire(row) for row in self._ok("list_worlds").result["worlds"]]
+        rows = decode_result(WorldsReply, self._ok("list_worlds").result).worlds
+        return [WorldInfo.of(row) for row in rows]
 
     def create_world(self, name: str, engine: str | None = None,
                      params: dict[str, Any] | None = None) -> WorldInfo:
@@ -107,7 +109,9 @@ class WorldMethods:
 
     def snapshots(self) -> list[SnapshotInfo]:
         """The snapshot slots the daemon keeps."""
-        return [SnapshotInfo.from_wire(row) for row in self._ok("snapshots").result["slots"]]
+        rows = decode_result(SnapshotsReply, self._ok("snapshots").result).slots
+        return [SnapshotInfo(row.slot, row.world, row.engine, row.bytes, row.step, row.sim_time,
+                             row.entity_count) for row in rows]
 
     def delete_snapshot(self, slot: str) -> None:
         self._ok("delete_snapshot", {"slot": slot})

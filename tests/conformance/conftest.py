@@ -69,7 +69,7 @@ def hold_replies_to_declarations(client: Client) -> None:
         reply = send(op, args, *rest)
         declared = OPERATIONS[op].reply if op in OPERATIONS else None
         if reply.ok and declared is not None:
-            decode_result(declared, reply.result)
+            decode_result(declared, reply.result, exact=True)
         return reply
     transport.request = request  # type: ignore[method-assign]
 

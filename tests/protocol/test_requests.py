@@ -123,7 +123,16 @@ def test_the_schema_holds_declared_replies(schema: dict[str, Any]) -> None:
 
 def test_a_reply_that_does_not_fit_its_declaration_is_refused() -> None:
     fits = {"names": ["a"], "bounds": pack_f64(np.zeros((1, 6)))}
-    assert rp.decode_result(rp.BoundsReply, fits).names == ["a"]
+    assert rp.decode_result(rp.BoundsReply, fits, exact=True).names == ["a"]
     for wrong in ({"names": ["a"]}, {**fits, "extra": 1}, {**fits, "names": "a"}):
         with pytest.raises(MalformedRequestError, match="does not fit its declaration"):
-            rp.decode_result(rp.BoundsReply, wrong)
+            rp.decode_result(rp.BoundsReply, wrong, exact=True)
+
+
+def test_a_newer_daemons_extra_field_is_left_out_unless_exact() -> None:
+    row = {"name": "w", "live": True, "engine": "mujoco", "state": "paused", "step": 1,
+           "sim_time": 0.1, "entity_count": 0, "faulted": False}
+    grown = {"worlds": [{**row, "colour": "red"}]}
+    assert rp.decode_result(rp.WorldsReply, grown).worlds[0].name == "w"
+    with pytest.raises(MalformedRequestError, match=r"\$\.worlds\[0\]\.colour not declared"):
+        rp.decode_result(rp.WorldsReply, grown, exact=True)
