@@ -117,7 +117,8 @@ def stream_cost(engine: str, seconds: float, rounds: int) -> dict[str, float]:
         finally:
             sim.pause()
     ratios = sorted(w / b for w, b in zip(with_stream, without, strict=True))
-    quartiles = statistics.quantiles(ratios, n=4, method="inclusive") if len(ratios) >= 2 else ratios * 3
+    quartiles = (statistics.quantiles(ratios, n=4, method="inclusive")
+                 if len(ratios) >= 2 else ratios * 3)
     return {"speed_without": statistics.median(without),
             "speed_with": statistics.median(with_stream),
             "cost_percent": 100 * (1 - statistics.median(ratios)),
