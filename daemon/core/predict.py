@@ -15,6 +15,7 @@ from galton.daemon.core.context import OpContext
 from galton.daemon.core.reply_limit import require_room
 from galton.daemon.ops import joints as ops_joints
 from galton.daemon.ops import scene as ops
+from galton.daemon.ops.binding import handles
 from galton.daemon.world.scene import World
 from galton.daemon.world.snapshot import clone_of, decode, world_from
 from galton.protocol import (
@@ -66,6 +67,7 @@ class PredictSampler:
         return out
 
 
+@handles("predict")
 def predict(loop: OpContext, call: Call, request: rq.Predict) -> None:
     """Start a prediction job (answered when its horizon is done)."""
     if loop.job is not None:

@@ -16,6 +16,7 @@ from typing import Any
 from galton.daemon.access import lease
 from galton.daemon.core.calls import Call, RestCheck, StepJob
 from galton.daemon.core.context import OpContext
+from galton.daemon.ops.binding import handles
 from galton.daemon.world.scene import World
 from galton.protocol import (
     IncorrectStateError,
@@ -43,6 +44,7 @@ def _rest_check(rest: dict[str, Any] | None, read: list[str] | None,
     return RestCheck(speed, max(1, round(every / timestep)))
 
 
+@handles("status")
 def status(loop: OpContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
     world = loop.world_for(request)
     if world is loop.world:
@@ -66,6 +68,7 @@ def _live_only(loop: OpContext, request: rq.Args, op: str) -> None:
                                   "side world moves by step and run_until")
 
 
+@handles("play")
 def play(loop: OpContext, call: Call, request: rq.Play) -> dict[str, Any]:
     _live_only(loop, request, "play")
     target = loop.target_rtf if request.rtf is None else request.rtf
@@ -77,6 +80,7 @@ def play(loop: OpContext, call: Call, request: rq.Play) -> dict[str, Any]:
     return loop.status().to_wire()
 
 
+@handles("set_rtf")
 def set_rtf(loop: OpContext, call: Call, request: rq.SetRtf) -> dict[str, Any]:
     _live_only(loop, request, "set_rtf")
     loop.target_rtf = request.rtf
@@ -84,6 +88,7 @@ def set_rtf(loop: OpContext, call: Call, request: rq.SetRtf) -> dict[str, Any]:
     return loop.status().to_wire()
 
 
+@handles("pause")
 def pause(loop: OpContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
     world = loop.world_for(request)
     _cancel_job_on(loop, world, "paused")
@@ -93,6 +98,7 @@ def pause(loop: OpContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
     return loop.status().to_wire()
 
 
+@handles("stop")
 def stop(loop: OpContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
     """Pause and rewind: time to 0 and every entity back to the state it was created in."""
     world = loop.world_for(request)
@@ -106,6 +112,7 @@ def stop(loop: OpContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
     return loop.status().to_wire()
 
 
+@handles("step")
 def step(loop: OpContext, call: Call, request: rq.Step) -> None:
     count = integer_in(request.count, "step.count", 1, loop.limits.max_steps)
     world = loop.world_for(request)
@@ -113,6 +120,7 @@ def step(loop: OpContext, call: Call, request: rq.Step) -> None:
                read_joints=_read_joint_list(world, request.read_joints, "step"))
 
 
+@handles("run_until")
 def run_until(loop: OpContext, call: Call, request: rq.RunUntil) -> dict[str, Any] | None:
     target = request.sim_time
     world = loop.world_for(request)
@@ -135,6 +143,7 @@ def run_until(loop: OpContext, call: Call, request: rq.RunUntil) -> dict[str, An
     return None
 
 
+@handles("reset")
 def reset(loop: OpContext, call: Call, request: rq.Reset) -> dict[str, Any]:
     scope = request.scope
     world = loop.world_for(request)
@@ -150,6 +159,7 @@ def reset(loop: OpContext, call: Call, request: rq.Reset) -> dict[str, Any]:
     return loop.status().to_wire()
 
 
+@handles("load_world")
 def load_world(loop: OpContext, call: Call, request: rq.LoadWorld) -> dict[str, Any]:
     """Replace the world with a fresh one on the named engine, in this process."""
     _live_only(loop, request, "load_world")

@@ -3,8 +3,9 @@
 binds each one to the function that serves it, and refuses to load when the two drift.
 
 A handler is bound where it is written, marked ``@handles("op")`` or ``@scene_op("op")``
-(daemon/ops/binding.py), in one of the modules ``OP_MODULES`` lists; the operations that
-predate the marks are still bound in ``_TABLE`` below (the same checks hold for both).
+(daemon/ops/binding.py), in one of the modules ``OP_MODULES`` lists; the few whose handlers
+live in world/ or access/ (which do not import ops/) are bound in ``_TABLE`` below (the
+same checks hold for both).
 
 Time-control operations (daemon/core/time_control.py) act on the loop; scene operations
 (daemon/ops/scene.py) act on its World and, when they change it, publish a ``scene`` event. The
@@ -58,55 +59,10 @@ def _scene(name: str, apply: ops.SceneOp) -> Handler:
     return handle
 
 
-def _capabilities(loop: OpContext, call: Call, request: Args) -> Result:
-    """The engine's capabilities, with what the daemon adds (its ZeroMQ endpoints)."""
-    return {**ops.capabilities(loop.world_for(request), request), **loop.advertised}
-
-
+# The operations whose handlers live where daemon/ops/binding.py may not be imported (world/
+# and access/ import nothing of ops/): bound here.
 _TABLE: dict[str, Handler] = {
-    "status": time_control.status,
-    "capabilities": _capabilities,
-    "play": time_control.play,
-    "set_rtf": time_control.set_rtf,
-    "pause": time_control.pause,
-    "stop": time_control.stop,
-    "step": time_control.step,
-    "run_until": time_control.run_until,
-    "reset": time_control.reset,
-    "load_world": time_control.load_world,
-    "spawn": _scene("spawn", ops.spawn),
-    "load_model": _scene("load_model", ops.load_model),
-    "list": _scene("list", ops.list_entities),
-    "get_states": _scene("get_states", ops.get_states),
-    "get_bounds": _scene("get_bounds", ops.get_bounds),
-    "get_shapes": _scene("get_shapes", ops.get_shapes),
-    "set_states": _scene("set_states", ops.set_states),
-    "update": _scene("update", ops.update),
-    "delete": _scene("delete", ops.delete),
-    "joints": _scene("joints", ops_joints.joints),
-    "get_joint_states": _scene("get_joint_states", ops_joints.get_joint_states),
-    "set_joint_states": _scene("set_joint_states", ops_joints.set_joint_states),
-    "set_joint_targets": _scene("set_joint_targets", ops_joints.set_joint_targets),
-    "apply_wrench": _scene("apply_wrench", ops_joints.apply_wrench),
-    "clear_wrenches": _scene("clear_wrenches", ops_joints.clear_wrenches),
-    "snapshot": worlds.snapshot,
-    "restore": worlds.restore,
-    "snapshots": worlds.snapshots,
-    "delete_snapshot": worlds.delete_snapshot,
-    "list_worlds": worlds.list_worlds,
-    "create_world": worlds.create_world,
-    "fork_world": worlds.fork_world,
-    "delete_world": worlds.delete_world,
-    "predict": predict.predict,
     "compare": _scene("compare", compare.compare),
-    "render": _scene("render", ops_perception.render),
-    "add_camera": _scene("add_camera", ops_perception.add_camera),
-    "remove_camera": _scene("remove_camera", ops_perception.remove_camera),
-    "cameras": _scene("cameras", ops_perception.cameras),
-    "raycast": _scene("raycast", ops_perception.raycast),
-    "contacts": _scene("contacts", ops_perception.contacts),
-    "get_params": _scene("get_params", ops.get_params),
-    "set_params": _scene("set_params", ops.set_params),
     "take_control": lease.take_control,
     "release_control": lease.release_control,
     "stream_states": state_streams.stream_states,
@@ -117,7 +73,7 @@ _TABLE: dict[str, Handler] = {
 # The modules whose marked functions are handlers (daemon/ops/binding.py): a module that
 # serves operations is listed here once, then each new handler in it binds itself.
 OP_MODULES: tuple[ModuleType, ...] = (ops, ops_joints, ops_perception, worlds, time_control,
-                                      predict, compare, lease, state_streams)
+                                      predict)
 
 
 def collect(modules: Iterable[ModuleType], table: dict[str, Handler]) -> dict[str, Handler]:

@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from galton.daemon.ops.binding import scene_op
 from galton.daemon.world.scene import World
 from galton.protocol import InvalidArgumentError, pack_f64
 from galton.protocol import requests as rq
@@ -22,6 +23,7 @@ from galton.protocol.model import (
 )
 
 
+@scene_op("joints")
 def joints(world: World, request: rq.Joints) -> dict[str, Any]:
     model = request.model
     if model is not None:
@@ -41,6 +43,7 @@ def joint_states(world: World, names: list[str], where: str) -> dict[str, Any]:
             "velocities": pack_f64(velocities), "efforts": pack_f64(efforts)}
 
 
+@scene_op("get_joint_states")
 def get_joint_states(world: World, request: rq.NamesOrAll) -> dict[str, Any]:
     raw = request.names
     names = (world.joints.scalar_names() if raw is None
@@ -48,6 +51,7 @@ def get_joint_states(world: World, request: rq.NamesOrAll) -> dict[str, Any]:
     return joint_states(world, names, "get_joint_states")
 
 
+@scene_op("set_joint_states")
 def set_joint_states(world: World, request: rq.SetJointStates) -> dict[str, Any]:
     names = check_names(request.names, "set_joint_states.names")
     infos = world.joints.require_scalar(names, "set_joint_states")
@@ -68,6 +72,7 @@ def set_joint_states(world: World, request: rq.SetJointStates) -> dict[str, Any]
             "twists": pack_f64(twists)}
 
 
+@scene_op("set_joint_targets")
 def set_joint_targets(world: World, request: rq.SetJointTargets) -> dict[str, Any]:
     names = check_names(request.names, "set_joint_targets.names")
     mode = request.mode  # one of TARGET_MODES: its declaration says so
@@ -90,6 +95,7 @@ def _values(raw: float | bytes | None, key: str, count: int, default: float, *,
     return decode_values(raw, count, f"set_joint_targets.{key}", allow_inf=allow_inf)
 
 
+@scene_op("apply_wrench")
 def apply_wrench(world: World, request: rq.ApplyWrench) -> dict[str, Any]:
     names = check_names(request.names, "apply_wrench.names")
     world.require_known(names)
@@ -107,6 +113,7 @@ def apply_wrench(world: World, request: rq.ApplyWrench) -> dict[str, Any]:
     return {"count": len(names)}
 
 
+@scene_op("clear_wrenches")
 def clear_wrenches(world: World, request: rq.NamesOrAll) -> dict[str, Any]:
     raw = request.names
     names = None if raw is None else check_names(raw, "clear_wrenches.names")

@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 
 from galton.daemon.core.reply_limit import RAW_PIXEL_BYTES, RAY_BYTES, require_room
+from galton.daemon.ops.binding import scene_op
 from galton.daemon.world.cameras import Camera, parse_camera, view_of
 from galton.daemon.world.scene import World
 from galton.protocol import InvalidArgumentError, NotFoundError, ResourceLimitError, pack_f64
@@ -42,6 +43,7 @@ def _request_camera(world: World, raw: Any, where: str) -> Camera:
     return spec
 
 
+@scene_op("render")
 def render(world: World, request: rq.Render) -> dict[str, Any]:
     raw = request.cameras
     fmt = request.format
@@ -83,6 +85,7 @@ def _raw_dtype(kind: str) -> str:
     return {"rgb": "u1", "depth": "<f4", "segmentation": "<i4"}[kind]
 
 
+@scene_op("add_camera")
 def add_camera(world: World, request: rq.AddCamera) -> dict[str, Any]:
     name = request.name
     if not 1 <= len(name) <= MAX_CAMERA_NAME or not name.isprintable():
@@ -100,6 +103,7 @@ def add_camera(world: World, request: rq.AddCamera) -> dict[str, Any]:
     return {"name": name, "camera": camera.to_wire()}
 
 
+@scene_op("remove_camera")
 def remove_camera(world: World, request: rq.Named) -> dict[str, Any]:
     name = request.name
     if _cameras_of(world).pop(name, None) is None:
@@ -107,10 +111,12 @@ def remove_camera(world: World, request: rq.Named) -> dict[str, Any]:
     return {"count": 1}
 
 
+@scene_op("cameras")
 def cameras(world: World, request: rq.NoArgs) -> dict[str, Any]:
     return {"cameras": [{"name": n, **c.to_wire()} for n, c in _cameras_of(world).items()]}
 
 
+@scene_op("raycast")
 def raycast(world: World, request: rq.Raycast) -> dict[str, Any]:
     raw = request.origins
     count = _row_count(raw)
@@ -177,6 +183,7 @@ def _row_count(raw: Any) -> int:
     return len(raw) // 24
 
 
+@scene_op("contacts")
 def contacts(world: World, request: rq.NamesOrAll) -> dict[str, Any]:
     raw = request.names
     names = None if raw is None else check_names(raw, "contacts.names")

@@ -15,10 +15,12 @@ from typing import Any
 
 import numpy as np
 
+from galton.daemon.core.calls import Call
+from galton.daemon.core.context import OpContext
 from galton.daemon.core.host_info import host_info
 from galton.daemon.engines import ENGINE_CLASSES
 from galton.daemon.engines.base import FEATURE_SPAWN_INERTIA
-from galton.daemon.ops.binding import scene_op
+from galton.daemon.ops.binding import handles, scene_op
 from galton.daemon.world.model_files import search_folders
 from galton.daemon.world.scene import World
 from galton.protocol import (
@@ -39,6 +41,7 @@ SceneOp = Callable[[World, Any], dict[str, Any]]  # Any: the op's declared reque
 MAX_PREFIX_LENGTH = 64
 
 
+@scene_op("spawn")
 def spawn(world: World, request: rq.Spawn) -> dict[str, Any]:
     groups_raw = request.groups
     if not groups_raw:
@@ -65,6 +68,7 @@ def _require_shapes(world: World, groups: list[BodyGroup]) -> None:
                 f"the {world.engine.name} engine cannot set a spawned body's inertia")
 
 
+@scene_op("load_model")
 def load_model(world: World, request: rq.LoadModel) -> dict[str, Any]:
     fmt = request.format
     formats = world.engine.capabilities().model_formats
@@ -118,6 +122,7 @@ def check_prefix(prefix: str) -> str:
     return prefix
 
 
+@scene_op("list")
 def list_entities(world: World, request: rq.List) -> dict[str, Any]:
     found = world.select(request.name, request.tag, request.kind)
     return {"entities": [info.to_wire() for info in world.effective(found)]}
@@ -129,12 +134,14 @@ def _names_or_all(world: World, names: list[str] | None, where: str) -> list[str
     return check_names(names, f"{where}.names")
 
 
+@scene_op("get_states")
 def get_states(world: World, request: rq.NamesOrAll) -> dict[str, Any]:
     names = _names_or_all(world, request.names, "get_states")
     poses, twists = world.get_states(names)
     return {"names": names, "poses": pack_f64(poses), "twists": pack_f64(twists)}
 
 
+@scene_op("get_bounds")
 def get_bounds(world: World, request: rq.NamesOrAll) -> dict[str, Any]:
     """Each entity's axis-aligned bounds in the world frame (simulation_interfaces'
     GetEntityBounds): rows of ``min_x min_y min_z max_x max_y max_z``."""
@@ -183,6 +190,7 @@ def bounds_of(world: World, names: list[str]) -> np.ndarray:
     return np.array(rows, dtype=float).reshape(-1, 6)
 
 
+@scene_op("get_shapes")
 def get_shapes(world: World, request: rq.NamesOrAll) -> dict[str, Any]:
     """Each entity's collision shapes in its own frame: a spawned primitive is its one
     shape at its origin; a loaded model's bodies are asked of the engine."""
@@ -225,6 +233,7 @@ def primitive_bounds(shape: str, size: tuple[float, ...], pose: np.ndarray) -> n
     return np.concatenate([centre - half, centre + half])
 
 
+@scene_op("set_states")
 def set_states(world: World, request: rq.SetStates) -> dict[str, Any]:
     names = check_names(request.names, "set_states.names")
     poses_raw, twists_raw = request.poses, request.twists
@@ -238,6 +247,7 @@ def set_states(world: World, request: rq.SetStates) -> dict[str, Any]:
     return {"count": len(names)}
 
 
+@scene_op("update")
 def update(world: World, request: rq.Update) -> dict[str, Any]:
     names = check_names(request.names, "update.names")
     props = BodyProperties.from_wire(request.properties, "update.properties")
@@ -245,26 +255,31 @@ def update(world: World, request: rq.Update) -> dict[str, Any]:
     return {"count": len(names)}
 
 
+@scene_op("delete")
 def delete(world: World, request: rq.NamedOnly) -> dict[str, Any]:
     names = check_names(request.names, "delete.names")
     world.delete(names)
     return {"count": len(names)}
 
 
+@scene_op("get_params")
 def get_params(world: World, request: rq.NoArgs) -> dict[str, Any]:
     return {"params": _wire_values(world.engine.get_params())}
 
 
+@scene_op("set_params")
 def set_params(world: World, request: rq.SetParams) -> dict[str, Any]:
     world.engine.set_params(request.params)
     return {"params": _wire_values(world.engine.get_params())}
 
 
-def capabilities(world: World, request: rq.Args) -> dict[str, Any]:
-    caps = world.engine.capabilities()
+@handles("capabilities")
+def capabilities(loop: OpContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
+    """The engine's capabilities, with what the daemon adds (its fronts' endpoints)."""
+    caps = loop.world_for(request).engine.capabilities()
     caps.engines_available = tuple(ENGINE_CLASSES)
     caps.host = host_info()
-    return caps.to_wire()
+    return {**caps.to_wire(), **loop.advertised}
 
 
 def _wire_values(params: dict[str, Any]) -> dict[str, Any]:

@@ -15,6 +15,7 @@ from galton.daemon.core import time_control
 from galton.daemon.core.calls import Call
 from galton.daemon.core.context import OpContext
 from galton.daemon.core.reply_limit import require_room
+from galton.daemon.ops.binding import handles
 from galton.daemon.world.scene import World
 from galton.daemon.world.slots import Slot
 from galton.daemon.world.snapshot import clone_of, decode, encode, snapshot_of, world_from
@@ -43,6 +44,7 @@ def world_row(loop: OpContext, world: World) -> dict[str, Any]:
             "entity_count": len(world.entities), "faulted": world.faulted}
 
 
+@handles("list_worlds")
 def list_worlds(loop: OpContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
     return {"worlds": [world_row(loop, w) for w in (loop.world, *loop.side.values())]}
 
@@ -66,6 +68,7 @@ def _factory(loop: OpContext) -> Any:
     return loop.engine_factory
 
 
+@handles("create_world")
 def create_world(loop: OpContext, call: Call, request: rq.CreateWorld) -> dict[str, Any]:
     name = _new_name(loop, request.name, "create_world")
     kind = request.engine or loop.world.engine.name
@@ -82,6 +85,7 @@ def create_world(loop: OpContext, call: Call, request: rq.CreateWorld) -> dict[s
     return world_row(loop, loop.side[name])
 
 
+@handles("fork_world")
 def fork_world(loop: OpContext, call: Call, request: rq.ForkWorld) -> dict[str, Any]:
     name = _new_name(loop, request.name, "fork_world")
     source = loop.world_for({"world": request.source})
@@ -91,6 +95,7 @@ def fork_world(loop: OpContext, call: Call, request: rq.ForkWorld) -> dict[str, 
     return world_row(loop, loop.side[name])
 
 
+@handles("delete_world")
 def delete_world(loop: OpContext, call: Call, request: rq.Named) -> dict[str, Any]:
     name = request.name
     world = loop.world_for({"world": name})
@@ -104,6 +109,7 @@ def delete_world(loop: OpContext, call: Call, request: rq.Named) -> dict[str, An
     return {"count": 1}
 
 
+@handles("snapshot")
 def snapshot(loop: OpContext, call: Call, request: rq.Snapshot) -> dict[str, Any]:
     world = loop.world_for(request)
     slot_name = request.slot
@@ -130,6 +136,7 @@ def snapshot(loop: OpContext, call: Call, request: rq.Snapshot) -> dict[str, Any
     return result
 
 
+@handles("restore")
 def restore(loop: OpContext, call: Call, request: rq.Restore) -> dict[str, Any]:
     world = loop.world_for(request)
     slot_name, blob = request.slot, request.blob
@@ -154,10 +161,12 @@ def restore(loop: OpContext, call: Call, request: rq.Restore) -> dict[str, Any]:
     return world_row(loop, new)
 
 
+@handles("snapshots")
 def snapshots(loop: OpContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
     return {"slots": [slot.to_wire() for slot in loop.slots.by_name.values()]}
 
 
+@handles("delete_snapshot")
 def delete_snapshot(loop: OpContext, call: Call, request: rq.Slot) -> dict[str, Any]:
     loop.slots.delete(request.slot)
     return {"count": 1}
