@@ -1,8 +1,9 @@
 """Engine parameters: named, typed, with units and defaults, set all-or-none.
 
-Names shared by every engine are bare (``timestep``); engine-specific ones carry the
-engine's name as prefix (``mujoco.solref``, ``pybullet.collision_margin``). Asking one
-engine for another engine's parameter is FEATURE_UNSUPPORTED, not a silent no-op.
+Names shared by every engine are bare (``timestep``) and declared here once (``SHARED``:
+their unit and range); engine-specific ones carry the engine's name as prefix
+(``mujoco.solref``, ``pybullet.collision_margin``). Asking one engine for another engine's
+parameter is FEATURE_UNSUPPORTED, not a silent no-op.
 """
 
 from __future__ import annotations
@@ -73,6 +74,26 @@ def flag(value: Any, where: str) -> bool:
     if not isinstance(value, bool):
         raise InvalidArgumentError(f"{where} must be true or false, got {brief(value)}")
     return value
+
+
+# The parameters every engine has: one unit and one range for all (docs/ENGINES.md's table
+# compares them across engines); each engine gives its own default and says what the value
+# means there, through ``shared``.
+SHARED: dict[str, tuple[str, Callable[[Any, str], Any]]] = {
+    "timestep": ("s", number(0, 1, low_open=True)),
+    "gravity": ("m/s²", vector(3, -1000, 1000)),
+    "solver_iterations": ("", integer(1, 10_000)),
+    "default_friction": ("", number(0, 100)),
+    "default_restitution": ("", number(0, 1)),
+    "default_static_friction": ("", number(0, 100)),
+    "default_static_restitution": ("", number(0, 1)),
+}
+
+
+def shared(name: str, default: Any, doc: str) -> ParamSpec:
+    """A parameter every engine has, with this engine's default and meaning."""
+    unit, check = SHARED[name]
+    return ParamSpec(name, default, unit, doc, check)
 
 
 def check_updates(engine: str, specs: Mapping[str, ParamSpec],

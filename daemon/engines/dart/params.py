@@ -10,28 +10,27 @@ under SDF's gravity (0, 0, -9.8).
 
 from __future__ import annotations
 
-from galton.daemon.engines.params import ParamSpec, choice, flag, integer, number, vector
+from galton.daemon.engines.params import ParamSpec, choice, flag, shared
 
 DETECTORS = ("ode", "fcl", "bullet", "dart")
 
 SPECS: dict[str, ParamSpec] = {spec.name: spec for spec in (
-    ParamSpec("timestep", 0.001, "s", "Simulated time per step (SDF max_step_size, "
-              "Gazebo's default).", number(0, 1, low_open=True)),
-    ParamSpec("gravity", (0.0, 0.0, -9.8), "m/s²", "Gravity vector, world frame (SDF's "
-              "default).", vector(3, -1000, 1000)),
-    ParamSpec("solver_iterations", 30, "", "Iterations of the PGS solver DART falls back on "
-              "when its Dantzig solver fails (DART's default 30; Dantzig itself is a direct "
-              "method).", integer(1, 10_000)),
-    ParamSpec("default_friction", 1.0, "", "Friction coefficient of moving bodies that set "
-              "none (SDF <ode><mu>, default 1). DART takes the smaller of a pair's two.",
-              number(0, 100)),
-    ParamSpec("default_restitution", 0.0, "", "Restitution of moving bodies that set none "
-              "(SDF <bounce><restitution_coefficient>, default 0). DART multiplies a pair's "
-              "two.", number(0, 1)),
-    ParamSpec("default_static_friction", 1.0, "", "Friction coefficient of static bodies "
-              "that set none (SDF's default 1).", number(0, 100)),
-    ParamSpec("default_static_restitution", 0.0, "", "Restitution of static bodies that "
-              "set none (SDF's default 0).", number(0, 1)),
+    shared("timestep", 0.001, "Simulated time per step (SDF max_step_size, "
+           "Gazebo's default)."),
+    shared("gravity", (0.0, 0.0, -9.8), "Gravity vector, world frame (SDF's "
+           "default)."),
+    shared("solver_iterations", 30, "Iterations of the PGS solver DART falls back on "
+           "when its Dantzig solver fails (DART's default 30; Dantzig itself is a direct "
+           "method)."),
+    shared("default_friction", 1.0, "Friction coefficient of moving bodies that set "
+           "none (SDF <ode><mu>, default 1). DART takes the smaller of a pair's two."),
+    shared("default_restitution", 0.0, "Restitution of moving bodies that set none "
+           "(SDF <bounce><restitution_coefficient>, default 0). DART multiplies a pair's "
+           "two."),
+    shared("default_static_friction", 1.0, "Friction coefficient of static bodies "
+           "that set none (SDF's default 1)."),
+    shared("default_static_restitution", 0.0, "Restitution of static bodies that "
+           "set none (SDF's default 0)."),
     ParamSpec("dart.collision_detector", "ode", "", "Collision detector: ode (what "
               "gz-physics installs in every world), fcl (DART's own default, which turns "
               "capsules into spheres), bullet or dart.", choice(*DETECTORS)),

@@ -15,7 +15,7 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from galton.daemon.engines.params import ParamSpec, choice, flag, integer, number, vector
+from galton.daemon.engines.params import ParamSpec, choice, flag, integer, number, shared, vector
 from galton.protocol import BodyGroup, InvalidArgumentError
 from galton.protocol.errors import brief
 
@@ -86,25 +86,21 @@ def _condim(value: Any, where: str) -> int:
 
 CONDIMS = (1, 3, 4, 6)
 PARAMS: dict[str, ParamSpec] = {p.name: p for p in (
-    ParamSpec("timestep", 0.002, "s", "physics step", number(0.0, 1.0, low_open=True)),
-    ParamSpec("gravity", (0.0, 0.0, -9.81), "m/s²", "gravity vector, world frame",
-              vector(3, -1e3, 1e3)),
-    ParamSpec("solver_iterations", 50, "", "constraint solver iterations (option iterations)",
-              integer(1, 10_000)),
-    ParamSpec("default_friction", 0.5, "",
-              "sliding friction of moving bodies spawned without one, also when changed "
-              "later; between two moving bodies a contact uses the larger value",
-              number(0.0, 100.0)),
-    ParamSpec("default_restitution", 0.3, "",
-              "restitution of moving bodies spawned without one, also when changed later; 0 "
-              "means MuJoCo's own contact (mujoco.solref as given)", number(0.0, 1.0)),
-    ParamSpec("default_static_friction", 0.5, "",
-              "sliding friction of static bodies (the scenery) spawned without one, also when "
-              "changed later; a contact with a static body uses the static body's surface",
-              number(0.0, 100.0)),
-    ParamSpec("default_static_restitution", 0.61, "",
-              "restitution of static bodies spawned without one, also when changed later; a "
-              "contact with a static body uses the static body's surface", number(0.0, 1.0)),
+    shared("timestep", 0.002, "physics step"),
+    shared("gravity", (0.0, 0.0, -9.81), "gravity vector, world frame"),
+    shared("solver_iterations", 50, "constraint solver iterations (option iterations)"),
+    shared("default_friction", 0.5,
+           "sliding friction of moving bodies spawned without one, also when changed "
+           "later; between two moving bodies a contact uses the larger value"),
+    shared("default_restitution", 0.3,
+           "restitution of moving bodies spawned without one, also when changed later; 0 "
+           "means MuJoCo's own contact (mujoco.solref as given)"),
+    shared("default_static_friction", 0.5,
+           "sliding friction of static bodies (the scenery) spawned without one, also when "
+           "changed later; a contact with a static body uses the static body's surface"),
+    shared("default_static_restitution", 0.61,
+           "restitution of static bodies spawned without one, also when changed later; a "
+           "contact with a static body uses the static body's surface"),
     ParamSpec("mujoco.solref", (0.02, 1.0), "s, 1",
               "[timeconst, dampratio] of spawned bodies' contacts; a restitution e > 0 "
               "replaces the dampratio (see mujoco/spec.py, damping_ratio)", _solref),

@@ -9,7 +9,7 @@ uses it), and how two bodies' surfaces combine (Webots has one material pair for
 
 from __future__ import annotations
 
-from galton.daemon.engines.params import ParamSpec, choice, flag, integer, number, vector
+from galton.daemon.engines.params import ParamSpec, choice, flag, integer, number, shared
 
 WEBOTS_TIMESTEP = 0.032  # s: WorldInfo.basicTimeStep's default, 32 ms
 # s: the paper board lost no ball at 2, 4 or 8 ms (43 of 100 at 32 ms); 2 ms keeps the
@@ -18,25 +18,22 @@ DEFAULT_TIMESTEP = 0.002
 STEPPERS = ("world", "quick")
 
 SPECS: dict[str, ParamSpec] = {spec.name: spec for spec in (
-    ParamSpec("timestep", DEFAULT_TIMESTEP, "s", "Simulated time per step (Webots' default "
-              f"basicTimeStep is {WEBOTS_TIMESTEP} s: the paper-webots board sets it).",
-              number(0, 1, low_open=True)),
-    ParamSpec("gravity", (0.0, 0.0, -9.81), "m/s²", "Gravity vector, world frame.",
-              vector(3, -1000, 1000)),
-    ParamSpec("solver_iterations", 20, "", "Iterations of QuickStep (ode.stepper quick); "
-              "dWorldStep, Webots' stepper, solves exactly and ignores it.",
-              integer(1, 10_000)),
-    ParamSpec("default_friction", 1.0, "", "Coulomb friction of moving bodies that set none, "
-              "now and after a change (Webots' contact default 1). Between two moving bodies "
-              "a contact takes the larger value.", number(0, 100)),
-    ParamSpec("default_restitution", 0.5, "", "Bounce of moving bodies that set none, now "
-              "and after a change (Webots' contact default 0.5). Between two moving bodies a "
-              "contact takes the larger value.", number(0, 1)),
-    ParamSpec("default_static_friction", 1.0, "", "Coulomb friction of static bodies (the "
-              "scenery) that set none; a contact with a static body uses the static body's "
-              "surface.", number(0, 100)),
-    ParamSpec("default_static_restitution", 0.5, "", "Bounce of static bodies that set none; "
-              "a contact with a static body uses the static body's surface.", number(0, 1)),
+    shared("timestep", DEFAULT_TIMESTEP, "Simulated time per step (Webots' default "
+           f"basicTimeStep is {WEBOTS_TIMESTEP} s: the paper-webots board sets it)."),
+    shared("gravity", (0.0, 0.0, -9.81), "Gravity vector, world frame."),
+    shared("solver_iterations", 20, "Iterations of QuickStep (ode.stepper quick); "
+           "dWorldStep, Webots' stepper, solves exactly and ignores it."),
+    shared("default_friction", 1.0, "Coulomb friction of moving bodies that set none, "
+           "now and after a change (Webots' contact default 1). Between two moving bodies "
+           "a contact takes the larger value."),
+    shared("default_restitution", 0.5, "Bounce of moving bodies that set none, now "
+           "and after a change (Webots' contact default 0.5). Between two moving bodies a "
+           "contact takes the larger value."),
+    shared("default_static_friction", 1.0, "Coulomb friction of static bodies (the "
+           "scenery) that set none; a contact with a static body uses the static body's "
+           "surface."),
+    shared("default_static_restitution", 0.5, "Bounce of static bodies that set none; "
+           "a contact with a static body uses the static body's surface."),
     ParamSpec("ode.stepper", "world", "", "world: dWorldStep, the exact (big-matrix) solver "
               "Webots steps with; quick: dWorldQuickStep, iterative (its random constraint "
               "order is seeded before every step, so runs replay).", choice(*STEPPERS)),

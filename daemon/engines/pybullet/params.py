@@ -13,7 +13,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
-from galton.daemon.engines.params import ParamSpec, flag, integer, number, vector
+from galton.daemon.engines.params import ParamSpec, flag, number, shared
 from galton.daemon.engines.pybullet.shapes import margin_for
 
 if TYPE_CHECKING:
@@ -22,23 +22,21 @@ if TYPE_CHECKING:
     from galton.daemon.engines.pybullet.rebuild import Body
 
 SPECS: dict[str, ParamSpec] = {spec.name: spec for spec in (
-    ParamSpec("timestep", 1 / 240, "s", "Simulated time per step.",
-              number(0, 1, low_open=True)),
-    ParamSpec("gravity", (0.0, 0.0, -9.81), "m/s²", "Gravity vector, world frame.",
-              vector(3, -1000, 1000)),
-    ParamSpec("solver_iterations", 10, "", "Constraint solver iterations per step "
-              "(numSolverIterations; PyBullet's own default is 50).", integer(1, 10_000)),
-    ParamSpec("default_friction", 0.5, "", "Lateral friction of moving bodies that set "
-              "none, now and after a change. PyBullet multiplies both bodies' values at a "
-              "contact: 0.5 on both is mu = 0.25.", number(0, 100)),
-    ParamSpec("default_restitution", 0.8275, "", "Restitution of moving bodies that set "
-              "none, now and after a change. PyBullet multiplies both bodies' values at a "
-              "contact: 0.8275 on both is e = 0.685.", number(0, 1)),
-    ParamSpec("default_static_friction", 0.5, "", "Lateral friction of static bodies (the "
-              "scenery) that set none, now and after a change; combined with the other body's "
-              "value as a product, like every PyBullet contact.", number(0, 100)),
-    ParamSpec("default_static_restitution", 0.8275, "", "Restitution of static bodies that "
-              "set none, now and after a change; combined as a product.", number(0, 1)),
+    shared("timestep", 1 / 240, "Simulated time per step."),
+    shared("gravity", (0.0, 0.0, -9.81), "Gravity vector, world frame."),
+    shared("solver_iterations", 10, "Constraint solver iterations per step "
+           "(numSolverIterations; PyBullet's own default is 50)."),
+    shared("default_friction", 0.5, "Lateral friction of moving bodies that set "
+           "none, now and after a change. PyBullet multiplies both bodies' values at a "
+           "contact: 0.5 on both is mu = 0.25."),
+    shared("default_restitution", 0.8275, "Restitution of moving bodies that set "
+           "none, now and after a change. PyBullet multiplies both bodies' values at a "
+           "contact: 0.8275 on both is e = 0.685."),
+    shared("default_static_friction", 0.5, "Lateral friction of static bodies (the "
+           "scenery) that set none, now and after a change; combined with the other body's "
+           "value as a product, like every PyBullet contact."),
+    shared("default_static_restitution", 0.8275, "Restitution of static bodies that "
+           "set none, now and after a change; combined as a product."),
     ParamSpec("pybullet.restitution_velocity_threshold", 0.2, "m/s", "Contacts approaching "
               "slower than this do not bounce.", number(0, 1000)),
     ParamSpec("pybullet.contact_breaking_threshold", 0.01, "m", "Gap at which Bullet makes a "

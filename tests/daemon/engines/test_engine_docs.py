@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import importlib
 import importlib.util
 from pathlib import Path
 
 from galton.daemon.engines import ENGINE_CLASSES
+from galton.daemon.engines.params import SHARED
 
 GENERATOR = Path(__file__).parents[3] / "docs" / "make_engines_md.py"
 
@@ -18,3 +20,15 @@ def test_engines_page_tables_match_the_engines_specs() -> None:
     page = generator.PAGE.read_text()
     for name in ENGINE_CLASSES:
         assert generator.table(name) in page, f"run python docs/make_engines_md.py ({name})"
+
+
+def test_every_engine_declares_the_shared_parameters_from_the_base() -> None:
+    """timestep, gravity, ... have one unit and one range on every engine (engines/params.py)."""
+    modules = {"mujoco": "mujoco.spec", "pybullet": "pybullet.params", "dart": "dart.params",
+               "ode": "ode.params"}
+    assert set(modules) == set(ENGINE_CLASSES)
+    for engine, module in modules.items():
+        loaded = importlib.import_module(f"galton.daemon.engines.{module}")
+        specs = getattr(loaded, "PARAMS", None) or loaded.SPECS
+        for name, (unit, check) in SHARED.items():
+            assert (specs[name].unit, specs[name].check) == (unit, check), (engine, name)
