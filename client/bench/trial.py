@@ -21,6 +21,7 @@ from galton.client.bench.defaults import DEFAULT_MAX_SIM_TIME_S
 from galton.client.sdk.client import Client, States
 from galton.client.sdk.recording import Recorder
 from galton.protocol import Telemetry
+from galton.protocol.operations import LONG_RUNNING_TIMEOUT_S
 
 DEFAULT_CHECK_INTERVAL_S = 0.5
 # The daemon checks for rest every check interval; the bench looks itself at least this
@@ -32,6 +33,7 @@ SETTLE_SEGMENT_S = 10.0
 # RTF ~0.01) stays far inside a client's 600 s wait. The first segment is a short probe.
 SEGMENT_WALL_S = 60.0
 FIRST_SEGMENT_S = 1.0
+FIRST_REQUEST_WAIT_S = 6 * 3600.0
 
 
 @dataclass
@@ -88,7 +90,7 @@ class PhysicsClock:
     def run_until(self, sim_time: float) -> float:
         started = time.perf_counter()
         before = self.sim_time
-        stamp = self.sim.run_until(sim_time)
+        stamp = self.sim.run_until(sim_time, timeout=self.wait_for(sim_time - before))
         self._count(started, before, stamp.sim_time)
         return stamp.sim_time
 
@@ -97,9 +99,14 @@ class PhysicsClock:
         """Run until these balls rest or ``sim_time``, in one round trip (timed as physics)."""
         started = time.perf_counter()
         before = self.sim_time
-        states, at_rest = self.sim.run_until_rest(sim_time, names, speed, every)
+        states, at_rest = self.sim.run_until_rest(sim_time, names, speed, every,
+                                                  timeout=self.wait_for(sim_time - before))
         self._count(started, before, states.sim_time)
         return states, at_rest
+
+    def wait_for(self, span: float) -> float:
+        """How long a request running ``span`` s of sim time may take (settling_wait)."""
+        return settling_wait(span, self.wall, self.simulated)
 
     def _count(self, started: float, before: float, after: float) -> None:
         self.wall += time.perf_counter() - started
@@ -117,6 +124,16 @@ def settling_segment(wall: float, simulated: float, check_interval: float) -> fl
     else:
         span = min(SETTLE_SEGMENT_S, SEGMENT_WALL_S * simulated / wall)
     return max(1, int(span / check_interval + 1e-9)) * check_interval
+
+
+def settling_wait(span: float, wall: float, simulated: float) -> float:
+    """The client's wait for a request running ``span`` s of sim time: 10 x what the RTF
+    so far predicts, at least the usual 600 s; before any figure, FIRST_REQUEST_WAIT_S (a
+    slow engine's first 1 s of a 500-ball crowd may take hours; a daemon that dies is seen
+    at once by its liveliness, so the long wait only ever waits on a working daemon)."""
+    if wall <= 0.0 or simulated <= 0.0:
+        return FIRST_REQUEST_WAIT_S
+    return max(LONG_RUNNING_TIMEOUT_S, 10.0 * span * wall / simulated)
 
 
 def prepare_world(sim: Client, config: TrialConfig) -> tuple[Perturbation, list[str]]:

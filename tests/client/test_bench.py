@@ -18,6 +18,7 @@ from galton.client.bench.trial import (
     TrialConfig,
     run_trial,
     settling_segment,
+    settling_wait,
 )
 from galton.client.cli.app import app
 from galton.protocol import InvalidArgumentError
@@ -95,6 +96,9 @@ def test_settling_requests_are_sized_by_the_rtf_so_far() -> None:
     middling = settling_segment(10.0, 1.0, 0.5)  # RTF 0.1: 6 s of sim in about 60 s
     assert middling == pytest.approx(0.1 * SEGMENT_WALL_S)
     assert (middling / 0.5).is_integer()  # whole check intervals: the same rest checks
+    assert settling_wait(0.5, 100.0, 0.1) == pytest.approx(10 * 0.5 / 0.001)  # 10 x predicted
+    assert settling_wait(6.0, 10.0, 1.0) == 600.0  # never under the usual wait
+    assert settling_wait(1.0, 0.0, 0.0) >= 3600.0  # the first request: no figure yet
 
 
 def test_bench_rejects_bad_options() -> None:
