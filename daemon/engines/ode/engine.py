@@ -80,8 +80,7 @@ FEATURES = (FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDATE_MAS
             FEATURE_CONTACTS, FEATURE_SPAWN_INERTIA, FEATURE_MODEL_SHAPES)
 
 
-# No mesh shape: FEATURE_UNSUPPORTED at spawn (docs/ENGINES.md, "Meshes").
-SHAPES = tuple(shape for shape in BODY_SHAPES if shape != "mesh")
+SHAPES = BODY_SHAPES  # a mesh: an ODE trimesh (trimesh.py, docs/ENGINES.md "Meshes")
 
 
 class OdeEngine(Snapshots, Engine):
