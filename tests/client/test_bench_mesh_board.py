@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from galton.analysis.board import BoardSpec
-from galton.client.bench.build import ball_group, board_groups
 from galton.client import Client
+from galton.client.bench.build import ball_group, board_groups
 from galton.client.bench.experiment import ExperimentConfig
 from galton.client.bench.trial import TrialConfig, run_trial
 from galton.protocol import BodyGroup
