@@ -38,6 +38,7 @@ class Snapshots:
     _owners: list[str]
     _models: dict[str, models.Model]
     _edits: dict[str, list[tuple[str, BodyProperties]]]
+    _loaded_meshes: dict[tuple[bytes, bytes], Any]  # during a restore: mesh -> its shape
 
     def snapshot(self, *, canonical: bool = True) -> dict[str, Any]:
         if canonical:
@@ -88,6 +89,8 @@ class Snapshots:
                                        f"{exc}") from None
 
     def _restore(self, data: dict[str, Any]) -> None:
+        # Bodies of one mesh share its shape, as a spawn group's do: each load takes ms.
+        self._loaded_meshes = {}
         self.set_params(check_updates("dart", SPECS, data["params"]))  # type: ignore[attr-defined]
         for item in data["items"]:
             if item["kind"] == "body":
@@ -124,7 +127,10 @@ class Snapshots:
             vertices = mesh_wire.decode_vertices(item["vertices"], f"{where} vertices")
             faces = mesh_wire.decode_faces(item["faces"], len(vertices), f"{where} faces")
             mesh_wire.check_area(vertices, faces, where)
-            body.mesh, body.mesh_shape = (vertices, faces), meshes.mesh_shape(vertices, faces)
+            key = (bytes(item["vertices"]), bytes(item["faces"]))
+            if key not in self._loaded_meshes:
+                self._loaded_meshes[key] = meshes.mesh_shape(vertices, faces)
+            body.mesh, body.mesh_shape = (vertices, faces), self._loaded_meshes[key]
         elif item.get("vertices") is not None or item.get("faces") is not None:
             raise ValueError(f"a {shape} has no vertices or faces")
         books.build(body, _vector(item["positions"], 6), _vector(item["velocities"], 6))
