@@ -10,8 +10,8 @@ touching pairs the pairs found last get no contact (DART warns once).
 
 The engine's parts: spawn.py (books, spawned skeletons, the world's set-up), state.py
 (states and divergence), models.py (URDF and MJCF), joints.py (joints, targets, wrenches),
-snapshot.py (snapshots, rebuilds) and contacts.py. dartpy has no ray casts and no
-headless renderer: ``raycast`` and ``render`` are FEATURE_UNSUPPORTED.
+snapshot.py (snapshots, rebuilds), meshes.py (mesh shapes) and contacts.py. dartpy has no
+ray casts and no headless renderer: ``raycast`` and ``render`` are FEATURE_UNSUPPORTED.
 """
 
 from __future__ import annotations
