@@ -34,6 +34,11 @@ SETTLE_SEGMENT_S = 10.0
 SEGMENT_WALL_S = 60.0
 FIRST_SEGMENT_S = 1.0
 FIRST_REQUEST_WAIT_S = 6 * 3600.0
+# An RTF-only trial (max_wall_time) advances in chunks of about WALL_CHUNK_S of wall time,
+# after a probe of PROBE_S of sim time; never under MIN_CHUNK_S (one step at 1 ms).
+WALL_CHUNK_S = 5.0
+PROBE_S = 0.01
+MIN_CHUNK_S = 0.001
 
 
 @dataclass
@@ -49,6 +54,9 @@ class TrialConfig:
     settle_speed: float = DEFAULT_SETTLE_SPEED
     # Where to save a recording of the trial that `galton-client view` replays (None: none).
     recording: Path | None = None
+    # For a trial that measures only the RTF: stop after this much wall time of physics,
+    # settled or not (None: run until the balls rest or max_sim_time).
+    max_wall_time: float | None = None
 
     @property
     def balls(self) -> int:
@@ -170,6 +178,27 @@ def release_and_settle(sim: Client, config: TrialConfig, shake: Perturbation,
         stuck_seen = True
 
 
+def run_for_wall(sim: Client, config: TrialConfig, shake: Perturbation, names: list[str],
+                 clock: PhysicsClock, budget: float) -> BallOutcomes:
+    """An RTF-only trial: release, then run in chunks sized by the RTF so far (a short
+    probe first) until ``budget`` s of physics wall time or max_sim_time; the balls as they
+    are then. No request outruns its wait, however slow the engine gets as its crowd forms
+    (DART's 500-ball funnel runs at RTF 0.0003)."""
+    released, now = release(sim, config, shake, names, clock)
+    while now < config.max_sim_time - 1e-9 and clock.wall < budget:
+        span = wall_chunk(budget - clock.wall, clock.wall, clock.simulated)
+        now = clock.run_until(min(now + span, config.max_sim_time))
+    return classify(config, shake, sim.get_states(names[:released]))
+
+
+def wall_chunk(remaining: float, wall: float, simulated: float) -> float:
+    """Sim seconds expected to take the lesser of ``remaining`` and WALL_CHUNK_S of wall
+    time at the RTF so far (PROBE_S before any figure; at least MIN_CHUNK_S)."""
+    if wall <= 0.0 or simulated <= 0.0:
+        return PROBE_S
+    return max(MIN_CHUNK_S, min(remaining, WALL_CHUNK_S) * simulated / wall)
+
+
 def release(sim: Client, config: TrialConfig, shake: Perturbation, names: list[str],
             clock: PhysicsClock) -> tuple[int, float]:
     """Spawn each ball at its release time; return how many were released, and when."""
@@ -200,7 +229,9 @@ def run_trial(sim: Client, config: TrialConfig) -> TrialRecord:
         shake, names = prepare_world(sim, config)
         clock = PhysicsClock(sim)
         with _recorded(sim, config.recording):
-            outcomes = release_and_settle(sim, config, shake, names, clock)
+            outcomes = (release_and_settle(sim, config, shake, names, clock)
+                        if config.max_wall_time is None else
+                        run_for_wall(sim, config, shake, names, clock, config.max_wall_time))
         sim_time = sim.status().sim_time
         settings = sim.get_params()
         version = sim.capabilities().engine_version
@@ -228,4 +259,5 @@ def trial_config_dict(config: TrialConfig, shake: Perturbation) -> dict[str, Any
         "board": config.board.to_dict(), "max_sim_time": config.max_sim_time,
         "check_interval": config.check_interval, "settle_speed": config.settle_speed,
         "board_offset_x": shake.board_offset_x,
+        **({} if config.max_wall_time is None else {"max_wall_time": config.max_wall_time}),
     }
