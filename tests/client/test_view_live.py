@@ -101,7 +101,7 @@ def test_a_loaded_models_link_is_drawn_as_its_collision_shapes(
 
 # A square pyramid off its body's origin: five vertices, where its box would have eight.
 PYRAMID = (np.array([[-0.1, -0.1, 0.0], [0.1, -0.1, 0.0], [0.1, 0.1, 0.0], [-0.1, 0.1, 0.0],
-                     [0.0, 0.0, 0.2]]) + [0.02, 0.0, -0.05],
+                     [0.0, 0.0, 0.2]]) + np.array([0.02, 0.0, -0.05]),
            np.array([[0, 2, 1], [0, 3, 2], [0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4]]))
 
 
