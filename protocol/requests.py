@@ -286,6 +286,16 @@ class ShapesReply(Reply, kw_only=True, forbid_unknown_fields=True):
                                                        "sizes as SIZE_LAYOUT, zero padded")]
     poses: Annotated[bytes, _kind("poses", description="packed float64 rows, 7 wide: each "
                                                        "shape's pose in its entity's frame")]
+    # Sent only when some row is a ``mesh`` (a reply without one is as before meshes were
+    # told): per row, its index into ``mesh_vertices`` / ``mesh_faces``, -1 for a primitive
+    # or for a mesh the daemon knows only as its box. Rows of one mesh share one index.
+    meshes: list[int] = msgspec.field(default_factory=list)
+    mesh_vertices: list[Annotated[bytes, _kind("points", description="packed float64 rows, "
+                                                "3 wide: in its row's frame")]] = \
+        msgspec.field(default_factory=list)
+    mesh_faces: list[Annotated[bytes, _kind("faces", description="packed uint32 rows, 3 "
+                                             "wide: vertex indices")]] = \
+        msgspec.field(default_factory=list)
 
 
 class StatusReply(Reply, kw_only=True, forbid_unknown_fields=True):

@@ -1,5 +1,6 @@
-"""Every reply is bounded by ``max_reply_bytes`` (issue 35, item 6): a raw render, a raycast
-and a snapshot blob over it are refused up front (a refused snapshot keeps no slot); any
+"""Every reply is bounded by ``max_reply_bytes`` (issue 35, item 6): a raw render, a raycast,
+a snapshot blob and a mesh's triangles over it are refused up front (a refused snapshot
+keeps no slot); any
 other reply over it (states of many bodies) is refused once encoded, never sent; the daemon
 keeps serving and small replies pass. One MuJoCo daemon with a 200 kB limit, over Zenoh and
 over ZeroMQ (the limit is the daemon's, the same for every engine)."""
@@ -11,7 +12,7 @@ from collections.abc import Iterator
 import numpy as np
 import pytest
 
-from galton.client import Client, EmbeddedDaemon, camera, spheres
+from galton.client import Client, EmbeddedDaemon, camera, meshes, spheres
 from galton.protocol import ResourceLimitError
 
 LIMIT = 200_000
@@ -77,3 +78,16 @@ def test_any_other_reply_over_the_limit_is_refused_once_encoded(sim: Client) -> 
     with pytest.raises(ResourceLimitError, match="list"):
         sim.list()  # 2,000 entities' rows: over the limit too
     assert sim.status().step == before  # still serving
+
+
+def test_a_get_shapes_reply_whose_triangles_pass_the_limit_is_refused_up_front(
+        sim: Client) -> None:
+    # 10,000 vertices (240 kB) of which one tetrahedron is made: quick for MuJoCo to build.
+    vertices = np.random.default_rng(35).uniform(-0.1, 0.1, (10_000, 3))
+    faces = [[0, 1, 2], [0, 2, 3], [0, 3, 1], [1, 3, 2]]
+    sim.spawn(meshes(["disc"], [[0, 0, 0.5]], vertices, faces, static=True),
+              spheres(["ball"], [[1, 0, 0.5]], 0.05, static=True))
+    with pytest.raises(ResourceLimitError, match="get_shapes reply") as refused:
+        sim.get_shapes()
+    _refused(refused)
+    assert [shape.kind for shape in sim.get_shapes(["ball"])["ball"]] == ["sphere"]
