@@ -16,6 +16,7 @@ from typing import Any
 from galton.daemon.access import lease
 from galton.daemon.core.calls import Call, RestCheck, StepJob
 from galton.daemon.core.context import OpContext
+from galton.daemon.core.reply_limit import reads_size, require_room
 from galton.daemon.world.scene import World, check_scope
 from galton.protocol import (
     IncorrectStateError,
@@ -211,11 +212,22 @@ def _start_job(loop: OpContext, call: Call, world: World, count: int,
         raise IncorrectStateError("cannot step while playing: pause first")
     if loop.job is not None:
         raise IncorrectStateError("another step request is still running")
+    require_reads_room(loop.limits.max_reply_bytes, read, read_joints)
     world.require_valid()
     if live and loop.state == SimState.STOPPED:
         loop.set_state(SimState.PAUSED)
     loop.start_job(StepJob(call, count, count, read, rest, read_joints,
                            world=None if live else world))
+
+
+def require_reads_room(limit: int, read: list[str] | None,
+                       read_joints: list[str] | None) -> None:
+    """Refuse, before its first step, a step request whose reads would make a reply over
+    ``max_reply_bytes``: refused after its steps, it would have changed the world."""
+    size = reads_size(read, read_joints)
+    require_room(f"this step request's reply (the states of {len(read or ())} bodies and "
+                 f"{len(read_joints or ())} joints)", size, limit,
+                 "no step was taken; read fewer bodies, and get_states the rest in parts")
 
 
 def client_gone(loop: OpContext, client: str) -> None:
