@@ -21,11 +21,19 @@ from galton.client.bench.defaults import DEFAULT_MAX_SIM_TIME_S
 from galton.client.sdk.client import Client, States
 from galton.client.sdk.recording import Recorder
 from galton.protocol import Telemetry
+from galton.protocol.operations import LONG_RUNNING_TIMEOUT_S
 
 DEFAULT_CHECK_INTERVAL_S = 0.5
-# The daemon checks for rest every check interval; the bench looks itself this often, so a
-# lost ball falling for ever (never at rest) stops the trial within this much sim time.
+# The daemon checks for rest every check interval; the bench looks itself at least this
+# often, so a lost ball falling for ever (never at rest) stops the trial within this much
+# sim time.
 SETTLE_SEGMENT_S = 10.0
+# ... and sizes each settling request to take about this much wall time at the RTF the
+# trial has run at so far, so that a slow engine's request (DART at 1,000 balls runs at
+# RTF ~0.01) stays far inside a client's 600 s wait. The first segment is a short probe.
+SEGMENT_WALL_S = 60.0
+FIRST_SEGMENT_S = 1.0
+FIRST_REQUEST_WAIT_S = 6 * 3600.0
 
 
 @dataclass
@@ -72,20 +80,60 @@ class PhysicsClock:
     def __init__(self, sim: Client) -> None:
         self.sim = sim
         self.wall = 0.0
+        self.simulated = 0.0
+        self.sim_time = 0.0  # where the last physics request left the world
+
+    def segment(self, check_interval: float) -> float:
+        """The sim time of the next settling request (settling_segment)."""
+        return settling_segment(self.wall, self.simulated, check_interval)
 
     def run_until(self, sim_time: float) -> float:
         started = time.perf_counter()
-        stamp = self.sim.run_until(sim_time)
-        self.wall += time.perf_counter() - started
+        before = self.sim_time
+        stamp = self.sim.run_until(sim_time, timeout=self.wait_for(sim_time - before))
+        self._count(started, before, stamp.sim_time)
         return stamp.sim_time
 
     def run_until_rest(self, sim_time: float, names: list[str], speed: float,
                        every: float) -> tuple[States, bool]:
         """Run until these balls rest or ``sim_time``, in one round trip (timed as physics)."""
         started = time.perf_counter()
-        states, at_rest = self.sim.run_until_rest(sim_time, names, speed, every)
-        self.wall += time.perf_counter() - started
+        before = self.sim_time
+        states, at_rest = self.sim.run_until_rest(sim_time, names, speed, every,
+                                                  timeout=self.wait_for(sim_time - before))
+        self._count(started, before, states.sim_time)
         return states, at_rest
+
+    def wait_for(self, span: float) -> float:
+        """How long a request running ``span`` s of sim time may take (settling_wait)."""
+        return settling_wait(span, self.wall, self.simulated)
+
+    def _count(self, started: float, before: float, after: float) -> None:
+        self.wall += time.perf_counter() - started
+        self.simulated += after - before
+        self.sim_time = after
+
+
+def settling_segment(wall: float, simulated: float, check_interval: float) -> float:
+    """About SEGMENT_WALL_S of wall time at the RTF measured so far (``simulated`` s in
+    ``wall`` s; a short probe before any), at most SETTLE_SEGMENT_S, in whole check
+    intervals: the daemon's rest checks then fall on the same sim times whatever the
+    segments, so the trial's outcome does not depend on the machine's speed."""
+    if wall <= 0.0 or simulated <= 0.0:
+        span = FIRST_SEGMENT_S
+    else:
+        span = min(SETTLE_SEGMENT_S, SEGMENT_WALL_S * simulated / wall)
+    return max(1, int(span / check_interval + 1e-9)) * check_interval
+
+
+def settling_wait(span: float, wall: float, simulated: float) -> float:
+    """The client's wait for a request running ``span`` s of sim time: 10 x what the RTF
+    so far predicts, at least the usual 600 s; before any figure, FIRST_REQUEST_WAIT_S (a
+    slow engine's first 1 s of a 500-ball crowd may take hours; a daemon that dies is seen
+    at once by its liveliness, so the long wait only ever waits on a working daemon)."""
+    if wall <= 0.0 or simulated <= 0.0:
+        return FIRST_REQUEST_WAIT_S
+    return max(LONG_RUNNING_TIMEOUT_S, 10.0 * span * wall / simulated)
 
 
 def prepare_world(sim: Client, config: TrialConfig) -> tuple[Perturbation, list[str]]:
@@ -111,8 +159,8 @@ def release_and_settle(sim: Client, config: TrialConfig, shake: Perturbation,
         if now >= config.max_sim_time - 1e-9:
             return classify(config, shake, sim.get_states(names[:released]))
         states, at_rest = clock.run_until_rest(
-            min(now + SETTLE_SEGMENT_S, config.max_sim_time), names[:released],
-            config.settle_speed, config.check_interval)
+            min(now + clock.segment(config.check_interval), config.max_sim_time),
+            names[:released], config.settle_speed, config.check_interval)
         now = states.sim_time
         outcomes = classify(config, shake, states)
         if not (at_rest or outcomes.reasons.get("moving", 0) == 0):

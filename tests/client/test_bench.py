@@ -12,7 +12,14 @@ from typer.testing import CliRunner
 from galton.analysis.board import BoardSpec
 from galton.analysis.records import ExperimentResults
 from galton.client import Client, EmbeddedDaemon
-from galton.client.bench.trial import TrialConfig, run_trial
+from galton.client.bench.trial import (
+    SEGMENT_WALL_S,
+    SETTLE_SEGMENT_S,
+    TrialConfig,
+    run_trial,
+    settling_segment,
+    settling_wait,
+)
 from galton.client.cli.app import app
 from galton.protocol import InvalidArgumentError
 
@@ -77,6 +84,21 @@ def test_bench_cli_writes_every_output(daemons: dict[str, EmbeddedDaemon],
     again = runner.invoke(app, ["report", str(out / "results.json"), "--out", str(rerendered)])
     assert again.exit_code == 0, again.output
     assert (rerendered / "report.md").read_text() == (out / "report.md").read_text()
+
+
+def test_settling_requests_are_sized_by_the_rtf_so_far() -> None:
+    """A slow engine's settling request stays near SEGMENT_WALL_S of wall time (DART at
+    1,000 balls once asked for 10 s of sim time at RTF ~0.01: past the 600 s wait)."""
+    assert settling_segment(0.0, 0.0, 0.5) == 1.0  # a probe before any figure
+    assert settling_segment(1.0, 50.0, 0.5) == SETTLE_SEGMENT_S  # fast: the cap
+    slow = settling_segment(100.0, 1.0, 0.5)  # RTF 0.01
+    assert slow == 0.5 and slow / 0.01 <= 2 * SEGMENT_WALL_S  # one check interval
+    middling = settling_segment(10.0, 1.0, 0.5)  # RTF 0.1: 6 s of sim in about 60 s
+    assert middling == pytest.approx(0.1 * SEGMENT_WALL_S)
+    assert (middling / 0.5).is_integer()  # whole check intervals: the same rest checks
+    assert settling_wait(0.5, 100.0, 0.1) == pytest.approx(10 * 0.5 / 0.001)  # 10 x predicted
+    assert settling_wait(6.0, 10.0, 1.0) == 600.0  # never under the usual wait
+    assert settling_wait(1.0, 0.0, 0.0) >= 3600.0  # the first request: no figure yet
 
 
 def test_bench_rejects_bad_options() -> None:
