@@ -42,14 +42,14 @@ class LocalSim:
         assert self.world is not None
         return self.world.spawn([BodyGroup.from_wire(g.to_wire()) for g in groups])
 
-    def run_until(self, sim_time: float) -> Stamp:
+    def run_until(self, sim_time: float, timeout: float | None = None) -> Stamp:
         assert self.world is not None
         dt = self.world.engine.timestep
         self.world.step(math.ceil((sim_time - self.world.sim_time) / dt - 1e-9))
         return Stamp(self.world.step_index, self.world.sim_time)
 
     def run_until_rest(self, sim_time: float, names: list[str], speed: float,
-                       every: float) -> tuple[States, bool]:
+                       every: float, timeout: float | None = None) -> tuple[States, bool]:
         """The daemon's until_rest loop: step to each check, read, stop once all rest."""
         assert self.world is not None
         dt = self.world.engine.timestep

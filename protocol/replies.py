@@ -139,6 +139,15 @@ class ShapesReply(Reply, kw_only=True):
     kinds: list[str]
     sizes: Annotated[bytes, _rows(3, ": half sizes as SIZE_LAYOUT, zero padded")]
     poses: Annotated[bytes, _rows(7, ": each shape's pose in its entity's frame")]
+    # Sent only when some row is a ``mesh`` (a reply without one is as before meshes were
+    # told): per row, its index into ``mesh_vertices`` / ``mesh_faces``, -1 for a primitive
+    # or for a mesh the daemon knows only as its box. Rows of one mesh share one index.
+    meshes: list[int] = msgspec.field(default_factory=list)
+    mesh_vertices: list[Annotated[bytes, _rows(3, ": in its row's frame")]] = \
+        msgspec.field(default_factory=list)
+    mesh_faces: list[Annotated[bytes, msgspec.Meta(
+        description="packed uint32 rows, 3 wide: vertex indices")]] = \
+        msgspec.field(default_factory=list)
 
 
 class StepReply(Reply, kw_only=True):

@@ -9,11 +9,8 @@ ENGINES = ("mujoco", "pybullet", "ode", "dart")
 # What an engine states it does not do (FEATURE_UNSUPPORTED, and left out of its
 # capabilities): a conformance test that meets one of these refusals is skipped, saying so;
 # any other refusal fails (tests/conformance/conftest.py).
-# What DART and ODE refuse at spawn (docs/ENGINES.md, "Meshes and a body's own inertia").
 STATED_GAPS: dict[str, tuple[str, ...]] = {
-    "ode": ("loads urdf models, not 'mjcf'", "does not support rendering",
-            "cannot spawn a mesh"),
-    "dart": ("cannot spawn a mesh",),
+    "ode": ("loads urdf models, not 'mjcf'", "does not support rendering"),
 }
 START_TIMEOUT_S = 60.0
 

@@ -48,6 +48,8 @@ class ExperimentConfig:
     max_sim_time: float = DEFAULT_MAX_SIM_TIME_S
     check_interval: float = DEFAULT_CHECK_INTERVAL_S
     extra: dict[str, Any] = field(default_factory=dict)
+    # RTF-only trials: each stops after this much physics wall time (None: until rest).
+    max_wall_time: float | None = None
     # A folder to save each trial's recording in, for `galton-client view` (None: none).
     recordings: Path | None = None
 
@@ -56,6 +58,9 @@ class ExperimentConfig:
             raise InvalidArgumentError(f"repetitions must be at least 1, got {self.repetitions}")
         if not self.balls or min(self.balls) < 1:
             raise InvalidArgumentError(f"ball counts must be positive, got {self.balls}")
+        if self.max_wall_time is not None and not self.max_wall_time > 0:
+            raise InvalidArgumentError(
+                f"max_wall_time must be above 0 s (or None), got {self.max_wall_time}")
         if not self.engines:
             raise InvalidArgumentError("name at least one engine")
         check_engines(self.engines)
@@ -79,7 +84,8 @@ class ExperimentConfig:
         """The plan: for each engine, each ball count, each repetition."""
         return [TrialConfig(engine, self.board_for(balls), rep, self.seed, self.max_sim_time,
                             self.check_interval,
-                            recording=self.recording_of(engine, balls, rep))
+                            recording=self.recording_of(engine, balls, rep),
+                            max_wall_time=self.max_wall_time)
                 for engine in self.engines for balls in self.balls
                 for rep in range(self.repetitions)]
 

@@ -21,6 +21,7 @@ from galton.client.bench.defaults import DEFAULT_MAX_SIM_TIME_S
 from galton.client.sdk.client import Client, States
 from galton.client.sdk.recording import Recorder
 from galton.protocol import Telemetry
+from galton.protocol.operations import LONG_RUNNING_TIMEOUT_S
 
 DEFAULT_CHECK_INTERVAL_S = 0.5
 # The daemon checks for rest every check interval; the bench looks itself at least this
@@ -32,6 +33,12 @@ SETTLE_SEGMENT_S = 10.0
 # RTF ~0.01) stays far inside a client's 600 s wait. The first segment is a short probe.
 SEGMENT_WALL_S = 60.0
 FIRST_SEGMENT_S = 1.0
+FIRST_REQUEST_WAIT_S = 6 * 3600.0
+# An RTF-only trial (max_wall_time) advances in chunks of about WALL_CHUNK_S of wall time,
+# after a probe of PROBE_S of sim time; never under MIN_CHUNK_S (one step at 1 ms).
+WALL_CHUNK_S = 5.0
+PROBE_S = 0.01
+MIN_CHUNK_S = 0.001
 
 
 @dataclass
@@ -47,6 +54,9 @@ class TrialConfig:
     settle_speed: float = DEFAULT_SETTLE_SPEED
     # Where to save a recording of the trial that `galton-client view` replays (None: none).
     recording: Path | None = None
+    # For a trial that measures only the RTF: stop after this much wall time of physics,
+    # settled or not (None: run until the balls rest or max_sim_time).
+    max_wall_time: float | None = None
 
     @property
     def balls(self) -> int:
@@ -88,7 +98,7 @@ class PhysicsClock:
     def run_until(self, sim_time: float) -> float:
         started = time.perf_counter()
         before = self.sim_time
-        stamp = self.sim.run_until(sim_time)
+        stamp = self.sim.run_until(sim_time, timeout=self.wait_for(sim_time - before))
         self._count(started, before, stamp.sim_time)
         return stamp.sim_time
 
@@ -97,9 +107,14 @@ class PhysicsClock:
         """Run until these balls rest or ``sim_time``, in one round trip (timed as physics)."""
         started = time.perf_counter()
         before = self.sim_time
-        states, at_rest = self.sim.run_until_rest(sim_time, names, speed, every)
+        states, at_rest = self.sim.run_until_rest(sim_time, names, speed, every,
+                                                  timeout=self.wait_for(sim_time - before))
         self._count(started, before, states.sim_time)
         return states, at_rest
+
+    def wait_for(self, span: float) -> float:
+        """How long a request running ``span`` s of sim time may take (settling_wait)."""
+        return settling_wait(span, self.wall, self.simulated)
 
     def _count(self, started: float, before: float, after: float) -> None:
         self.wall += time.perf_counter() - started
@@ -117,6 +132,16 @@ def settling_segment(wall: float, simulated: float, check_interval: float) -> fl
     else:
         span = min(SETTLE_SEGMENT_S, SEGMENT_WALL_S * simulated / wall)
     return max(1, int(span / check_interval + 1e-9)) * check_interval
+
+
+def settling_wait(span: float, wall: float, simulated: float) -> float:
+    """The client's wait for a request running ``span`` s of sim time: 10 x what the RTF
+    so far predicts, at least the usual 600 s; before any figure, FIRST_REQUEST_WAIT_S (a
+    slow engine's first 1 s of a 500-ball crowd may take hours; a daemon that dies is seen
+    at once by its liveliness, so the long wait only ever waits on a working daemon)."""
+    if wall <= 0.0 or simulated <= 0.0:
+        return FIRST_REQUEST_WAIT_S
+    return max(LONG_RUNNING_TIMEOUT_S, 10.0 * span * wall / simulated)
 
 
 def prepare_world(sim: Client, config: TrialConfig) -> tuple[Perturbation, list[str]]:
@@ -153,6 +178,27 @@ def release_and_settle(sim: Client, config: TrialConfig, shake: Perturbation,
         stuck_seen = True
 
 
+def run_for_wall(sim: Client, config: TrialConfig, shake: Perturbation, names: list[str],
+                 clock: PhysicsClock, budget: float) -> BallOutcomes:
+    """An RTF-only trial: release, then run in chunks sized by the RTF so far (a short
+    probe first) until ``budget`` s of physics wall time or max_sim_time; the balls as they
+    are then. No request outruns its wait, however slow the engine gets as its crowd forms
+    (DART's 500-ball funnel runs at RTF 0.0003)."""
+    released, now = release(sim, config, shake, names, clock)
+    while now < config.max_sim_time - 1e-9 and clock.wall < budget:
+        span = wall_chunk(budget - clock.wall, clock.wall, clock.simulated)
+        now = clock.run_until(min(now + span, config.max_sim_time))
+    return classify(config, shake, sim.get_states(names[:released]))
+
+
+def wall_chunk(remaining: float, wall: float, simulated: float) -> float:
+    """Sim seconds expected to take the lesser of ``remaining`` and WALL_CHUNK_S of wall
+    time at the RTF so far (PROBE_S before any figure; at least MIN_CHUNK_S)."""
+    if wall <= 0.0 or simulated <= 0.0:
+        return PROBE_S
+    return max(MIN_CHUNK_S, min(remaining, WALL_CHUNK_S) * simulated / wall)
+
+
 def release(sim: Client, config: TrialConfig, shake: Perturbation, names: list[str],
             clock: PhysicsClock) -> tuple[int, float]:
     """Spawn each ball at its release time; return how many were released, and when."""
@@ -183,7 +229,9 @@ def run_trial(sim: Client, config: TrialConfig) -> TrialRecord:
         shake, names = prepare_world(sim, config)
         clock = PhysicsClock(sim)
         with _recorded(sim, config.recording):
-            outcomes = release_and_settle(sim, config, shake, names, clock)
+            outcomes = (release_and_settle(sim, config, shake, names, clock)
+                        if config.max_wall_time is None else
+                        run_for_wall(sim, config, shake, names, clock, config.max_wall_time))
         sim_time = sim.status().sim_time
         settings = sim.get_params()
         version = sim.capabilities().engine_version
@@ -211,4 +259,5 @@ def trial_config_dict(config: TrialConfig, shake: Perturbation) -> dict[str, Any
         "board": config.board.to_dict(), "max_sim_time": config.max_sim_time,
         "check_interval": config.check_interval, "settle_speed": config.settle_speed,
         "board_offset_x": shake.board_offset_x,
+        **({} if config.max_wall_time is None else {"max_wall_time": config.max_wall_time}),
     }

@@ -25,9 +25,19 @@ def fuzz(
     seed: Annotated[int, typer.Option(help="Seed of the request generator.")] = 0,
     resealed: Annotated[int, typer.Option(
         help="Re-sealed corrupt snapshots to restore after the requests.", min=0)] = 100,
+    oversize: Annotated[bool, typer.Option(
+        help="Then send requests whose replies would pass the daemon's max_reply_bytes "
+             "(each must be refused and change nothing).")] = True,
+    unread: Annotated[int, typer.Option(
+        help="Then pipeline this many requests from a ZeroMQ client that never reads them, "
+             "while others ask for status (0: none; needs the daemon's ZeroMQ front).",
+        min=0)] = 1800,
     engine: Annotated[str | None, typer.Option(
         help="Fuzz a fresh embedded daemon of this engine instead of --connect/--instance.")
     ] = None,
+    zmq: Annotated[bool, typer.Option(
+        "--zmq", help="With --engine: the daemon serves ZeroMQ too, and the campaign's "
+        "requests go over it.")] = False,
     as_json: JsonOpt = False,
 ) -> None:
     """Send seeded malformed and well-formed requests; check each gets one typed reply and
@@ -41,16 +51,18 @@ def fuzz(
         with ExitStack() as stack:
             daemon = None
             if engine is not None:
-                daemon = stack.enter_context(EmbeddedDaemon(engine, instance=f"fuzz-{engine}"))
-                client = stack.enter_context(Client(daemon.instance, daemon.endpoint,
-                                                    timeout=30.0))
+                daemon = stack.enter_context(EmbeddedDaemon(engine, instance=f"fuzz-{engine}",
+                                                            zmq=zmq))
+                client = stack.enter_context(Client(
+                    daemon.instance, daemon.zmq_endpoint or daemon.endpoint, timeout=30.0))
             else:
                 client = stack.enter_context(ctx.obj.client())
             progress = stack.enter_context(Progress(console=console, disable=as_json))
             task = progress.add_task(f"fuzz (seed {seed})", total=requests)
             report = run_campaign(client, requests, seed,
                                   lambda done: progress.update(task, completed=done),
-                                  resealed=resealed)
+                                  resealed=resealed, oversize_cases=oversize,
+                                  unread=unread)
             if daemon is not None and daemon.process is not None and \
                     daemon.process.poll() is not None:
                 report.missing_replies.append(f"the daemon exited ({daemon.process.poll()})")
@@ -70,7 +82,13 @@ def _render(report: FuzzReport) -> None:
     for title, found in (("missing replies", report.missing_replies),
                          ("untyped replies", report.untyped_replies),
                          ("side effects of rejected requests", report.side_effects),
-                         ("bad restores of re-sealed snapshots", report.bad_restores)):
+                         ("bad restores of re-sealed snapshots", report.bad_restores),
+                         (f"over-limit requests answered (of {report.oversize_cases})",
+                          report.oversize_answered),
+                         (f"status starved by {report.unread_sent} unread requests",
+                          report.starved)):
         console.print(f"{title}: {len(found)}")
         for line in found[:10]:
             console.print(f"  {line}", markup=False)
+    for line in report.skipped:
+        console.print(f"skipped: {line}", markup=False)

@@ -16,6 +16,7 @@ if TYPE_CHECKING:
     import numpy as np
 
     from galton.client.sdk.client import States
+    from galton.client.sdk.values import ShapeInfo
 
 # This group's commands; galton.client.cli.app registers them on the CLI.
 commands = typer.Typer()
@@ -88,18 +89,34 @@ def get_shapes(
     names: EntityNames = None,
     as_json: JsonOpt = False,
 ) -> None:
-    """Show each entity's collision shapes: kind, half sizes, pose in the entity's frame."""
+    """Show each entity's collision shapes: kind, half sizes, pose in the entity's frame,
+    and a mesh's vertex and triangle counts (or that only its box is known)."""
     shapes = with_client(ctx, lambda c: c.get_shapes(names or None))
 
     def render() -> None:
-        table = Table("name", "kind", "half sizes (m)", "pose (x y z qx qy qz qw)")
+        table = Table("name", "kind", "half sizes (m)", "pose (x y z qx qy qz qw)", "mesh")
         for name, found in shapes.items():
             for shape in found:
                 table.add_row(name, shape.kind, _numbers(shape.size),
-                              _numbers(shape.pose))
+                              _numbers(shape.pose), _triangles(shape))
         console.print(table)
-    emit({name: [{"kind": s.kind, "size": list(s.size), "pose": s.pose.tolist()}
-                 for s in found] for name, found in shapes.items()}, as_json, render)
+    emit({name: [{"kind": s.kind, "size": list(s.size), "pose": s.pose.tolist(),
+                  "triangles": _counts(s)} for s in found]
+          for name, found in shapes.items()}, as_json, render)
+
+
+def _counts(shape: ShapeInfo) -> list[int] | None:
+    """A mesh's vertex and triangle counts, where they are told."""
+    if shape.vertices is None or shape.faces is None:
+        return None
+    return [len(shape.vertices), len(shape.faces)]
+
+
+def _triangles(shape: ShapeInfo) -> str:
+    counts = _counts(shape)
+    if counts is not None:
+        return f"{counts[0]} vertices, {counts[1]} triangles"
+    return "its box only" if shape.boxed else ""
 
 
 @commands.command("set-states", rich_help_panel=PANEL)

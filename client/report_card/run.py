@@ -37,20 +37,23 @@ class CardPlan:
     laws: tuple[str, ...] | None = None  # None: the whole suite
     mesh_balls: int = 100  # the paper-mesh board's trials
     mesh_repetitions: int = 10
-    # Sim seconds each RTF-curve trial may run (its RTF needs no settled board): a 300-ball
-    # board on a slow engine (DART, ~0.01 × real time) would otherwise outrun a request.
+    # Sim seconds, and physics wall seconds, each RTF-curve trial may run (its RTF needs no
+    # settled board): DART's 1,000-ball crowd runs at RTF ~0.0003.
     curve_sim_time: float = 10.0
+    curve_wall_time: float = 60.0
 
     @classmethod
     def quick(cls) -> CardPlan:
         return cls(repetitions=5, curve=(1, 10, 300), footprint_s=3.0, round_trips=100,
-                   world_ops=6, mesh_balls=25, mesh_repetitions=2, curve_sim_time=2.0)
+                   world_ops=6, mesh_balls=25, mesh_repetitions=2, curve_sim_time=2.0,
+                   curve_wall_time=15.0)
 
     def describe(self) -> str:
         return (f"paper, {self.fidelity_balls} balls × {self.repetitions}, all at once; "
                 f"paper-mesh, {self.mesh_balls} balls × {self.mesh_repetitions}; "
                 f"RTF curve at {', '.join(map(str, sorted({*self.curve, self.fidelity_balls})))} "
-                f"balls (curve trials at most {self.curve_sim_time:g} s of sim time)")
+                f"balls (curve trials at most {self.curve_sim_time:g} s of sim time and "
+                f"{self.curve_wall_time:g} s of wall time)")
 
 
 @contextmanager
@@ -73,7 +76,8 @@ def board_measures(sim: Client, engine: str, plan: CardPlan, seed: int,
     fidelity = ExperimentConfig(board=board, engines=(engine,), balls=(plan.fidelity_balls,),
                                 repetitions=plan.repetitions, seed=seed)
     curve = ExperimentConfig(board=board, engines=(engine,), balls=plan.curve, repetitions=1,
-                             seed=seed, max_sim_time=plan.curve_sim_time)
+                             seed=seed, max_sim_time=plan.curve_sim_time,
+                             max_wall_time=plan.curve_wall_time)
     trials = [*trials_of(sim, engine, fidelity), *trials_of(sim, engine, curve)]
     group = summarise_group([t for t in trials if t.balls == plan.fidelity_balls],
                             plan.fidelity_balls)

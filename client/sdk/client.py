@@ -317,10 +317,11 @@ class Client(WorldMethods, PerceptionMethods, ControlMethods, StreamMethods):
 
     def get_shapes(self, names: Sequence[str] | None = None
                    ) -> dict[str, builtins.list[ShapeInfo]]:
-        """Each entity's collision shapes (all entities when None), in its own frame."""
+        """Each entity's collision shapes (all entities when None), in its own frame; a
+        mesh with its triangles where the daemon knows them (``ShapeInfo.boxed`` if not)."""
         reply = decode_result(ShapesReply, self._ok("get_shapes",
                                                     sdk_joints.names_arg(names)).result)
-        return shapes_of(reply.names, reply.counts, reply.kinds, reply.sizes, reply.poses)
+        return shapes_of(reply)
 
     def set_states(self, names: Sequence[str], poses: ArrayLike | None = None,
                    twists: ArrayLike | None = None) -> Stamp:

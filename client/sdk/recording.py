@@ -1,4 +1,5 @@
-"""A recording of a world's motion: the entities as ``list`` described them, and their poses
+"""A recording of a world's motion: the entities as ``list`` described them (with the shapes
+of loaded models' bodies and spawned meshes, as ``get_shapes`` told them), and their poses
 at each sample of a state stream, saved as one ``.npz`` file that ``galton-client view
 FILE`` (or a directory of them) replays.
 
@@ -13,14 +14,16 @@ from __future__ import annotations
 
 import json
 import threading
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from galton.client.sdk import drawn_shapes
+from galton.client.sdk.drawn_shapes import Shapes
 from galton.client.sdk.streams import StateSample
-from galton.protocol import POSE_WIDTH, EntityInfo, InvalidArgumentError
+from galton.protocol import POSE_WIDTH, EntityInfo, GaltonError, InvalidArgumentError
 
 if TYPE_CHECKING:
     from galton.client.sdk.client import Client
@@ -35,11 +38,13 @@ FIRST_SAMPLE_WAIT_S = 5.0
 
 @dataclass
 class Recording:
-    """Entities, sample times and poses (samples, entities, 7; NaN where absent)."""
+    """Entities, sample times and poses (samples, entities, 7; NaN where absent), and the
+    shapes of those drawn by them (none in a recording made before they were kept)."""
 
     infos: list[EntityInfo]
     times: np.ndarray
     poses: np.ndarray
+    shapes: Shapes = field(default_factory=dict)
 
     @property
     def names(self) -> list[str]:
@@ -49,8 +54,10 @@ class Recording:
         path.parent.mkdir(parents=True, exist_ok=True)
         entities = json.dumps([info.to_wire() for info in self.infos])
         with path.open("wb") as out:
-            np.savez_compressed(out, entities=np.asarray(entities), times=self.times,
-                                poses=self.poses)
+            arrays: dict[str, Any] = {"entities": np.asarray(entities), "times": self.times,
+                                      "poses": self.poses,
+                                      **drawn_shapes.pack_shapes(self.shapes)}
+            np.savez_compressed(out, **arrays)
 
     @classmethod
     def load(cls, path: Path) -> Recording:
@@ -58,13 +65,14 @@ class Recording:
             with np.load(path, allow_pickle=False) as data:
                 infos = [EntityInfo.from_wire(row) for row in json.loads(str(data["entities"]))]
                 times, poses = np.asarray(data["times"]), np.asarray(data["poses"])
-        except (OSError, ValueError, KeyError) as error:
+                shapes = drawn_shapes.unpack_shapes(data)
+        except (OSError, ValueError, KeyError, GaltonError) as error:
             raise InvalidArgumentError(f"{path} is no recording of galton-client: {error}") \
                 from error
         if poses.ndim != 3 or poses.shape[1:] != (len(infos), POSE_WIDTH) \
                 or len(times) != len(poses):
             raise InvalidArgumentError(f"{path}: its poses do not match its entities and times")
-        return cls(infos, times, poses)
+        return cls(infos, times, poses, shapes)
 
 
 def recordings_in(source: Path) -> list[Path]:
@@ -89,6 +97,7 @@ class Recorder:
         self.path = path
         self.rate = rate
         self.samples: list[StateSample] = []
+        self.shapes: Shapes = {}
         self._lock = threading.Condition()
         self._stream: StateStream | None = None
 
@@ -107,6 +116,7 @@ class Recorder:
         """Open the stream and wait for its first sample, so the recording starts with the
         world as the block finds it (a world run flat out inside the block may otherwise
         be far along before the subscription sees its first sample)."""
+        self.shapes = drawn_shapes.shapes_for_drawing(self.client, self.client.list())
         self._stream = self.client.stream_states(rate=self.rate, callback=self._take)
         self.wait_for(1, FIRST_SAMPLE_WAIT_S)
         return self
@@ -118,7 +128,8 @@ class Recorder:
 
     def recording(self) -> Recording:
         """What was recorded, entities as ``list`` describes them now (or as a name alone
-        when gone since)."""
+        when gone since); shapes as told at the start, those of entities that came since
+        asked now."""
         with self._lock:
             samples = list(self.samples)
         order: dict[str, int] = {}
@@ -131,4 +142,6 @@ class Recorder:
         listed = {info.name: info for info in self.client.list()}
         infos = [listed.get(name, EntityInfo(name, "link")) for name in order]
         times = np.asarray([sample.sim_time for sample in samples], dtype=float)
-        return Recording(infos, times, poses)
+        came = [info for info in infos if info.name in listed and info.name not in self.shapes]
+        shapes = {**self.shapes, **drawn_shapes.shapes_for_drawing(self.client, came)}
+        return Recording(infos, times, poses, {n: shapes[n] for n in order if n in shapes})

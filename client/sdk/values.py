@@ -18,6 +18,7 @@ from numpy.typing import NDArray
 from galton.protocol import POSE_WIDTH, TWIST_WIDTH, OperationFailedError, Reply, unpack_f64
 from galton.protocol import replies as rp
 from galton.protocol.png import decode_png
+from galton.protocol.replies import ShapesReply
 
 FloatArray = NDArray[np.float64]
 MM = 1000.0  # depth PNGs hold millimetres
@@ -374,24 +375,61 @@ class Contacts:
 class ShapeInfo:
     """One collision shape of an entity (``get_shapes``): kind (a body shape or "mesh"),
     half sizes as the protocol's SIZE_LAYOUT (a mesh: a box around it), pose (7) in the
-    entity's frame."""
+    entity's frame; a mesh's triangles in that pose's frame where the daemon tells them
+    (``vertices`` (n, 3), ``faces`` (m, 3) indices; shapes of one mesh share the arrays)."""
 
     kind: str
     size: tuple[float, ...]
     pose: FloatArray
+    vertices: FloatArray | None = None
+    faces: NDArray[np.int64] | None = None
+
+    @property
+    def boxed(self) -> bool:
+        """A mesh told only as the box around it: the daemon knows no triangles of it."""
+        return self.kind == "mesh" and self.vertices is None
 
 
-def shapes_of(names: list[str], counts: list[int], kinds: list[str], sizes: bytes,
-              poses: bytes) -> dict[str, list[ShapeInfo]]:
-    """A ``get_shapes`` reply's flat rows grouped by entity."""
-    size_rows = unpack_f64(sizes, 3, "sizes")
-    pose_rows = unpack_f64(poses, POSE_WIDTH, "poses")
-    if sum(counts) != len(kinds) or len(kinds) != len(size_rows) or len(kinds) != len(pose_rows):
-        raise OperationFailedError("get_shapes: counts, kinds, sizes and poses disagree")
+Triangles = tuple[FloatArray, NDArray[np.int64]]  # a mesh's vertices and faces
+
+
+def shapes_of(reply: ShapesReply) -> dict[str, list[ShapeInfo]]:
+    """A ``get_shapes`` reply's flat rows grouped by entity, meshes with their triangles."""
+    if len(reply.mesh_vertices) != len(reply.mesh_faces):
+        raise OperationFailedError("get_shapes: mesh_vertices and mesh_faces disagree")
+    table = [triangles_of(unpack_f64(v, 3, "mesh_vertices"), np.frombuffer(f, dtype="<u4"))
+             for v, f in zip(reply.mesh_vertices, reply.mesh_faces, strict=True)]
+    return grouped_shapes(reply.names, reply.counts, reply.kinds,
+                          unpack_f64(reply.sizes, 3, "sizes"),
+                          unpack_f64(reply.poses, POSE_WIDTH, "poses"), reply.meshes, table)
+
+
+def triangles_of(vertices: NDArray[Any], faces: NDArray[Any]) -> Triangles:
+    """A mesh's (n, 3) vertices and (m, 3) faces, whose indices must name its vertices."""
+    rows = np.asarray(faces, dtype=np.int64).reshape(-1, 3) if np.size(faces) % 3 == 0 \
+        else None
+    if rows is None or (rows.size and (rows.min() < 0 or rows.max() >= len(vertices))):
+        raise OperationFailedError("get_shapes: a mesh's faces do not index its vertices")
+    return np.asarray(vertices, dtype=np.float64).reshape(-1, 3), rows
+
+
+def grouped_shapes(names: list[str], counts: list[int], kinds: list[str],
+                   size_rows: FloatArray, pose_rows: FloatArray, meshes: list[int],
+                   table: list[Triangles]) -> dict[str, list[ShapeInfo]]:
+    """Flat shape rows (as ``get_shapes`` sends them) grouped by entity; ``meshes``: each
+    row's index into ``table`` (-1: none), or empty where no row has one."""
+    rows = len(kinds)
+    if sum(counts) != rows or rows != len(size_rows) or rows != len(pose_rows) \
+            or len(names) != len(counts) or (meshes and len(meshes) != rows) \
+            or any(not -1 <= index < len(table) for index in meshes):
+        raise OperationFailedError("get_shapes: counts, kinds, sizes, poses and meshes "
+                                   "disagree")
+    mesh_of = [table[i] if i >= 0 else None for i in meshes] or [None] * rows
     found: dict[str, list[ShapeInfo]] = {}
     start = 0
     for name, count in zip(names, counts, strict=True):
-        found[name] = [ShapeInfo(kinds[i], tuple(float(v) for v in size_rows[i]), pose_rows[i])
+        found[name] = [ShapeInfo(kinds[i], tuple(float(v) for v in size_rows[i]), pose_rows[i],
+                                 *(mesh_of[i] or (None, None)))
                        for i in range(start, start + count)]
         start += count
     return found

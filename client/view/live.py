@@ -12,7 +12,7 @@ import logging
 import threading
 import time
 from collections import deque
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -20,15 +20,10 @@ import viser
 import viser.uplot
 
 from galton.client.sdk.client import Client
+from galton.client.sdk.drawn_shapes import shapes_for_drawing
 from galton.client.sdk.streams import StateSample, StateStream
-from galton.client.view.scene import Shapes, WorldDrawing, framing
-from galton.protocol import (
-    MODEL_SHAPES,
-    AccessDeniedError,
-    EntityInfo,
-    GaltonError,
-    RequestTimeoutError,
-)
+from galton.client.view.scene import WorldDrawing, framing
+from galton.protocol import AccessDeniedError, GaltonError, RequestTimeoutError
 
 log = logging.getLogger("galton.client")
 
@@ -72,19 +67,6 @@ def may_operate(client: Client) -> bool:
     return True
 
 
-def shapes_of_links(client: Client, infos: Sequence[EntityInfo]) -> Shapes | None:
-    """The collision shapes of the loaded models' bodies, or None where the engine does
-    not tell them (their links are drawn as small cubes then)."""
-    links = [info.name for info in infos if info.shape in MODEL_SHAPES]
-    if not links:
-        return None
-    try:
-        return client.get_shapes(links)
-    except GaltonError as error:  # FEATURE_UNSUPPORTED, or a model deleted meanwhile
-        log.info("links drawn as cubes: %s", error)
-        return None
-
-
 class Followed:
     """One world followed by a stream and drawn by a WorldDrawing."""
 
@@ -106,7 +88,7 @@ class Followed:
         if self.stale or sample.names != self.drawing.names:
             infos = self.client.list()
             self.drawing.rebuild(infos, sample.names, sample.poses,
-                                 shapes_of_links(self.client, infos))
+                                 shapes_for_drawing(self.client, infos))
             self.stale = False
         else:
             self.drawing.update(sample.poses)
@@ -194,7 +176,7 @@ class LiveView:
         poses = np.asarray(prediction.poses)[-1]
         infos = self.client.list()
         self.prediction.rebuild(infos, names, poses.reshape(-1, 7),
-                                shapes_of_links(self.client, infos))
+                                shapes_for_drawing(self.client, infos))
 
     def _on_event(self, event: dict[str, Any]) -> None:
         """A scene change makes the drawing list the scene again; a comparison's score

@@ -56,7 +56,7 @@ class ReplayView:
         self.frame.max = max(len(recording.times) - 1, 1)
         self.frame.value = 0  # type: ignore[misc]  # viser's handles take assignments
         first = visible_poses(recording.poses[0]) if len(recording.times) else np.zeros((0, 7))
-        self.drawing.rebuild(recording.infos, recording.names, first)
+        self.drawing.rebuild(recording.infos, recording.names, first, recording.shapes)
         framed = self.camera or framing(recording.infos, recording.names,
                                         np.nan_to_num(recording.poses[-1]))
         if framed is not None:

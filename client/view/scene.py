@@ -15,9 +15,9 @@ import viser
 
 from galton.client.sdk.values import ShapeInfo
 from galton.client.view.palette import Rgb, colour_of, opacity_of
-from galton.protocol import MODEL_SHAPES, EntityInfo
+from galton.protocol import EntityInfo
 
-Shapes = Mapping[str, Sequence[ShapeInfo]]  # get_shapes' answer for a world's links
+Shapes = Mapping[str, Sequence[ShapeInfo]]  # get_shapes' answer for links and meshes
 
 LINK_HALF = 0.02  # a link whose shapes the engine does not tell: a small cube marks it
 PLANE_HALF = 5.0  # an unbounded plane is drawn this far from its origin
@@ -32,7 +32,9 @@ class GroupKey:
     size: tuple[float, ...]
     colour: Rgb
     opacity: float | None
-    link: str = ""  # a loaded model's body drawn as its own shapes (one mesh per link)
+    # A body drawn as its get_shapes rows (a loaded model's body, a spawned mesh): what
+    # they are (shapes_key), so that bodies of one mesh share one batched mesh.
+    drawn: tuple[Any, ...] = ()
 
 
 def shape_mesh(shape: str, size: Sequence[float]) -> tuple[np.ndarray, np.ndarray]:
@@ -49,7 +51,7 @@ def _trimesh(shape: str, size: Sequence[float]) -> Any:  # a trimesh.Trimesh (un
     creation = trimesh.creation
     if shape == "sphere":
         return creation.icosphere(subdivisions=2, radius=size[0])
-    if shape in ("box", "mesh"):  # a mesh: the box the engine keeps around it
+    if shape in ("box", "mesh"):  # a mesh whose triangles are not told: its box
         return creation.box(extents=[2 * h for h in size[:3]])
     if shape == "cylinder":
         return creation.cylinder(radius=size[0], height=2 * size[1], sections=24)
@@ -63,11 +65,20 @@ def _trimesh(shape: str, size: Sequence[float]) -> Any:  # a trimesh.Trimesh (un
     return creation.box(extents=[2 * LINK_HALF] * 3)  # a link, a model's root
 
 
+def shapes_key(shapes: Sequence[ShapeInfo]) -> tuple[Any, ...]:
+    """What makes two bodies' shapes draw alike: kinds, sizes, poses and which triangles
+    (by their arrays' identity, which the shapes of one reply or recording share)."""
+    return tuple((shape.kind, shape.size, np.asarray(shape.pose).tobytes(),
+                  0 if shape.vertices is None else id(shape.vertices)) for shape in shapes)
+
+
 def link_mesh(shapes: Sequence[ShapeInfo]) -> tuple[np.ndarray, np.ndarray]:
-    """A link's collision shapes as one mesh in the link's frame."""
+    """A body's shapes as one mesh in the body's frame: a mesh as its triangles where they
+    are told (else its box), a primitive as its shape."""
     parts = []
     for shape in shapes:
-        part = _trimesh(shape.kind, shape.size)
+        part = _trimesh(shape.kind, shape.size) if shape.vertices is None or shape.faces is None \
+            else trimesh.Trimesh(shape.vertices, shape.faces, process=False)
         pose = np.asarray(shape.pose, dtype=float)
         x, y, z, w = pose[3:] / np.linalg.norm(pose[3:])
         transform = np.eye(4)
@@ -102,24 +113,29 @@ class WorldDrawing:
     def rebuild(self, infos: Sequence[EntityInfo], names: Sequence[str],
                 poses: np.ndarray, shapes: Shapes | None = None) -> None:
         """Draw these entities afresh (the scene changed): one batched mesh per group; a
-        loaded model's body is drawn as its ``shapes`` (a small cube where none are told)."""
+        body with ``shapes`` (a loaded model's, a spawned mesh) is drawn as them (a model's
+        body whose shapes are not told as a small cube, a mesh's as its box)."""
         self.clear()
         self.infos = list(infos)
         by_name = {info.name: info for info in infos}
         shapes = shapes or {}
         members: dict[GroupKey, list[int]] = defaultdict(list)
+        drawing: dict[tuple[Any, ...], Sequence[ShapeInfo]] = {}
         for index, name in enumerate(names):
             info = by_name.get(name, EntityInfo(name, "link"))
             if self.moving_only and info.static:
                 continue
             colour = self.tint or colour_of(info.tags, info.static)
             opacity = min(self.opacity or 1.0, opacity_of(info.tags) or 1.0)
-            link = name if info.shape in MODEL_SHAPES and shapes.get(name) else ""
+            told = shapes.get(name)
+            drawn = shapes_key(told) if told else ()
+            if told:
+                drawing[drawn] = told
             members[GroupKey(info.shape, tuple(info.size), colour,
-                             None if opacity >= 1.0 else opacity, link)].append(index)
+                             None if opacity >= 1.0 else opacity, drawn)].append(index)
         for number, (key, indices) in enumerate(members.items()):
             rows = np.asarray(indices)
-            vertices, faces = link_mesh(shapes[key.link]) if key.link \
+            vertices, faces = link_mesh(drawing[key.drawn]) if key.drawn \
                 else shape_mesh(key.shape, key.size)
             handle = self.scene.add_batched_meshes_simple(
                 f"{self.root}/group{number}", vertices, faces,

@@ -16,6 +16,7 @@ if TYPE_CHECKING:
     from galton.daemon.core.calls import Call, StepJob
     from galton.daemon.core.limits import Limits
     from galton.daemon.core.monitor import Pacer, RtfWindow
+    from galton.daemon.core.step_queue import StepQueue
     from galton.daemon.world.scene import World
     from galton.daemon.world.slots import SnapshotSlots
     from galton.daemon.world.state_streams import StateStreams
@@ -40,6 +41,7 @@ class OpContext(Protocol):
     pacer: Pacer
     rtf_window: RtfWindow
     job: StepJob | None
+    step_queue: StepQueue  # step requests waiting for the job, handled when it ends
     # Who may do what, and how much.
     lease: Lease
     limits: Limits

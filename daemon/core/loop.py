@@ -31,6 +31,7 @@ from galton.daemon.core.inbox import PolledInbox
 from galton.daemon.core.limits import DEFAULT_LIMITS, Limits
 from galton.daemon.core.monitor import Pacer, ProcessMonitor, RtfWindow
 from galton.daemon.core.reply_limit import too_big
+from galton.daemon.core.step_queue import StepBusyError, StepQueue
 from galton.daemon.ops.handlers import HANDLERS
 from galton.daemon.world.scene import World
 from galton.daemon.world.slots import SnapshotSlots
@@ -103,6 +104,7 @@ class SimLoop:
         self.state = SimState.STOPPED
         self.target_rtf = 1.0
         self.job: StepJob | None = None
+        self.step_queue = StepQueue()  # step requests waiting for the job (step_queue.py)
         self.lease = lease.Lease()  # who holds control (daemon/access/lease.py)
         self.pacer = Pacer()
         self.rtf_window = RtfWindow()
@@ -187,6 +189,7 @@ class SimLoop:
         """Physics first (the steps due now), then telemetry, then requests until the next
         step is due; returns when the next telemetry sample is due."""
         self._advance()
+        self._start_queued()
         now = time.monotonic()
         if now >= next_telemetry:
             loop_status.publish_telemetry(self, now)
@@ -198,6 +201,13 @@ class SimLoop:
             self.checkpoint()
         self._take_calls(self._idle_timeout(next_telemetry))
         return next_telemetry
+
+    def _start_queued(self) -> None:
+        """With no step job running, handle the waiting step requests in arrival order
+        until one starts a job (daemon/core/step_queue.py)."""
+        while self.job is None and (call := self.step_queue.head()) is not None:
+            self.handle(call)
+            self.step_queue.done(call)
 
     def _recover(self, exc: Exception) -> None:
         """The last line of defence: an error no request handler caught pauses the world."""
@@ -262,6 +272,8 @@ class SimLoop:
         job = self.end_job()
         if job is not None:
             self.reply_error(job.call, closing)
+        while (waiting := self.step_queue.take()) is not None:
+            self.reply_error(waiting, closing)
         while True:
             try:
                 call = self.inbox.get_nowait()
@@ -289,6 +301,8 @@ class SimLoop:
             self._keep_invariants()  # before the reply: what the client asks next sees it
             if result is not None:
                 self._reply_ok(call, result)
+        except StepBusyError:  # another step request runs: this one waits for it
+            self._hold_step(call)
         except RemoteError as error:
             self._keep_invariants()
             self.reply_error(call, error)
@@ -297,6 +311,12 @@ class SimLoop:
             self._keep_invariants()
             self.reply_error(call, OperationFailedError(
                 f"{type(exc).__name__}: {brief(str(exc))}"))
+
+    def _hold_step(self, call: Call) -> None:
+        try:
+            self.step_queue.hold(call)
+        except RemoteError as error:
+            self.reply_error(call, error)
 
     def set_state(self, state: SimState) -> None:
         """Move the state machine, announcing a change with a ``state`` event."""

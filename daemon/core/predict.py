@@ -12,15 +12,13 @@ import numpy as np
 
 from galton.daemon.core.calls import Call, StepJob
 from galton.daemon.core.context import OpContext
-from galton.daemon.core.reply_limit import require_room
+from galton.daemon.core.reply_limit import VALUE_BYTES, reads_size, require_room
 from galton.daemon.ops import joints as ops_joints
 from galton.daemon.ops import scene as ops
 from galton.daemon.ops.binding import handles
 from galton.daemon.world.scene import World
 from galton.daemon.world.snapshot import clone_of, decode, world_from
 from galton.protocol import (
-    POSE_WIDTH,
-    TWIST_WIDTH,
     IncorrectStateError,
     InvalidArgumentError,
     OperationFailedError,
@@ -105,18 +103,18 @@ def _job(loop: OpContext, call: Call, copy: World, horizon: float,
         copy.require_known(read)
     if joints is not None:
         copy.joints.require_scalar(joints, "predict.read_joints")
-    _require_reply_room(loop.limits.max_reply_bytes, steps // every + 1,
-                        0 if read is None else len(read), 0 if joints is None else len(joints))
+    _require_reply_room(loop.limits.max_reply_bytes, steps // every + 1, read, joints)
     _apply_changes(copy, request)
     sampler = PredictSampler(min(every, steps), read, joints)
     sampler.take(copy)
     return StepJob(call, steps, steps, world=copy, sampler=sampler, scratch=True)
 
 
-def _require_reply_room(limit: int, samples: int, bodies: int, joints: int) -> None:
+def _require_reply_room(limit: int, samples: int, read: list[str] | None,
+                        joints: list[str] | None) -> None:
     """Refuse, before a step, a prediction whose reply would pass ``max_reply_bytes``:
     each sample is its time, a pose and a twist per body, two values per joint."""
-    size = samples * 8 * (1 + bodies * (POSE_WIDTH + TWIST_WIDTH) + joints * 2)
+    size = reads_size(read, joints, samples, joint_values=2) + samples * VALUE_BYTES
     require_room(f"this prediction's reply ({samples} samples)", size, limit,
                  "sample less often with 'every', read fewer bodies")
 

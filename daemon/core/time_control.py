@@ -16,6 +16,8 @@ from typing import Any
 from galton.daemon.access import lease
 from galton.daemon.core.calls import Call, RestCheck, StepJob
 from galton.daemon.core.context import OpContext
+from galton.daemon.core.reply_limit import reads_size, require_room
+from galton.daemon.core.step_queue import StepBusyError
 from galton.daemon.ops.binding import handles
 from galton.daemon.world.scene import World
 from galton.protocol import (
@@ -175,6 +177,7 @@ def load_world(loop: OpContext, call: Call, request: rq.LoadWorld) -> dict[str, 
             engine.close()
             raise
     cancel_job(loop, "world replaced")
+    end_queued(loop, loop.world.name, "world replaced")
     old, loop.world = loop.world, World(engine, loop.world.name, loop.limits)
     old.engine.close()
     loop.tune_switch_interval()
@@ -211,13 +214,25 @@ def _start_job(loop: OpContext, call: Call, world: World, count: int,
     live = world is loop.world
     if live and loop.state == SimState.PLAYING:
         raise IncorrectStateError("cannot step while playing: pause first")
-    if loop.job is not None:
-        raise IncorrectStateError("another step request is still running")
+    require_reads_room(loop.limits.max_reply_bytes, read, read_joints)
     world.require_valid()
+    # Checked last: a request that waits is valid as the world stands now.
+    if loop.job is not None or loop.step_queue.must_wait(call):
+        raise StepBusyError("another step request is still running")
     if live and loop.state == SimState.STOPPED:
         loop.set_state(SimState.PAUSED)
     loop.start_job(StepJob(call, count, count, read, rest, read_joints,
                            world=None if live else world))
+
+
+def require_reads_room(limit: int, read: list[str] | None,
+                       read_joints: list[str] | None) -> None:
+    """Refuse, before its first step, a step request whose reads would make a reply over
+    ``max_reply_bytes``: refused after its steps, it would have changed the world."""
+    size = reads_size(read, read_joints)
+    require_room(f"this step request's reply (the states of {len(read or ())} bodies and "
+                 f"{len(read_joints or ())} joints)", size, limit,
+                 "no step was taken; read fewer bodies, and get_states the rest in parts")
 
 
 def client_gone(loop: OpContext, client: str) -> None:
@@ -233,6 +248,10 @@ def client_gone(loop: OpContext, client: str) -> None:
         loop.emit({"kind": "job_abandoned", "client": job.call.client or client,
                    "steps_done": job.done,
                    "steps_asked": job.total, "step": loop.world.step_index})
+    dropped = loop.step_queue.drop_client(client)  # no reply could reach it
+    if dropped:
+        loop.emit({"kind": "steps_dropped", "client": dropped[0].client or client,
+                   "count": len(dropped), "step": loop.world.step_index})
     lease.client_gone(loop, client)
 
 
@@ -242,6 +261,7 @@ def _cancel_job_on(loop: OpContext, world: World, reason: str) -> None:
     job = loop.job
     if job is not None and world in ((job.world or loop.world), job.source):
         cancel_job(loop, reason)
+    end_queued(loop, world.name, reason)
 
 
 def cancel_job(loop: OpContext, reason: str) -> None:
@@ -252,6 +272,14 @@ def cancel_job(loop: OpContext, reason: str) -> None:
     loop.reply_error(job.call, OperationFailedError(
         f"step request interrupted ({reason}) after {job.done} of {job.total} steps",
         {"steps_done": job.done}))
+
+
+def end_queued(loop: OpContext, world: str, reason: str) -> None:
+    """Answer the step requests waiting to step ``world``: they will not run."""
+    for call in loop.step_queue.end_for(world, loop.world.name):
+        loop.reply_error(call, OperationFailedError(
+            f"step request interrupted ({reason}) before its first step: it was waiting "
+            "for another step request", {"steps_done": 0}))
 
 
 def _after_reset(loop: OpContext) -> None:

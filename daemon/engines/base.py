@@ -65,6 +65,9 @@ KNOWN_FEATURES = (FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDA
 # One collision shape: kind (a BODY_SHAPES name or "mesh"), half sizes as SIZE_LAYOUT
 # (a mesh: the half sizes of a box around it), its pose in its body's frame (7 wide).
 Shape = tuple[str, tuple[float, ...], tuple[float, ...]]
+# A mesh shape's triangles: (n, 3) float64 vertices in its Shape's frame (its pose), (m, 3)
+# vertex indices.
+ShapeMesh = tuple[np.ndarray, np.ndarray]
 
 
 @dataclass(frozen=True)
@@ -303,6 +306,12 @@ class Engine(ABC):
         """Each of a loaded model's bodies' collision shapes in its own frame (engines that
         answer list FEATURE_MODEL_SHAPES); spawned primitives need no engine."""
         raise self._unsupported("shapes of loaded models")
+
+    def shape_meshes(self, names: Sequence[str]) -> list[dict[int, ShapeMesh]]:
+        """The triangles of a loaded model's ``mesh`` shapes, by their index in each body's
+        ``shapes`` list, where the engine keeps them; by default none (such a mesh is told
+        as its box). Bodies that share a mesh may share its arrays."""
+        return [{} for _ in names]
 
     def contacts(self, names: Sequence[str] | None
                  ) -> ContactPoints:

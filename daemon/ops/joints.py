@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from galton.daemon.core.reply_limit import reads_size, require_room
 from galton.daemon.ops.binding import scene_op
 from galton.daemon.world.scene import World
 from galton.protocol import InvalidArgumentError, pack_f64
@@ -64,6 +65,8 @@ def set_joint_states(world: World, request: rq.SetJointStates) -> dict[str, Any]
     if read is not None:
         read = check_names(read, "set_joint_states.read")
         world.require_known(read)
+        require_room("this set_joint_states reply's reads", reads_size(read, None),
+                     world.limits.max_reply_bytes, "no joint was set; read fewer bodies")
     world.set_joint_states(names, positions, velocities)
     if read is None:
         return {"count": len(names)}

@@ -18,8 +18,9 @@ import numpy as np
 from galton.daemon.core.calls import Call
 from galton.daemon.core.context import OpContext
 from galton.daemon.core.host_info import host_info
+from galton.daemon.core.reply_limit import require_room
 from galton.daemon.engines import ENGINE_CLASSES
-from galton.daemon.engines.base import FEATURE_SPAWN_INERTIA
+from galton.daemon.engines.base import FEATURE_SPAWN_INERTIA, Shape, ShapeMesh
 from galton.daemon.ops.binding import handles, scene_op
 from galton.daemon.world.model_files import search_folders
 from galton.daemon.world.scene import World
@@ -31,6 +32,7 @@ from galton.protocol import (
     ResourceLimitError,
     pack_f64,
 )
+from galton.protocol import mesh as mesh_wire
 from galton.protocol import requests as rq
 from galton.protocol.errors import brief
 from galton.protocol.model import check_names, decode_points, decode_poses, decode_twists
@@ -193,23 +195,55 @@ def bounds_of(world: World, names: list[str]) -> np.ndarray:
 @scene_op("get_shapes")
 def get_shapes(world: World, request: rq.NamesOrAll) -> dict[str, Any]:
     """Each entity's collision shapes in its own frame: a spawned primitive is its one
-    shape at its origin; a loaded model's bodies are asked of the engine."""
+    shape at its origin (a spawned mesh with the triangles it was spawned with); a loaded
+    model's bodies are asked of the engine, with the triangles of the meshes it keeps."""
     names = _names_or_all(world, request.names, "get_shapes")
     world.get_states(names)  # unknown names: NOT_FOUND, as get_states
     infos = [world.entities[n].info for n in names]
     modelled = [n for n, info in zip(names, infos, strict=True) if info.shape in MODEL_SHAPES]
     from_engine = dict(zip(modelled, world.engine.shapes(modelled), strict=True)) \
         if modelled else {}
+    engine_meshes = dict(zip(modelled, world.engine.shape_meshes(modelled), strict=True)) \
+        if modelled else {}
     origin = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0)
-    shapes = [from_engine[info.name] if info.name in from_engine
-              else [(info.shape, tuple(info.size), origin)] for info in infos]
+    shapes: list[list[Shape]] = []
+    meshes: list[ShapeMesh | None] = []
+    for info in infos:
+        if info.name in from_engine:
+            shapes.append(from_engine[info.name])
+            known = engine_meshes[info.name]
+            meshes += [known.get(row) for row in range(len(shapes[-1]))]
+        else:
+            shapes.append([(info.shape, tuple(info.size), origin)])
+            meshes.append(world.entities[info.name].mesh)
+    return shapes_reply(names, shapes, meshes, world.limits.max_reply_bytes)
+
+
+def shapes_reply(names: list[str], shapes: list[list[Shape]], meshes: list[ShapeMesh | None],
+                 limit: int) -> dict[str, Any]:
+    """get_shapes' result map: flat rows, and where a row is a mesh, each mesh's triangles
+    once (refused up front when they would pass ``max_reply_bytes``)."""
     rows = [shape for entity in shapes for shape in entity]
+    table: dict[int, int] = {}  # id of a mesh's vertex array -> its index in the reply
+    distinct: list[ShapeMesh] = []
+    for mesh in meshes:
+        if mesh is not None and id(mesh[0]) not in table:
+            table[id(mesh[0])] = len(distinct)
+            distinct.append(mesh)
+    reply_bytes = len(rows) * (10 * 8 + 16) + sum(24 * len(v) + 12 * len(f)
+                                                  for v, f in distinct)
+    require_room("this get_shapes reply", reply_bytes, limit, "ask for fewer names")
     sizes = [[*size, 0.0, 0.0, 0.0][:3] for _, size, _ in rows]
-    return {"names": names, "counts": [len(entity) for entity in shapes],
-            "kinds": [kind for kind, _, _ in rows],
-            "sizes": pack_f64(np.array(sizes, dtype=float).reshape(-1, 3)),
-            "poses": pack_f64(np.array([pose for _, _, pose in rows], dtype=float)
-                              .reshape(-1, 7))}
+    kinds = [kind for kind, _, _ in rows]
+    result: dict[str, Any] = {
+        "names": names, "counts": [len(entity) for entity in shapes], "kinds": kinds,
+        "sizes": pack_f64(np.array(sizes, dtype=float).reshape(-1, 3)),
+        "poses": pack_f64(np.array([pose for _, _, pose in rows], dtype=float).reshape(-1, 7))}
+    if "mesh" in kinds:
+        result["meshes"] = [-1 if mesh is None else table[id(mesh[0])] for mesh in meshes]
+        result["mesh_vertices"] = [mesh_wire.pack_vertices(v) for v, _ in distinct]
+        result["mesh_faces"] = [mesh_wire.pack_faces(f) for _, f in distinct]
+    return result
 
 
 def primitive_bounds(shape: str, size: tuple[float, ...], pose: np.ndarray) -> np.ndarray:

@@ -38,14 +38,31 @@ from galton.protocol.errors import brief, did_you_mean, unknown_names
 from galton.protocol.model import check_type
 from galton.protocol.vocabulary import ENTITY_KINDS
 
+# A spawned mesh's triangles as spawn gave them: (n, 3) vertices in the body's frame,
+# (m, 3) vertex indices. The bodies of one group share one pair (read-only arrays).
+Mesh = tuple[np.ndarray, np.ndarray]
+
 
 @dataclass
 class Entity:
-    """A registry entry: what the entity is, and the state it was created with."""
+    """A registry entry: what the entity is, and the state it was created with (and a
+    spawned mesh's triangles, kept so that ``get_shapes`` tells them on any engine)."""
 
     info: EntityInfo
     initial_pose: np.ndarray
     initial_twist: np.ndarray
+    mesh: Mesh | None = None
+
+
+def frozen_mesh(vertices: np.ndarray | None, faces: np.ndarray | None) -> Mesh | None:
+    """Read-only copies of a mesh's arrays (None for a primitive)."""
+    if vertices is None or faces is None:
+        return None
+    kept = (np.array(vertices, dtype=float).reshape(-1, 3),
+            np.array(faces, dtype=np.int64).reshape(-1, 3))
+    for array in kept:
+        array.setflags(write=False)
+    return kept
 
 
 class World:
@@ -136,11 +153,13 @@ class World:
         for group in groups:
             twists = group.twists if group.twists is not None else np.zeros(
                 (len(group), TWIST_WIDTH))
+            mesh = frozen_mesh(group.vertices, group.faces)
             for i, name in enumerate(group.names):
                 info = EntityInfo(name=name, shape=group.shape, size=group.size,
                                   static=group.static, tags=group.tags, mass=group.mass,
                                   friction=group.friction, restitution=group.restitution)
-                self.entities[name] = Entity(info, group.poses[i].copy(), twists[i].copy())
+                self.entities[name] = Entity(info, group.poses[i].copy(), twists[i].copy(),
+                                             mesh)
         return names
 
     def load_model(self, fmt: str, text: str | None, path: str | None, prefix: str, *,

@@ -19,7 +19,7 @@ import numpy as np
 from galton.daemon.core.limits import Limits
 from galton.daemon.engines.base import Engine
 from galton.daemon.world import snapshot_checks as checks
-from galton.daemon.world.scene import Entity, World
+from galton.daemon.world.scene import Entity, Mesh, World, frozen_mesh
 from galton.protocol import (
     POSE_WIDTH,
     TARGET_MODES,
@@ -29,6 +29,7 @@ from galton.protocol import (
     pack_f64,
     unpack_f64,
 )
+from galton.protocol import mesh as mesh_wire
 from galton.protocol.errors import brief
 
 FORMAT = 1
@@ -57,7 +58,9 @@ def clone_of(world: World, name: str, limits: Limits) -> World:
 def registry_of(world: World) -> dict[str, Any]:
     """The World's own part of a snapshot: entities, joint modes, wrenches, the clock."""
     entities = list(world.entities.values())
+    meshes = _meshes_of(entities)
     return {
+        **({"meshes": meshes} if meshes else {}),
         "entities": [e.info.to_wire() for e in entities],
         "initial_poses": pack_f64(np.array([e.initial_pose for e in entities]).reshape(
             -1, POSE_WIDTH)),
@@ -68,6 +71,16 @@ def registry_of(world: World) -> dict[str, Any]:
         "clock": {"step": world.step_index, "base_step": world._time_base[0],
                   "base_time": world._time_base[1], "base_dt": world._time_base[2]},
     }
+
+
+def _meshes_of(entities: list[Entity]) -> list[dict[str, Any]]:
+    """The spawned meshes' triangles, once per mesh with the names of its bodies."""
+    by_mesh: dict[int, tuple[Mesh, list[str]]] = {}
+    for entity in entities:
+        if entity.mesh is not None:
+            by_mesh.setdefault(id(entity.mesh), (entity.mesh, []))[1].append(entity.info.name)
+    return [{"names": names, "vertices": mesh_wire.pack_vertices(mesh[0]),
+             "faces": mesh_wire.pack_faces(mesh[1])} for mesh, names in by_mesh.values()]
 
 
 def encode(data: dict[str, Any], key: bytes | None = None) -> bytes:
@@ -167,6 +180,7 @@ def _restore_registry(world: World, data: dict[str, Any]) -> None:
         raise InvalidArgumentError("the snapshot's registry and initial states disagree")
     world.entities = {info.name: Entity(info, poses[i].copy(), twists[i].copy())
                       for i, info in enumerate(infos)}
+    _restore_meshes(world, data.get("meshes", []))
     world.layout += 1
     world.step_index, world._time_base = step, base
     world.verified_step = step
@@ -176,3 +190,25 @@ def _restore_registry(world: World, data: dict[str, Any]) -> None:
             world.joints.by_name[joint] = dataclasses.replace(world.joints.by_name[joint],
                                                               mode=mode)
     world.wrenches.ends = {str(n): (None if e is None else int(e)) for n, e in ends.items()}
+
+
+def _restore_meshes(world: World, meshes: Any) -> None:
+    """The spawned meshes' triangles, checked as spawn checks them, each given to the mesh
+    bodies it names (a snapshot older than them has none: those are told as their box)."""
+    if not isinstance(meshes, list):
+        raise InvalidArgumentError("the snapshot's meshes are malformed")
+    for index, body in enumerate(meshes):
+        where = f"the snapshot's meshes[{index}]"
+        names = body.get("names") if isinstance(body, dict) else None
+        if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
+            raise InvalidArgumentError(f"{where} names no bodies")
+        vertices = mesh_wire.decode_vertices(body.get("vertices"), f"{where}.vertices")
+        faces = mesh_wire.decode_faces(body.get("faces"), len(vertices), f"{where}.faces")
+        mesh_wire.check_area(vertices, faces, where)
+        mesh = frozen_mesh(vertices, faces)
+        for name in names:
+            entity = world.entities.get(name)
+            if entity is None or entity.info.shape != "mesh" or entity.mesh is not None:
+                raise InvalidArgumentError(f"{where} names {brief(name)}: no mesh body of "
+                                           "the snapshot's, or one given twice")
+            entity.mesh = mesh

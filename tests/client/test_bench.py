@@ -13,11 +13,16 @@ from galton.analysis.board import BoardSpec
 from galton.analysis.records import ExperimentResults
 from galton.client import Client, EmbeddedDaemon
 from galton.client.bench.trial import (
+    MIN_CHUNK_S,
+    PROBE_S,
     SEGMENT_WALL_S,
     SETTLE_SEGMENT_S,
+    WALL_CHUNK_S,
     TrialConfig,
     run_trial,
     settling_segment,
+    settling_wait,
+    wall_chunk,
 )
 from galton.client.cli.app import app
 from galton.protocol import InvalidArgumentError
@@ -95,6 +100,24 @@ def test_settling_requests_are_sized_by_the_rtf_so_far() -> None:
     middling = settling_segment(10.0, 1.0, 0.5)  # RTF 0.1: 6 s of sim in about 60 s
     assert middling == pytest.approx(0.1 * SEGMENT_WALL_S)
     assert (middling / 0.5).is_integer()  # whole check intervals: the same rest checks
+    assert settling_wait(0.5, 100.0, 0.1) == pytest.approx(10 * 0.5 / 0.001)  # 10 x predicted
+    assert settling_wait(6.0, 10.0, 1.0) == 600.0  # never under the usual wait
+    assert settling_wait(1.0, 0.0, 0.0) >= 3600.0  # the first request: no figure yet
+
+
+def test_an_rtf_only_trial_stops_at_its_wall_budget_unsettled(mujoco_sim: Client) -> None:
+    """The report card's curve trials: a budget spent by the first probe ends the trial
+    there, every ball still in the air, with an RTF from the sim time it did run."""
+    board = BoardSpec.load("small")
+    record = run_trial(mujoco_sim, TrialConfig("mujoco", board, seed=1, max_wall_time=1e-6))
+    assert record.sim_time == pytest.approx(PROBE_S)
+    assert record.unsettled == board.ball.count and record.settled == 0
+    assert record.rtf is not None and record.rtf > 0
+    assert record.config["max_wall_time"] == 1e-6
+    assert wall_chunk(30.0, 0.0, 0.0) == PROBE_S
+    assert wall_chunk(30.0, 2.0, 1.0) == pytest.approx(0.5 * WALL_CHUNK_S)  # RTF 0.5
+    assert wall_chunk(1.0, 2.0, 1.0) == pytest.approx(0.5)  # the budget left
+    assert wall_chunk(1.0, 1e4, 1.0) == MIN_CHUNK_S
 
 
 def test_bench_rejects_bad_options() -> None:

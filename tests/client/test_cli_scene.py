@@ -35,7 +35,7 @@ def test_spawn_options_reach_the_world(target: list[str]) -> None:
     assert [p[:3] for p in states["poses"]] == [[1.0, 2.0, 3.0], [1.5, 2.0, 3.0]]
     shapes = invoke([*target, "get-shapes", "crate_1", "--json"])
     assert shapes == {"crate_1": [{"kind": "box", "size": [0.1, 0.2, 0.3],
-                                   "pose": [0, 0, 0, 0, 0, 0, 1]}]}
+                                   "pose": [0, 0, 0, 0, 0, 0, 1], "triangles": None}]}
     assert "box" in run([*target, "get-shapes"]).output
 
 
@@ -50,6 +50,9 @@ def test_spawn_a_mesh_from_an_obj_file_and_a_box_mesh_with_an_inertia(
     found = {e["name"]: e for e in invoke([*target, "entities", "--json"])}
     assert found["pyramid"]["shape"] == "mesh" and found["pyramid"]["size"] == [0.1, 0.1, 0.2]
     assert found["crate"]["size"] == [0.1, 0.2, 0.3]
+    [pyramid] = invoke([*target, "get-shapes", "pyramid", "--json"])["pyramid"]
+    assert pyramid["triangles"] == [5, 6]  # the file's, not a box's
+    assert "vertices" in run([*target, "get-shapes", "pyramid"]).output
     obj.write_text("v 0 0 0\nf 1 2 3\n")
     result = run([*target, "spawn", "mesh", "bad", "--mesh", str(obj)])
     assert result.exit_code != 0 and "line 2" in result.output

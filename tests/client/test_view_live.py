@@ -1,6 +1,6 @@
 """The live page's parts without a browser (tests/client/test_view_browser.py draws it in one):
 side worlds followed as ghosts, compare's score charted, a prediction drawn, operator
-actions, on the session's MuJoCo daemon."""
+actions, links and meshes drawn as their shapes, on the session's MuJoCo daemon."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from collections.abc import Iterator
 import numpy as np
 import pytest
 
-from galton.client import Client, EmbeddedDaemon, spheres
+from galton.client import Client, EmbeddedDaemon, meshes, spheres
 
 viser = pytest.importorskip("viser", reason="the [view] extra is not installed")
 from galton.client.view.live import LiveView  # noqa: E402
@@ -97,3 +97,31 @@ def test_a_loaded_models_link_is_drawn_as_its_collision_shapes(
     np.testing.assert_allclose(vertices.max(axis=0), [0.2, 0.1, 0.4], atol=1e-5)
     # A spawned ball keeps its own shape.
     assert np.ptp(page.live.drawing.vertices_of("a"), axis=0) == pytest.approx([0.1] * 3, abs=1e-3)
+
+
+# A square pyramid off its body's origin: five vertices, where its box would have eight.
+PYRAMID = (np.array([[-0.1, -0.1, 0.0], [0.1, -0.1, 0.0], [0.1, 0.1, 0.0], [-0.1, 0.1, 0.0],
+                     [0.0, 0.0, 0.2]]) + np.array([0.02, 0.0, -0.05]),
+           np.array([[0, 2, 1], [0, 3, 2], [0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4]]))
+
+
+def test_a_spawned_mesh_is_drawn_as_its_triangles(mujoco_sim: Client, page: LiveView) -> None:
+    vertices, faces = PYRAMID
+    mujoco_sim.spawn(meshes(["p1", "p2"], [[0, 1, 0.5], [0.5, 1, 0.5]], vertices, faces,
+                            static=True, tags=["green"]))
+    _until(page, lambda: page.live.draw() is not None and "p2" in page.live.drawing.names)
+    np.testing.assert_allclose(page.live.drawing.vertices_of("p1"), vertices, atol=1e-6)
+    np.testing.assert_allclose(page.live.drawing.vertices_of("p2"), vertices, atol=1e-6)
+    # A loaded model's mesh link: MuJoCo keeps its triangles, so it is drawn as them.
+    [holder] = mujoco_sim.load_model("mjcf", text=MJCF_TETRAHEDRON, prefix="t_")
+    _until(page, lambda: page.live.draw() is not None and holder in page.live.drawing.names)
+    drawn = page.live.drawing.vertices_of(holder)
+    assert len(drawn) == 4  # not a box's 8
+    np.testing.assert_allclose(sorted(np.round(drawn, 5).tolist()), TETRAHEDRON_IN_BODY,
+                               atol=1e-5)
+
+
+MJCF_TETRAHEDRON = """<mujoco><asset><mesh name="tet" vertex="0 0 0  0.2 0 0  0 0.1 0  0 0 0.3"
+  face="0 2 1  0 1 3  0 3 2  1 2 3"/></asset><worldbody><body name="holder" pos="0 -1 1">
+  <geom type="mesh" mesh="tet" pos="0.1 0 0"/></body></worldbody></mujoco>"""
+TETRAHEDRON_IN_BODY = [[0.1, 0.0, 0.0], [0.1, 0.0, 0.3], [0.1, 0.1, 0.0], [0.3, 0.0, 0.0]]

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from cli_support import invoke, run, target_of
 
-from galton.client import Client, EmbeddedDaemon, plane, spheres
+from galton.client import Client, EmbeddedDaemon, meshes, plane, spheres
 from galton.client.sdk.recording import Recorder, Recording, recordings_in
 from galton.protocol import InvalidArgumentError
 
@@ -57,6 +57,53 @@ def test_a_recording_keeps_every_entity_and_replays_in_the_page(
         page = ReplayView.open(tmp_path, server, None)
         assert page.drawing.names == tuple(recording.names)
         assert visible_poses(recording.poses[0])[late, 2] < -100  # drawn out of sight
+    finally:
+        server.stop()
+
+
+PYRAMID = (np.array([[-0.1, -0.1, 0.0], [0.1, -0.1, 0.0], [0.1, 0.1, 0.0], [-0.1, 0.1, 0.0],
+                     [0.0, 0.0, 0.2]]),
+           np.array([[0, 2, 1], [0, 3, 2], [0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4]]))
+
+
+CRATE = """<robot name="crate"><link name="base">
+  <inertial><mass value="1"/><inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/>
+  </inertial><collision><geometry><box size="0.2 0.4 0.6"/></geometry></collision>
+</link></robot>"""
+
+
+def test_a_recording_keeps_mesh_and_link_shapes_and_an_older_one_draws_boxes(
+        mujoco_sim: Client, tmp_path: Path) -> None:
+    """Shapes told at the start (a mesh, a robot's link), and at save for a mesh spawned
+    meanwhile; a recording made before recordings kept shapes still loads, its mesh drawn
+    as its box (8 corners)."""
+    vertices, faces = PYRAMID
+    mujoco_sim.spawn(meshes(["early"], [[0, 0, 0.5]], vertices, faces, static=True))
+    [crate] = mujoco_sim.load_model("urdf", text=CRATE, prefix="u_")
+    path = tmp_path / "meshes.npz"
+    with Recorder(mujoco_sim, path, rate=30) as recorder:
+        mujoco_sim.spawn(meshes(["late"], [[1, 0, 0.5]], vertices * 2, faces, static=True))
+        mujoco_sim.step(1)  # a sample that holds it
+        assert recorder.wait_for(len(recorder.samples) + 2, WAIT_S)
+    recording = Recording.load(path)
+    assert set(recording.shapes) == {"early", "late", crate}
+    np.testing.assert_allclose(recording.shapes["late"][0].vertices, vertices * 2)
+    (tmp_path / "old").mkdir()
+    with np.load(path) as data:  # as saved before recordings kept shapes
+        np.savez(tmp_path / "old" / "meshes.npz", entities=data["entities"],
+                 times=data["times"], poses=data["poses"])
+
+    from galton.client.view.replay import ReplayView
+    server = viser.ViserServer(host="127.0.0.1", port=_free_port(), verbose=False)
+    try:
+        page = ReplayView.open(path, server, None)
+        np.testing.assert_allclose(page.drawing.vertices_of("early"), vertices, atol=1e-6)
+        np.testing.assert_allclose(page.drawing.vertices_of("late"), vertices * 2, atol=1e-6)
+        link = page.drawing.vertices_of(crate)  # its collision box, not a marker cube
+        np.testing.assert_allclose(np.ptp(link, axis=0), [0.2, 0.4, 0.6], atol=1e-5)
+        old = ReplayView.open(tmp_path / "old", server, None)
+        assert Recording.load(tmp_path / "old" / "meshes.npz").shapes == {}
+        assert len(old.drawing.vertices_of("early")) == 8
     finally:
         server.stop()
 

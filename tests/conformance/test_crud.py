@@ -14,9 +14,7 @@ def test_capabilities_name_the_engine(sim: Client, engine: str) -> None:
     caps = sim.capabilities()
     assert caps.engine == engine
     assert caps.engine_version
-    primitives = set(BODY_SHAPES) - {"mesh"}  # DART and ODE state no mesh (ENGINES.md)
-    assert primitives <= set(caps.body_shapes) <= set(BODY_SHAPES)
-    assert ("mesh" in caps.body_shapes) == (engine in ("mujoco", "pybullet"))
+    assert set(caps.body_shapes) == set(BODY_SHAPES)  # every engine takes meshes too
     assert "timestep" in caps.params and "default" in caps.params["timestep"]
 
 

@@ -1,7 +1,7 @@
-"""Mesh bodies and spawn's own inertia on every engine (DART and ODE refuse both, as their
-capabilities state): a ball rests on a static mesh box at its top, a moving mesh box rests
-on the ground, a snapshot replays a mesh world bit for bit, a refused mesh changes nothing,
-and a ball given the paper's inertia of 0.1 kg m² spins up far slower down an incline."""
+"""Mesh bodies and spawn's own inertia on every engine: a ball rests on a static mesh box
+at its top, a moving mesh box rests on the ground, a snapshot replays a mesh world bit for
+bit, a refused mesh changes nothing, and a ball given the paper's inertia of 0.1 kg m²
+spins up far slower down an incline."""
 
 from __future__ import annotations
 

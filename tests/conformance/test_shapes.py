@@ -1,12 +1,19 @@
-"""get_shapes: each entity's collision shapes in its own frame, on every engine."""
+"""get_shapes: each entity's collision shapes in its own frame, on every engine; a mesh with
+its triangles where the daemon knows them (spawned meshes always; a loaded model's where
+the engine keeps them), else flagged as its box."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
+from support_models import ROBOTS, load
 
-from galton.client import Client, body_group, spheres
+from galton.client import Client, ShapeInfo, body_group, meshes, spheres
 from galton.protocol import FeatureUnsupportedError, NotFoundError
+from galton.protocol.mesh import box_mesh
+
+# Engines that keep a loaded model's mesh triangles (the others tell such a mesh as its box).
+TELLS_MODEL_MESHES = ("mujoco",)
 
 URDF = """<robot name="crate"><link name="base">
   <inertial><origin xyz="0.05 0 0"/><mass value="1"/>
@@ -44,3 +51,56 @@ def test_a_urdf_crate_is_one_box_of_its_size(sim: Client) -> None:
     # In the link's frame, not its centre of mass's.
     np.testing.assert_allclose(crate.pose[:3], [0.0, 0.0, 0.1], atol=1e-6)
     np.testing.assert_allclose(np.abs(crate.pose[3:]), [0, 0, 0, 1], atol=1e-6)
+
+
+def _crate() -> tuple[np.ndarray, np.ndarray]:
+    """A box off its body's origin: not the box that its reach about the origin makes."""
+    vertices, faces = box_mesh((0.1, 0.05, 0.08))
+    return vertices + np.array([0.03, -0.02, 0.01]), faces
+
+
+def test_a_spawned_mesh_is_told_with_its_triangles_and_keeps_them(sim: Client) -> None:
+    if "mesh" not in sim.capabilities().body_shapes:
+        pytest.skip("this engine spawns no mesh")
+    vertices, faces = _crate()
+    sim.spawn(meshes(["m1", "m2"], [[0, 0, 1], [1, 0, 1]], vertices, faces, static=True),
+              spheres(["ball"], [[0, 1, 1]], 0.1, static=True))
+    shapes = sim.get_shapes()
+    [m1], [m2], [ball] = shapes["m1"], shapes["m2"], shapes["ball"]
+    assert (m1.kind, m1.boxed, ball.vertices, ball.boxed) == ("mesh", False, None, False)
+    np.testing.assert_allclose(m1.vertices, vertices)
+    np.testing.assert_array_equal(m1.faces, faces)
+    np.testing.assert_allclose(m1.pose, [0, 0, 0, 0, 0, 0, 1])
+    assert m2.vertices is m1.vertices  # one mesh, sent once for both bodies
+    result = sim.call("get_shapes", {"names": ["m1", "m2", "ball"]})
+    assert (result["meshes"], len(result["mesh_vertices"])) == ([0, 0, -1], 1)
+    assert "meshes" not in sim.call("get_shapes", {"names": ["ball"]})  # as before meshes
+    # A snapshot's blob and a fork carry them.
+    blob = sim.snapshot(blob=True).blob
+    sim.delete(["m1", "m2"])
+    sim.restore(blob=blob)
+    np.testing.assert_allclose(_mesh_of(sim, "m2").vertices, vertices)
+    sim.fork_world("side")
+    try:
+        np.testing.assert_allclose(_mesh_of(sim.world("side"), "m1").vertices, vertices)
+    finally:
+        sim.delete_world("side")
+
+
+def _mesh_of(sim: Client, name: str) -> ShapeInfo:
+    [shape] = sim.get_shapes([name])[name]
+    return shape
+
+
+def test_a_robots_mesh_links_are_their_triangles_or_flagged_boxes(sim: Client,
+                                                                  engine: str) -> None:
+    caps = sim.capabilities()
+    if "model_shapes" not in caps.features or "urdf" not in caps.model_formats:
+        pytest.skip(f"{engine} tells no loaded model's shapes")
+    names = load(sim, "urdf", path=ROBOTS["kuka"])  # collision meshes: STL files
+    rows = [shape for entity in sim.get_shapes(names).values() for shape in entity]
+    told = [shape for shape in rows if shape.kind == "mesh" and not shape.boxed]
+    assert len(told) == (len(rows) if engine in TELLS_MODEL_MESHES else 0)
+    for shape in told:  # in the row's frame, inside the box the row gives
+        assert shape.faces is not None and shape.faces.max() < len(shape.vertices)
+        assert np.all(np.abs(shape.vertices) <= np.asarray(shape.size) + 1e-6)

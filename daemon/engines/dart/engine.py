@@ -10,8 +10,8 @@ touching pairs the pairs found last get no contact (DART warns once).
 
 The engine's parts: spawn.py (books, spawned skeletons, the world's set-up), state.py
 (states and divergence), models.py (URDF and MJCF), joints.py (joints, targets, wrenches),
-snapshot.py (snapshots, rebuilds) and contacts.py. dartpy has no ray casts and no
-headless renderer: ``raycast`` and ``render`` are FEATURE_UNSUPPORTED.
+snapshot.py (snapshots, rebuilds), meshes.py (mesh shapes) and contacts.py. dartpy has no
+ray casts and no headless renderer: ``raycast`` and ``render`` are FEATURE_UNSUPPORTED.
 """
 
 from __future__ import annotations
@@ -48,7 +48,7 @@ from galton.daemon.engines.base import (
     Shape,
 )
 from galton.daemon.engines.dart import contacts as contact_points
-from galton.daemon.engines.dart import frames, state
+from galton.daemon.engines.dart import frames, meshes, state
 from galton.daemon.engines.dart import spawn as books
 from galton.daemon.engines.dart.joints import Robots, Target
 from galton.daemon.engines.dart.models import MODEL_FORMATS
@@ -76,8 +76,7 @@ FEATURES = (FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDATE_MAS
             FEATURE_MODEL_SHAPES)
 
 
-# No mesh shape: FEATURE_UNSUPPORTED at spawn (docs/ENGINES.md, "Meshes").
-SHAPES = tuple(shape for shape in BODY_SHAPES if shape != "mesh")
+SHAPES = BODY_SHAPES  # a mesh: a DART MeshShape (meshes.py, docs/ENGINES.md "Meshes")
 
 
 class DartEngine(Scene, Snapshots, Engine):
@@ -134,11 +133,15 @@ class DartEngine(Scene, Snapshots, Engine):
         velocities = frames.twists_to_free(twists)
         if group.static:
             velocities[:] = 0.0
+        mesh = None if group.vertices is None or group.faces is None else (
+            group.vertices, group.faces)
+        shared = None if mesh is None else meshes.mesh_shape(*mesh)
         for k, name in enumerate(group.names):
             body = books.Body(name, group.shape, size, group.static, mass, friction,
                               restitution, group.friction is None, group.restitution is None,
                               None, None, group.rgba, unit_inertia=None if group.inertia is None
-                              else tuple(i / mass for i in group.inertia))
+                              else tuple(i / mass for i in group.inertia),
+                              mesh=mesh, mesh_shape=shared)
             books.build(body, positions[k], velocities[k])
             self._add(body)
 

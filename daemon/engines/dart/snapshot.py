@@ -17,12 +17,13 @@ from typing import Any
 
 import numpy as np
 
-from galton.daemon.engines.dart import models
+from galton.daemon.engines.dart import meshes, models
 from galton.daemon.engines.dart import spawn as books
 from galton.daemon.engines.dart.joints import Robots, Target
 from galton.daemon.engines.dart.params import SPECS
 from galton.daemon.engines.params import check_updates
 from galton.protocol import BodyProperties, InvalidArgumentError
+from galton.protocol import mesh as mesh_wire
 
 FORMAT = "galton-dart-1"
 
@@ -37,6 +38,7 @@ class Snapshots:
     _owners: list[str]
     _models: dict[str, models.Model]
     _edits: dict[str, list[tuple[str, BodyProperties]]]
+    _loaded_meshes: dict[tuple[bytes, bytes], Any]  # during a restore: mesh -> its shape
 
     def snapshot(self, *, canonical: bool = True) -> dict[str, Any]:
         if canonical:
@@ -65,7 +67,11 @@ class Snapshots:
                     "follows": [body.follows_friction, body.follows_restitution],
                     "rgba": None if body.rgba is None else list(body.rgba),
                     "unit_inertia": None if body.unit_inertia is None
-                    else list(body.unit_inertia), **dynamic}
+                    else list(body.unit_inertia),
+                    "vertices": None if body.mesh is None
+                    else mesh_wire.pack_vertices(body.mesh[0]),
+                    "faces": None if body.mesh is None else mesh_wire.pack_faces(body.mesh[1]),
+                    **dynamic}
         model = self._models[owner]
         return {"kind": "model", "root": owner, "fmt": model.fmt, "text": model.text,
                 "prefix": model.prefix, "fixed_base": model.fixed_base,
@@ -83,6 +89,8 @@ class Snapshots:
                                        f"{exc}") from None
 
     def _restore(self, data: dict[str, Any]) -> None:
+        # Bodies of one mesh share its shape, as a spawn group's do: each load takes ms.
+        self._loaded_meshes = {}
         self.set_params(check_updates("dart", SPECS, data["params"]))  # type: ignore[attr-defined]
         for item in data["items"]:
             if item["kind"] == "body":
@@ -112,8 +120,19 @@ class Snapshots:
                           bool(follows[0]), bool(follows[1]), None, None, rgba,
                           unit_inertia=_unit_inertia(item.get("unit_inertia"), static))
         self._check_new([body.name])  # type: ignore[attr-defined]
-        if shape not in ("sphere", "box", "cylinder", "capsule", "plane"):
+        if shape not in ("sphere", "box", "cylinder", "capsule", "plane", "mesh"):
             raise ValueError(f"unknown shape {shape!r}")
+        if shape == "mesh":
+            where = f"the snapshot's mesh {body.name!r}"
+            vertices = mesh_wire.decode_vertices(item["vertices"], f"{where} vertices")
+            faces = mesh_wire.decode_faces(item["faces"], len(vertices), f"{where} faces")
+            mesh_wire.check_area(vertices, faces, where)
+            key = (bytes(item["vertices"]), bytes(item["faces"]))
+            if key not in self._loaded_meshes:
+                self._loaded_meshes[key] = meshes.mesh_shape(vertices, faces)
+            body.mesh, body.mesh_shape = (vertices, faces), self._loaded_meshes[key]
+        elif item.get("vertices") is not None or item.get("faces") is not None:
+            raise ValueError(f"a {shape} has no vertices or faces")
         books.build(body, _vector(item["positions"], 6), _vector(item["velocities"], 6))
         self._add(body)  # type: ignore[attr-defined]
 

@@ -17,6 +17,7 @@ import numpy as np
 
 from galton.daemon.engines.dart.params import SPECS
 from galton.protocol import BodyGroup, InvalidArgumentError
+from galton.protocol import mesh as mesh_wire
 from galton.protocol.vocabulary import BODY_SHAPES
 
 SPAWNED, MODEL = "b:", "m:"  # skeleton name prefixes: unique, whatever entities are named
@@ -43,6 +44,10 @@ class Body:
     links: list[str] = field(default_factory=list)  # a root's other links
     # Principal moments per kg of a body spawned with its own ``inertia``; None: its shape's.
     unit_inertia: tuple[float, ...] | None = None
+    # A mesh's vertices and faces (for snapshots) and its DART MeshShape (meshes.py), which
+    # the bodies of one spawn group share.
+    mesh: tuple[np.ndarray, np.ndarray] | None = None
+    mesh_shape: Any = None
 
 
 def make_shape(shape: str, size: tuple[float, ...]) -> Any:
@@ -80,8 +85,10 @@ def check_group(group: BodyGroup) -> None:
 def group_values(group: BodyGroup, values: dict[str, Any]) -> tuple[float, float, float]:
     """Each body's mass (NaN when static), friction and restitution."""
     size = tuple(float(s) for s in group.size)
+    solid = volume(group.shape, size) if group.vertices is None or group.faces is None \
+        else mesh_wire.volume(group.vertices, group.faces)
     mass = math.nan if group.static else (
-        float(group.mass) if group.mass is not None else DENSITY * volume(group.shape, size))
+        float(group.mass) if group.mass is not None else DENSITY * solid)
     kind = "default_static_" if group.static else "default_"
     friction = group.friction if group.friction is not None else values[kind + "friction"]
     restitution = group.restitution if group.restitution is not None else (
@@ -94,7 +101,9 @@ def build(body: Body, positions: np.ndarray, velocities: np.ndarray) -> None:
     skeleton = dart.dynamics.Skeleton(SPAWNED + body.name)
     _, node = skeleton.createFreeJointAndBodyNodePair()
     node.setName(body.name)
-    shape_node = node.createShapeNode(make_shape(body.shape, body.size))
+    shape = body.mesh_shape if body.mesh_shape is not None else make_shape(body.shape,
+                                                                             body.size)
+    shape_node = node.createShapeNode(shape)
     shape_node.createCollisionAspect()
     shape_node.createDynamicsAspect()
     body.skeleton, body.node = skeleton, node
@@ -118,7 +127,8 @@ def set_surface(body: Body) -> None:
 
 def set_mass(body: Body, mass: float) -> None:
     """A spawned body's mass and the inertia at that mass: its own (spawn's ``inertia``,
-    scaled with the mass) or its solid shape's."""
+    scaled with the mass) or its solid shape's (a mesh: its bounding box's, DART's
+    ``MeshShape::computeInertia``)."""
     if body.unit_inertia is not None:
         moment = np.diag(np.asarray(body.unit_inertia, dtype=float) * mass)
     else:

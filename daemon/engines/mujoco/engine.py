@@ -71,9 +71,11 @@ from galton.daemon.engines.base import (
     Engine,
     RayHits,
     Shape,
+    ShapeMesh,
 )
 from galton.daemon.engines.mujoco import clone as cloning
 from galton.daemon.engines.mujoco import compiled as compiling
+from galton.daemon.engines.mujoco import geoms as colliders
 from galton.daemon.engines.mujoco import models, removal, teleport, wrench
 from galton.daemon.engines.mujoco import observed as observing
 from galton.daemon.engines.mujoco import perception as sensing
@@ -101,7 +103,6 @@ from galton.protocol import (
     JointInfo,
     NotFoundError,
 )
-from galton.protocol.vocabulary import SIZE_LAYOUT
 
 FEATURES = (FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDATE_MASS,
             FEATURE_UPDATE_FRICTION, FEATURE_UPDATE_RESTITUTION, FEATURE_UPDATE_RGBA,
@@ -395,15 +396,12 @@ class MujocoEngine(Engine):
         return rows
 
     def shapes(self, names: Sequence[str]) -> list[list[Shape]]:
-        """Each body's colliding geoms (contype or conaffinity set) in its frame; a mesh,
-        a height field or an ellipsoid is the box MuJoCo keeps around it (``geom_aabb``)."""
-        model = self.model
-        found: list[list[Shape]] = []
-        for body in self.body_ids(names):
-            geoms = np.flatnonzero((model.geom_bodyid == body)
-                                   & ((model.geom_contype | model.geom_conaffinity) != 0))
-            found.append([_geom_shape(model, int(g)) for g in geoms])
-        return found
+        """Each body's colliding geoms in its frame (geoms.py)."""
+        return colliders.body_shapes(self.model, self.body_ids(names).tolist())
+
+    def shape_meshes(self, names: Sequence[str]) -> list[dict[int, ShapeMesh]]:
+        """The triangles of each body's mesh geoms (geoms.py)."""
+        return colliders.body_meshes(self.model, self.body_ids(names).tolist())
 
     def close(self) -> None:
         self.entities.clear()
@@ -411,25 +409,3 @@ class MujocoEngine(Engine):
             self.cameras.close()
             self.cameras = None
 
-
-# MuJoCo's geom types as the protocol's shapes (sizes already half sizes, as SIZE_LAYOUT).
-_GEOM = mujoco.mjtGeom
-_GEOM_KINDS = {int(_GEOM.mjGEOM_PLANE): "plane", int(_GEOM.mjGEOM_SPHERE): "sphere",
-               int(_GEOM.mjGEOM_CAPSULE): "capsule", int(_GEOM.mjGEOM_CYLINDER): "cylinder",
-               int(_GEOM.mjGEOM_BOX): "box"}
-
-
-def _geom_shape(model: Any, geom: int) -> Shape:
-    quat = model.geom_quat[geom]  # w x y z
-    rotation = (float(quat[1]), float(quat[2]), float(quat[3]), float(quat[0]))
-    position = model.geom_pos[geom]
-    kind = _GEOM_KINDS.get(int(model.geom_type[geom]))
-    if kind is not None:
-        width = len(SIZE_LAYOUT[kind])
-        size = tuple(float(v) for v in model.geom_size[geom][:width])
-        return kind, size, (*map(float, position), *rotation)
-    box = model.geom_aabb[geom]  # centre and half sizes in the geom's frame
-    matrix = np.empty(9)
-    mujoco.mju_quat2Mat(matrix, quat)
-    centre = position + matrix.reshape(3, 3) @ box[:3]
-    return "mesh", tuple(float(v) for v in box[3:]), (*map(float, centre), *rotation)

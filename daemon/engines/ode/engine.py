@@ -4,9 +4,9 @@ contacts with Coulomb friction 1, bounce 0.5 above 0.01 m/s, soft CFM 0.001 and 
 Webots sources in docs/ENGINES.md).
 
 One world, one sweep-and-prune space holding every geom, one group of contact joints emptied before
-each step's collision. Parts: bodies (spawn.py), states (state.py), collision and contact
-reports (contacts.py), ray casts (rays.py), snapshots (snapshot.py, snapshot_format.py), robots
-(joints.py, urdf.py).
+each step's collision. Parts: bodies (spawn.py; meshes: trimesh.py), states (state.py),
+collision and contact reports (contacts.py), ray casts (rays.py), snapshots (snapshot.py,
+snapshot_format.py), robots (joints.py, urdf.py).
 
 Determinism: ``dWorldStep`` draws no random numbers, ODE's space visits geoms in the order
 they were made, and a restore makes them again in that order, so the same steps give the
@@ -80,8 +80,7 @@ FEATURES = (FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDATE_MAS
             FEATURE_CONTACTS, FEATURE_SPAWN_INERTIA, FEATURE_MODEL_SHAPES)
 
 
-# No mesh shape: FEATURE_UNSUPPORTED at spawn (docs/ENGINES.md, "Meshes").
-SHAPES = tuple(shape for shape in BODY_SHAPES if shape != "mesh")
+SHAPES = BODY_SHAPES  # a mesh: an ODE trimesh (trimesh.py, docs/ENGINES.md "Meshes")
 
 
 class OdeEngine(Snapshots, Engine):

@@ -27,7 +27,7 @@ POS, ROT, QUAT, LVEL, AVEL, STATE_LENGTH = 0, 4, 16, 20, 24, 28
 CONTACT_BOUNCE, CONTACT_SOFT_ERP, CONTACT_SOFT_CFM, CONTACT_APPROX1 = 4, 8, 16, 0x7000
 RAY_CLASS = 5
 SAP_AXES_XZY = 0 | (2 << 2) | (1 << 4)  # dSAP_AXES_XZY: sort along x (the board's width) first
-SPHERE, BOX, CAPSULE, CYLINDER, PLANE = 0, 1, 2, 3, 4  # ODE's geom classes
+SPHERE, BOX, CAPSULE, CYLINDER, PLANE, TRIMESH = 0, 1, 2, 3, 4, 8  # ODE's geom classes
 JOINT_TYPE_CONTACT = 4
 
 
@@ -122,6 +122,10 @@ _SIGNATURES: dict[str, tuple[Any, tuple[Any, ...]]] = {
     "dJointGetSliderPositionRate": (D, (P,)), "dJointSetSliderParam": (None, (P, N, D)),
     "dJointAddSliderForce": (None, (P, D)),
     "dAreConnectedExcluding": (N, (P, P, N)),
+    "dGeomTriMeshDataCreate": (P, ()), "dGeomTriMeshDataDestroy": (None, (P,)),
+    "dGeomTriMeshDataBuildDouble": (None, (P, P, N, N, P, N, N)),
+    "dCreateTriMesh": (P, (P, P, P, P, P)), "dMassSetTrimeshTotal": (None, (P, D, P)),
+    "dMassAdjust": (None, (P, D)),
 }
 
 

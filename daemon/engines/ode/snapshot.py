@@ -95,11 +95,14 @@ class Snapshots:
     def _restore_body(self, data: dict[str, Any]) -> None:
         static, state = data["static"], data["state"]
         pose = data["pose"] if static else state[0:3] + state[17:20] + state[16:17]
+        mesh = snapshots.mesh_of(data, data["name"])
         group = BodyGroup(data["shape"], tuple(data["size"]), [data["name"]],
                           np.array([pose], dtype=float), static=static, mass=data["mass"],
                           friction=data["friction"], restitution=data["restitution"],
                           rgba=None if data["rgba"] is None else tuple(data["rgba"]),
-                          inertia=_inertia(data))
+                          inertia=_inertia(data),
+                          vertices=None if mesh is None else mesh[0],
+                          faces=None if mesh is None else mesh[1])
         made = spawning.spawn_group(self._world, self._space, group, self._values)
         body = made[0]
         body.follows_friction, body.follows_restitution = data["follows"]

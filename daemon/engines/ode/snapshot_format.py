@@ -14,9 +14,12 @@ from __future__ import annotations
 import math
 from typing import Any
 
+import numpy as np
+
 from galton.daemon.engines.ode.native import STATE_LENGTH
 from galton.daemon.engines.ode.spawn import Body
 from galton.protocol import BODY_SHAPES, TARGET_MODES, InvalidArgumentError
+from galton.protocol import mesh as mesh_wire
 
 FORMAT = "galton-ode-snapshot"
 VERSION = 1
@@ -30,7 +33,22 @@ def body_data(body: Body, enabled: bool, wrench: list[float] | None) -> dict[str
             "rgba": None if body.rgba is None else list(body.rgba),
             "pose": list(body.pose), "state": [] if body.static else body.state.tolist(),
             "enabled": enabled, "wrench": wrench,
-            "unit_inertia": None if body.unit_inertia is None else list(body.unit_inertia)}
+            "unit_inertia": None if body.unit_inertia is None else list(body.unit_inertia),
+            "vertices": None if body.mesh is None else mesh_wire.pack_vertices(
+                body.mesh.vertices),
+            "faces": None if body.mesh is None else mesh_wire.pack_faces(body.mesh.indices)}
+
+
+def mesh_of(body: dict[str, Any], where: str) -> tuple[np.ndarray, np.ndarray] | None:
+    """A mesh body's vertices and faces, checked as spawn checks them; none for the rest."""
+    if body["shape"] != "mesh":
+        if body.get("vertices") is not None or body.get("faces") is not None:
+            raise _fail(where, "has vertices or faces but is no mesh")
+        return None
+    vertices = mesh_wire.decode_vertices(body.get("vertices"), f"{where}.vertices")
+    faces = mesh_wire.decode_faces(body.get("faces"), len(vertices), f"{where}.faces")
+    mesh_wire.check_area(vertices, faces, where)
+    return vertices, faces
 
 
 def _fail(where: str, what: str) -> InvalidArgumentError:
@@ -105,6 +123,7 @@ def _check_body(body: Any, where: str) -> None:
             v > 0 and math.isfinite(v)
             for v in _numbers(body["unit_inertia"], 3, f"{where}.unit_inertia"))):
         raise _fail(f"{where}.unit_inertia", "must be 3 positive numbers, on a moving body")
+    mesh_of(body, where)
 
 
 JOINT_FIELDS = ("target", "kp", "kd", "max_effort", "effort")

@@ -2,7 +2,9 @@
 
 A moving entity is a body whose frame is its centre of mass (every primitive's), with the
 mass of its shape at 1000 kg/m³ unless given. A static entity is a geom alone, placed once;
-a plane is ODE's infinite plane through the pose, its normal the pose's z axis.
+a plane is ODE's infinite plane through the pose, its normal the pose's z axis. A mesh is
+an ODE trimesh (trimesh.py); a moving one whose centre of mass is off its origin sits, as a
+model's link does, at that centre (``frame``) with its geom offset back.
 
 Collision bits keep pairs that cannot make a contact out of the near-callback (ODE tests
 them in C): static geoms collide only with moving ones, and sleeping bodies only with awake
@@ -18,9 +20,12 @@ from typing import Any
 
 import numpy as np
 
+from galton.daemon.engines.ode import frames
 from galton.daemon.engines.ode.frames import Frame
 from galton.daemon.engines.ode.native import LIB, Mass, body_state, quaternion
+from galton.daemon.engines.ode.trimesh import TriMesh, centred_mass
 from galton.protocol import BodyGroup, InvalidArgumentError
+from galton.protocol import mesh as mesh_wire
 from galton.protocol.vocabulary import POSE_WIDTH, TWIST_WIDTH
 
 DENSITY = 1000.0  # kg/m³ of a body spawned with no mass
@@ -58,6 +63,8 @@ class Body:
     # pose x y z qx qy qz qw); a spawned body's are its shape and size.
     link_shapes: list[tuple[str, tuple[float, ...], tuple[float, ...]]] = \
         field(default_factory=list)
+    mesh: TriMesh | None = None  # a mesh's arrays and ODE data, alive as long as its geom
+    unit_mass: Mass | None = None  # a moving mesh's mass per kg about its centre
 
     def geoms(self) -> list[int]:
         return ([self.geom] if self.geom else []) + self.extra
@@ -84,7 +91,7 @@ def mass_of(shape: str, size: tuple[float, ...], total: float) -> Mass:
     address = ctypes.addressof(mass)
     if shape == "sphere":
         LIB.dMassSetSphereTotal(address, total, size[0])
-    elif shape == "box":
+    elif shape in ("box", "mesh"):  # a mesh enclosing no volume: its bounding box's
         LIB.dMassSetBoxTotal(address, total, 2 * size[0], 2 * size[1], 2 * size[2])
     elif shape == "cylinder":
         LIB.dMassSetCylinderTotal(address, total, 3, size[0], 2 * size[1])
@@ -93,7 +100,10 @@ def mass_of(shape: str, size: tuple[float, ...], total: float) -> Mass:
     return mass
 
 
-def make_geom(space: int, shape: str, size: tuple[float, ...]) -> int:
+def make_geom(space: int, shape: str, size: tuple[float, ...],
+              mesh: TriMesh | None = None) -> int:
+    if mesh is not None:
+        return mesh.geom(space)
     if shape == "sphere":
         return int(LIB.dCreateSphere(space, size[0]))
     if shape == "box":
@@ -136,18 +146,21 @@ def spawn_group(world: int, space: int, group: BodyGroup, values: dict[str, Any]
     made: list[Body] = []
     try:
         for k, name in enumerate(group.names):
+            mesh = None if group.vertices is None or group.faces is None else \
+                TriMesh.build(group.vertices, group.faces)
             body = Body(name, group.shape, size, group.static, 0, 0, math.nan,
                         values[friction_key] if group.friction is None else group.friction,
                         values[restitution_key] if group.restitution is None
                         else group.restitution,
                         group.friction is None, group.restitution is None, group.rgba,
-                        poses[k])
+                        poses[k], mesh=mesh)
             made.append(body)
             if group.static:
                 make_static(space, body)
             else:
-                total = group.mass if group.mass is not None else DENSITY * volume(
-                    group.shape, size)
+                total = group.mass if group.mass is not None else DENSITY * (
+                    volume(group.shape, size) if mesh is None
+                    else mesh_wire.volume(mesh.vertices, mesh.indices))
                 if group.inertia is not None:
                     body.unit_inertia = tuple(i / total for i in group.inertia)
                 make_moving(world, space, body, float(total), poses[k],
@@ -166,7 +179,7 @@ def default_key_pair(static: bool) -> tuple[str, str]:
 
 def make_static(space: int, body: Body) -> None:
     body.geom = (int(LIB.dCreatePlane(space, 0.0, 0.0, 1.0, 0.0)) if body.shape == "plane"
-                 else make_geom(space, body.shape, body.size))
+                 else make_geom(space, body.shape, body.size, body.mesh))
     body.set_bits(STATIC)
     place_static(body, body.pose)
 
@@ -174,8 +187,14 @@ def make_static(space: int, body: Body) -> None:
 def make_moving(world: int, space: int, body: Body, total: float, pose: list[float],
                 twist: list[float] | None) -> None:
     body.body = int(LIB.dBodyCreate(world))
-    body.geom = make_geom(space, body.shape, body.size)
+    body.geom = make_geom(space, body.shape, body.size, body.mesh)
+    if body.mesh is not None:
+        _centre_mesh(body)
     LIB.dGeomSetBody(body.geom, body.body)
+    if body.frame is not None:
+        LIB.dGeomSetOffsetPosition(body.geom, *(-body.frame[0]))
+        at, turn = frames.compose((np.asarray(pose[:3]), np.asarray(pose[3:])), body.frame)
+        pose = [*at.tolist(), *turn.tolist()]
     set_mass(body, total)
     body.set_bits(AWAKE)
     body.state = np.ctypeslib.as_array(body_state(body.body))
@@ -187,6 +206,18 @@ def make_moving(world: int, space: int, body: Body, total: float, pose: list[flo
     body.pose = []
 
 
+def _centre_mesh(body: Body) -> None:
+    """A moving mesh's mass per kg about its centre of mass (ODE's integral over its
+    triangles; its bounding box's where it encloses no volume), and that centre's frame."""
+    assert body.mesh is not None
+    found = centred_mass(body.geom, body.mesh.vertices, body.mesh.indices, 1.0)
+    if found is None:
+        return  # the shape's mass: a box of the mesh's half extents (mass_of)
+    body.unit_mass, centre = found
+    if np.any(centre != 0.0):
+        body.frame = (centre, frames.IDENTITY[1].copy())
+
+
 def set_mass(body: Body, total: float) -> None:
     """The body's mass, and its inertia at that mass: its own (scaled) or its shape's."""
     if body.unit_inertia is not None:
@@ -194,6 +225,11 @@ def set_mass(body: Body, total: float) -> None:
         ixx, iyy, izz = (total * i for i in body.unit_inertia)
         LIB.dMassSetParameters(ctypes.addressof(mass), total, 0.0, 0.0, 0.0, ixx, iyy, izz,
                                0.0, 0.0, 0.0)
+    elif body.unit_mass is not None:
+        mass = Mass()
+        ctypes.memmove(ctypes.addressof(mass), ctypes.addressof(body.unit_mass),
+                       ctypes.sizeof(Mass))
+        LIB.dMassAdjust(ctypes.addressof(mass), total)
     else:
         mass = mass_of(body.shape, body.size, total)
     LIB.dBodySetMass(body.body, ctypes.addressof(mass))
@@ -206,6 +242,8 @@ def destroy(bodies: list[Body]) -> None:
         for geom in body.geoms():
             LIB.dGeomDestroy(geom)
         body.geom, body.extra = 0, []
+        if body.mesh is not None:
+            body.mesh.release()
         if body.body:
             LIB.dBodyDestroy(body.body)
             body.body = 0

@@ -16,6 +16,8 @@ from galton.protocol import (
     FeatureUnsupportedError,
     InvalidArgumentError,
 )
+from galton.protocol import mesh as mesh_wire
+from galton.protocol.mesh import box_mesh
 
 RADIUS = 0.05
 
@@ -146,3 +148,23 @@ def test_a_snapshot_of_another_engine_is_refused(engine: DartEngine) -> None:
         engine.restore({"format": "galton-pybullet-1"})
     with pytest.raises(InvalidArgumentError, match="malformed DART snapshot"):
         engine.restore({"format": "galton-dart-1", "params": {}, "items": [{"kind": "body"}]})
+
+
+def test_a_mesh_is_loaded_in_float32_and_a_damaged_one_is_not_restored(
+        engine: DartEngine) -> None:
+    """dartpy makes a MeshShape only by loading a file (meshes.py): the shape holds the
+    vertices as Assimp's float32; a snapshot carries the float64 ones, checked on restore."""
+    vertices, faces = box_mesh((0.2, 0.2, 0.1))
+    vertices = vertices + 0.1 / 3  # not a float32 number
+    engine.spawn([BodyGroup("mesh", (0.3, 0.3, 0.2), ["slab"], at([0, 0, 0.5]), static=True,
+                            vertices=vertices, faces=faces)])
+    box = engine._bodies["slab"].node.getShapeNode(0).getShape().getBoundingBox()
+    assert np.array_equal(box.getMax(), vertices.max(axis=0).astype(np.float32))
+    data = engine.snapshot()
+    data["items"][0]["faces"] = mesh_wire.pack_faces(np.array([[0, 1, 8]]))
+    copy = DartEngine()
+    try:
+        with pytest.raises(InvalidArgumentError, match="faces"):
+            copy.restore(data)
+    finally:
+        copy.close()
