@@ -194,7 +194,7 @@ class ApplyWrench(Args, kw_only=True, forbid_unknown_fields=True):
 
 class Snapshot(Args, kw_only=True, forbid_unknown_fields=True):
     slot: Text | None = None
-    blob: Flag | None = None
+    blob: Flag = False
 
 
 class Restore(Args, kw_only=True, forbid_unknown_fields=True):

@@ -113,7 +113,7 @@ def delete_world(loop: OpContext, call: Call, request: rq.Named) -> dict[str, An
 def snapshot(loop: OpContext, call: Call, request: rq.Snapshot) -> dict[str, Any]:
     world = loop.world_for(request)
     slot_name = request.slot
-    want_blob = bool(request.blob)
+    want_blob = request.blob
     if slot_name is None and not want_blob:
         raise InvalidArgumentError("snapshot needs a 'slot' to keep it in, 'blob': true to "
                                    "return it, or both")
