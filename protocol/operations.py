@@ -1,6 +1,6 @@
 """Every operation of the protocol, declared once: its request and reply types (shared ones
-in protocol/requests.py; a newer operation's beside its entry here, in one block), and
-what it does to a world.
+in protocol/requests.py and protocol/replies.py; a newer operation's beside its entry here,
+in one block), and what it does to a world.
 
 The daemon refuses an argument not declared here (INVALID_ARGUMENT, with a "did you mean"),
 the fuzz harness generates requests from these declarations, and docs/protocol.md is held
@@ -114,7 +114,7 @@ class Operation:
 
 # -- operations declared whole here: request type, reply type and entry side by side. A new
 # operation is one such block (docs/ARCHITECTURE.md, "How to add an operation"); the shared
-# types it may reuse sit in protocol/requests.py.
+# types it may reuse sit in protocol/requests.py and protocol/replies.py.
 
 
 class GetEntities(rq.Args, kw_only=True, forbid_unknown_fields=True):
