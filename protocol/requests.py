@@ -108,10 +108,18 @@ class Step(Args, kw_only=True, forbid_unknown_fields=True):
     read_joints: Names | None = None
 
 
+class UntilRest(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
+    """run_until's stop rule: once every read body moves slower than ``speed`` (m/s),
+    looked at every ``every`` seconds of sim time."""
+
+    speed: Positive
+    every: Positive
+
+
 class RunUntil(Args, kw_only=True, forbid_unknown_fields=True):
     sim_time: NonNegative
     read: Names | None = None
-    until_rest: Fields | None = None
+    until_rest: Annotated[UntilRest, _kind("map")] | None = None
     read_joints: Names | None = None
 
 
@@ -295,20 +303,44 @@ def explain(op: str, declared: type[Args], error: str, args: dict[str, Any]) -> 
     if what.startswith("Object missing required field"):
         field = what.rsplit("`", 2)[-2]
         return f"{where}: missing required field {field!r}"
+    if what.startswith("Object contains unknown field"):  # in a declared map (until_rest)
+        field, allowed = what.rsplit("`", 2)[-2], _fields_at(declared, steps)
+        return (f"{where} takes no field {field!r}{did_you_mean(field[:64], allowed)}; it "
+                f"takes: {', '.join(allowed)}")
     value = _value_at(args, steps)
+    owner = _struct_at(declared, steps[:-1])
     if what.startswith("Invalid enum value"):
-        choices = field_kind(declared, str(steps[0]))[1] if steps else ()
+        choices = field_kind(owner, str(steps[-1]))[1] if steps and owner else ()
         return (f"{where} {brief(value)} is not one of {', '.join(choices)}"
                 f"{did_you_mean(str(value)[:64], choices)}")
     if what.startswith("Expected `"):  # "Expected `int | null`, got `str`"
         expected = what.split("`")[1].removesuffix(" | null")  # None means "not sent"
-        if ", got `" not in what and len(steps) == 1:  # "Expected `float` >= 0.0": a range
-            expected = range_text(declared, str(steps[0]))
+        if ", got `" not in what and owner and isinstance(steps[-1], str):  # a range
+            expected = range_text(owner, steps[-1])
         return f"{where} must be {expected}, got {brief(value)}"
     return f"{where}: {what[:1].lower()}{what[1:]}, got {brief(value)}"  # ranges, lengths
 
 
-def range_text(declared: type[Args], name: str) -> str:
+def _struct_at(declared: type[msgspec.Struct], steps: list[str | int]
+               ) -> type[msgspec.Struct] | None:
+    """The declared Struct a path leads to (through fields declared as Structs), if any."""
+    found: type[msgspec.Struct] = declared
+    for step in steps:
+        if not isinstance(step, str) or step not in found.__struct_fields__:
+            return None
+        base = _metas(found, step)[0]
+        if not (isinstance(base, type) and issubclass(base, msgspec.Struct)):
+            return None
+        found = base
+    return found
+
+
+def _fields_at(declared: type[msgspec.Struct], steps: list[str | int]) -> tuple[str, ...]:
+    found = _struct_at(declared, steps)
+    return () if found is None else found.__struct_fields__
+
+
+def range_text(declared: type[msgspec.Struct], name: str) -> str:
     """A field's declared range in words: "a finite number in [0, 1e+06]", "an integer
     >= 1", "a list of 1 to 16 items"."""
     meta = _constraints(declared, name)
@@ -326,7 +358,7 @@ def range_text(declared: type[Args], name: str) -> str:
     return " ".join([what, *low, *high])
 
 
-def _constraints(declared: type[Args], name: str) -> dict[str, Any]:
+def _constraints(declared: type[msgspec.Struct], name: str) -> dict[str, Any]:
     """The bounds (ge, gt, le, lt, min_length, max_length) a field's type declares."""
     found: dict[str, Any] = {}
     for meta in _metas(declared, name)[1]:
@@ -336,7 +368,7 @@ def _constraints(declared: type[Args], name: str) -> dict[str, Any]:
     return found
 
 
-def _metas(declared: type[Args], name: str) -> tuple[Any, list[msgspec.Meta]]:
+def _metas(declared: type[msgspec.Struct], name: str) -> tuple[Any, list[msgspec.Meta]]:
     """A field's base type and the msgspec.Meta annotations on it (through ``X | None``)."""
     field = next(f for f in msgspec.structs.fields(declared) if f.name == name)
     tp = field.type
@@ -366,7 +398,7 @@ def _value_at(args: Any, steps: list[str | int]) -> Any:
     return value
 
 
-def field_kind(declared: type[Args], name: str) -> tuple[str, tuple[str, ...], bool]:
+def field_kind(declared: type[msgspec.Struct], name: str) -> tuple[str, tuple[str, ...], bool]:
     """A field's wire kind, its choices and whether it may exceed the string limit, read
     from its declared type."""
     base, metas = _metas(declared, name)

@@ -27,23 +27,18 @@ from galton.protocol import (
     SimStatus,
 )
 from galton.protocol import requests as rq
-from galton.protocol.model import check_names, finite_number, integer_in
-from galton.protocol.vocabulary import SimState, check_fields
+from galton.protocol.model import check_names, integer_in
+from galton.protocol.vocabulary import SimState
 
 
-def _rest_check(rest: dict[str, Any] | None, read: list[str] | None,
+def _rest_check(rest: rq.UntilRest | None, read: list[str] | None,
                 timestep: float) -> RestCheck | None:
-    """run_until's optional ``until_rest: {speed, every}``: stop once the read bodies rest."""
+    """run_until's optional ``until_rest``: stop once the read bodies rest."""
     if rest is None:
         return None
-    check_fields(rest, ("speed", "every"), "run_until.until_rest")
     if read is None:
         raise InvalidArgumentError("run_until.until_rest needs 'read': the bodies that must rest")
-    speed = finite_number(rest.get("speed"), "run_until.until_rest.speed", low=0.0,
-                          low_open=True)
-    every = finite_number(rest.get("every"), "run_until.until_rest.every", low=0.0,
-                          low_open=True)
-    return RestCheck(speed, max(1, round(every / timestep)))
+    return RestCheck(rest.speed, max(1, round(rest.every / timestep)))
 
 
 @handles("status")

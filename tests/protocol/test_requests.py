@@ -39,6 +39,10 @@ REFUSED = {
     "count below one": ("step", {"count": 0}, r"step\.count must be an integer >= 1, got 0"),
     "rate": ("stream_states", {"rate": 61},
              r"stream_states\.rate must be a finite number in \[1, 60\], got 61"),
+    "nested range": ("run_until", {"sim_time": 1, "until_rest": {"speed": -1, "every": 1}},
+                     r"run_until\.until_rest\.speed must be a finite number > 0, got -1"),
+    "nested unknown field": ("run_until", {"sim_time": 1, "until_rest": {"sped": 1, "every": 1}},
+                             r"until_rest takes no field 'sped'.*did you mean 'speed'"),
     "no cameras": ("render", {"cameras": []},
                    r"render\.cameras must be a list of 1 to 16 items, got \[\]"),
 }
