@@ -20,6 +20,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any
 
 import mujoco
+import numpy as np
 
 from galton.daemon.engines.mujoco import snapshot_arrays as arrays
 from galton.daemon.engines.mujoco import spec as ms
@@ -32,13 +33,15 @@ from galton.protocol.errors import brief
 if TYPE_CHECKING:
     from galton.daemon.engines.mujoco.engine import MujocoEngine
 
-FORMAT = 2  # 2: the bodies' order travels (format 1 could restore them permuted)
+# 2: the bodies' order travels (format 1 could restore them permuted); 3: the meshes'
+# vertices travel exactly (MJCF's six digits moved a prism's, and its geom's size with them).
+FORMAT = 3
 ENGINE = "mujoco"
 SIZES = ("nbody", "ngeom", "njnt", "nq", "nv", "nu", "ntree", "nmocap")
 KEYS = frozenset({"format", "engine", "engine_version", "params", "spec", "memory", "sizes",
                   "bodies",
                   "model", "data", "entities", "loads", "kinds", "pool", "joints", "targets",
-                  "wrenches", "balance", "looks"})
+                  "wrenches", "balance", "looks", "meshes"})
 
 
 # -- taking a snapshot ----------------------------------------------------------------------
@@ -57,7 +60,7 @@ def snapshot(engine: MujocoEngine) -> dict[str, Any]:
     assets = {id(e.assets): e.assets for e in engine.entities.values() if e.assets}
     return {
         "format": FORMAT, "engine": ENGINE, "engine_version": mujoco.__version__,
-        "params": engine.get_params(), "spec": _xml(engine),
+        "params": engine.get_params(), "spec": _xml(engine), "meshes": _mesh_vertices(engine.spec),
         "memory": int(engine.spec.memory), "sizes": {s: int(getattr(m, s)) for s in SIZES},
         "bodies": _body_order(engine.spec),
         "model": arrays.model_numbers(m), "data": arrays.data_numbers(m, d),
@@ -83,6 +86,26 @@ def _xml(engine: MujocoEngine) -> str:
     if engine.xml is None:
         engine.xml = engine.spec.to_xml()
     return engine.xml
+
+
+def _mesh_vertices(spec: mujoco.MjSpec) -> dict[str, Any]:
+    """Each mesh's vertices as the spec holds them: its MJCF has six digits only."""
+    return {mesh.name: arrays.pack(np.asarray(mesh.uservert, dtype=np.float32), arrays.F32)
+            for mesh in spec.meshes}
+
+
+def _write_mesh_vertices(spec: mujoco.MjSpec, meshes: Any) -> None:
+    """Put back the exact vertices of every mesh the MJCF names (and only those)."""
+    table = arrays.map_of_names(meshes, "snapshot.meshes")
+    named = {mesh.name: mesh for mesh in spec.meshes}
+    if set(table) != set(named):
+        raise InvalidArgumentError(
+            f"snapshot.spec compiles to a world of the meshes {sorted(named)[:5]}, not of the "
+            f"snapshot's meshes {sorted(table)[:5]}")
+    for name, mesh in named.items():
+        count = len(mesh.uservert)
+        mesh.uservert = arrays.unpack(table[name], f"snapshot.meshes.{name}", arrays.F32,
+                                      (count,)).astype(np.float64)
 
 
 def _body_order(spec: mujoco.MjSpec) -> list[str]:
@@ -134,6 +157,7 @@ def restore(engine: MujocoEngine, data: Any) -> None:
     _check_header(data)
     values = _params(data["params"])
     spec = _parse(data["spec"], data["memory"], values)
+    _write_mesh_vertices(spec, data["meshes"])
     try:
         model = spec.compile()
     except MUJOCO_ERRORS as exc:

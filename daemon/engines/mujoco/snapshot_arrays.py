@@ -90,6 +90,11 @@ def _float_arrays(struct: Any, prefixes: tuple[str, ...] = (),
     return out
 
 
+def map_of_names(obj: Any, where: str) -> dict[str, Any]:
+    """A map of names from plain data, or InvalidArgumentError (for the snapshot's reader)."""
+    return _table(obj, where)
+
+
 def _write_all(targets: dict[str, np.ndarray], obj: Any, where: str,
                dtype: np.dtype[Any] = F64) -> None:
     """Every target array from plain data: all of them, nothing more, each its own shape;
