@@ -44,7 +44,7 @@ class CardPlan:
 
     @classmethod
     def quick(cls) -> CardPlan:
-        return cls(repetitions=5, curve=(1, 10, 300), footprint_s=3.0, round_trips=100,
+        return cls(repetitions=4, curve=(1, 10, 300), footprint_s=3.0, round_trips=100,
                    world_ops=6, mesh_balls=25, mesh_repetitions=2, curve_sim_time=2.0,
                    curve_wall_time=15.0)
 
