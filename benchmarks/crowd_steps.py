@@ -26,8 +26,8 @@ def chunks(engine: str, board_name: str, balls: int, chunk: float, count: int) -
     board = board.replace(ball=BallSpec(board.ball.radius, board.ball.mass, balls))
     config = TrialConfig(engine, board)
     sim = LocalSim()
-    shake, names = prepare_world(sim, config)  # type: ignore[arg-type]
-    release(sim, config, shake, names, PhysicsClock(sim))  # type: ignore[arg-type]
+    shake, names = prepare_world(sim, config)
+    release(sim, config, shake, names, PhysicsClock(sim))
     for index in range(count):
         started = time.perf_counter()
         stamp = sim.run_until((index + 1) * chunk)

@@ -89,23 +89,28 @@ def _xml(engine: MujocoEngine) -> str:
 
 
 def _mesh_vertices(spec: mujoco.MjSpec) -> dict[str, Any]:
-    """Each mesh's vertices as the spec holds them: its MJCF has six digits only."""
+    """Each mesh's vertices as the spec holds them: its MJCF has six digits only (empty for
+    a mesh a model loads from a file, which compiles alike from that file)."""
     return {mesh.name: arrays.pack(np.asarray(mesh.uservert, dtype=np.float32), arrays.F32)
             for mesh in spec.meshes}
 
 
 def _write_mesh_vertices(spec: mujoco.MjSpec, meshes: Any) -> None:
     """Put back the exact vertices of every mesh the MJCF names (and only those)."""
-    table = arrays.map_of_names(meshes, "snapshot.meshes")
+    table = arrays.names_map(meshes, "snapshot.meshes")
     named = {mesh.name: mesh for mesh in spec.meshes}
     if set(table) != set(named):
         raise InvalidArgumentError(
             f"snapshot.spec compiles to a world of the meshes {sorted(named)[:5]}, not of the "
             f"snapshot's meshes {sorted(table)[:5]}")
-    for name, mesh in named.items():
-        count = len(mesh.uservert)
-        mesh.uservert = arrays.unpack(table[name], f"snapshot.meshes.{name}", arrays.F32,
-                                      (count,)).astype(np.float64)
+    exact = {name: arrays.unpack(table[name], f"snapshot.meshes.{name}", arrays.F32,
+                                 (len(mesh.uservert),)) for name, mesh in named.items()}
+    for name, vertices in exact.items():
+        if not np.isfinite(vertices).all():
+            raise InvalidArgumentError(f"snapshot.meshes.{name} holds a vertex that is not "
+                                       "finite")
+    for name, vertices in exact.items():
+        named[name].uservert = vertices.astype(np.float64)
 
 
 def _body_order(spec: mujoco.MjSpec) -> list[str]:

@@ -70,7 +70,7 @@ def unpack(obj: Any, where: str, dtype: np.dtype[Any], shape: tuple[int, ...]) -
     return np.frombuffer(bytes(data), dtype=dtype).reshape(shape)
 
 
-def _table(obj: Any, where: str) -> dict[str, Any]:
+def names_map(obj: Any, where: str) -> dict[str, Any]:
     if not isinstance(obj, dict) or not all(isinstance(k, str) for k in obj):
         raise InvalidArgumentError(f"{where} must be a map of names, got {brief(obj)}")
     return obj
@@ -90,16 +90,11 @@ def _float_arrays(struct: Any, prefixes: tuple[str, ...] = (),
     return out
 
 
-def map_of_names(obj: Any, where: str) -> dict[str, Any]:
-    """A map of names from plain data, or InvalidArgumentError (for the snapshot's reader)."""
-    return _table(obj, where)
-
-
 def _write_all(targets: dict[str, np.ndarray], obj: Any, where: str,
                dtype: np.dtype[Any] = F64) -> None:
     """Every target array from plain data: all of them, nothing more, each its own shape;
     all checked before any is written."""
-    table = _table(obj, where)
+    table = names_map(obj, where)
     if set(table) != set(targets):
         missing, extra = sorted(set(targets) - set(table)), sorted(set(table) - set(targets))
         raise InvalidArgumentError(f"{where} must hold this world's arrays: missing "
@@ -119,8 +114,8 @@ def model_numbers(m: mujoco.MjModel) -> dict[str, Any]:
 
 
 def write_model_numbers(m: mujoco.MjModel, obj: Any) -> None:
-    table = _table(obj, "snapshot.model")
-    stat = _table(table.get("stat"), "snapshot.model.stat")
+    table = names_map(obj, "snapshot.model")
+    stat = names_map(table.get("stat"), "snapshot.model.stat")
     values = {f: unpack(stat.get(f), f"snapshot.model.stat.{f}", F64,
                         np.atleast_1d(getattr(m.stat, f)).shape) for f in STAT_FIELDS}
     nodes = _body_nodes(m)
@@ -158,7 +153,7 @@ def data_numbers(m: mujoco.MjModel, d: mujoco.MjData) -> dict[str, Any]:
 
 def write_data_numbers(m: mujoco.MjModel, d: mujoco.MjData, obj: Any) -> None:
     """A fresh MjData of the same model made the snapshot's, checked before any write."""
-    table = _table(obj, "snapshot.data")
+    table = names_map(obj, "snapshot.data")
     state = unpack(table.get("state"), "snapshot.data.state", F64,
                    (mujoco.mj_stateSize(m, STATE),))
     sleep, counts = _sleep_books(m, d, table)
@@ -174,8 +169,8 @@ def _sleep_books(m: mujoco.MjModel, d: mujoco.MjData,
                  table: dict[str, Any]) -> tuple[dict[str, np.ndarray], dict[str, int]]:
     """The sleep books, checked: flags are sleep states, awake lists hold valid ids, and
     the sleeping trees' cycles are cycles of sleeping trees."""
-    books = _table(table.get("sleep"), "snapshot.data.sleep")
-    raw = _table(table.get("counts"), "snapshot.data.counts")
+    books = names_map(table.get("sleep"), "snapshot.data.sleep")
+    raw = names_map(table.get("counts"), "snapshot.data.counts")
     sleep = {n: unpack(books.get(n), f"snapshot.data.sleep.{n}", I32, getattr(d, n).shape)
              for n in ("tree_asleep", *SLEEP_FLAGS, *AWAKE_LISTS)}
     counts = {"ntree_awake": _count(raw, "ntree_awake", m.ntree)}

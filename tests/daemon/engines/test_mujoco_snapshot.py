@@ -179,7 +179,13 @@ def test_a_prism_mesh_world_restores_and_continues_bit_identically(
                      poses=np.array([[0.02, 0, 0.8, 0, 0, 0, 1]]))
     engine.spawn([floor(), pin, ball])
     engine.step(200)
-    assert_same_runs(engine, restored(engine.snapshot()), [steps(300)] * 2)
+    snapshot = engine.snapshot()
+    assert_same_runs(engine, restored(snapshot), [steps(300)] * 2)
+    broken = copy.deepcopy(snapshot)
+    (vertices,) = [v for v in broken["meshes"].values() if v["data"]]
+    vertices["data"] = np.full(len(vertices["data"]) // 4, np.nan, dtype="<f4").tobytes()
+    with pytest.raises(InvalidArgumentError, match="not finite"):
+        MujocoEngine().restore(broken)
 
 
 def test_a_snapshot_restores_twice_alike_and_after_its_source_closed(
@@ -256,10 +262,11 @@ def _set(path: str, value: Any) -> Callable[[dict[str, Any]], None]:
     (lambda s: s.pop("pool"), "missing ['pool']"),
     (lambda s: s["bodies"].reverse(), "another order"),
     (_set("bodies", "all"), "another order"),
+    (_set("meshes", {}), "meshes"),
 ], ids=["other-engine", "format", "version", "truncated", "params-type", "param-value",
         "spec-type", "other-world", "entities-type", "dtype", "sleep-cycles", "target-type",
         "target-nan", "wrench-name", "missing-key", "body-order",
-        "body-order-type"])
+        "body-order-type", "meshes-missing"])
 def test_a_malformed_snapshot_is_refused_with_a_typed_error(
         snapshot: dict[str, Any], change: Callable[[dict[str, Any]], None],
         words: str) -> None:
