@@ -92,10 +92,9 @@ class JointSamples(Reply, kw_only=True):
     velocities: Numbers
 
 
-class JointStatesReply(Reply, kw_only=True):
-    names: list[str]
-    positions: Numbers
-    velocities: Numbers
+class JointStatesReply(JointSamples, kw_only=True):
+    """``get_joint_states``: the samples' fields and each joint's effort."""
+
     efforts: Numbers
 
 
