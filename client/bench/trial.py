@@ -88,38 +88,36 @@ class PhysicsClock:
     def __init__(self, sim: Client) -> None:
         self.sim = sim
         self.wall = 0.0
-        self.simulated = 0.0
-        self.sim_time = 0.0  # where the last physics request left the world
+        # Where the last physics request left the world: a trial's world starts at 0 and
+        # moves only by these requests, so this is also the sim time they ran.
+        self.sim_time = 0.0
 
     def segment(self, check_interval: float) -> float:
         """The sim time of the next settling request (settling_segment)."""
-        return settling_segment(self.wall, self.simulated, check_interval)
+        return settling_segment(self.wall, self.sim_time, check_interval)
 
     def run_until(self, sim_time: float) -> float:
         started = time.perf_counter()
-        before = self.sim_time
-        stamp = self.sim.run_until(sim_time, timeout=self.wait_for(sim_time - before))
-        self._count(started, before, stamp.sim_time)
+        stamp = self.sim.run_until(sim_time, timeout=self.wait_for(sim_time))
+        self._count(started, stamp.sim_time)
         return stamp.sim_time
 
     def run_until_rest(self, sim_time: float, names: list[str], speed: float,
                        every: float) -> tuple[States, bool]:
         """Run until these balls rest or ``sim_time``, in one round trip (timed as physics)."""
         started = time.perf_counter()
-        before = self.sim_time
         states, at_rest = self.sim.run_until_rest(sim_time, names, speed, every,
-                                                  timeout=self.wait_for(sim_time - before))
-        self._count(started, before, states.sim_time)
+                                                  timeout=self.wait_for(sim_time))
+        self._count(started, states.sim_time)
         return states, at_rest
 
-    def wait_for(self, span: float) -> float:
-        """How long a request running ``span`` s of sim time may take (settling_wait)."""
-        return settling_wait(span, self.wall, self.simulated)
+    def wait_for(self, sim_time: float) -> float:
+        """How long a request running the world to ``sim_time`` may take (settling_wait)."""
+        return settling_wait(sim_time - self.sim_time, self.wall, self.sim_time)
 
-    def _count(self, started: float, before: float, after: float) -> None:
+    def _count(self, started: float, sim_time: float) -> None:
         self.wall += time.perf_counter() - started
-        self.simulated += after - before
-        self.sim_time = after
+        self.sim_time = sim_time
 
 
 def settling_segment(wall: float, simulated: float, check_interval: float) -> float:
@@ -186,7 +184,7 @@ def run_for_wall(sim: Client, config: TrialConfig, shake: Perturbation, names: l
     (DART's 500-ball funnel runs at RTF 0.0003)."""
     released, now = release(sim, config, shake, names, clock)
     while now < config.max_sim_time - 1e-9 and clock.wall < budget:
-        span = wall_chunk(budget - clock.wall, clock.wall, clock.simulated)
+        span = wall_chunk(budget - clock.wall, clock.wall, clock.sim_time)
         now = clock.run_until(min(now + span, config.max_sim_time))
     return classify(config, shake, sim.get_states(names[:released]))
 
