@@ -16,7 +16,7 @@ same states bit for bit (QuickStep's random constraint order is seeded before ea
 from __future__ import annotations
 
 import itertools
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -104,6 +104,7 @@ class OdeEngine(Snapshots, Engine):
         self._robots = Robots()
         self._diverged = False
         self._closed = False
+        self.generation = 0  # counts changes of the bodies: a pose reader's addresses hold
         # Webots turns damping off (WbOdeContext: damping thresholds 0) and sets none.
         LIB.dWorldSetLinearDampingThreshold(self._world, 0.0)
         LIB.dWorldSetAngularDampingThreshold(self._world, 0.0)
@@ -170,6 +171,7 @@ class OdeEngine(Snapshots, Engine):
         self._adopt(made)
 
     def _adopt(self, made: list[Body]) -> None:
+        self.generation += 1
         for body in made:
             body.serial = next(self._serials)
             self._bodies[body.name] = body
@@ -180,6 +182,7 @@ class OdeEngine(Snapshots, Engine):
 
     def delete(self, names: Sequence[str]) -> None:
         bodies = self._lookup(names)
+        self.generation += 1
         roots = [b for b in bodies if b.model == b.name]
         if any(b.model is not None and b.model != b.name for b in bodies):
             raise InvalidArgumentError("a model's link goes with its model: delete the root")
@@ -197,6 +200,7 @@ class OdeEngine(Snapshots, Engine):
         spawning.destroy(bodies)
 
     def clear(self) -> None:
+        self.generation += 1
         self._collider.forget()
         self._robots.destroy()
         self._robots = Robots()
@@ -242,6 +246,20 @@ class OdeEngine(Snapshots, Engine):
     # -- states and stepping ------------------------------------------------------------------
     def get_states(self, names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
         return states.read(self._lookup(names))
+
+    def pose_reader(self, names: Sequence[str]) -> Callable[[], np.ndarray]:
+        """Poses gathered from ODE's memory in one index; looked up again after the bodies
+        change, as a freed body's memory must never be read."""
+        fixed = list(names)
+        reader = states.PoseReader(self._lookup(fixed))
+        made_at = self.generation
+
+        def read() -> np.ndarray:
+            nonlocal reader, made_at
+            if made_at != self.generation:
+                reader, made_at = states.PoseReader(self._lookup(fixed)), self.generation
+            return reader()
+        return read
 
     def set_states(self, names: Sequence[str], poses: np.ndarray | None,
                    twists: np.ndarray | None) -> None:

@@ -7,13 +7,23 @@ bodies is one ``np.stack`` and two column picks, with no ctypes call per body.
 
 from __future__ import annotations
 
+import ctypes
 import math
 from collections.abc import Sequence
 
 import numpy as np
 
 from galton.daemon.engines.ode import frames
-from galton.daemon.engines.ode.native import AVEL, LIB, LVEL, POS, QUAT, quaternion
+from galton.daemon.engines.ode.native import (
+    AVEL,
+    LIB,
+    LVEL,
+    POS,
+    QUAT,
+    REAL,
+    STATE_LENGTH,
+    quaternion,
+)
 from galton.daemon.engines.ode.spawn import AWAKE, Body, place_static
 
 POSE_COLUMNS = [POS, POS + 1, POS + 2, QUAT + 1, QUAT + 2, QUAT + 3, QUAT]  # x y z, x y z w
@@ -38,6 +48,44 @@ def read(bodies: Sequence[Body]) -> tuple[np.ndarray, np.ndarray]:
         elif body.frame is not None:
             poses[k], twists[k] = link_state(body, poses[k], twists[k])
     return poses, twists
+
+
+class PoseReader:
+    """A state stream's reader of fixed bodies: one numpy gather over ODE's memory.
+
+    A moving body's 28 doubles lie at a fixed address for the body's life, so the poses of
+    n bodies are one fancy index into a view that spans their addresses, about 30 µs for
+    1,000 bodies against 1.4 ms for a stack of n views. Only those addresses are ever read,
+    so the gaps between them (other allocations, or none mapped) are never touched. Static
+    bodies and links whose frame is not their centre of mass read as ``read`` reads them.
+    The engine makes a new reader when its bodies change (``OdeEngine.generation``).
+    """
+
+    def __init__(self, bodies: Sequence[Body]) -> None:
+        self.bodies = list(bodies)
+        plain = [k for k, b in enumerate(self.bodies) if not b.static and b.frame is None]
+        self.plain = np.array(plain, dtype=np.intp)
+        self.rest = [k for k in range(len(self.bodies)) if k not in set(plain)]
+        self.memory = np.zeros(0)
+        self.index = np.zeros((0, len(POSE_COLUMNS)), dtype=np.intp)
+        if plain:
+            self._map([self.bodies[k] for k in plain])
+
+    def _map(self, bodies: Sequence[Body]) -> None:
+        size = ctypes.sizeof(REAL)
+        addresses = np.array([b.state.ctypes.data for b in bodies], dtype=np.intp)
+        base = int(addresses.min())
+        span = int(addresses.max() - base) // size + STATE_LENGTH
+        pointer = ctypes.cast(base, ctypes.POINTER(REAL))
+        self.memory = np.ctypeslib.as_array(pointer, shape=(span,))
+        self.index = ((addresses - base) // size)[:, None] + np.array(POSE_COLUMNS)
+
+    def __call__(self) -> np.ndarray:
+        poses = np.empty((len(self.bodies), 7))
+        poses[self.plain] = self.memory[self.index]
+        if self.rest:
+            poses[self.rest] = read([self.bodies[k] for k in self.rest])[0]
+        return poses
 
 
 def link_state(body: Body, pose: np.ndarray, twist: np.ndarray
