@@ -1,7 +1,7 @@
 """The state stream and the live view: what they cost a playing world (issue 41).
 
 Usage: python benchmarks/view_stream.py [--seconds 10] [--rounds 3] [--engine mujoco]
-       [--json FILE] [--sample-only]
+       [--json FILE] [--sample-only] [--paced]
 
 1. The view: 500 spheres resting on a plane, ``play(1.0)``, and the page of
    ``galton-client view`` (LiveView, in this process, its viser server serving no browser)
@@ -17,6 +17,11 @@ Usage: python benchmarks/view_stream.py [--seconds 10] [--rounds 3] [--engine mu
    packing) over the time of one step of the same world, both medians of alternating
    batches. A ratio of two timings taken side by side holds on a loaded machine; the
    stream's share of a playing world is then 60 x that ratio x one step's wall time.
+4. ``--paced`` (instead of 1 and 2): the target as the issue words it, a playing world: the
+   1,000 spheres played at RTF 1.0, the achieved RTF in windows without and with a 60 Hz
+   stream of all of them, alternating (``--rounds`` pairs). An engine whose step leaves the
+   physics thread idle part of each wall second pays for the stream out of that idle time;
+   one that cannot hold RTF 1.0 with this world even without a stream is reported as such.
 """
 
 from __future__ import annotations
@@ -126,6 +131,27 @@ def stream_cost(engine: str, seconds: float, rounds: int) -> dict[str, float]:
             "samples_per_s": statistics.median(received), "rounds": rounds}
 
 
+def paced_cost(engine: str, seconds: float, rounds: int) -> dict[str, float]:
+    """Achieved RTF of 1,000 bodies played at RTF 1.0, without and with a 60 Hz stream."""
+    without, with_stream, received = [], [], []
+    with daemon_client(engine) as (_, sim):
+        _scene(sim, 1000)
+        sim.play(1.0)
+        try:
+            _speed(sim, 1.0)  # the pacer's first second, not measured
+            for _ in range(rounds):
+                without.append(_speed(sim, seconds))
+                samples: list[object] = []
+                with sim.stream_states(rate=60.0, callback=samples.append):
+                    with_stream.append(_speed(sim, seconds))
+                received.append(len(samples) / seconds)
+        finally:
+            sim.pause()
+    return {"rtf_without": statistics.median(without), "rtf_with": statistics.median(with_stream),
+            "rtf_without_min": min(without), "rtf_with_min": min(with_stream),
+            "samples_per_s": statistics.median(received), "rounds": rounds}
+
+
 def sample_in_steps(engine: str, rounds: int) -> dict[str, float]:
     """Median time of one stream sample over that of one step (item 3 of the docstring)."""
     from galton.daemon.engines import create_engine
@@ -168,6 +194,8 @@ def main() -> None:
     parser.add_argument("--json")
     parser.add_argument("--sample-only", action="store_true",
                         help="only item 3 (in-process, no daemon)")
+    parser.add_argument("--paced", action="store_true",
+                        help="items 3 and 4: 1,000 bodies at RTF 1.0, without and with a stream")
     args = parser.parse_args()
     sample = sample_in_steps(args.engine, args.rounds)
     print(f"one sample of 1,000 poses: {sample['sample_s'] * 1e6:.0f} us = "
@@ -175,6 +203,15 @@ def main() -> None:
           f"us); at 60 Hz: {60 * sample['sample_s'] * 100:.2f} % of the physics thread")
     if args.sample_only:
         write_json(args.json, {"sample": sample, "engine": args.engine})
+        return
+    if args.paced:
+        paced = paced_cost(args.engine, args.seconds, args.rounds)
+        print(f"# 1,000 bodies at RTF 1.0 on {machine()}, {args.engine}: achieved RTF "
+              f"{paced['rtf_without']:.4f} without a stream (lowest window "
+              f"{paced['rtf_without_min']:.4f}), {paced['rtf_with']:.4f} with a 60 Hz stream "
+              f"(lowest {paced['rtf_with_min']:.4f}; {paced['samples_per_s']:.1f} samples/s "
+              f"received; medians of {paced['rounds']} windows each)")
+        write_json(args.json, {"paced": paced, "sample": sample, "engine": args.engine})
         return
     view = view_at_rtf_one(args.engine, args.seconds)
     cost = stream_cost(args.engine, args.seconds, args.rounds)
