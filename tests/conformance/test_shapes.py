@@ -13,7 +13,7 @@ from galton.protocol import FeatureUnsupportedError, NotFoundError
 from galton.protocol.mesh import box_mesh
 
 # Engines that keep a loaded model's mesh triangles (the others tell such a mesh as its box).
-TELLS_MODEL_MESHES = ("mujoco",)
+TELLS_MODEL_MESHES = ("mujoco", "pybullet")
 
 URDF = """<robot name="crate"><link name="base">
   <inertial><origin xyz="0.05 0 0"/><mass value="1"/>
@@ -104,3 +104,38 @@ def test_a_robots_mesh_links_are_their_triangles_or_flagged_boxes(sim: Client,
     for shape in told:  # in the row's frame, inside the box the row gives
         assert shape.faces is not None and shape.faces.max() < len(shape.vertices)
         assert np.all(np.abs(shape.vertices) <= np.asarray(shape.size) + 1e-6)
+
+
+def test_a_robots_mesh_triangles_fill_the_engines_own_box(sim: Client, engine: str) -> None:
+    """The triangles sent are where the engine collides: placed by the link's pose and the
+    row's, they span the engine's own box of the link (PyBullet's getAABB, DART's), within
+    a collision margin. MuJoCo's box of a link is its mesh geoms' boxes turned, looser."""
+    if engine not in ("pybullet", "dart"):
+        pytest.skip(f"{engine}'s own box of a link is not its triangles' box")
+    names = load(sim, "urdf", path=ROBOTS["kuka"])
+    shapes, bounds = sim.get_shapes(names), sim.get_bounds(names)
+    poses = sim.get_states(names).poses
+    for row, name in enumerate(names):
+        points = [_placed(poses[row], shape.pose, shape.vertices)
+                  for shape in shapes[name] if shape.vertices is not None]
+        if not points:
+            continue
+        every = np.concatenate(points)
+        found = np.concatenate([every.min(axis=0), every.max(axis=0)])
+        np.testing.assert_allclose(found, bounds[name], atol=0.03, err_msg=name)
+
+
+def _placed(body: np.ndarray, row: np.ndarray, vertices: np.ndarray) -> np.ndarray:
+    """Vertices in the world: turned and moved by the row's pose, then the body's."""
+    for pose in (row, body):
+        vertices = _turn(pose[3:], vertices) + pose[:3]
+    return vertices
+
+
+def _turn(quat: np.ndarray, points: np.ndarray) -> np.ndarray:
+    x, y, z, w = quat
+    matrix = np.array([
+        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+    return points @ matrix.T

@@ -2,9 +2,10 @@
 protocol's primitives (``get_shapes``).
 
 Bullet reports each shape in the link's inertial frame (its centre of mass), with full
-lengths where the protocol keeps half sizes; a mesh is reported as the box around it, from
-the link's own box (``getAABB``, world axes) turned into the link frame: a box that holds
-the mesh, not the tightest one.
+lengths where the protocol keeps half sizes. A mesh file's row is the box around the convex
+hull PyBullet collides with (mesh_files.py), its triangles beside it; any other mesh (one
+whose file cannot be read) is the link's own box (``getAABB``, world axes) turned into the
+link frame: a box that holds the mesh, not the tightest one, with no triangles.
 """
 
 from __future__ import annotations
@@ -13,14 +14,18 @@ import numpy as np
 import pybullet
 from pybullet_utils.bullet_client import BulletClient
 
-from galton.daemon.engines.base import Shape
+from galton.daemon.engines.base import Shape, ShapeMesh
+from galton.daemon.engines.pybullet.mesh_files import HullCache
 
 Pose = tuple[float, ...]
 
 
-def link_shapes(bc: BulletClient, uid: int, link: int) -> list[Shape]:
+def link_shapes_and_meshes(bc: BulletClient, uid: int, link: int, hulls: HullCache | None
+                           ) -> tuple[list[Shape], dict[int, ShapeMesh]]:
+    """The link's shapes, and with ``hulls`` the triangles of its mesh rows by row index."""
     inertial = bc.getDynamicsInfo(uid, link)[3:5]
     found: list[Shape] = []
+    meshes: dict[int, ShapeMesh] = {}
     for row in bc.getCollisionShapeData(uid, link):
         geometry, dimensions = int(row[2]), [float(v) for v in row[3]]
         position, orientation = bc.multiplyTransforms(*inertial, row[5], row[6])
@@ -35,8 +40,19 @@ def link_shapes(bc: BulletClient, uid: int, link: int) -> list[Shape]:
         elif geometry == pybullet.GEOM_PLANE:
             found.append(("plane", (0.0, 0.0), pose))
         else:
-            found.append(_mesh_box(bc, uid, link))
-    return found
+            hull = None
+            if hulls is not None and geometry == pybullet.GEOM_MESH:
+                hull = hulls.get(bytes(row[4]).decode(errors="replace"), tuple(dimensions))
+            if hull is None:
+                found.append(_mesh_box(bc, uid, link))
+                continue
+            centre, half, mesh = hull
+            position, orientation = bc.multiplyTransforms(position, orientation,
+                                                          centre.tolist(), (0, 0, 0, 1))
+            meshes[len(found)] = mesh
+            found.append(("mesh", tuple(float(v) for v in half),
+                          (*(float(v) for v in position), *(float(v) for v in orientation))))
+    return found, meshes
 
 
 def _mesh_box(bc: BulletClient, uid: int, link: int) -> Shape:

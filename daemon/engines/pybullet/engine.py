@@ -71,6 +71,7 @@ from galton.daemon.engines.base import (
     FEATURE_WRENCH,
     Engine,
     Shape,
+    ShapeMesh,
     native_output_silenced,
 )
 from galton.daemon.engines.params import check_updates
@@ -81,6 +82,7 @@ from galton.daemon.engines.pybullet import state as states
 from galton.daemon.engines.pybullet.articulated import Articulated
 from galton.daemon.engines.pybullet.calls import engine_call
 from galton.daemon.engines.pybullet.frames import Offset
+from galton.daemon.engines.pybullet.mesh_files import HullCache
 from galton.daemon.engines.pybullet.models import MODEL_FORMATS
 from galton.daemon.engines.pybullet.params import SPECS, Parameters
 from galton.daemon.engines.pybullet.perception import Perception
@@ -121,6 +123,7 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
         self._change = bc.changeDynamics
         self._step = bc.stepSimulation
         self._shapes = ShapeCache(bc)
+        self._hulls = HullCache()  # model mesh files' hulls, for get_shapes
         self.bodies: dict[str, _Body] = {}
         self._maker = BodyMaker(bc)
         self._values: dict[str, Any] = {name: spec.default for name, spec in SPECS.items()}
@@ -319,7 +322,19 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
         for name in names:
             root, link = links.get(name, (name, -1))
             [body] = self.lookup([root])
-            found.append(collisions.link_shapes(self._bc, body.uid, link))
+            found.append(collisions.link_shapes_and_meshes(self._bc, body.uid, link,
+                                                           self._hulls)[0])
+        return found
+
+    def shape_meshes(self, names: Sequence[str]) -> list[dict[int, ShapeMesh]]:
+        """The convex hulls PyBullet collides model mesh links with (mesh_files.py)."""
+        links = self.robots.links
+        found = []
+        for name in names:
+            root, link = links.get(name, (name, -1))
+            [body] = self.lookup([root])
+            found.append(collisions.link_shapes_and_meshes(self._bc, body.uid, link,
+                                                           self._hulls)[1])
         return found
 
     def _read(self, ids: list[int]) -> tuple[np.ndarray, np.ndarray]:
