@@ -13,7 +13,7 @@ from galton.protocol import FeatureUnsupportedError, NotFoundError
 from galton.protocol.mesh import box_mesh
 
 # Engines that keep a loaded model's mesh triangles (the others tell such a mesh as its box).
-TELLS_MODEL_MESHES = ("mujoco", "pybullet")
+TELLS_MODEL_MESHES = ("mujoco", "pybullet", "dart")
 
 URDF = """<robot name="crate"><link name="base">
   <inertial><origin xyz="0.05 0 0"/><mass value="1"/>
@@ -107,20 +107,27 @@ def test_a_robots_mesh_links_are_their_triangles_or_flagged_boxes(sim: Client,
 
 
 def test_a_robots_mesh_triangles_fill_the_engines_own_box(sim: Client, engine: str) -> None:
-    """The triangles sent are where the engine collides: placed by the link's pose and the
-    row's, they span the engine's own box of the link (PyBullet's getAABB, DART's), within
-    a collision margin. MuJoCo's box of a link is its mesh geoms' boxes turned, looser."""
+    """The triangles sent are where the engine collides: they fill the box the engine keeps
+    around the mesh (the row's size: DART's own box, PyBullet's hull's), and placed by the
+    link's pose and the row's they span PyBullet's own box of the link (getAABB) within its
+    collision margin. MuJoCo's box of a link is its mesh geoms' boxes turned, looser."""
     if engine not in ("pybullet", "dart"):
         pytest.skip(f"{engine}'s own box of a link is not its triangles' box")
     names = load(sim, "urdf", path=ROBOTS["kuka"])
-    shapes, bounds = sim.get_shapes(names), sim.get_bounds(names)
-    poses = sim.get_states(names).poses
+    shapes = sim.get_shapes(names)
+    rows = [shape for name in names for shape in shapes[name]]
+    assert rows and all(shape.vertices is not None for shape in rows)
+    for shape in rows:
+        assert shape.vertices is not None
+        np.testing.assert_allclose(shape.vertices.max(axis=0), shape.size, atol=1e-3)
+        np.testing.assert_allclose(shape.vertices.min(axis=0), -np.asarray(shape.size),
+                                   atol=1e-3)
+    if engine == "dart":
+        return  # DART tells no box of a loaded link (get_bounds: FEATURE_UNSUPPORTED)
+    bounds, poses = sim.get_bounds(names), sim.get_states(names).poses
     for row, name in enumerate(names):
-        points = [_placed(poses[row], shape.pose, shape.vertices)
-                  for shape in shapes[name] if shape.vertices is not None]
-        if not points:
-            continue
-        every = np.concatenate(points)
+        every = np.concatenate([_placed(poses[row], shape.pose, shape.vertices)
+                                for shape in shapes[name] if shape.vertices is not None])
         found = np.concatenate([every.min(axis=0), every.max(axis=0)])
         np.testing.assert_allclose(found, bounds[name], atol=0.03, err_msg=name)
 

@@ -46,15 +46,17 @@ from galton.daemon.engines.base import (
     ContactPoints,
     Engine,
     Shape,
+    ShapeMesh,
 )
 from galton.daemon.engines.dart import contacts as contact_points
 from galton.daemon.engines.dart import frames, meshes, state
 from galton.daemon.engines.dart import spawn as books
 from galton.daemon.engines.dart.joints import Robots, Target
+from galton.daemon.engines.dart.mesh_files import MeshFiles
 from galton.daemon.engines.dart.models import MODEL_FORMATS
 from galton.daemon.engines.dart.params import SPECS
 from galton.daemon.engines.dart.scene import Scene
-from galton.daemon.engines.dart.shapes import node_shapes
+from galton.daemon.engines.dart.shapes import node_meshes, node_shapes
 from galton.daemon.engines.dart.snapshot import Snapshots
 from galton.daemon.engines.params import check_updates
 from galton.protocol import (
@@ -89,6 +91,7 @@ class DartEngine(Scene, Snapshots, Engine):
         self._world = books.new_world(self._values)
         self._bodies: dict[str, books.Body] = {}
         self._robots = Robots()
+        self._mesh_files = MeshFiles()  # model mesh files' triangles, for get_shapes
         self._init_scene()
         self._unchecked = False  # states were set from outside since the last step
         self._diverged = False
@@ -180,6 +183,10 @@ class DartEngine(Scene, Snapshots, Engine):
     # -- states ---------------------------------------------------------------------------
     def shapes(self, names: Sequence[str]) -> list[list[Shape]]:
         return [node_shapes(body.node) for body in self._lookup(names)]
+
+    def shape_meshes(self, names: Sequence[str]) -> list[dict[int, ShapeMesh]]:
+        """The triangles DART collides model mesh links with (mesh_files.py)."""
+        return [node_meshes(body.node, self._mesh_files) for body in self._lookup(names)]
 
     def get_states(self, names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
         return state.read(self._lookup(names))

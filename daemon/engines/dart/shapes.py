@@ -1,6 +1,7 @@
 """A DART model link's collision shapes in its body node's frame (``get_shapes``): DART's
 own box, sphere, cylinder and capsule (full lengths turned into half sizes); any other
-shape (a mesh, an ellipsoid) as the box DART keeps around it."""
+shape (a mesh, an ellipsoid) as the box DART keeps around it, a mesh file's triangles beside
+it (mesh_files.py), in that box's frame."""
 
 from __future__ import annotations
 
@@ -9,17 +10,34 @@ from typing import Any
 import dartpy as dart
 import numpy as np
 
-from galton.daemon.engines.base import Shape
+from galton.daemon.engines.base import Shape, ShapeMesh
 from galton.daemon.engines.dart import frames
+from galton.daemon.engines.dart.mesh_files import MeshFiles
 
 
 def node_shapes(node: Any) -> list[Shape]:
-    found: list[Shape] = []
-    for k in range(node.getNumShapeNodes()):
-        shape_node = node.getShapeNode(k)
-        if shape_node.hasCollisionAspect():
-            found.append(_shape(shape_node.getShape(), shape_node.getRelativeTransform()))
+    return [_shape(shape, transform) for shape, transform in _colliding(node)]
+
+
+def node_meshes(node: Any, files: MeshFiles) -> dict[int, ShapeMesh]:
+    """The triangles of the node's mesh shapes by row, about the centre of DART's box."""
+    found: dict[int, ShapeMesh] = {}
+    for row, (shape, _) in enumerate(_colliding(node)):
+        if shape.getType() != dart.dynamics.MeshShape.getStaticType():
+            continue
+        mesh = files.get(str(shape.getMeshPath()), tuple(shape.getScale()))
+        if mesh is not None:
+            box = shape.getBoundingBox()
+            centre = (np.asarray(box.getMin(), dtype=float)
+                      + np.asarray(box.getMax(), dtype=float)) / 2
+            found[row] = (mesh[0] - centre, mesh[1])
     return found
+
+
+def _colliding(node: Any) -> list[tuple[Any, Any]]:
+    shape_nodes = (node.getShapeNode(k) for k in range(node.getNumShapeNodes()))
+    return [(sn.getShape(), sn.getRelativeTransform()) for sn in shape_nodes
+            if sn.hasCollisionAspect()]
 
 
 def _shape(shape: Any, transform: Any) -> Shape:
