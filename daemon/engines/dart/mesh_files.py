@@ -8,6 +8,8 @@ once per file and scale; a file it cannot read leaves the row as its box.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import trimesh
 
@@ -31,7 +33,7 @@ def _read(path: str, scale: np.ndarray) -> ShapeMesh | None:
     if not path:
         return None
     try:
-        loaded = trimesh.load(path, force="mesh", process=False)
+        loaded: Any = trimesh.load(path, force="mesh", process=False)  # a Trimesh
     except (OSError, ValueError, IndexError):
         return None
     vertices = np.asarray(loaded.vertices, dtype=float) * scale

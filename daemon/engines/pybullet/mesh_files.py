@@ -9,6 +9,8 @@ that a row's pose and half sizes are the box around it.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import trimesh
 from scipy.spatial import ConvexHull, QhullError
@@ -35,7 +37,7 @@ class HullCache:
 
 def _read_hull(path: str, scale: np.ndarray) -> HullEntry:
     try:
-        loaded = trimesh.load(path, force="mesh", process=False)
+        loaded: Any = trimesh.load(path, force="mesh", process=False)  # a Trimesh
         points = np.asarray(loaded.vertices, dtype=float) * scale
         hull = ConvexHull(points)
     except (OSError, ValueError, IndexError, QhullError):
