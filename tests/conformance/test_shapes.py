@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from support_models import ROBOTS, load
+from support_models import ROBOTS, load, load_robot
 
 from galton.client import Client, ShapeInfo, body_group, meshes, spheres
 from galton.protocol import FeatureUnsupportedError, NotFoundError
@@ -113,7 +113,7 @@ def test_a_robots_mesh_triangles_fill_the_engines_own_box(sim: Client, engine: s
     collision margin. MuJoCo's box of a link is its mesh geoms' boxes turned, looser."""
     if engine not in ("pybullet", "dart"):
         pytest.skip(f"{engine}'s own box of a link is not its triangles' box")
-    names = load(sim, "urdf", path=ROBOTS["kuka"])
+    names = load_robot(sim, "kuka")  # sent as text: the daemon makes its file names whole
     shapes = sim.get_shapes(names)
     rows = [shape for name in names for shape in shapes[name]]
     assert rows and all(shape.vertices is not None for shape in rows)
