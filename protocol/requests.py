@@ -52,7 +52,8 @@ def _kind(kind: str, **extra: Any) -> msgspec.Meta:
 
 
 # Every number is finite: NaN and the infinities fail these bounds (msgspec checks them in C).
-_BIG = sys.float_info.max
+# The exported JSON Schema leaves them out (operations.json_schema): they are no real range.
+_BIG = FINITE_BOUND = sys.float_info.max
 Number = Annotated[float, _kind("number"), msgspec.Meta(ge=-_BIG, le=_BIG)]
 Positive = Annotated[float, _kind("number"), msgspec.Meta(gt=0.0, le=_BIG)]
 NonNegative = Annotated[float, _kind("number"), msgspec.Meta(ge=0.0, le=_BIG)]

@@ -117,6 +117,19 @@ def test_the_schema_shows_ranges_and_defaults(schema: dict[str, Any]) -> None:
     assert not validator(schema, "step", "request").is_valid({"count": 0})
 
 
+def test_the_schema_shows_no_finite_number_sentinel(schema: dict[str, Any]) -> None:
+    """Finite-only numbers are checked by the daemon; the schema shows real ranges only
+    (JSON carries no NaN or infinity anyway), so +-1.8e308 never appears."""
+    printed = json.dumps(schema)
+    assert "1.7976931348623157e+308" not in printed and "e+308" not in printed
+    sim_time = schema["$defs"]["RunUntil"]["properties"]["sim_time"]
+    assert sim_time["minimum"] == 0.0 and "maximum" not in sim_time
+    horizon = schema["$defs"]["Predict"]["properties"]["horizon"]
+    assert "maximum" not in horizon and horizon["exclusiveMinimum"] == 0.0
+    rate = schema["$defs"]["StreamStates"]["properties"]["rate"]
+    assert (rate["minimum"], rate["maximum"]) == (1.0, 60.0)
+
+
 def test_the_schema_holds_declared_replies(schema: dict[str, Any]) -> None:
     bounds = {"names": ["a"], "bounds": pack_f64(np.zeros((1, 6)))}
     validator(schema, "get_bounds", "reply").validate(as_json(bounds))
