@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from galton.daemon.core.calls import Call
-from galton.daemon.core.context import OpContext
+from galton.daemon.core.context import CapabilitiesContext
 from galton.daemon.core.host_info import host_info
 from galton.daemon.core.reply_limit import require_room
 from galton.daemon.engines import ENGINE_CLASSES
@@ -308,7 +308,7 @@ def set_params(world: World, request: rq.SetParams) -> dict[str, Any]:
 
 
 @handles("capabilities")
-def capabilities(loop: OpContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
+def capabilities(loop: CapabilitiesContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
     """The engine's capabilities, with what the daemon adds (its fronts' endpoints)."""
     caps = loop.world_for(request).engine.capabilities()
     caps.engines_available = tuple(ENGINE_CLASSES)
