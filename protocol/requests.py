@@ -31,6 +31,7 @@ from galton.protocol.vocabulary import (
     DEFAULT_SIGMA_ANGLE,
     DEFAULT_SIGMA_POSITION,
     DEFAULT_SIGMA_SPEED,
+    MAX_BATCH,
     MAX_CAMERAS_PER_REQUEST,
     MAX_RATE_HZ,
     MAX_RTF,
@@ -63,7 +64,11 @@ Count = Annotated[int, _kind("count"), msgspec.Meta(ge=1)]
 Text = Annotated[str, _kind("string")]
 LongText = Annotated[str, _kind("string", long_text=True)]
 Flag = Annotated[bool, _kind("bool")]
-Names = Annotated[list[str], _kind("names")]
+# A names list holds 1 to MAX_BATCH names; each name's form (printable, distinct) is checked
+# by the handler (protocol/model.check_names), which msgspec cannot declare.
+Names = Annotated[list[str], _kind("names"), msgspec.Meta(min_length=1, max_length=MAX_BATCH)]
+# stream_states: empty means every entity.
+NamesOrEvery = Annotated[list[str], _kind("names")]
 Fields = Annotated[dict[str, Any], _kind("map")]
 Groups = Annotated[list[dict[str, Any]], _kind("groups")]
 Cameras = Annotated[list[dict[str, Any]], _kind("cameras"),
@@ -274,7 +279,7 @@ class SetParams(Args, kw_only=True, forbid_unknown_fields=True):
 
 class StreamStates(Args, kw_only=True, forbid_unknown_fields=True):
     rate: RateHz = DEFAULT_RATE_HZ
-    names: Names | None = None
+    names: NamesOrEvery | None = None
 
 
 class CloseStream(Args, kw_only=True, forbid_unknown_fields=True):

@@ -19,6 +19,7 @@ from galton.protocol import InvalidArgumentError, MalformedRequestError, pack_f6
 from galton.protocol import replies as rp
 from galton.protocol import requests as rq
 from galton.protocol.operations import OPERATIONS
+from galton.protocol.vocabulary import MAX_BATCH
 
 REFUSED = {
     "wrong type": ("step", {"count": "ten"}, r"step\.count must be int, got 'ten'"),
@@ -130,6 +131,20 @@ def test_the_schema_shows_no_finite_number_sentinel(schema: dict[str, Any]) -> N
     assert (rate["minimum"], rate["maximum"]) == (1.0, 60.0)
 
 
+def test_a_names_list_declares_its_length_per_field(schema: dict[str, Any]) -> None:
+    """Every names list holds 1 to MAX_BATCH names, refused before any handler with its
+    "op.field" label and value; stream_states' names may be empty (every entity)."""
+    with pytest.raises(InvalidArgumentError, match=r"set_states\.names must be a list of 1 "
+                       r"to 100000 items, got \[\]"):
+        OPERATIONS["set_states"].decode({"names": []})
+    with pytest.raises(InvalidArgumentError, match=r"step\.read must be a list of 1"):
+        OPERATIONS["step"].decode({"count": 1, "read": []})
+    assert OPERATIONS["stream_states"].decode({"names": []}).names == []
+    names = schema["$defs"]["SetStates"]["properties"]["names"]
+    assert (names["minItems"], names["maxItems"]) == (1, MAX_BATCH)
+    assert "minItems" not in json.dumps(schema["$defs"]["StreamStates"]["properties"]["names"])
+
+
 def test_the_schema_holds_declared_replies(schema: dict[str, Any]) -> None:
     bounds = {"names": ["a"], "bounds": pack_f64(np.zeros((1, 6)))}
     validator(schema, "get_bounds", "reply").validate(as_json(bounds))
@@ -153,3 +168,13 @@ def test_a_newer_daemons_extra_field_is_left_out_unless_exact() -> None:
     assert rp.decode_result(rp.WorldsReply, grown).worlds[0].name == "w"
     with pytest.raises(MalformedRequestError, match=r"\$\.worlds\[0\]\.colour not declared"):
         rp.decode_result(rp.WorldsReply, grown, exact=True)
+
+
+def test_sim_status_follows_the_status_reply() -> None:
+    """The SDK's SimStatus is the declared StatusReply, field for field: a field added to
+    one and not the other fails here, not in a client."""
+    from dataclasses import fields
+
+    from galton.protocol import SimStatus
+
+    assert tuple(f.name for f in fields(SimStatus)) == rp.StatusReply.__struct_fields__
