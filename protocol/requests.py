@@ -32,9 +32,11 @@ from galton.protocol.vocabulary import (
     DEFAULT_SIGMA_POSITION,
     DEFAULT_SIGMA_SPEED,
     MAX_BATCH,
+    MAX_CAMERA_NAME,
     MAX_CAMERAS_PER_REQUEST,
     MAX_RATE_HZ,
     MAX_RTF,
+    MAX_WORLD_NAME,
     MIN_RATE_HZ,
     MODEL_FORMATS,
     EngineName,
@@ -63,6 +65,11 @@ RateHz = Annotated[float, _kind("number"), msgspec.Meta(ge=MIN_RATE_HZ, le=MAX_R
 Count = Annotated[int, _kind("count"), msgspec.Meta(ge=1)]
 Text = Annotated[str, _kind("string")]
 LongText = Annotated[str, _kind("string", long_text=True)]
+# The name of a world or slot being made, of a camera being added (that each is printable
+# is the handler's check: msgspec cannot declare str.isprintable).
+NewName = Annotated[str, _kind("string"), msgspec.Meta(min_length=1, max_length=MAX_WORLD_NAME)]
+CameraName = Annotated[str, _kind("string"),
+                       msgspec.Meta(min_length=1, max_length=MAX_CAMERA_NAME)]
 Flag = Annotated[bool, _kind("bool")]
 # A names list holds 1 to MAX_BATCH names; each name's form (printable, distinct) is checked
 # by the handler (protocol/model.check_names), which msgspec cannot declare.
@@ -207,7 +214,7 @@ class ApplyWrench(Args, kw_only=True, forbid_unknown_fields=True):
 
 
 class Snapshot(Args, kw_only=True, forbid_unknown_fields=True):
-    slot: Text | None = None
+    slot: NewName | None = None
     blob: Flag = False
 
 
@@ -221,13 +228,13 @@ class Slot(Args, kw_only=True, forbid_unknown_fields=True):
 
 
 class CreateWorld(Args, kw_only=True, forbid_unknown_fields=True):
-    name: Text
+    name: NewName
     engine: Engine | None = None
     params: Fields | None = None
 
 
 class ForkWorld(Args, kw_only=True, forbid_unknown_fields=True):
-    name: Text
+    name: NewName
     source: Text | None = None
 
 
@@ -262,7 +269,7 @@ class Render(Args, kw_only=True, forbid_unknown_fields=True):
 
 
 class AddCamera(Args, kw_only=True, forbid_unknown_fields=True):
-    name: Text
+    name: CameraName
     camera: Fields
 
 
@@ -352,6 +359,8 @@ def range_text(declared: type[msgspec.Struct], name: str) -> str:
     meta = _constraints(declared, name)
     if "min_length" in meta or "max_length" in meta:
         shortest, longest = meta.get("min_length", 0), meta.get("max_length", math.inf)
+        if _metas(declared, name)[0] is str:
+            return f"a string of {shortest:g} to {longest:g} characters"
         return f"a list of {shortest:g} to {longest:g} items"
     what = "a finite number" if field_kind(declared, name)[0] == "number" else "an integer"
     low = [f"{sign} {meta[k]:g}" for k, sign in (("ge", ">="), ("gt", ">"))

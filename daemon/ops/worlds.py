@@ -28,11 +28,11 @@ from galton.protocol import (
 )
 from galton.protocol import requests as rq
 from galton.protocol.errors import brief
+from galton.protocol.vocabulary import MAX_WORLD_NAME
 
 if TYPE_CHECKING:
     from galton.daemon.engines.base import Engine
 
-MAX_WORLD_NAME = 64
 
 
 def world_row(loop: WorldsContext, world: World) -> dict[str, Any]:
@@ -50,7 +50,7 @@ def list_worlds(loop: WorldsContext, call: Call, request: rq.NoArgs) -> dict[str
 
 
 def _new_name(loop: WorldsContext, name: str, where: str) -> str:
-    if not 1 <= len(name) <= MAX_WORLD_NAME or not name.isprintable():
+    if not name.isprintable():  # its length is declared (protocol/requests.py)
         raise InvalidArgumentError(f"{where}.name {brief(name)} must be 1-{MAX_WORLD_NAME} "
                                    "printable characters")
     if name == loop.world.name or name in loop.side:
@@ -117,8 +117,7 @@ def snapshot(loop: WorldsContext, call: Call, request: rq.Snapshot) -> dict[str,
     if slot_name is None and not want_blob:
         raise InvalidArgumentError("snapshot needs a 'slot' to keep it in, 'blob': true to "
                                    "return it, or both")
-    if slot_name is not None and (not 1 <= len(slot_name) <= MAX_WORLD_NAME
-                                  or not slot_name.isprintable()):
+    if slot_name is not None and not slot_name.isprintable():  # its length is declared
         raise InvalidArgumentError(f"snapshot.slot {brief(slot_name)} must be "
                                    f"1-{MAX_WORLD_NAME} printable characters")
     world.verify()

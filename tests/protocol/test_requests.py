@@ -178,3 +178,20 @@ def test_sim_status_follows_the_status_reply() -> None:
     from galton.protocol import SimStatus
 
     assert tuple(f.name for f in fields(SimStatus)) == rp.StatusReply.__struct_fields__
+
+
+@pytest.mark.parametrize("op, args, label", [
+    ("create_world", {"name": ""}, "create_world.name"),
+    ("fork_world", {"name": "w" * 65}, "fork_world.name"),
+    ("snapshot", {"slot": "s" * 65}, "snapshot.slot"),
+    ("add_camera", {"name": "c" * 65, "camera": {}}, "add_camera.name"),
+])
+def test_new_world_camera_and_slot_names_declare_their_length(
+        schema: dict[str, Any], op: str, args: dict[str, Any], label: str) -> None:
+    with pytest.raises(InvalidArgumentError,
+                       match=rf"{label} must be a string of 1 to 64 characters, got"):
+        OPERATIONS[op].decode(args)
+    declared = schema["$defs"][OPERATIONS[op].request.__name__]["properties"]
+    field = declared[label.split(".")[1]]
+    shown = field if "maxLength" in field else field["anyOf"][0]
+    assert (shown["minLength"], shown["maxLength"]) == (1, 64)
