@@ -180,9 +180,24 @@ class SetStates(Args, kw_only=True, forbid_unknown_fields=True):
     twists: Twists | None = None
 
 
+Unit = Annotated[float, _kind("number"), msgspec.Meta(ge=0.0, le=1.0)]
+
+
+class UpdateProperties(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
+    """``update``'s properties; one not sent (or nil) is left as it is. Each tag's form
+    (a printable entity-like name) is the handler's check."""
+
+    mass: Annotated[float, _kind("number"), msgspec.Meta(gt=0.0, le=1e9)] | None = None
+    friction: Annotated[float, _kind("number"), msgspec.Meta(ge=0.0, le=100.0)] | None = None
+    restitution: Unit | None = None
+    rgba: Annotated[list[Unit], _kind("numbers"),
+                    msgspec.Meta(min_length=4, max_length=4)] | None = None
+    tags: Annotated[list[str], _kind("names")] | None = None
+
+
 class Update(Args, kw_only=True, forbid_unknown_fields=True):
     names: Names
-    properties: Fields
+    properties: Annotated[UpdateProperties, _kind("map")]
 
 
 class Joints(Args, kw_only=True, forbid_unknown_fields=True):
@@ -330,6 +345,8 @@ def explain(op: str, declared: type[Args], error: str, args: dict[str, Any]) -> 
         expected = what.split("`")[1].removesuffix(" | null")  # None means "not sent"
         if ", got `" not in what and owner and isinstance(steps[-1], str):  # a range
             expected = range_text(owner, steps[-1])
+        elif ", got `" not in what:  # a list item's range: "float <= 1.0"
+            expected = what.removeprefix("Expected ").replace("`", "").replace(" | null", "")
         return f"{where} must be {expected}, got {brief(value)}"
     return f"{where}: {what[:1].lower()}{what[1:]}, got {brief(value)}"  # ranges, lengths
 

@@ -89,6 +89,12 @@ BAD_REQUESTS = {
         "names": ["ball_0"], "properties": {"colour": "red"}}), ResultCode.INVALID_ARGUMENT),
     "negative-mass": ("update", request("update", {
         "names": ["ball_0"], "properties": {"mass": -2.0}}), ResultCode.INVALID_ARGUMENT),
+    "misspelt-property": ("update", request("update", {
+        "names": ["ball_0"], "properties": {"frcition": 0.5}}), ResultCode.INVALID_ARGUMENT),
+    "short-rgba": ("update", request("update", {
+        "names": ["ball_0"], "properties": {"rgba": [1, 0, 0]}}), ResultCode.INVALID_ARGUMENT),
+    "bad-tag": ("update", request("update", {
+        "names": ["ball_0"], "properties": {"tags": ["ok", ""]}}), ResultCode.INVALID_ARGUMENT),
     "unknown-param": ("set_params", request("set_params", {"params": {"timestpe": 0.01}}),
                       ResultCode.INVALID_ARGUMENT),
     "zero-timestep": ("set_params", request("set_params", {"params": {"timestep": 0.0}}),

@@ -195,3 +195,16 @@ def test_new_world_camera_and_slot_names_declare_their_length(
     field = declared[label.split(".")[1]]
     shown = field if "maxLength" in field else field["anyOf"][0]
     assert (shown["minLength"], shown["maxLength"]) == (1, 64)
+
+
+@pytest.mark.parametrize("properties, said", [
+    ({"frcition": 0.5}, r"update\.properties takes no field 'frcition' \(did you mean "
+                        r"'friction'.*it takes: mass, friction"),
+    ({"mass": -2.0}, r"update\.properties\.mass must be .*, got -2\.0"),
+    ({"restitution": "high"}, r"update\.properties\.restitution must be .*, got 'high'"),
+    ({"rgba": [1, 0, 0]}, r"update\.properties\.rgba must be a list of 4 to 4 items"),
+    ({"rgba": [1, 0, 0, 2]}, r"update\.properties\.rgba\[3\] must be float <= 1\.0, got 2"),
+])
+def test_update_properties_are_declared(properties: dict[str, Any], said: str) -> None:
+    with pytest.raises(InvalidArgumentError, match=said):
+        OPERATIONS["update"].decode({"names": ["a"], "properties": properties})
