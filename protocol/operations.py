@@ -196,12 +196,27 @@ def json_schema() -> dict[str, Any]:
     base64 strings, as a JSON rendering of the wire would carry them."""
     types = [t for op in OPERATIONS.values() for t in (op.request, op.reply) if t is not None]
     refs, defs = msgspec.json.schema_components(types, ref_template="#/$defs/{name}")
+    defs = _without_finite_sentinels(defs)
     by_type = dict(zip(types, refs, strict=True))
     operations = {name: {"request": by_type[op.request],
                          "reply": by_type[op.reply] if op.reply is not None else {}}
                   for name, op in OPERATIONS.items()}
     return {"$schema": "https://json-schema.org/draft/2020-12/schema", "$defs": defs,
             "operations": operations}
+
+
+def _without_finite_sentinels(node: Any) -> Any:
+    """``node`` less the +-1.8e308 bounds that make a number finite: the daemon checks
+    them, JSON cannot carry NaN or infinity, and to a reader they are noise."""
+    if isinstance(node, list):
+        return [_without_finite_sentinels(item) for item in node]
+    if not isinstance(node, dict):
+        return node
+    return {key: _without_finite_sentinels(value) for key, value in node.items()
+            if not (key in _BOUND_KEYS and abs(value) == rq.FINITE_BOUND)}
+
+
+_BOUND_KEYS = frozenset({"minimum", "maximum", "exclusiveMinimum", "exclusiveMaximum"})
 
 
 def operation(name: str) -> Operation:

@@ -31,9 +31,12 @@ from galton.protocol.vocabulary import (
     DEFAULT_SIGMA_ANGLE,
     DEFAULT_SIGMA_POSITION,
     DEFAULT_SIGMA_SPEED,
+    MAX_BATCH,
+    MAX_CAMERA_NAME,
     MAX_CAMERAS_PER_REQUEST,
     MAX_RATE_HZ,
     MAX_RTF,
+    MAX_WORLD_NAME,
     MIN_RATE_HZ,
     MODEL_FORMATS,
     EngineName,
@@ -52,7 +55,8 @@ def _kind(kind: str, **extra: Any) -> msgspec.Meta:
 
 
 # Every number is finite: NaN and the infinities fail these bounds (msgspec checks them in C).
-_BIG = sys.float_info.max
+# The exported JSON Schema leaves them out (operations.json_schema): they are no real range.
+_BIG = FINITE_BOUND = sys.float_info.max
 Number = Annotated[float, _kind("number"), msgspec.Meta(ge=-_BIG, le=_BIG)]
 Positive = Annotated[float, _kind("number"), msgspec.Meta(gt=0.0, le=_BIG)]
 NonNegative = Annotated[float, _kind("number"), msgspec.Meta(ge=0.0, le=_BIG)]
@@ -61,8 +65,17 @@ RateHz = Annotated[float, _kind("number"), msgspec.Meta(ge=MIN_RATE_HZ, le=MAX_R
 Count = Annotated[int, _kind("count"), msgspec.Meta(ge=1)]
 Text = Annotated[str, _kind("string")]
 LongText = Annotated[str, _kind("string", long_text=True)]
+# The name of a world or slot being made, of a camera being added (that each is printable
+# is the handler's check: msgspec cannot declare str.isprintable).
+NewName = Annotated[str, _kind("string"), msgspec.Meta(min_length=1, max_length=MAX_WORLD_NAME)]
+CameraName = Annotated[str, _kind("string"),
+                       msgspec.Meta(min_length=1, max_length=MAX_CAMERA_NAME)]
 Flag = Annotated[bool, _kind("bool")]
-Names = Annotated[list[str], _kind("names")]
+# A names list holds 1 to MAX_BATCH names; each name's form (printable, distinct) is checked
+# by the handler (protocol/model.check_names), which msgspec cannot declare.
+Names = Annotated[list[str], _kind("names"), msgspec.Meta(min_length=1, max_length=MAX_BATCH)]
+# stream_states: empty means every entity.
+NamesOrEvery = Annotated[list[str], _kind("names")]
 Fields = Annotated[dict[str, Any], _kind("map")]
 Groups = Annotated[list[dict[str, Any]], _kind("groups")]
 Cameras = Annotated[list[dict[str, Any]], _kind("cameras"),
@@ -167,9 +180,24 @@ class SetStates(Args, kw_only=True, forbid_unknown_fields=True):
     twists: Twists | None = None
 
 
+Unit = Annotated[float, _kind("number"), msgspec.Meta(ge=0.0, le=1.0)]
+
+
+class UpdateProperties(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
+    """``update``'s properties; one not sent (or nil) is left as it is. Each tag's form
+    (a printable entity-like name) is the handler's check."""
+
+    mass: Annotated[float, _kind("number"), msgspec.Meta(gt=0.0, le=1e9)] | None = None
+    friction: Annotated[float, _kind("number"), msgspec.Meta(ge=0.0, le=100.0)] | None = None
+    restitution: Unit | None = None
+    rgba: Annotated[list[Unit], _kind("numbers"),
+                    msgspec.Meta(min_length=4, max_length=4)] | None = None
+    tags: Annotated[list[str], _kind("names")] | None = None
+
+
 class Update(Args, kw_only=True, forbid_unknown_fields=True):
     names: Names
-    properties: Fields
+    properties: Annotated[UpdateProperties, _kind("map")]
 
 
 class Joints(Args, kw_only=True, forbid_unknown_fields=True):
@@ -201,7 +229,7 @@ class ApplyWrench(Args, kw_only=True, forbid_unknown_fields=True):
 
 
 class Snapshot(Args, kw_only=True, forbid_unknown_fields=True):
-    slot: Text | None = None
+    slot: NewName | None = None
     blob: Flag = False
 
 
@@ -215,13 +243,13 @@ class Slot(Args, kw_only=True, forbid_unknown_fields=True):
 
 
 class CreateWorld(Args, kw_only=True, forbid_unknown_fields=True):
-    name: Text
+    name: NewName
     engine: Engine | None = None
     params: Fields | None = None
 
 
 class ForkWorld(Args, kw_only=True, forbid_unknown_fields=True):
-    name: Text
+    name: NewName
     source: Text | None = None
 
 
@@ -256,7 +284,7 @@ class Render(Args, kw_only=True, forbid_unknown_fields=True):
 
 
 class AddCamera(Args, kw_only=True, forbid_unknown_fields=True):
-    name: Text
+    name: CameraName
     camera: Fields
 
 
@@ -273,7 +301,7 @@ class SetParams(Args, kw_only=True, forbid_unknown_fields=True):
 
 class StreamStates(Args, kw_only=True, forbid_unknown_fields=True):
     rate: RateHz = DEFAULT_RATE_HZ
-    names: Names | None = None
+    names: NamesOrEvery | None = None
 
 
 class CloseStream(Args, kw_only=True, forbid_unknown_fields=True):
@@ -317,6 +345,8 @@ def explain(op: str, declared: type[Args], error: str, args: dict[str, Any]) -> 
         expected = what.split("`")[1].removesuffix(" | null")  # None means "not sent"
         if ", got `" not in what and owner and isinstance(steps[-1], str):  # a range
             expected = range_text(owner, steps[-1])
+        elif ", got `" not in what:  # a list item's range: "float <= 1.0"
+            expected = what.removeprefix("Expected ").replace("`", "").replace(" | null", "")
         return f"{where} must be {expected}, got {brief(value)}"
     return f"{where}: {what[:1].lower()}{what[1:]}, got {brief(value)}"  # ranges, lengths
 
@@ -346,6 +376,8 @@ def range_text(declared: type[msgspec.Struct], name: str) -> str:
     meta = _constraints(declared, name)
     if "min_length" in meta or "max_length" in meta:
         shortest, longest = meta.get("min_length", 0), meta.get("max_length", math.inf)
+        if _metas(declared, name)[0] is str:
+            return f"a string of {shortest:g} to {longest:g} characters"
         return f"a list of {shortest:g} to {longest:g} items"
     what = "a finite number" if field_kind(declared, name)[0] == "number" else "an integer"
     low = [f"{sign} {meta[k]:g}" for k, sign in (("ge", ">="), ("gt", ">"))

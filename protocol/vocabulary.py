@@ -13,6 +13,8 @@ POSE_WIDTH = 7
 TWIST_WIDTH = 6
 MAX_BATCH = 100_000
 MAX_NAME_LENGTH = 128
+MAX_WORLD_NAME = 64  # a world's or a snapshot slot's name
+MAX_CAMERA_NAME = 64
 # Ranges and defaults of request fields that are the protocol's, not a daemon's option
 # (protocol/requests.py declares them; the daemon's own limits stay in its Limits).
 MAX_RTF = 1e6  # play / set_rtf

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from galton.daemon.core.calls import Call
-from galton.daemon.core.context import OpContext
+from galton.daemon.core.context import AccessContext
 from galton.protocol import ControlHeldError, InvalidArgumentError
 from galton.protocol import requests as rq
 from galton.protocol.operations import Operation
@@ -77,7 +77,7 @@ class Lease:
         return None if holder is None else holder.name
 
 
-def check(loop: OpContext, call: Call, op: Operation) -> None:
+def check(loop: AccessContext, call: Call, op: Operation) -> None:
     """Refuse a request that would change or step a world while another client holds
     control (called before its handler runs, so a refused request changed nothing)."""
     holder = loop.lease.holder
@@ -86,7 +86,7 @@ def check(loop: OpContext, call: Call, op: Operation) -> None:
     raise _held(holder, f"{op.name} from {_asker(call)} would change the world and is refused")
 
 
-def take_control(loop: OpContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
+def take_control(loop: AccessContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
     """Take the lease, or keep it (taking it again is no change); refused while another
     client holds it."""
     if call.client is None and call.peer is None:
@@ -113,7 +113,7 @@ def take_control(loop: OpContext, call: Call, request: rq.NoArgs) -> dict[str, A
     return {"controller": taker.name, "taken": True}
 
 
-def release_control(loop: OpContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
+def release_control(loop: AccessContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
     """Give the lease back (its holder only); with nobody holding it, nothing to do."""
     holder = loop.lease.holder
     if holder is None:
@@ -125,7 +125,7 @@ def release_control(loop: OpContext, call: Call, request: rq.NoArgs) -> dict[str
     return {"controller": None, "released": True}
 
 
-def client_gone(loop: OpContext, who: str) -> None:
+def client_gone(loop: AccessContext, who: str) -> None:
     """A client's token went, or a ZeroMQ connection closed: if it held control, the lease
     ends now."""
     holder = loop.lease.holder
@@ -149,5 +149,5 @@ def _asker(call: Call) -> str:
     return "an anonymous request (no 'client' in its envelope)"
 
 
-def _announce(loop: OpContext, holder: Holder, change: str) -> None:
+def _announce(loop: AccessContext, holder: Holder, change: str) -> None:
     loop.emit({"kind": "control", "holder": holder.name, "change": change})

@@ -1,9 +1,13 @@
-"""What a handler may reach of the core: ``OpContext``, the narrow face of the physics loop
-that every operation's handler receives (``handler(ctx, call, request) -> Result``).
+"""What a handler may reach of the core: small Protocols, one per part of the physics loop
+(the worlds, the clock, the step job, access, streams), and, per handler family, the
+narrowest union of them it needs. ``OpContext`` is all of them: what the dispatcher holds
+and passes (``handler(ctx, call, request) -> Result``); a handler typed with a narrower
+context takes it (mypy --strict holds that a family reaches nothing else).
 
-``SimLoop`` (daemon/core/loop.py) satisfies it structurally; handlers import this module,
+``SimLoop`` (daemon/core/loop.py) satisfies them structurally; handlers import this module,
 never the loop, so there is no import cycle (loop -> handlers -> time control -> loop).
-Everything here is used on the physics thread only.
+Everything here is used on the physics thread only. docs/ARCHITECTURE.md lists which family
+sees what.
 """
 
 from __future__ import annotations
@@ -24,34 +28,40 @@ if TYPE_CHECKING:
     from galton.protocol.requests import Args
 
 
-class OpContext(Protocol):
-    """The worlds, the clock and its state machine, the one step job, control, limits."""
+class Events(Protocol):
+    """Publishing to every front."""
 
-    # The worlds: the live one, side worlds by name, snapshot slots and how engines are made.
+    def emit(self, event: dict[str, Any]) -> None:
+        """Publish an event to every front."""
+
+
+class WorldChoice(Protocol):
+    """Which world a request names."""
+
+    def world_for(self, args: dict[str, Any] | Args) -> World:
+        """The world a request names (the live one when it names none), or NOT_FOUND."""
+
+
+class Worlds(WorldChoice, Events, Protocol):
+    """The worlds: the live one, side worlds by name, snapshot slots, how engines are made,
+    and the daemon's limits on them."""
+
     world: World
     side: dict[str, World]
     slots: SnapshotSlots
     snapshot_key: bytes | None
     engine_factory: Callable[[str], Any] | None
-    # Time: the state machine, pacing and the step job (started and ended by ``start_job``
-    # and ``end_job`` only).
+    limits: Limits
+
+
+class Clock(Protocol):
+    """Time: the state machine and pacing of the live world."""
+
     state: SimState
     target_rtf: float
     rtf: float
     pacer: Pacer
     rtf_window: RtfWindow
-    job: StepJob | None
-    step_queue: StepQueue  # step requests waiting for the job, handled when it ends
-    # Who may do what, and how much.
-    lease: Lease
-    limits: Limits
-    instance: str
-    advertised: dict[str, Any]
-    client_alive: Callable[[str], bool] | None
-    streams: StateStreams
-
-    def world_for(self, args: dict[str, Any] | Args) -> World:
-        """The world a request names (the live one when it names none), or NOT_FOUND."""
 
     def set_state(self, state: SimState) -> None:
         """Change the simulation state and announce it."""
@@ -59,17 +69,18 @@ class OpContext(Protocol):
     def status(self) -> SimStatus:
         """The status reply's values now."""
 
-    def emit(self, event: dict[str, Any]) -> None:
-        """Publish an event to every front."""
-
     def refresh_clock(self) -> None:
         """Take the world's clock into the atomic status snapshot."""
 
     def tune_switch_interval(self) -> None:
         """Set Python's switch interval for the live world's engine."""
 
-    def start_job(self, job: StepJob) -> None:
-        """Make ``job`` the step job (there is at most one)."""
+
+class JobEnd(Protocol):
+    """The one step job as its runners see it: the world it steps, ending and answering it."""
+
+    world: World
+    job: StepJob | None
 
     def end_job(self) -> StepJob | None:
         """End the step job, if any, and return it (its caller answers it)."""
@@ -77,8 +88,73 @@ class OpContext(Protocol):
     def finish_job(self, job: StepJob) -> None:
         """Answer a step job that has done its steps."""
 
+    def reply_error(self, call: Call, error: RemoteError) -> None:
+        """Answer ``call`` with ``error``."""
+
+
+class Jobs(JobEnd, Protocol):
+    """The one step job (started and ended by ``start_job`` and ``end_job`` only) and the
+    step requests waiting for it."""
+
+    step_queue: StepQueue
+
+    def start_job(self, job: StepJob) -> None:
+        """Make ``job`` the step job (there is at most one)."""
+
     def check_job_reads(self) -> None:
         """Answer the step job now if an entity it reads is gone."""
 
-    def reply_error(self, call: Call, error: RemoteError) -> None:
-        """Answer ``call`` with ``error``."""
+
+class SceneContext(WorldChoice, Events, Protocol):
+    """What a scene operation's wrapper sees (daemon/ops/handlers.py ``_scene``): the world
+    named, events, and the step job's reads."""
+
+    def check_job_reads(self) -> None:
+        """Answer the step job now if an entity it reads is gone."""
+
+
+class CapabilitiesContext(WorldChoice, Protocol):
+    """``capabilities``: the world named and what the daemon advertises."""
+
+    advertised: dict[str, Any]
+
+
+class AccessContext(Events, Protocol):
+    """Who controls the daemon (daemon/access/lease.py)."""
+
+    lease: Lease
+    client_alive: Callable[[str], bool] | None
+
+
+class StreamContext(WorldChoice, Protocol):
+    """State streams (daemon/world/state_streams.py): the worlds they sample, the clock's
+    state and rate they report, and whether their owner is still there."""
+
+    world: World
+    side: dict[str, World]
+    state: SimState
+    rtf: float
+    instance: str
+    streams: StateStreams
+    client_alive: Callable[[str], bool] | None
+
+
+class PredictContext(Worlds, Jobs, Protocol):
+    """``predict``: a copy of a world stepped as the step job."""
+
+
+class WorldsContext(Worlds, Clock, Jobs, Protocol):
+    """Creating, forking, deleting and loading worlds: loading the live one re-anchors the
+    clock, deleting one ends the job that steps it."""
+
+
+class TimeContext(Worlds, Clock, Jobs, Protocol):
+    """Time control (daemon/core/time_control.py): the clock, the step job, and the status
+    reply's instance and controller."""
+
+    lease: Lease
+    instance: str
+
+
+class OpContext(TimeContext, AccessContext, StreamContext, CapabilitiesContext, Protocol):
+    """Every part: what the dispatcher passes to every handler (``SimLoop`` implements it)."""

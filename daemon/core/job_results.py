@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 
 from galton.daemon.core.calls import StepJob
-from galton.daemon.core.context import OpContext
+from galton.daemon.core.context import JobEnd
 from galton.daemon.ops.joints import joint_states
 from galton.daemon.world.scene import World
 from galton.protocol import NotFoundError, RemoteError, pack_f64
@@ -47,7 +47,7 @@ def job_result(world: World, job: StepJob) -> dict[str, Any]:
     return result
 
 
-def answer_if_reads_gone(loop: OpContext) -> None:
+def answer_if_reads_gone(loop: JobEnd) -> None:
     """A step job whose read entities (or joints) were deleted is answered now with
     NOT_FOUND, not after its steps (a prediction's scratch world cannot lose them)."""
     job = loop.job

@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from galton.daemon.core.calls import Call, StepJob
-from galton.daemon.core.context import OpContext
+from galton.daemon.core.context import PredictContext
 from galton.daemon.core.reply_limit import VALUE_BYTES, reads_size, require_room
 from galton.daemon.ops import joints as ops_joints
 from galton.daemon.ops import scene as ops
@@ -66,7 +66,7 @@ class PredictSampler:
 
 
 @handles("predict")
-def predict(loop: OpContext, call: Call, request: rq.Predict) -> None:
+def predict(loop: PredictContext, call: Call, request: rq.Predict) -> None:
     """Start a prediction job (answered when its horizon is done)."""
     if loop.job is not None:
         raise IncorrectStateError("another step request is still running; wait for it")
@@ -92,7 +92,7 @@ def predict(loop: OpContext, call: Call, request: rq.Predict) -> None:
     loop.start_job(job)
 
 
-def _job(loop: OpContext, call: Call, copy: World, horizon: float,
+def _job(loop: PredictContext, call: Call, copy: World, horizon: float,
          request: rq.Predict) -> StepJob:
     dt = copy.engine.timestep
     steps = horizon_steps(horizon, dt, loop.limits.max_steps)

@@ -9,7 +9,7 @@ import time
 
 from galton.daemon.core import job_results
 from galton.daemon.core.calls import StepJob, smoothed_step_cost
-from galton.daemon.core.context import OpContext
+from galton.daemon.core.context import JobEnd
 from galton.protocol import OperationFailedError, PhysicsError, RemoteError
 from galton.protocol.errors import brief
 
@@ -19,7 +19,7 @@ log = logging.getLogger("galton.daemon")
 CHUNK_WALL_S = 0.002
 
 
-def run_chunk(loop: OpContext, job: StepJob) -> None:
+def run_chunk(loop: JobEnd, job: StepJob) -> None:
     """One chunk of a side job's steps; answers it when done, at rest, or failed."""
     world = job.world
     assert world is not None
@@ -50,7 +50,7 @@ def run_chunk(loop: OpContext, job: StepJob) -> None:
         loop.finish_job(job)
 
 
-def end(loop: OpContext, job: StepJob, error: RemoteError) -> None:
+def end(loop: JobEnd, job: StepJob, error: RemoteError) -> None:
     """Answer a side job with an error and release what it held."""
     if loop.job is job:
         loop.end_job()

@@ -15,7 +15,7 @@ from typing import Any
 
 from galton.daemon.access import lease
 from galton.daemon.core.calls import Call, RestCheck, StepJob
-from galton.daemon.core.context import OpContext
+from galton.daemon.core.context import JobEnd, Jobs, OpContext, TimeContext
 from galton.daemon.core.reply_limit import reads_size, require_room
 from galton.daemon.core.step_queue import StepBusyError
 from galton.daemon.ops.binding import handles
@@ -42,14 +42,14 @@ def _rest_check(rest: rq.UntilRest | None, read: list[str] | None,
 
 
 @handles("status")
-def status(loop: OpContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
+def status(loop: TimeContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
     world = loop.world_for(request)
     if world is loop.world:
         return loop.status().to_wire()
     return side_status(loop, world).to_wire()
 
 
-def side_status(loop: OpContext, world: World) -> SimStatus:
+def side_status(loop: TimeContext, world: World) -> SimStatus:
     """A side world's status: it never plays."""
     return SimStatus(
         state=SimState.STOPPED if world.step_index == 0 else SimState.PAUSED,
@@ -59,14 +59,14 @@ def side_status(loop: OpContext, world: World) -> SimStatus:
         controller=loop.lease.controller)
 
 
-def _live_only(loop: OpContext, request: rq.Args, op: str) -> None:
+def _live_only(loop: TimeContext, request: rq.Args, op: str) -> None:
     if loop.world_for(request) is not loop.world:
         raise IncorrectStateError(f"{op}: only the live world {loop.world.name!r} plays; a "
                                   "side world moves by step and run_until")
 
 
 @handles("play")
-def play(loop: OpContext, call: Call, request: rq.Play) -> dict[str, Any]:
+def play(loop: TimeContext, call: Call, request: rq.Play) -> dict[str, Any]:
     _live_only(loop, request, "play")
     target = loop.target_rtf if request.rtf is None else request.rtf
     if loop.job is not None and loop.job.world is None:
@@ -78,7 +78,7 @@ def play(loop: OpContext, call: Call, request: rq.Play) -> dict[str, Any]:
 
 
 @handles("set_rtf")
-def set_rtf(loop: OpContext, call: Call, request: rq.SetRtf) -> dict[str, Any]:
+def set_rtf(loop: TimeContext, call: Call, request: rq.SetRtf) -> dict[str, Any]:
     _live_only(loop, request, "set_rtf")
     loop.target_rtf = request.rtf
     loop.pacer.anchor(time.monotonic(), loop.world.sim_time, loop.target_rtf)
@@ -86,7 +86,7 @@ def set_rtf(loop: OpContext, call: Call, request: rq.SetRtf) -> dict[str, Any]:
 
 
 @handles("pause")
-def pause(loop: OpContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
+def pause(loop: TimeContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
     world = loop.world_for(request)
     _cancel_job_on(loop, world, "paused")
     if world is not loop.world:
@@ -96,7 +96,7 @@ def pause(loop: OpContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
 
 
 @handles("stop")
-def stop(loop: OpContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
+def stop(loop: TimeContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
     """Pause and rewind: time to 0 and every entity back to the state it was created in."""
     world = loop.world_for(request)
     _cancel_job_on(loop, world, "stopped")
@@ -110,7 +110,7 @@ def stop(loop: OpContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
 
 
 @handles("step")
-def step(loop: OpContext, call: Call, request: rq.Step) -> None:
+def step(loop: TimeContext, call: Call, request: rq.Step) -> None:
     count = integer_in(request.count, "step.count", 1, loop.limits.max_steps)
     world = loop.world_for(request)
     _start_job(loop, call, world, count, _read_list(world, request.read, "step"),
@@ -118,7 +118,7 @@ def step(loop: OpContext, call: Call, request: rq.Step) -> None:
 
 
 @handles("run_until")
-def run_until(loop: OpContext, call: Call, request: rq.RunUntil) -> dict[str, Any] | None:
+def run_until(loop: TimeContext, call: Call, request: rq.RunUntil) -> dict[str, Any] | None:
     target = request.sim_time
     world = loop.world_for(request)
     dt = world.engine.timestep
@@ -141,7 +141,7 @@ def run_until(loop: OpContext, call: Call, request: rq.RunUntil) -> dict[str, An
 
 
 @handles("reset")
-def reset(loop: OpContext, call: Call, request: rq.Reset) -> dict[str, Any]:
+def reset(loop: TimeContext, call: Call, request: rq.Reset) -> dict[str, Any]:
     scope = request.scope
     world = loop.world_for(request)
     _cancel_job_on(loop, world, "reset")
@@ -157,7 +157,7 @@ def reset(loop: OpContext, call: Call, request: rq.Reset) -> dict[str, Any]:
 
 
 @handles("load_world")
-def load_world(loop: OpContext, call: Call, request: rq.LoadWorld) -> dict[str, Any]:
+def load_world(loop: TimeContext, call: Call, request: rq.LoadWorld) -> dict[str, Any]:
     """Replace the world with a fresh one on the named engine, in this process."""
     _live_only(loop, request, "load_world")
     name = request.engine
@@ -203,7 +203,7 @@ def _read_joint_list(world: World, read: list[str] | None, where: str
     return names
 
 
-def _start_job(loop: OpContext, call: Call, world: World, count: int,
+def _start_job(loop: TimeContext, call: Call, world: World, count: int,
                read: list[str] | None = None, rest: RestCheck | None = None,
                read_joints: list[str] | None = None) -> None:
     live = world is loop.world
@@ -250,7 +250,7 @@ def client_gone(loop: OpContext, client: str) -> None:
     lease.client_gone(loop, client)
 
 
-def _cancel_job_on(loop: OpContext, world: World, reason: str) -> None:
+def _cancel_job_on(loop: TimeContext, world: World, reason: str) -> None:
     """Cancel the running step request if it steps this world, or predicts from it (a
     prediction is long work on the world's behalf: pause, stop and reset end it too)."""
     job = loop.job
@@ -259,7 +259,7 @@ def _cancel_job_on(loop: OpContext, world: World, reason: str) -> None:
     end_queued(loop, world.name, reason)
 
 
-def cancel_job(loop: OpContext, reason: str) -> None:
+def cancel_job(loop: JobEnd, reason: str) -> None:
     job = loop.end_job()
     if job is None:
         return
@@ -269,7 +269,7 @@ def cancel_job(loop: OpContext, reason: str) -> None:
         {"steps_done": job.done}))
 
 
-def end_queued(loop: OpContext, world: str, reason: str) -> None:
+def end_queued(loop: Jobs, world: str, reason: str) -> None:
     """Answer the step requests waiting to step ``world``: they will not run."""
     for call in loop.step_queue.end_for(world, loop.world.name):
         loop.reply_error(call, OperationFailedError(
@@ -277,7 +277,7 @@ def end_queued(loop: OpContext, world: str, reason: str) -> None:
             "for another step request", {"steps_done": 0}))
 
 
-def _after_reset(loop: OpContext) -> None:
+def _after_reset(loop: TimeContext) -> None:
     loop.refresh_clock()
     loop.rtf_window.clear()
     loop.pacer.anchor(time.monotonic(), loop.world.sim_time, loop.target_rtf)

@@ -23,7 +23,7 @@ from typing import Any
 from galton.daemon.access import lease
 from galton.daemon.core import predict, time_control
 from galton.daemon.core.calls import Call
-from galton.daemon.core.context import OpContext
+from galton.daemon.core.context import OpContext, SceneContext
 from galton.daemon.ops import joints as ops_joints
 from galton.daemon.ops import perception as ops_perception
 from galton.daemon.ops import scene as ops
@@ -45,7 +45,7 @@ def _scene(name: str, apply: ops.SceneOp) -> Handler:
     the scene is announced, and a step job reading a deleted entity is answered now."""
     mutates = OPERATIONS[name].mutates
 
-    def handle(loop: OpContext, call: Call, request: Args) -> Result:
+    def handle(loop: SceneContext, call: Call, request: Args) -> Result:
         world = loop.world_for(request)
         result = apply(world, request)
         if mutates:

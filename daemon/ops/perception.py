@@ -16,10 +16,9 @@ from galton.protocol import requests as rq
 from galton.protocol.errors import brief
 from galton.protocol.model import check_names, check_type, decode_points
 from galton.protocol.png import depth_png, encode_png, segmentation_png
-from galton.protocol.vocabulary import check_fields
+from galton.protocol.vocabulary import MAX_CAMERA_NAME, check_fields
 
 MAX_NAMED_CAMERAS = 32
-MAX_CAMERA_NAME = 64
 
 
 def _cameras_of(world: World) -> dict[str, Camera]:
@@ -88,7 +87,7 @@ def _raw_dtype(kind: str) -> str:
 @scene_op("add_camera")
 def add_camera(world: World, request: rq.AddCamera) -> dict[str, Any]:
     name = request.name
-    if not 1 <= len(name) <= MAX_CAMERA_NAME or not name.isprintable():
+    if not name.isprintable():  # its length is declared (protocol/requests.py)
         raise InvalidArgumentError(f"add_camera.name {brief(name)} must be "
                                    f"1-{MAX_CAMERA_NAME} printable characters")
     camera = parse_camera(request.camera, "add_camera.camera")

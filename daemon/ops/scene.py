@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from galton.daemon.core.calls import Call
-from galton.daemon.core.context import OpContext
+from galton.daemon.core.context import CapabilitiesContext
 from galton.daemon.core.host_info import host_info
 from galton.daemon.core.reply_limit import require_room
 from galton.daemon.engines import ENGINE_CLASSES
@@ -35,7 +35,13 @@ from galton.protocol import (
 from galton.protocol import mesh as mesh_wire
 from galton.protocol import requests as rq
 from galton.protocol.errors import brief
-from galton.protocol.model import check_names, decode_points, decode_poses, decode_twists
+from galton.protocol.model import (
+    check_names,
+    check_tags,
+    decode_points,
+    decode_poses,
+    decode_twists,
+)
 from galton.protocol.operations import GetEntities
 from galton.protocol.vocabulary import MAX_BATCH, MODEL_SHAPES
 
@@ -284,7 +290,13 @@ def set_states(world: World, request: rq.SetStates) -> dict[str, Any]:
 @scene_op("update")
 def update(world: World, request: rq.Update) -> dict[str, Any]:
     names = check_names(request.names, "update.names")
-    props = BodyProperties.from_wire(request.properties, "update.properties")
+    declared = request.properties  # types, ranges and keys checked by its declaration
+    rgba = declared.rgba
+    props = BodyProperties(
+        mass=declared.mass, friction=declared.friction, restitution=declared.restitution,
+        rgba=None if rgba is None else (rgba[0], rgba[1], rgba[2], rgba[3]),
+        tags=None if declared.tags is None else check_tags(declared.tags,
+                                                           "update.properties.tags"))
     world.update(names, props)
     return {"count": len(names)}
 
@@ -308,7 +320,7 @@ def set_params(world: World, request: rq.SetParams) -> dict[str, Any]:
 
 
 @handles("capabilities")
-def capabilities(loop: OpContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
+def capabilities(loop: CapabilitiesContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
     """The engine's capabilities, with what the daemon adds (its fronts' endpoints)."""
     caps = loop.world_for(request).engine.capabilities()
     caps.engines_available = tuple(ENGINE_CLASSES)

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any
 
 from galton.daemon.core import time_control
 from galton.daemon.core.calls import Call
-from galton.daemon.core.context import OpContext
+from galton.daemon.core.context import WorldsContext
 from galton.daemon.core.reply_limit import require_room
 from galton.daemon.ops.binding import handles
 from galton.daemon.world.scene import World
@@ -28,14 +28,14 @@ from galton.protocol import (
 )
 from galton.protocol import requests as rq
 from galton.protocol.errors import brief
+from galton.protocol.vocabulary import MAX_WORLD_NAME
 
 if TYPE_CHECKING:
     from galton.daemon.engines.base import Engine
 
-MAX_WORLD_NAME = 64
 
 
-def world_row(loop: OpContext, world: World) -> dict[str, Any]:
+def world_row(loop: WorldsContext, world: World) -> dict[str, Any]:
     live = world is loop.world
     state = loop.state if live else (SimState.STOPPED if world.step_index == 0
                                      else SimState.PAUSED)
@@ -45,12 +45,12 @@ def world_row(loop: OpContext, world: World) -> dict[str, Any]:
 
 
 @handles("list_worlds")
-def list_worlds(loop: OpContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
+def list_worlds(loop: WorldsContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
     return {"worlds": [world_row(loop, w) for w in (loop.world, *loop.side.values())]}
 
 
-def _new_name(loop: OpContext, name: str, where: str) -> str:
-    if not 1 <= len(name) <= MAX_WORLD_NAME or not name.isprintable():
+def _new_name(loop: WorldsContext, name: str, where: str) -> str:
+    if not name.isprintable():  # its length is declared (protocol/requests.py)
         raise InvalidArgumentError(f"{where}.name {brief(name)} must be 1-{MAX_WORLD_NAME} "
                                    "printable characters")
     if name == loop.world.name or name in loop.side:
@@ -62,14 +62,14 @@ def _new_name(loop: OpContext, name: str, where: str) -> str:
     return name
 
 
-def _factory(loop: OpContext) -> Any:
+def _factory(loop: WorldsContext) -> Any:
     if loop.engine_factory is None:
         raise OperationFailedError("this daemon cannot make engines")
     return loop.engine_factory
 
 
 @handles("create_world")
-def create_world(loop: OpContext, call: Call, request: rq.CreateWorld) -> dict[str, Any]:
+def create_world(loop: WorldsContext, call: Call, request: rq.CreateWorld) -> dict[str, Any]:
     name = _new_name(loop, request.name, "create_world")
     kind = request.engine or loop.world.engine.name
     params = request.params
@@ -86,7 +86,7 @@ def create_world(loop: OpContext, call: Call, request: rq.CreateWorld) -> dict[s
 
 
 @handles("fork_world")
-def fork_world(loop: OpContext, call: Call, request: rq.ForkWorld) -> dict[str, Any]:
+def fork_world(loop: WorldsContext, call: Call, request: rq.ForkWorld) -> dict[str, Any]:
     name = _new_name(loop, request.name, "fork_world")
     source = loop.world_for({"world": request.source})
     source.verify()
@@ -96,7 +96,7 @@ def fork_world(loop: OpContext, call: Call, request: rq.ForkWorld) -> dict[str, 
 
 
 @handles("delete_world")
-def delete_world(loop: OpContext, call: Call, request: rq.Named) -> dict[str, Any]:
+def delete_world(loop: WorldsContext, call: Call, request: rq.Named) -> dict[str, Any]:
     name = request.name
     world = loop.world_for({"world": name})
     if world is loop.world:
@@ -110,15 +110,14 @@ def delete_world(loop: OpContext, call: Call, request: rq.Named) -> dict[str, An
 
 
 @handles("snapshot")
-def snapshot(loop: OpContext, call: Call, request: rq.Snapshot) -> dict[str, Any]:
+def snapshot(loop: WorldsContext, call: Call, request: rq.Snapshot) -> dict[str, Any]:
     world = loop.world_for(request)
     slot_name = request.slot
     want_blob = request.blob
     if slot_name is None and not want_blob:
         raise InvalidArgumentError("snapshot needs a 'slot' to keep it in, 'blob': true to "
                                    "return it, or both")
-    if slot_name is not None and (not 1 <= len(slot_name) <= MAX_WORLD_NAME
-                                  or not slot_name.isprintable()):
+    if slot_name is not None and not slot_name.isprintable():  # its length is declared
         raise InvalidArgumentError(f"snapshot.slot {brief(slot_name)} must be "
                                    f"1-{MAX_WORLD_NAME} printable characters")
     world.verify()
@@ -137,7 +136,7 @@ def snapshot(loop: OpContext, call: Call, request: rq.Snapshot) -> dict[str, Any
 
 
 @handles("restore")
-def restore(loop: OpContext, call: Call, request: rq.Restore) -> dict[str, Any]:
+def restore(loop: WorldsContext, call: Call, request: rq.Restore) -> dict[str, Any]:
     world = loop.world_for(request)
     slot_name, blob = request.slot, request.blob
     if (slot_name is None) == (blob is None):
@@ -162,11 +161,11 @@ def restore(loop: OpContext, call: Call, request: rq.Restore) -> dict[str, Any]:
 
 
 @handles("snapshots")
-def snapshots(loop: OpContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
+def snapshots(loop: WorldsContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
     return {"slots": [slot.to_wire() for slot in loop.slots.by_name.values()]}
 
 
 @handles("delete_snapshot")
-def delete_snapshot(loop: OpContext, call: Call, request: rq.Slot) -> dict[str, Any]:
+def delete_snapshot(loop: WorldsContext, call: Call, request: rq.Slot) -> dict[str, Any]:
     loop.slots.delete(request.slot)
     return {"count": 1}

@@ -26,7 +26,7 @@ import msgpack
 import numpy as np
 
 from galton.daemon.core.calls import Call
-from galton.daemon.core.context import OpContext
+from galton.daemon.core.context import StreamContext
 from galton.daemon.world.scene import World, canonical_quaternions
 from galton.daemon.world.stream_sender import Publish, SampleSender
 from galton.protocol import InvalidArgumentError, Keys, NotFoundError, ResourceLimitError
@@ -80,7 +80,7 @@ class StateStreams:
         self.streams: dict[str, StateStream] = {}
         self.next_due = math.inf
 
-    def open(self, loop: OpContext, call: Call, request: rq.StreamStates) -> dict[str, Any]:
+    def open(self, loop: StreamContext, call: Call, request: rq.StreamStates) -> dict[str, Any]:
         """Open a stream for the request's client; its first sample is due at once."""
         rate = request.rate
         names = request.names
@@ -118,7 +118,7 @@ class StateStreams:
         for stream in [s for s in self.streams.values() if s.owner == owner]:
             self._end(stream)
 
-    def publish_due(self, loop: OpContext, now: float) -> None:
+    def publish_due(self, loop: StreamContext, now: float) -> None:
         """Publish a sample of every stream that is due, and schedule each one's next."""
         shared: dict[tuple[int, int, tuple[str, ...] | None], bytes] = {}
         for stream in list(self.streams.values()):
@@ -128,7 +128,7 @@ class StateStreams:
             self._sample(loop, stream, shared)
         self._reschedule()
 
-    def _sample(self, loop: OpContext, stream: StateStream,
+    def _sample(self, loop: StreamContext, stream: StateStream,
                 shared: dict[tuple[int, int, tuple[str, ...] | None], bytes]) -> None:
         """One sample; ``shared`` holds the poses this round already read, by world and
         names, so that streams of the same world read it once."""
@@ -229,7 +229,7 @@ def _caller(call: Call) -> str | None:
     return call.peer if call.peer is not None else call.client
 
 
-def _owner(loop: OpContext, call: Call) -> str:
+def _owner(loop: StreamContext, call: Call) -> str:
     owner = _caller(call)
     if owner is None:
         raise InvalidArgumentError(NO_OWNER)
@@ -241,11 +241,11 @@ def _owner(loop: OpContext, call: Call) -> str:
     return owner
 
 
-def stream_states(loop: OpContext, call: Call, request: rq.StreamStates) -> dict[str, Any]:
+def stream_states(loop: StreamContext, call: Call, request: rq.StreamStates) -> dict[str, Any]:
     """The ``stream_states`` operation (docs/protocol.md, "State streams")."""
     return loop.streams.open(loop, call, request)
 
 
-def close_stream(loop: OpContext, call: Call, request: rq.CloseStream) -> dict[str, Any]:
+def close_stream(loop: StreamContext, call: Call, request: rq.CloseStream) -> dict[str, Any]:
     """The ``close_stream`` operation."""
     return loop.streams.close(call, request)

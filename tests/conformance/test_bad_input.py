@@ -61,6 +61,16 @@ BAD_REQUESTS = {
                       ResultCode.INVALID_ARGUMENT),
     "names-not-list": ("delete", request("delete", {"names": "ball_0"}),
                        ResultCode.INVALID_ARGUMENT),
+    "empty-names": ("delete", request("delete", {"names": []}), ResultCode.INVALID_ARGUMENT),
+    "empty-read": ("step", request("step", {"count": 1, "read": []}),
+                   ResultCode.INVALID_ARGUMENT),
+    "empty-world-name": ("create_world", request("create_world", {"name": ""}),
+                         ResultCode.INVALID_ARGUMENT),
+    "long-camera-name": ("add_camera", request("add_camera", {
+        "name": "c" * 65, "camera": {"eye": [1, 0, 1], "target": [0, 0, 0]}}),
+        ResultCode.INVALID_ARGUMENT),
+    "long-slot-name": ("snapshot", request("snapshot", {"slot": "s" * 65}),
+                       ResultCode.INVALID_ARGUMENT),
     "unknown-name": ("delete", request("delete", {"names": ["ghost"]}), ResultCode.NOT_FOUND),
     "duplicate-in-request": ("delete", request("delete", {"names": ["ball_0", "ball_0"]}),
                              ResultCode.INVALID_ARGUMENT),
@@ -79,6 +89,12 @@ BAD_REQUESTS = {
         "names": ["ball_0"], "properties": {"colour": "red"}}), ResultCode.INVALID_ARGUMENT),
     "negative-mass": ("update", request("update", {
         "names": ["ball_0"], "properties": {"mass": -2.0}}), ResultCode.INVALID_ARGUMENT),
+    "misspelt-property": ("update", request("update", {
+        "names": ["ball_0"], "properties": {"frcition": 0.5}}), ResultCode.INVALID_ARGUMENT),
+    "short-rgba": ("update", request("update", {
+        "names": ["ball_0"], "properties": {"rgba": [1, 0, 0]}}), ResultCode.INVALID_ARGUMENT),
+    "bad-tag": ("update", request("update", {
+        "names": ["ball_0"], "properties": {"tags": ["ok", ""]}}), ResultCode.INVALID_ARGUMENT),
     "unknown-param": ("set_params", request("set_params", {"params": {"timestpe": 0.01}}),
                       ResultCode.INVALID_ARGUMENT),
     "zero-timestep": ("set_params", request("set_params", {"params": {"timestep": 0.0}}),

@@ -19,6 +19,7 @@ from galton.protocol import InvalidArgumentError, MalformedRequestError, pack_f6
 from galton.protocol import replies as rp
 from galton.protocol import requests as rq
 from galton.protocol.operations import OPERATIONS
+from galton.protocol.vocabulary import MAX_BATCH
 
 REFUSED = {
     "wrong type": ("step", {"count": "ten"}, r"step\.count must be int, got 'ten'"),
@@ -117,6 +118,33 @@ def test_the_schema_shows_ranges_and_defaults(schema: dict[str, Any]) -> None:
     assert not validator(schema, "step", "request").is_valid({"count": 0})
 
 
+def test_the_schema_shows_no_finite_number_sentinel(schema: dict[str, Any]) -> None:
+    """Finite-only numbers are checked by the daemon; the schema shows real ranges only
+    (JSON carries no NaN or infinity anyway), so +-1.8e308 never appears."""
+    printed = json.dumps(schema)
+    assert "1.7976931348623157e+308" not in printed and "e+308" not in printed
+    sim_time = schema["$defs"]["RunUntil"]["properties"]["sim_time"]
+    assert sim_time["minimum"] == 0.0 and "maximum" not in sim_time
+    horizon = schema["$defs"]["Predict"]["properties"]["horizon"]
+    assert "maximum" not in horizon and horizon["exclusiveMinimum"] == 0.0
+    rate = schema["$defs"]["StreamStates"]["properties"]["rate"]
+    assert (rate["minimum"], rate["maximum"]) == (1.0, 60.0)
+
+
+def test_a_names_list_declares_its_length_per_field(schema: dict[str, Any]) -> None:
+    """Every names list holds 1 to MAX_BATCH names, refused before any handler with its
+    "op.field" label and value; stream_states' names may be empty (every entity)."""
+    with pytest.raises(InvalidArgumentError, match=r"set_states\.names must be a list of 1 "
+                       r"to 100000 items, got \[\]"):
+        OPERATIONS["set_states"].decode({"names": []})
+    with pytest.raises(InvalidArgumentError, match=r"step\.read must be a list of 1"):
+        OPERATIONS["step"].decode({"count": 1, "read": []})
+    assert OPERATIONS["stream_states"].decode({"names": []}).names == []
+    names = schema["$defs"]["SetStates"]["properties"]["names"]
+    assert (names["minItems"], names["maxItems"]) == (1, MAX_BATCH)
+    assert "minItems" not in json.dumps(schema["$defs"]["StreamStates"]["properties"]["names"])
+
+
 def test_the_schema_holds_declared_replies(schema: dict[str, Any]) -> None:
     bounds = {"names": ["a"], "bounds": pack_f64(np.zeros((1, 6)))}
     validator(schema, "get_bounds", "reply").validate(as_json(bounds))
@@ -140,3 +168,43 @@ def test_a_newer_daemons_extra_field_is_left_out_unless_exact() -> None:
     assert rp.decode_result(rp.WorldsReply, grown).worlds[0].name == "w"
     with pytest.raises(MalformedRequestError, match=r"\$\.worlds\[0\]\.colour not declared"):
         rp.decode_result(rp.WorldsReply, grown, exact=True)
+
+
+def test_sim_status_follows_the_status_reply() -> None:
+    """The SDK's SimStatus is the declared StatusReply, field for field: a field added to
+    one and not the other fails here, not in a client."""
+    from dataclasses import fields
+
+    from galton.protocol import SimStatus
+
+    assert tuple(f.name for f in fields(SimStatus)) == rp.StatusReply.__struct_fields__
+
+
+@pytest.mark.parametrize("op, args, label", [
+    ("create_world", {"name": ""}, "create_world.name"),
+    ("fork_world", {"name": "w" * 65}, "fork_world.name"),
+    ("snapshot", {"slot": "s" * 65}, "snapshot.slot"),
+    ("add_camera", {"name": "c" * 65, "camera": {}}, "add_camera.name"),
+])
+def test_new_world_camera_and_slot_names_declare_their_length(
+        schema: dict[str, Any], op: str, args: dict[str, Any], label: str) -> None:
+    with pytest.raises(InvalidArgumentError,
+                       match=rf"{label} must be a string of 1 to 64 characters, got"):
+        OPERATIONS[op].decode(args)
+    declared = schema["$defs"][OPERATIONS[op].request.__name__]["properties"]
+    field = declared[label.split(".")[1]]
+    shown = field if "maxLength" in field else field["anyOf"][0]
+    assert (shown["minLength"], shown["maxLength"]) == (1, 64)
+
+
+@pytest.mark.parametrize("properties, said", [
+    ({"frcition": 0.5}, r"update\.properties takes no field 'frcition' \(did you mean "
+                        r"'friction'.*it takes: mass, friction"),
+    ({"mass": -2.0}, r"update\.properties\.mass must be .*, got -2\.0"),
+    ({"restitution": "high"}, r"update\.properties\.restitution must be .*, got 'high'"),
+    ({"rgba": [1, 0, 0]}, r"update\.properties\.rgba must be a list of 4 to 4 items"),
+    ({"rgba": [1, 0, 0, 2]}, r"update\.properties\.rgba\[3\] must be float <= 1\.0, got 2"),
+])
+def test_update_properties_are_declared(properties: dict[str, Any], said: str) -> None:
+    with pytest.raises(InvalidArgumentError, match=said):
+        OPERATIONS["update"].decode({"names": ["a"], "properties": properties})
