@@ -3,7 +3,8 @@
 DART collides a URDF mesh as its triangles (its ODE collision detector makes an ODE
 trimesh of the Assimp scene), but dartpy 6.20 gives no access to that scene: only the
 mesh's path and scale. The file is read here with trimesh (local files only), scaled,
-once per file and scale; a file it cannot read leaves the row as its box.
+once per file and scale; a file it cannot read leaves the row as its box, and so does a
+daemon without trimesh (imported when a model's mesh is first asked for).
 """
 
 from __future__ import annotations
@@ -11,7 +12,6 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-import trimesh
 
 from galton.daemon.engines.base import ShapeMesh
 
@@ -32,6 +32,10 @@ class MeshFiles:
 def _read(path: str, scale: np.ndarray) -> ShapeMesh | None:
     if not path:
         return None
+    try:
+        import trimesh
+    except ImportError:
+        return None  # told as its box
     try:
         loaded: Any = trimesh.load(path, force="mesh", process=False)  # a Trimesh
     except (OSError, ValueError, IndexError):

@@ -4,7 +4,9 @@ PyBullet's URDF importer makes a mesh file's collision shape the convex hull of 
 vertices (scaled), unless the link is marked concave; getCollisionShapeData names the file
 and scale but gives no triangles, so the file is read here (trimesh, local files only) and
 its hull taken (scipy), once per file and scale. The hull is centred on its own box, so
-that a row's pose and half sizes are the box around it.
+that a row's pose and half sizes are the box around it. trimesh and scipy are imported
+only when a model's mesh is first asked for: a robot's daemon without them (the ``view``
+extra brings them) tells such a link as its box, flagged, as before.
 """
 
 from __future__ import annotations
@@ -12,8 +14,6 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-import trimesh
-from scipy.spatial import ConvexHull, QhullError
 
 from galton.daemon.engines.base import ShapeMesh
 
@@ -36,6 +36,11 @@ class HullCache:
 
 
 def _read_hull(path: str, scale: np.ndarray) -> HullEntry:
+    try:
+        import trimesh
+        from scipy.spatial import ConvexHull, QhullError
+    except ImportError:
+        return None  # the view's extra is not installed: told as its box
     try:
         loaded: Any = trimesh.load(path, force="mesh", process=False)  # a Trimesh
         points = np.asarray(loaded.vertices, dtype=float) * scale
