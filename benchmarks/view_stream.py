@@ -104,15 +104,19 @@ def _speed(sim: Client, seconds: float) -> float:
     return (sim.status().sim_time - start) / (time.monotonic() - started)
 
 
-def stream_cost(engine: str, seconds: float, rounds: int) -> dict[str, float]:
-    """The stream's cost as the median of paired ratios: each round measures a window
-    without a stream and the next with one, so a drift of the machine's speed between
-    rounds cancels within each pair (single flat-out windows here varied by ±15 %)."""
+def _paired_windows(engine: str, rtf: float, seconds: float, rounds: int
+                    ) -> tuple[list[float], list[float], list[float]]:
+    """1,000 bodies played at ``rtf`` (0: flat out): sim seconds per wall second in
+    alternating windows without and with a 60 Hz stream of all of them, and the samples a
+    second the stream delivered. A paced world's first second (the pacer starting) is not
+    measured."""
     without, with_stream, received = [], [], []
     with daemon_client(engine) as (_, sim):
         _scene(sim, 1000)
-        sim.play(0.0)
+        sim.play(rtf)
         try:
+            if rtf > 0:
+                _speed(sim, 1.0)
             for _ in range(rounds):
                 without.append(_speed(sim, seconds))
                 samples: list[object] = []
@@ -121,6 +125,14 @@ def stream_cost(engine: str, seconds: float, rounds: int) -> dict[str, float]:
                 received.append(len(samples) / seconds)
         finally:
             sim.pause()
+    return without, with_stream, received
+
+
+def stream_cost(engine: str, seconds: float, rounds: int) -> dict[str, float]:
+    """The stream's cost as the median of paired ratios: each round measures a window
+    without a stream and the next with one, so a drift of the machine's speed between
+    rounds cancels within each pair (single flat-out windows here varied by ±15 %)."""
+    without, with_stream, received = _paired_windows(engine, 0.0, seconds, rounds)
     ratios = sorted(w / b for w, b in zip(with_stream, without, strict=True))
     quartiles = (statistics.quantiles(ratios, n=4, method="inclusive")
                  if len(ratios) >= 2 else ratios * 3)
@@ -133,20 +145,7 @@ def stream_cost(engine: str, seconds: float, rounds: int) -> dict[str, float]:
 
 def paced_cost(engine: str, seconds: float, rounds: int) -> dict[str, float]:
     """Achieved RTF of 1,000 bodies played at RTF 1.0, without and with a 60 Hz stream."""
-    without, with_stream, received = [], [], []
-    with daemon_client(engine) as (_, sim):
-        _scene(sim, 1000)
-        sim.play(1.0)
-        try:
-            _speed(sim, 1.0)  # the pacer's first second, not measured
-            for _ in range(rounds):
-                without.append(_speed(sim, seconds))
-                samples: list[object] = []
-                with sim.stream_states(rate=60.0, callback=samples.append):
-                    with_stream.append(_speed(sim, seconds))
-                received.append(len(samples) / seconds)
-        finally:
-            sim.pause()
+    without, with_stream, received = _paired_windows(engine, 1.0, seconds, rounds)
     return {"rtf_without": statistics.median(without), "rtf_with": statistics.median(with_stream),
             "rtf_without_min": min(without), "rtf_with_min": min(with_stream),
             "samples_per_s": statistics.median(received), "rounds": rounds}

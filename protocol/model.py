@@ -20,6 +20,8 @@ from galton.protocol.replies import CapabilitiesReply, StatusReply, decode_resul
 from galton.protocol.vocabulary import (
     BODY_SHAPES,
     MAX_BATCH,
+    MAX_FRICTION,
+    MAX_MASS,
     MAX_NAME_LENGTH,
     POSE_WIDTH,
     SCALAR_JOINT_TYPES,
@@ -202,8 +204,8 @@ class BodyProperties:
         check_fields(args, ("mass", "friction", "restitution", "rgba", "tags"), where)
         tags = args.get("tags")
         return cls(
-            mass=optional_number(args, "mass", where, low=0, low_open=True, high=1e9),
-            friction=optional_number(args, "friction", where, low=0, high=100),
+            mass=optional_number(args, "mass", where, low=0, low_open=True, high=MAX_MASS),
+            friction=optional_number(args, "friction", where, low=0, high=MAX_FRICTION),
             restitution=optional_number(args, "restitution", where, low=0, high=1),
             rgba=check_rgba(args.get("rgba"), f"{where}.rgba"),
             tags=None if tags is None else check_tags(tags, f"{where}.tags"),
@@ -287,8 +289,8 @@ class BodyGroup:
             raise InvalidArgumentError(f"{where}: static bodies cannot have a non-zero twist")
         return cls(
             shape=shape, size=size, names=names, poses=poses, twists=twists, static=static,
-            mass=optional_number(body, "mass", where, low=0, low_open=True, high=1e9),
-            friction=optional_number(body, "friction", where, low=0, high=100),
+            mass=optional_number(body, "mass", where, low=0, low_open=True, high=MAX_MASS),
+            friction=optional_number(body, "friction", where, low=0, high=MAX_FRICTION),
             restitution=optional_number(body, "restitution", where, low=0, high=1),
             rgba=check_rgba(body.get("rgba"), f"{where}.rgba"),
             tags=check_tags(body.get("tags", []), f"{where}.tags"),
@@ -330,7 +332,7 @@ def _check_inertia(value: Any, static: bool, where: str) -> tuple[float, float, 
                                    f"got {len(value)}")
     if static:
         raise InvalidArgumentError(f"{where}: a static body has no inertia to set")
-    ixx, iyy, izz = (finite_number(v, f"{where}[{i}]", low=0, low_open=True, high=1e9)
+    ixx, iyy, izz = (finite_number(v, f"{where}[{i}]", low=0, low_open=True, high=MAX_MASS)
                      for i, v in enumerate(value))
     if ixx + iyy < izz or iyy + izz < ixx or ixx + izz < iyy:
         raise InvalidArgumentError(f"{where} {[ixx, iyy, izz]} breaks the triangle "

@@ -171,25 +171,24 @@ class SetJointStatesReply(Reply, kw_only=True):
     twists: Twists | None = None
 
 
-class SnapshotReply(Reply, kw_only=True):
-    slot: str | None
+class SnapshotFacts(Reply, kw_only=True):
+    """What a snapshot says of itself, in its reply and in a slot's row."""
+
     world: str
     engine: str
     bytes: int
     step: int
     sim_time: float
     entity_count: int
+
+
+class SnapshotReply(SnapshotFacts, kw_only=True):
+    slot: str | None
     blob: Blob | None = None
 
 
-class SlotRow(Reply, kw_only=True):
+class SlotRow(SnapshotFacts, kw_only=True):
     slot: str
-    world: str
-    engine: str
-    bytes: int
-    step: int
-    sim_time: float
-    entity_count: int
 
 
 class SnapshotsReply(Reply, kw_only=True):

@@ -34,6 +34,8 @@ from galton.protocol.vocabulary import (
     MAX_BATCH,
     MAX_CAMERA_NAME,
     MAX_CAMERAS_PER_REQUEST,
+    MAX_FRICTION,
+    MAX_MASS,
     MAX_RATE_HZ,
     MAX_RTF,
     MAX_WORLD_NAME,
@@ -187,8 +189,8 @@ class UpdateProperties(msgspec.Struct, kw_only=True, forbid_unknown_fields=True)
     """``update``'s properties; one not sent (or nil) is left as it is. Each tag's form
     (a printable entity-like name) is the handler's check."""
 
-    mass: Annotated[float, _kind("number"), msgspec.Meta(gt=0.0, le=1e9)] | None = None
-    friction: Annotated[float, _kind("number"), msgspec.Meta(ge=0.0, le=100.0)] | None = None
+    mass: Annotated[float, _kind("number"), msgspec.Meta(gt=0.0, le=MAX_MASS)] | None = None
+    friction: Annotated[float, _kind("number"), msgspec.Meta(ge=0.0, le=MAX_FRICTION)] | None = None
     restitution: Unit | None = None
     rgba: Annotated[list[Unit], _kind("numbers"),
                     msgspec.Meta(min_length=4, max_length=4)] | None = None

@@ -13,6 +13,8 @@ POSE_WIDTH = 7
 TWIST_WIDTH = 6
 MAX_BATCH = 100_000
 MAX_NAME_LENGTH = 128
+MAX_MASS = 1e9  # kg: a body's mass (spawn, update, snapshot edits), and its principal moments
+MAX_FRICTION = 100.0  # a body's friction coefficient
 MAX_WORLD_NAME = 64  # a world's or a snapshot slot's name
 MAX_CAMERA_NAME = 64
 # Ranges and defaults of request fields that are the protocol's, not a daemon's option

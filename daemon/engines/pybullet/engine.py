@@ -304,12 +304,9 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
 
     def bounds(self, names: Sequence[str]) -> np.ndarray:
         """PyBullet's own box around each body's (or model link's) collision shapes."""
-        links = self.robots.links
         rows = np.empty((len(names), 6))
         for row, name in enumerate(names):
-            root, link = links.get(name, (name, -1))
-            [body] = self.lookup([root])
-            low, high = self._bc.getAABB(body.uid, link)
+            low, high = self._bc.getAABB(*self._link_of(name))
             rows[row] = [*low, *high]
         return rows
 
@@ -317,25 +314,27 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
         return engine_call(states.PoseReader(self, names).__call__)
 
     def shapes(self, names: Sequence[str]) -> list[list[Shape]]:
-        links = self.robots.links
-        found = []
-        for name in names:
-            root, link = links.get(name, (name, -1))
-            [body] = self.lookup([root])
-            found.append(collisions.link_shapes_and_meshes(self._bc, body.uid, link,
-                                                           self._hulls)[0])
-        return found
+        return [shapes for shapes, _ in self._link_shapes(names)]
 
     def shape_meshes(self, names: Sequence[str]) -> list[dict[int, ShapeMesh]]:
         """The convex hulls PyBullet collides model mesh links with (mesh_files.py)."""
-        links = self.robots.links
+        return [meshes for _, meshes in self._link_shapes(names)]
+
+    def _link_shapes(self, names: Sequence[str]
+                     ) -> list[tuple[list[Shape], dict[int, ShapeMesh]]]:
+        """Each entity's collision shapes and its mesh rows' triangles, found together so
+        that the rows of both always agree."""
         found = []
         for name in names:
-            root, link = links.get(name, (name, -1))
-            [body] = self.lookup([root])
-            found.append(collisions.link_shapes_and_meshes(self._bc, body.uid, link,
-                                                           self._hulls)[1])
+            uid, link = self._link_of(name)
+            found.append(collisions.link_shapes_and_meshes(self._bc, uid, link, self._hulls))
         return found
+
+    def _link_of(self, name: str) -> tuple[int, int]:
+        """The PyBullet body and link index of an entity (-1: a body's base)."""
+        root, link = self.robots.links.get(name, (name, -1))
+        [body] = self.lookup([root])
+        return body.uid, link
 
     def _read(self, ids: list[int]) -> tuple[np.ndarray, np.ndarray]:
         return states.read(self, ids)
