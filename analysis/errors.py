@@ -6,7 +6,8 @@
     ├── CountsError               a bin-count table has the wrong length or a bad entry
     ├── NoSettledBallsError       no ball settled in a bin: there is no distribution to test
     ├── TooFewBallsError          too few balls for two cells of expected count >= 5
-    └── RecordError               a trial record or results.json field is missing or mistyped
+    ├── RecordError               a trial record or results.json field is missing or mistyped
+    └── WeightsError              a report card's criteria or uses (--weights FILE) are malformed
 
 The package stays free of other galton packages, so the root derives from ``Exception``;
 the client may catch ``AnalysisError`` at its edge beside ``GaltonError``.
@@ -33,3 +34,8 @@ class TooFewBallsError(AnalysisError):
 
 class RecordError(AnalysisError):
     """A trial record (or results.json) is missing a field, mistyped, or inconsistent."""
+
+
+class WeightsError(AnalysisError):
+    """A report card's criteria-and-uses file is unreadable, names an unknown criterion, or
+    gives a field a value it cannot take."""

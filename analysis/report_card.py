@@ -1,83 +1,46 @@
-"""One report card across engines: the measures of each engine, ranked per criterion,
-the paper's published rows beside them where it measured the same thing, and a plain
-recommendation per use with its reasons.
+"""One report card across engines: each engine's measures with their 95 % intervals, the
+law checks and Galton trials they came from, ranked per criterion (ties where intervals
+overlap or gaps are under a threshold), and a recommendation per use, or "no clear
+winner" and why (``card_rules``).
 
-The client (``galton.client.report_card``) takes the measures; this module only ranks and
-writes them, so a saved card.json rebuilds the same report.
+The client (``galton.client.report_card``) takes the measures; this module only holds,
+judges and saves them, so a saved card.json rebuilds the same report
+(``card_text`` writes it, ``report_card_outputs`` its files).
 """
 
 from __future__ import annotations
 
+import itertools
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from galton.analysis.errors import RecordError
-from galton.analysis.published import PUBLISHED_TABLE2
-
-CARD_FORMAT = 1
-
-
-@dataclass(frozen=True)
-class Criterion:
-    """A measure every engine has, and which way is better."""
-
-    key: str
-    title: str
-    unit: str
-    lower_is_better: bool
-    paper: str = ""  # the paper's published values for the same measure, if any
-
-
-CRITERIA: tuple[Criterion, ...] = (
-    Criterion("laws_passed", "physical laws passed (of the suite's checks)", "checks", False),
-    Criterion("board_chi2_median", "Galton board: median χ² per trial (paper board, "
-              "primitives)", "", True,
-              "; ".join(f"{r.simulator} {r.chi2:g}" for r in PUBLISHED_TABLE2)),
-    Criterion("board_pooled_p", "Galton board: pooled Monte Carlo p", "", False),
-    Criterion("board_lost_percent", "Galton board: balls lost", "%", True,
-              "; ".join(f"{r.simulator} {r.lost_percent:g} %" for r in PUBLISHED_TABLE2)),
-    Criterion("mesh_chi2_median", "Galton board as meshes: median χ² per trial (paper-mesh)",
-              "", True),
-    Criterion("mesh_lost_percent", "Galton board as meshes: balls lost", "%", True),
-    Criterion("rtf_100", "real-time factor at 100 balls (as fast as possible)", "×", False,
-              "; ".join(f"{r.simulator} {r.rtf_text}" for r in PUBLISHED_TABLE2)),
-    Criterion("idle_rss_mb", "idle memory (RSS, board loaded)", "MB", True),
-    Criterion("idle_cpu_percent", "idle CPU (board loaded, paused)", "% of a core", True),
-    Criterion("rtf1_cpu_percent", "CPU at RTF 1 (board and 100 balls)", "% of a core", True),
-    Criterion("status_zenoh_ms", "status round trip over Zenoh (p50)", "ms", True),
-    Criterion("step_zenoh_ms", "step(1) round trip over Zenoh (p50)", "ms", True),
-    Criterion("status_zmq_ms", "status round trip over ZeroMQ ipc (p50)", "ms", True),
-    Criterion("step_zmq_ms", "step(1) round trip over ZeroMQ ipc (p50)", "ms", True),
-    Criterion("snapshot_ms", "snapshot (p50)", "ms", True),
-    Criterion("restore_ms", "restore (p50)", "ms", True),
-    Criterion("fork_ms", "fork a world (p50)", "ms", True),
-    Criterion("predict_ms", "predict 1 s ahead (p50)", "ms", True),
-    Criterion("physics_errors", "physics errors (failed law runs and trials)", "", True),
+from galton.analysis.card_intervals import (
+    BoardTrial,
+    Measure,
+    chi2_median,
+    laws_measure,
+    order_probability,
+    resampled_w,
 )
-BY_KEY = {c.key: c for c in CRITERIA}
+from galton.analysis.card_rules import Decision, Rules, Table, decide, gap_text, ranks
+from galton.analysis.errors import RecordError
+from galton.analysis.laws import Check
 
-USES: dict[str, tuple[str, ...]] = {
-    "embedded predictor on a 2-core board computer": (
-        "idle_rss_mb", "idle_cpu_percent", "rtf1_cpu_percent", "step_zmq_ms", "predict_ms",
-        "fork_ms", "snapshot_ms", "restore_ms", "rtf_100", "physics_errors"),
-    "faithful offline benchmark": (
-        "laws_passed", "board_chi2_median", "board_pooled_p", "board_lost_percent",
-        "physics_errors"),
-}
-
-
-RULE = ("For each use, the engine with the lowest sum of its ranks over the criteria that "
-        "use cares about, every criterion weighing the same.")
+CARD_FORMAT = 2  # 2: every measure {value, low, high, n}; laws and board trials kept
+BOARDS = {"board": "paper", "mesh": "paper-mesh"}  # measure prefix -> board preset
 
 
 @dataclass
 class CardResults:
-    """Each engine's measures (criterion key -> value, None where not measured), the
-    RTF-versus-balls curve, and how and where they were taken."""
+    """Each engine's measures (criterion key -> Measure, None where not measured), its law
+    checks and Galton trials, the RTF-versus-balls curve, and how and where they were
+    taken."""
 
-    measures: dict[str, dict[str, float | None]]
+    measures: dict[str, dict[str, Measure | None]]
+    laws: dict[str, list[Check]] = field(default_factory=dict)
+    trials: dict[str, dict[str, list[BoardTrial]]] = field(default_factory=dict)
     curves: dict[str, dict[int, float]] = field(default_factory=dict)
     versions: dict[str, str] = field(default_factory=dict)
     config: dict[str, Any] = field(default_factory=dict)
@@ -86,149 +49,126 @@ class CardResults:
     def engines(self) -> list[str]:
         return list(self.measures)
 
-    def to_dict(self) -> dict[str, Any]:
-        return {"format": CARD_FORMAT, "measures": self.measures,
-                "curves": {e: {str(n): r for n, r in c.items()} for e, c in self.curves.items()},
-                "versions": self.versions, "config": self.config}
+    def to_dict(self, rules: Rules | None = None) -> dict[str, Any]:
+        """The measured record, and with ``rules`` what they make of it (criteria with
+        their ranks, uses with their recommendation)."""
+        body: dict[str, Any] = {
+            "format": CARD_FORMAT,
+            "measures": {e: {k: None if m is None else m.to_dict() for k, m in ms.items()}
+                         for e, ms in self.measures.items()},
+            "laws": {e: [c.to_dict() for c in checks] for e, checks in self.laws.items()},
+            "trials": {e: {b: [t.to_dict() for t in ts] for b, ts in boards.items()}
+                       for e, boards in self.trials.items()},
+            "curves": {e: {str(n): r for n, r in c.items()} for e, c in self.curves.items()},
+            "versions": self.versions, "config": self.config}
+        if rules is not None:
+            body |= judged(self, rules)
+        return body
 
     @classmethod
     def from_dict(cls, body: dict[str, Any]) -> CardResults:
         if not isinstance(body, dict) or body.get("format") != CARD_FORMAT:
-            raise RecordError(f"not a report card of format {CARD_FORMAT}")
-        return cls(measures={e: dict(m) for e, m in body["measures"].items()},
-                   curves={e: {int(n): float(r) for n, r in c.items()}
-                           for e, c in body.get("curves", {}).items()},
-                   versions=dict(body.get("versions", {})), config=dict(body.get("config", {})))
+            raise RecordError(f"not a report card of format {CARD_FORMAT} (a card taken "
+                              "before intervals is format 1: take it again)")
+        try:
+            return cls(
+                measures={e: {k: None if m is None else Measure.from_dict(m)
+                              for k, m in ms.items()} for e, ms in body["measures"].items()},
+                laws={e: [Check.from_dict(c) for c in cs]
+                      for e, cs in body.get("laws", {}).items()},
+                trials={e: {b: [BoardTrial.from_dict(t) for t in ts] for b, ts in bs.items()}
+                        for e, bs in body.get("trials", {}).items()},
+                curves={e: {int(n): float(r) for n, r in c.items()}
+                        for e, c in body.get("curves", {}).items()},
+                versions=dict(body.get("versions", {})), config=dict(body.get("config", {})))
+        except (AttributeError, KeyError, TypeError, ValueError) as error:
+            raise RecordError(f"a report card's card.json is malformed ({error!r})") from error
 
-    def save(self, path: Path) -> None:
-        path.write_text(json.dumps(self.to_dict(), indent=1) + "\n")
-
-
-def ranking(card: CardResults, key: str) -> list[str]:
-    """Engines best first on one criterion; engines without the measure come last."""
-    criterion = BY_KEY[key]
-    measured = [e for e in card.engines if card.measures[e].get(key) is not None]
-    unmeasured = [e for e in card.engines if e not in measured]
-    ordered = sorted(measured, key=lambda e: float(card.measures[e][key] or 0.0),
-                     reverse=not criterion.lower_is_better)
-    return ordered + unmeasured
-
-
-def rank_of(card: CardResults, key: str, engine: str) -> int:
-    """1 for the best; engines with equal values share the better rank."""
-    value = card.measures[engine].get(key)
-    if value is None:
-        return len(card.engines)
-    order = ranking(card, key)
-    return 1 + next(i for i, e in enumerate(order) if card.measures[e].get(key) == value)
+    def save(self, path: Path, rules: Rules | None = None) -> None:
+        path.write_text(json.dumps(self.to_dict(rules), indent=1) + "\n")
 
 
-@dataclass(frozen=True)
-class Recommendation:
-    use: str
-    engine: str
-    wins: list[str]  # criteria the engine ranks first on
-    losses: list[str]  # criteria where another engine does better
+def criterion_table(card: CardResults, rules: Rules) -> Table:
+    """Every criterion's measure per engine; a law criterion's counted from the checks."""
+    table: dict[str, dict[str, Measure | None]] = {}
+    for key, spec in rules.criteria.items():
+        if spec.laws:
+            table[key] = {e: _law_measure(card.laws.get(e, []), spec.laws)
+                          for e in card.engines}
+        else:
+            table[key] = {e: card.measures[e].get(key) for e in card.engines}
+    return table
 
 
-def recommend(card: CardResults, use: str) -> Recommendation:
-    """The engine with the lowest rank sum over the use's criteria (the first in the
-    engine list on a tie), and where it leads and trails."""
-    keys = [k for k in USES[use] if any(card.measures[e].get(k) is not None
-                                        for e in card.engines)]
-    totals = {e: sum(rank_of(card, k, e) for k in keys) for e in card.engines}
-    best = min(card.engines, key=lambda e: totals[e])
-    wins = [k for k in keys if rank_of(card, k, best) == 1]
-    return Recommendation(use, best, wins, [k for k in keys if k not in wins])
+def _law_measure(checks: list[Check], laws: tuple[str, ...]) -> Measure | None:
+    chosen = [c for c in checks if c.law in laws]
+    return laws_measure(chosen) if chosen else None
 
 
-def value_text(value: float | None, unit: str = "") -> str:
-    if value is None:
-        return "not measured"
-    text = f"{value:.4g}" if abs(value) < 1e5 else f"{value:.3e}"
-    return f"{text} {unit}".strip() if unit and unit not in ("checks",) else text
+def decisions(card: CardResults, rules: Rules) -> dict[str, Decision]:
+    table = criterion_table(card, rules)
+    return {use: decide(rules, use, table, card.engines) for use in rules.uses}
 
 
-def _reason(card: CardResults, key: str, engine: str) -> str:
-    criterion = BY_KEY[key]
-    others = ", ".join(f"{e} {value_text(card.measures[e].get(key), criterion.unit)}"
-                       for e in card.engines if e != engine)
-    mine = value_text(card.measures[engine].get(key), criterion.unit)
-    return f"{criterion.title}: {mine} (vs {others})" if others else f"{criterion.title}: {mine}"
+def fidelity_orders(card: CardResults, rules: Rules, key: str) -> list[tuple[str, str, float]]:
+    """For a Galton criterion, each engine and the next in its order, with the share of
+    bootstrap resamples (of each engine's trials) in which that order holds."""
+    prefix, _, statistic_name = key.partition("_")
+    statistic = {"chi2_median": chi2_median, "effect_w": resampled_w}.get(statistic_name)
+    board = BOARDS.get(prefix)
+    spec = rules.criteria.get(key)
+    if statistic is None or board is None or spec is None:
+        return []
+    column = criterion_table(card, rules)[key]
+    measured = sorted((e for e in card.engines if column[e] is not None),
+                      key=lambda e: column[e].value if column[e] else 0.0,  # type: ignore[union-attr]
+                      reverse=not spec.lower_is_better)
+    pairs = []
+    for ahead, behind in itertools.pairwise(measured):
+        a = [t for t in card.trials.get(ahead, {}).get(board, []) if t.settled]
+        b = [t for t in card.trials.get(behind, {}).get(board, []) if t.settled]
+        if a and b:
+            pairs.append((ahead, behind, order_probability(
+                a, b, statistic, spec.lower_is_better, int(card.config.get("seed", 0)))))
+    return pairs
 
 
-def recommendation_lines(card: CardResults) -> list[str]:
-    lines = []
-    for use in USES:
-        chosen = recommend(card, use)
-        lines.append(f"- **{use}: {chosen.engine}.** It leads on "
-                     + ("; ".join(_reason(card, k, chosen.engine) for k in chosen.wins)
-                        or "nothing alone") + ".")
-        if chosen.losses:
-            lines.append("  It trails or ties on "
-                         + "; ".join(_reason(card, k, chosen.engine) for k in chosen.losses)
-                         + ".")
-    return lines
+def _decision_body(card: CardResults, rules: Rules, table: Table,
+                   decision: Decision) -> dict[str, Any]:
+    use = rules.uses[decision.use]
+    chosen = decision.engine or ""
+
+    def entry(key: str, winner: str, loser: str | None) -> dict[str, Any]:
+        mine, theirs = table[key].get(winner), table[key].get(loser or "")
+        return {"criterion": key, "weight": use.weights[key], "engine": winner,
+                "value": mine.to_dict() if mine else None, "rival": loser,
+                "rival_value": theirs.to_dict() if theirs else None,
+                "gap": gap_text(rules.criteria[key], mine, theirs) if mine and theirs else ""}
+    return {"title": use.title, "engine": decision.engine, "margin": decision.margin,
+            "rival": decision.rival,
+            "decisive": [entry(k, chosen, decision.rival) for k in decision.decisive]
+            if decision.engine else [],
+            "why": decision.why,
+            "weights": use.weights,
+            "criteria": {k: {"weight": w, "ranks": ranks(rules.criteria[k], table[k])}
+                         for k, w in use.weights.items()}}
 
 
-def criteria_table(card: CardResults) -> list[list[str]]:
-    """Header and rows: criterion, each engine's value with its rank, the paper's values."""
-    header = ["criterion", *[f"{e} {card.versions.get(e, '')}".strip() for e in card.engines],
-              "best", "published (paper)"]
-    rows = [header]
-    for criterion in CRITERIA:
-        values = [f"{value_text(card.measures[e].get(criterion.key), criterion.unit)} "
-                  f"(#{rank_of(card, criterion.key, e)})" for e in card.engines]
-        leaders = [e for e in card.engines if card.measures[e].get(criterion.key) is not None
-                   and rank_of(card, criterion.key, e) == 1]
-        rows.append([criterion.title, *values, ", ".join(leaders) or "–",
-                     criterion.paper or "–"])
-    return rows
-
-
-def curve_table(card: CardResults) -> list[list[str]]:
-    counts = sorted({n for c in card.curves.values() for n in c})
-    rows = [["balls", *card.engines]]
-    for n in counts:
-        rows.append([str(n), *[value_text(card.curves.get(e, {}).get(n))
-                               for e in card.engines]])
-    return rows
-
-
-def markdown_table(rows: list[list[str]]) -> str:
-    lines = ["| " + " | ".join(rows[0]) + " |", "| " + " | ".join("---" for _ in rows[0]) + " |"]
-    lines += ["| " + " | ".join(r) + " |" for r in rows[1:]]
-    return "\n".join(lines)
-
-
-def about_lines(card: CardResults) -> list[str]:
-    config = card.config
-    host = config.get("host", {})
-    return [f"- mode: {'quick' if config.get('quick') else 'full'}; board: "
-            f"{config.get('board_plan', '')}; taken {config.get('taken', '')}",
-            f"- machine: {host.get('cpu_model', 'unknown CPU')}, "
-            f"{host.get('logical_cores', '?')} logical cores, "
-            f"{int(host.get('memory_bytes', 0)) / 2**30:.0f} GiB, {host.get('os', '')}; "
-            f"{config.get('machine_note', '')}",
-            f"- command: `{config.get('command', 'galton-client report-card')}`",
-            *([f"- the Galton trials ran on a pool of {len(config['pool'])} daemons: "
-               f"{', '.join(config['pool'])}"] if config.get("pool") else []),
-            "- the Galton board is built from primitives (paper) and, as the paper imported "
-            "it, from triangle meshes (paper-mesh; not measured on engines without meshes)"]
-
-
-def render_card(card: CardResults, plots: list[str] | None = None) -> str:
-    lines = ["# Report card: choosing a simulator", "", *about_lines(card), "",
-             "## Recommendation", "", RULE, "", *recommendation_lines(card), "",
-             "## Per criterion", "",
-             "Each value with its rank among the engines here (#1 best); the paper's "
-             "published Webots, CoppeliaSim and Gazebo rows where it measured the same "
-             "thing (its own machines, its own board as a mesh).", "",
-             markdown_table(criteria_table(card)), "",
-             "## Real-time factor versus balls", "", markdown_table(curve_table(card))]
-    notes = card.config.get("notes") or []
-    if notes:
-        lines += ["", "## Physics errors met", "", *[f"- {n}" for n in notes]]
-    if plots:
-        lines += ["", *[f"![{p}]({p})" for p in plots]]
-    return "\n".join(lines) + "\n"
+def judged(card: CardResults, rules: Rules) -> dict[str, Any]:
+    """card.json's derived part: per criterion its measures and ranks, per use its
+    recommendation (engine or null, margin, decisive criteria) and its criteria's ranks."""
+    table = criterion_table(card, rules)
+    criteria: dict[str, dict[str, Any]] = {key: {"title": spec.title, "unit": spec.unit,
+        "better": "lower" if spec.lower_is_better else "higher",
+        "threshold": spec.threshold, "relative": spec.relative, "laws": list(spec.laws),
+        "measures": {e: m.to_dict() if m else None for e, m in table[key].items()},
+        "ranks": ranks(spec, table[key])} for key, spec in rules.criteria.items()}
+    for key in ("board_effect_w", "board_chi2_median"):
+        if key in criteria:
+            criteria[key]["order_probability"] = [
+                {"ahead": a, "behind": b, "probability": p}
+                for a, b, p in fidelity_orders(card, rules, key)]
+    return {"rules": {"source": rules.source, "min_margin": rules.min_margin},
+            "criteria": criteria,
+            "uses": {use: _decision_body(card, rules, table, d)
+                     for use, d in decisions(card, rules).items()}}

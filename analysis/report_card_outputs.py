@@ -1,5 +1,7 @@
-"""The report card's files: card.json, report-card.md, the RTF-versus-balls plot, and a
-self-contained report-card.html (its plots inlined as data URIs, no file beside it needed).
+"""The report card's files: card.json (measures with intervals, and what the rules make of
+them), report-card.md, the RTF-versus-balls plot, and a self-contained report-card.html
+(its plots inlined as data URIs). Both texts come from the same blocks (``card_text``),
+written whole: no line is wrapped or cut, whatever its width.
 """
 
 from __future__ import annotations
@@ -9,15 +11,10 @@ import html
 import re
 from pathlib import Path
 
-from galton.analysis.report_card import (
-    RULE,
-    CardResults,
-    about_lines,
-    criteria_table,
-    curve_table,
-    recommendation_lines,
-    render_card,
-)
+from galton.analysis.card_blocks import Block, Grid, Heading, Items, Para, markdown
+from galton.analysis.card_rules import Rules, load_rules
+from galton.analysis.card_text import TITLE, card_blocks
+from galton.analysis.report_card import CardResults
 
 CARD_JSON = "card.json"
 CARD_MD = "report-card.md"
@@ -25,6 +22,13 @@ CARD_HTML = "report-card.html"
 CURVE_PNG = "rtf_vs_balls.png"
 _BOLD = re.compile(r"\*\*(.+?)\*\*")
 _CODE = re.compile(r"`(.+?)`")
+_LINK = re.compile(r"\[([^\]]+)\]\(([^)\s]+)\)")
+
+
+def render_card(card: CardResults, rules: Rules | None = None, plots: list[str] | None = None,
+                law_links: list[str] | None = None) -> str:
+    """report-card.md's text."""
+    return markdown(TITLE, card_blocks(card, rules or load_rules(), plots, law_links))
 
 
 def plot_curve(card: CardResults, out: Path) -> list[str]:
@@ -51,20 +55,17 @@ def plot_curve(card: CardResults, out: Path) -> list[str]:
 
 
 def _inline(text: str) -> str:
-    """Escape, then the two Markdown marks the card uses: **bold** and `code`."""
-    return _CODE.sub(r"<code>\1</code>", _BOLD.sub(r"<strong>\1</strong>", html.escape(text)))
+    """Escape, then the Markdown marks the card uses: **bold**, `code` and [links](to)."""
+    marked = _BOLD.sub(r"<strong>\1</strong>", html.escape(text, quote=False))
+    marked = _CODE.sub(r"<code>\1</code>", marked)
+    return _LINK.sub(r'<a href="\2">\1</a>', marked)
 
 
 def _table(rows: list[list[str]]) -> str:
-    head = "".join(f"<th>{html.escape(c)}</th>" for c in rows[0])
-    body = "".join("<tr>" + "".join(f"<td>{html.escape(c)}</td>" for c in row) + "</tr>"
+    head = "".join(f"<th>{_inline(c)}</th>" for c in rows[0])
+    body = "".join("<tr>" + "".join(f"<td>{_inline(c)}</td>" for c in row) + "</tr>"
                    for row in rows[1:])
     return f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
-
-
-def _list(lines: list[str]) -> str:
-    items = "".join(f"<li>{_inline(line.removeprefix('- ').strip())}</li>" for line in lines)
-    return f"<ul>{items}</ul>"
 
 
 def _image(path: Path) -> str:
@@ -72,49 +73,46 @@ def _image(path: Path) -> str:
     return f'<p><img alt="{html.escape(path.name)}" src="data:image/png;base64,{data}"></p>'
 
 
-STYLE = ("body{font-family:sans-serif;max-width:70em;margin:2em auto;line-height:1.4}"
+STYLE = ("body{font-family:sans-serif;max-width:80em;margin:2em auto;line-height:1.4}"
          "table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #bbb;"
          "padding:0.25em 0.5em;text-align:left}th{background:#eee}img{max-width:100%}")
 
 
-def render_html(card: CardResults, images: list[Path]) -> str:
+def _html_block(block: Block, out: Path) -> str:
+    if isinstance(block, Heading):
+        return f"<h2>{html.escape(block.text)}</h2>"
+    if isinstance(block, Para):
+        return f"<p>{_inline(block.text)}</p>"
+    if isinstance(block, Items):
+        return "<ul>" + "".join(f"<li>{_inline(line)}</li>" for line in block.lines) + "</ul>"
+    if isinstance(block, Grid):
+        return _table(block.rows)
+    return _image(out / block.path)
+
+
+def render_html(card: CardResults, out: Path, rules: Rules | None = None,
+                plots: list[str] | None = None, law_links: list[str] | None = None) -> str:
+    """A page that needs no file beside it: the curve and the laws' plots inlined."""
+    blocks = card_blocks(card, rules or load_rules(), plots, law_links)
+    images = [p for p in law_links or [] if p.endswith(".png")]
     parts = ["<!DOCTYPE html><html><head><meta charset=\"utf-8\">",
-             "<title>Report card: choosing a simulator</title>",
-             f"<style>{STYLE}</style></head><body>",
-             "<h1>Report card: choosing a simulator</h1>", _list(about_lines(card)),
-             "<h2>Recommendation</h2>", f"<p>{_inline(RULE)}</p>",
-             _list(_joined(recommendation_lines(card))),
-             "<h2>Per criterion</h2>", _table(criteria_table(card)),
-             "<h2>Real-time factor versus balls</h2>", _table(curve_table(card)),
-             *[_image(p) for p in images], *_notes(card), "</body></html>"]
+             f"<title>{TITLE}</title>", f"<style>{STYLE}</style></head><body>",
+             f"<h1>{TITLE}</h1>", *[_html_block(b, out) for b in blocks],
+             *[_image(out / p) for p in images if (out / p).exists()], "</body></html>"]
     return "\n".join(parts) + "\n"
 
 
-def _notes(card: CardResults) -> list[str]:
-    notes = [f"- {n}" for n in card.config.get("notes") or []]
-    return ["<h2>Physics errors met</h2>", _list(notes)] if notes else []
-
-
-def _joined(lines: list[str]) -> list[str]:
-    """Markdown list items with their indented continuation lines folded in."""
-    items: list[str] = []
-    for line in lines:
-        if line.startswith("  ") and items:
-            items[-1] += " " + line.strip()
-        else:
-            items.append(line)
-    return items
-
-
-def write_card_outputs(card: CardResults, out: Path, plots: bool = True,
-                       extra_images: list[Path] | None = None) -> dict[str, Path]:
+def write_card_outputs(card: CardResults, out: Path, rules: Rules | None = None,
+                       plots: bool = True, law_links: list[str] | None = None
+                       ) -> dict[str, Path]:
     """card.json, report-card.md, report-card.html and the plots in ``out`` (created);
-    ``extra_images`` (the laws' plots) are inlined in the HTML too."""
+    ``law_links`` (paths under ``out``: the laws' report and plots) are linked, and the
+    plots among them inlined in the HTML."""
+    chosen = rules or load_rules()
     out.mkdir(parents=True, exist_ok=True)
-    card.save(out / CARD_JSON)
+    card.save(out / CARD_JSON, chosen)
     drawn = plot_curve(card, out) if plots else []
-    (out / CARD_MD).write_text(render_card(card, drawn))
-    images = [out / p for p in drawn] + list(extra_images or [])
-    (out / CARD_HTML).write_text(render_html(card, images))
+    (out / CARD_MD).write_text(render_card(card, chosen, drawn, law_links))
+    (out / CARD_HTML).write_text(render_html(card, out, chosen, drawn, law_links))
     return {"card_json": out / CARD_JSON, "card_md": out / CARD_MD,
             "card_html": out / CARD_HTML, **{p: out / p for p in drawn}}

@@ -11,8 +11,12 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
+from galton.analysis import card_intervals
 from galton.analysis.board import BoardSpec
-from galton.analysis.laws import LawResults
+from galton.analysis.card_intervals import BoardTrial, Measure
+from galton.analysis.card_rules import Rules
+from galton.analysis.laws import EngineLaws, LawResults
+from galton.analysis.records import TrialRecord
 from galton.analysis.report_card import CardResults
 from galton.client.bench.experiment import ExperimentConfig
 from galton.client.laws import choose, run_engine
@@ -65,45 +69,109 @@ def engine_daemon(engine: str, timeout: float) -> Iterator[tuple[Client, Client]
         yield zenoh_client, zmq_client
 
 
-def board_measures(sim: Client, engine: str, plan: CardPlan, seed: int,
-                   trials_of: TrialRunner = local_trials
-                   ) -> tuple[dict[str, float | None], dict[int, float], int]:
-    """Fidelity at the plan's ball count, the RTF curve (mean RTF per ball count), and
-    the balls lost to a diverged (NaN) state."""
-    from galton.analysis.summary import summarise_group  # scipy: the [bench] extra
+def board_trial(trial: TrialRecord) -> BoardTrial:
+    return BoardTrial(tuple(trial.counts), trial.lost, trial.balls)
 
+
+@dataclass
+class BoardRun:
+    """One engine's Galton figures: measures, trials kept, the RTF curve, diverged balls."""
+
+    measures: dict[str, Measure | None]
+    trials: list[BoardTrial]
+    curve: dict[int, float]
+    diverged: int
+    released: int
+
+
+def board_measures(sim: Client, engine: str, plan: CardPlan, seed: int,
+                   trials_of: TrialRunner = local_trials) -> BoardRun:
+    """Fidelity at the plan's ball count (bootstrap over its trials), the RTF at that count
+    (mean of its trials), the RTF curve (mean RTF per ball count), and the balls lost to a
+    diverged (NaN) state."""
     board = BoardSpec.load("paper")
     fidelity = ExperimentConfig(board=board, engines=(engine,), balls=(plan.fidelity_balls,),
                                 repetitions=plan.repetitions, seed=seed)
     curve = ExperimentConfig(board=board, engines=(engine,), balls=plan.curve, repetitions=1,
                              seed=seed, max_sim_time=plan.curve_sim_time,
                              max_wall_time=plan.curve_wall_time)
-    trials = [*trials_of(sim, engine, fidelity), *trials_of(sim, engine, curve)]
-    group = summarise_group([t for t in trials if t.balls == plan.fidelity_balls],
-                            plan.fidelity_balls)
+    fidelity_trials = trials_of(sim, engine, fidelity)
+    trials = [*fidelity_trials, *trials_of(sim, engine, curve)]
+    kept = [board_trial(t) for t in fidelity_trials]
     rtfs: dict[int, list[float]] = {}
     for trial in trials:
         if trial.rtf is not None:
             rtfs.setdefault(trial.balls, []).append(trial.rtf)
-    means = {n: statistics.fmean(v) for n, v in sorted(rtfs.items())}
-    return ({"board_chi2_median": group.chi2_median,
-             "board_pooled_p": None if group.pooled is None else group.pooled.p_monte_carlo,
-             "board_lost_percent": group.lost_percent_pooled,
-             "rtf_100": means.get(plan.fidelity_balls)},
-            means, sum(t.lost_by_reason.get("nan", 0) for t in trials))
+    at_count = [t.rtf for t in fidelity_trials if t.rtf is not None]
+    measures = card_intervals.board_measures(kept, "board", seed)
+    measures["rtf_100"] = card_intervals.mean_measure(at_count) if at_count else None
+    return BoardRun(measures, kept, {n: statistics.fmean(v) for n, v in sorted(rtfs.items())},
+                    sum(t.lost_by_reason.get("nan", 0) for t in trials),
+                    sum(t.balls for t in trials))
 
 
 def mesh_measures(sim: Client, engine: str, plan: CardPlan, seed: int,
-                  trials_of: TrialRunner = local_trials) -> dict[str, float | None]:
-    """The paper-mesh board's median χ² and balls lost, beside the primitives'."""
-    from galton.analysis.summary import summarise_group  # scipy: the [bench] extra
-
+                  trials_of: TrialRunner = local_trials
+                  ) -> tuple[dict[str, Measure | None], list[BoardTrial]]:
+    """The paper-mesh board's figures, beside the primitives', and its trials."""
     config = ExperimentConfig(board=BoardSpec.load("paper-mesh"), engines=(engine,),
                               balls=(plan.mesh_balls,), repetitions=plan.mesh_repetitions,
                               seed=seed)
-    group = summarise_group(trials_of(sim, engine, config), plan.mesh_balls)
-    return {"mesh_chi2_median": group.chi2_median,
-            "mesh_lost_percent": group.lost_percent_pooled}
+    kept = [board_trial(t) for t in trials_of(sim, engine, config)]
+    return card_intervals.board_measures(kept, "mesh", seed), kept
+
+
+def sampled(samples: dict[str, list[float]], mean: tuple[str, ...] = ()
+            ) -> dict[str, Measure | None]:
+    """Each figure's median (timings) or mean (telemetry) with its interval."""
+    return {k: (card_intervals.mean_measure(v) if k in mean else
+                card_intervals.median_measure(v)) if v else None
+            for k, v in samples.items()}
+
+
+def measure_engine(zenoh_client: Client, zmq_client: Client, engine: str, plan: CardPlan,
+                   seed: int, card: CardResults, tell: Say, trials_of: TrialRunner
+                   ) -> EngineLaws:
+    """Every measure of one engine into ``card``; its law records returned."""
+    board = BoardSpec.load("paper")
+    tell(f"{engine}: footprint")
+    measures = sampled(measure.footprint(zmq_client, engine, board, plan.footprint_s),
+                       mean=("idle_rss_mb", "idle_cpu_percent", "rtf1_cpu_percent"))
+    tell(f"{engine}: round trips and world operations")
+    measure.busy_world(zmq_client, engine, board)
+    for name, client in (("zenoh", zenoh_client), ("zmq", zmq_client)):
+        status_ms, step_ms = measure.round_trips(client, plan.round_trips)
+        measures |= sampled({f"status_{name}_ms": status_ms, f"step_{name}_ms": step_ms})
+    costs, restore_errors = measure.world_costs(zmq_client, plan.world_ops)
+    measures |= sampled(costs)
+    tell(f"{engine}: the physical laws")
+    laws = run_engine(zmq_client, engine, choose(plan.laws), seed)
+    card.laws[engine] = list(laws.checks)
+    measures["laws_passed"] = card_intervals.laws_measure(laws.checks)
+    tell(f"{engine}: the Galton board")
+    run = board_measures(zmq_client, engine, plan, seed, trials_of)
+    measures |= run.measures
+    card.curves[engine] = run.curve
+    card.trials[engine] = {"paper": run.trials}
+    released = run.released
+    if "mesh" in zenoh_client.capabilities().body_shapes:
+        tell(f"{engine}: the Galton board as meshes")
+        mesh, mesh_trials = mesh_measures(zmq_client, engine, plan, seed, trials_of)
+        measures |= mesh
+        card.trials[engine]["paper-mesh"] = mesh_trials
+        released += sum(t.balls for t in mesh_trials)
+    failed = [c for c in laws.checks if c.value is None]
+    measures["physics_errors"] = card_intervals.count_measure(
+        len(failed) + run.diverged + restore_errors, len(laws.checks) + released + 1)
+    notes = card.config.setdefault("notes", [])
+    notes += [f"{engine}: law {c.law} did not run: {c.note}" for c in failed]
+    if run.diverged:
+        notes.append(f"{engine}: {run.diverged} Galton ball(s) lost to a diverged state")
+    if restore_errors:
+        notes.append(f"{engine}: stepping after restore (board and 100 balls) "
+                     "diverged: PHYSICS_ERROR")
+    card.measures[engine] = measures
+    return laws
 
 
 def run_card(engines: Sequence[str], plan: CardPlan, seed: int = 0, timeout: float = 30.0,
@@ -114,59 +182,29 @@ def run_card(engines: Sequence[str], plan: CardPlan, seed: int = 0, timeout: flo
     card = CardResults(measures={}, config={"plan": plan.describe(), "seed": seed})
     law_records = []
     tell = say or (lambda _: None)
-    board = BoardSpec.load("paper")
     for engine in engines:
         began = time.perf_counter()
         with engine_daemon(engine, timeout) as (zenoh_client, zmq_client):
             caps = zenoh_client.capabilities()
             card.versions[engine] = caps.engine_version
             card.config.setdefault("host", caps.host)
-            measures: dict[str, float | None] = {}
-            tell(f"{engine}: footprint")
-            measures |= measure.footprint(zmq_client, engine, board, plan.footprint_s)
-            tell(f"{engine}: round trips and world operations")
-            measure.busy_world(zmq_client, engine, board)
-            for name, client in (("zenoh", zenoh_client), ("zmq", zmq_client)):
-                status_ms, step_ms = measure.round_trips(client, plan.round_trips)
-                measures[f"status_{name}_ms"] = status_ms
-                measures[f"step_{name}_ms"] = step_ms
-            costs, restore_errors = measure.world_costs(zmq_client, plan.world_ops)
-            measures |= costs
-            tell(f"{engine}: the physical laws")
-            laws = run_engine(zmq_client, engine, choose(plan.laws), seed)
-            law_records.append(laws)
-            measures["laws_passed"] = float(laws.passed)
-            tell(f"{engine}: the Galton board")
-            board_values, curve, diverged = board_measures(zmq_client, engine, plan, seed,
-                                                           trials_of)
-            measures |= board_values
-            card.curves[engine] = curve
-            if "mesh" in caps.body_shapes:
-                tell(f"{engine}: the Galton board as meshes")
-                measures |= mesh_measures(zmq_client, engine, plan, seed, trials_of)
-            failed = [c for c in laws.checks if c.value is None]
-            measures["physics_errors"] = float(len(failed) + diverged + restore_errors)
-            notes = card.config.setdefault("notes", [])
-            notes += [f"{engine}: law {c.law} did not run: {c.note}" for c in failed]
-            if diverged:
-                notes.append(f"{engine}: {diverged} Galton ball(s) lost to a diverged state")
-            if restore_errors:
-                notes.append(f"{engine}: stepping after restore (board and 100 balls) "
-                             "diverged: PHYSICS_ERROR")
-        card.measures[engine] = measures
+            law_records.append(measure_engine(zenoh_client, zmq_client, engine, plan, seed,
+                                              card, tell, trials_of))
         tell(f"{engine}: done in {time.perf_counter() - began:.0f} s")
     return card, LawResults(law_records, {"engines": list(engines),
                                           "laws": [e.key for e in choose(plan.laws)],
                                           "seed": seed})
 
 
-def write_report_card(card: CardResults, laws: LawResults, out: Path) -> dict[str, Path]:
-    """The card's files in ``out`` and the laws' report in ``out/laws``, its plots inlined
-    in the card's HTML page too."""
+def write_report_card(card: CardResults, laws: LawResults, out: Path,
+                      rules: Rules | None = None) -> dict[str, Path]:
+    """The card's files in ``out`` and the laws' report in ``out/laws``, linked from the
+    card (its plots inlined in the card's HTML page too)."""
     from galton.analysis.laws_report import write_law_outputs
     from galton.analysis.report_card_outputs import write_card_outputs
 
     written = write_law_outputs(laws, out / "laws")
-    images = [path for path in written.values() if path.suffix == ".png"]
-    return {**write_card_outputs(card, out, extra_images=images),
+    links = [path.relative_to(out).as_posix() for key, path in written.items()
+             if key != "results_json"]
+    return {**write_card_outputs(card, out, rules, law_links=links),
             **{f"laws/{key}": path for key, path in written.items()}}
