@@ -17,6 +17,7 @@ import typer
 from galton.client.cli.common import console, run_guarded
 
 if TYPE_CHECKING:
+    from galton.analysis.card_rules import Rules
     from galton.analysis.laws import LawResults
     from galton.analysis.report_card import CardResults
 
@@ -55,12 +56,21 @@ def report_card(
         help="Endpoint(s) of the pool's daemons (else the global --connect).")] = None,
     instances: Annotated[str | None, typer.Option(
         help="Comma-separated daemon instances of the pool.")] = None,
+    weights: Annotated[Path | None, typer.Option(
+        help="A TOML of criteria and uses read over the shipped one (card_uses.toml: "
+             "thresholds, weights per use; docs/report-card/reading.md).")] = None,
 ) -> None:
     """Measure every engine on daemons started here (the Galton board, the physical laws,
     footprint, embedding costs) and write a ranked report card: report-card.md, a
     self-contained report-card.html, card.json and the laws' report under laws/."""
+    from galton.analysis.card_rules import load_rules
+    from galton.analysis.errors import WeightsError
     from galton.client.report_card import CardPlan, run_card, write_report_card
     from galton.client.report_card.pooled import pooled_trials
+    try:
+        rules = load_rules(weights)  # a bad file fails before anything is measured
+    except WeightsError as error:
+        raise typer.BadParameter(str(error), param_hint="--weights") from error
     plan = CardPlan.quick() if quick else CardPlan()
     chosen = [e.strip() for e in engines.split(",") if e.strip()] if engines else None
 
@@ -84,5 +94,15 @@ def report_card(
     card.config |= {"quick": quick, "board_plan": plan.describe(), "machine_note": note,
                     "taken": datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC"),
                     "command": "galton-client " + shlex.join(sys.argv[1:])}
-    written = write_report_card(card, laws, out)
-    console.print(f"wrote {', '.join(str(p) for p in written.values())}", markup=False)
+    written = write_report_card(card, laws, out, rules)
+    for line in answer_lines(card, rules):
+        typer.echo(line)  # whole lines, never wrapped or cut, in a terminal or a pipe
+    typer.echo(f"wrote {', '.join(str(p) for p in written.values())}")
+
+
+def answer_lines(card: CardResults, rules: Rules) -> list[str]:
+    """The card's answer per use, one line each, for the terminal."""
+    from galton.analysis.report_card import decisions
+    return [f"{rules.uses[d.use].title}: "
+            + (f"{d.engine} (ahead of {d.rival} by {d.margin:.0%} of the weight)"
+               if d.engine else "no clear winner") for d in decisions(card, rules).values()]

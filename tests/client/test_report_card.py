@@ -7,7 +7,9 @@ import json
 from pathlib import Path
 
 from galton.analysis.board import BoardSpec
-from galton.analysis.report_card import CRITERIA, CardResults, value_text
+from galton.analysis.card_intervals import measure_text
+from galton.analysis.card_rules import load_rules
+from galton.analysis.report_card import CardResults
 from galton.client.bench.experiment import ExperimentConfig
 from galton.client.report_card import CardPlan, run_card, write_report_card
 from galton.client.report_card.pooled import local_trials, pooled_trials
@@ -18,21 +20,31 @@ TINY = CardPlan(fidelity_balls=20, repetitions=1, curve=(1,), footprint_s=0.5, r
 
 
 def test_a_tiny_card_measures_every_criterion(tmp_path: Path) -> None:
+    """Every criterion the rules name is measured, each with its interval and its n."""
+    rules = load_rules()
     card, laws = run_card(["pybullet"], TINY)
     measures = card.measures["pybullet"]
-    missing = [c.key for c in CRITERIA if measures.get(c.key) is None]
+    measured = [k for k, spec in rules.criteria.items() if not spec.laws]
+    missing = [k for k in measured if measures.get(k) is None]
     assert not missing, missing
-    assert measures["laws_passed"] == 1.0 and measures["physics_errors"] == 0.0
-    assert 0 < measures["idle_rss_mb"] < 2000  # type: ignore[operator]
-    assert measures["step_zmq_ms"] > 0 and set(card.curves["pybullet"]) == {1, 20}  # type: ignore[operator]
+    assert set(measures) == set(measured)  # nothing measured that no criterion reads
+    laws_passed, errors = measures["laws_passed"], measures["physics_errors"]
+    assert laws_passed is not None and (laws_passed.value, laws_passed.n) == (1.0, 1)
+    assert errors is not None and errors.value == 0.0 and errors.high > 0  # 0, by chance
+    rss, step = measures["idle_rss_mb"], measures["step_zmq_ms"]
+    assert rss is not None and 0 < rss.low <= rss.value <= rss.high < 2000 and rss.n > 1
+    assert step is not None and step.low <= step.value <= step.high and step.n == 5
+    assert set(card.curves["pybullet"]) == {1, 20}
     assert [c.law for c in laws.engines[0].checks] == ["free-fall"]
-    files = write_report_card(card, laws, tmp_path)
+    files = write_report_card(card, laws, tmp_path, rules)
     assert files["laws/results_json"].exists() and files["card_html"].exists()
     saved = CardResults.from_dict(json.loads(files["card_json"].read_text()))
+    assert saved.measures == card.measures and saved.laws == card.laws
     text = files["card_md"].read_text()
-    for criterion in CRITERIA:
-        shown = value_text(saved.measures["pybullet"][criterion.key], criterion.unit)
-        assert f"| {criterion.title} | {shown} (#1) |" in text
+    for key in measured:
+        spec = rules.criteria[key]
+        assert f"| {spec.title} | {measure_text(measures[key], spec.unit)} (#1) |" in text
+    assert "[laws/report.md](laws/report.md)" in text
 
 
 def test_pool_trials_run_on_a_small_real_pool_and_fall_back_when_none_answers() -> None:
