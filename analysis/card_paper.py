@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-from galton.analysis.card_intervals import Measure, measure_text, number
+from galton.analysis.card_intervals import Measure, measure_text
 from galton.analysis.published import PAPER_CRITICAL_VALUE, PUBLISHED_TABLE2, PublishedRow
 
 # the paper's simulator -> (the engine here, how close it stands)
@@ -46,7 +46,7 @@ def lost_line(row: PublishedRow, engine: str, lost: Measure | None) -> str:
     theirs, ours = row.lost_percent <= LOST_FEW, lost.value <= LOST_FEW
     verdict = "agrees" if theirs == ours else "does not agree"
     def said(few: bool) -> str:
-        return f"almost none (≤ {LOST_FEW:g} %)" if few else "many"
+        return f"almost none, ≤ {LOST_FEW:g} %" if few else "many"
     return (f"balls lost {verdict}: {row.simulator} lost {row.lost_percent:g} % "
             f"({said(theirs)}), {engine} {measure_text(lost, '%')} ({said(ours)})")
 
@@ -90,7 +90,7 @@ def paper_rows(engines: list[str], column: Mapping[str, Mapping[str, Measure | N
         chi2 = column["board_chi2_median"].get(engine)
         lost = column["board_lost_percent"].get(engine)
         rtf = column["rtf_100"].get(engine)
-        rows.append([row.simulator, f"{engine}: {how}", number(row.chi2), measure_text(chi2),
+        rows.append([row.simulator, f"{engine}: {how}", f"{row.chi2:g}", measure_text(chi2),
                      f"{row.lost_percent:g} %", measure_text(lost, "%"), row.rtf_text,
                      measure_text(rtf, "×")])
         lines.append(f"**{row.simulator} / {engine}**: " + "; ".join(

@@ -43,7 +43,7 @@ class CriterionSpec:
 
     def threshold_text(self) -> str:
         if self.relative:
-            return f"{self.threshold:.0%}"
+            return percent(self.threshold)
         unit = "" if self.unit in ("", "checks") else f" {self.unit}"
         return f"{self.threshold:g}{unit}"
 
@@ -62,6 +62,11 @@ class Rules:
     uses: dict[str, UseSpec]
     min_margin: float
     source: str = SHIPPED
+
+
+def percent(share: float) -> str:
+    """``15 %``: a share written as the card writes percentages."""
+    return f"{100 * share:.0f} %"
 
 
 def _fail(where: str, what: str) -> WeightsError:
@@ -243,12 +248,12 @@ def decide(rules: Rules, use_key: str, table: Table, engines: list[str]) -> Deci
 
 def _no_winner(rules: Rules, use: UseSpec, best: str, rival: str, margin: float,
                decisive: list[str], against: list[str]) -> str:
-    need = f"the {rules.min_margin:.0%} of the use's weight a recommendation needs"
+    need = f"the {percent(rules.min_margin)} of the use's weight a recommendation needs"
     if not decisive and not against:
         return (f"{best} and {rival} tie on every criterion this use weighs (intervals "
                 f"overlap or gaps under the thresholds)")
     def named(keys: list[str]) -> str:
         return ", ".join(f"{rules.criteria[k].title} (weight {use.weights[k]:g})"
                          for k in keys) or "nothing"
-    return (f"{best} leads {rival} by {margin:.0%} of the weight, under {need}: {best} is "
+    return (f"{best} leads {rival} by {percent(margin)} of the weight, under {need}: {best} is "
             f"clearly better on {named(decisive)}; {rival} on {named(against)}; the rest tie")

@@ -8,7 +8,15 @@ from __future__ import annotations
 from galton.analysis.card_blocks import Block, Grid, Heading, Items, Para, Picture
 from galton.analysis.card_intervals import NEAR_LINE, measure_text, number
 from galton.analysis.card_paper import paper_rows
-from galton.analysis.card_rules import CriterionSpec, Decision, Rules, Table, gap_text, ranks
+from galton.analysis.card_rules import (
+    CriterionSpec,
+    Decision,
+    Rules,
+    Table,
+    gap_text,
+    percent,
+    ranks,
+)
 from galton.analysis.laws import Check
 from galton.analysis.report_card import CardResults, criterion_table, decisions, fidelity_orders
 
@@ -19,7 +27,7 @@ ALL_LAWS = "laws_passed"  # the criterion that counts every check of the suite
 def rule_text(rules: Rules) -> str:
     return (f"An engine is recommended for a use when, against every other engine, the "
             f"weight of the criteria on which it is clearly better, less the weight of those "
-            f"on which it is clearly worse, is at least {rules.min_margin:.0%} of the "
+            f"on which it is clearly worse, is at least {percent(rules.min_margin)} of the "
             f"weight both were measured on. Clearly better: its 95 % interval does not "
             f"overlap the other's and the gap is at least the criterion's threshold; "
             f"anything less is a tie. Criteria, thresholds and weights: `{rules.source}`.")
@@ -33,8 +41,8 @@ def about_lines(card: CardResults) -> list[str]:
             f"{config.get('taken', '')}",
             f"machine: {host.get('cpu_model', 'unknown CPU')}, "
             f"{host.get('logical_cores', '?')} logical cores, "
-            f"{int(host.get('memory_bytes', 0)) / 2**30:.0f} GiB, {host.get('os', '')}; "
-            f"{config.get('machine_note', '')}",
+            f"{int(host.get('memory_bytes', 0)) / 2**30:.0f} GiB, {host.get('os', '')}"
+            + (f"; {config['machine_note']}" if config.get("machine_note") else ""),
             f"command: `{config.get('command', 'galton-client report-card')}`",
             *([f"the Galton trials ran on a pool of {len(config['pool'])} daemons: "
                f"{', '.join(config['pool'])}"] if config.get("pool") else []),
@@ -66,7 +74,7 @@ def decision_line(rules: Rules, table: Table, decision: Decision,
         return "; ".join(f"{_versus(rules.criteria[k], table, k, a, b)} (weight "
                          f"{use.weights[k]:g})" for k in keys)
     text = (f"**{use.title}: {decision.engine}**, ahead of its nearest rival "
-            f"{decision.rival} by {decision.margin:.0%} of the weight. Decisive: "
+            f"{decision.rival} by {percent(decision.margin)} of the weight. Decisive: "
             f"{listed(decision.decisive, decision.engine, decision.rival)}.")
     if decision.against:
         text += (f" Against it: "
@@ -93,21 +101,25 @@ def order_lines(card: CardResults, rules: Rules) -> list[str]:
     for key in ("board_effect_w", "board_chi2_median"):
         for ahead, behind, p in fidelity_orders(card, rules, key):
             lines.append(f"{rules.criteria[key].title}: {ahead} stays ahead of {behind} in "
-                         f"{p:.0%} of resamples of their trials")
+                         f"{percent(p)} of resamples of their trials")
     return lines
 
 
-def covers(spec: CriterionSpec, law: str) -> bool:
-    return law in spec.laws or spec.key == ALL_LAWS
+def bearing_uses(rules: Rules, law: str) -> list[str]:
+    """The uses a failure of ``law`` bears on: those with a criterion naming that law, and
+    those whose heaviest criteria include every law's count (the faithful benchmark); a
+    use that counts every law only lightly is not named for each failure."""
+    found = []
+    for key, use in rules.uses.items():
+        heaviest = max(use.weights.values())
+        if any(law in rules.criteria[c].laws or (c == ALL_LAWS and w >= heaviest)
+               for c, w in use.weights.items()):
+            found.append(key)
+    return found
 
 
 def failed_checks(card: CardResults) -> list[tuple[str, Check]]:
     return [(e, c) for e in card.engines for c in card.laws.get(e, []) if not c.passed]
-
-
-def bearing_uses(rules: Rules, law: str) -> list[str]:
-    return [k for k, use in rules.uses.items()
-            if any(covers(rules.criteria[c], law) for c in use.weights)]
 
 
 def failure_rows(card: CardResults, rules: Rules) -> list[list[str]]:
@@ -123,11 +135,15 @@ def failure_rows(card: CardResults, rules: Rules) -> list[list[str]]:
 
 
 def bearing_by_use(card: CardResults, rules: Rules) -> dict[str, list[str]]:
-    found: dict[str, list[str]] = {}
+    """Per use, per engine: the failed laws that bear on it (``tower ×2``: two checks)."""
+    found: dict[str, dict[str, dict[str, int]]] = {}
     for engine, check in failed_checks(card):
         for use in bearing_uses(rules, check.law):
-            found.setdefault(use, []).append(f"{engine} {check.law} ({check.quantity})")
-    return found
+            laws = found.setdefault(use, {}).setdefault(engine, {})
+            laws[check.law] = laws.get(check.law, 0) + 1
+    return {use: [f"{engine}: " + ", ".join(law + (f" ×{n}" if n > 1 else "")
+                                            for law, n in laws.items())
+                  for engine, laws in engines.items()] for use, engines in found.items()}
 
 
 def failure_blocks(card: CardResults, rules: Rules, law_links: list[str]) -> list[Block]:
@@ -135,8 +151,9 @@ def failure_blocks(card: CardResults, rules: Rules, law_links: list[str]) -> lis
     blocks: list[Block] = [Heading("Failed laws"), Para(
         f"Every check an engine failed, with its value, theory and tolerance (a check "
         f"passes when |value − theory| ≤ tolerance; one within a factor {NEAR_LINE:g} of "
-        f"its tolerance widens the count's interval). The laws' report and plots: "
-        f"{links or 'laws/ (not written)'}.")]
+        f"its tolerance widens the count's interval). Bears on: the uses with a criterion "
+        f"naming the law, and those that weigh the count of every law most. The laws' "
+        f"report and plots: {links or 'laws/ (not written)'}.")]
     rows = failure_rows(card, rules)
     blocks.append(Grid(rows) if len(rows) > 1 else Para("Every engine passed every check."))
     return blocks

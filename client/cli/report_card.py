@@ -102,7 +102,8 @@ def report_card(
 
 def answer_lines(card: CardResults, rules: Rules) -> list[str]:
     """The card's answer per use, one line each, for the terminal."""
+    from galton.analysis.card_rules import percent
     from galton.analysis.report_card import decisions
     return [f"{rules.uses[d.use].title}: "
-            + (f"{d.engine} (ahead of {d.rival} by {d.margin:.0%} of the weight)"
+            + (f"{d.engine} (ahead of {d.rival} by {percent(d.margin)} of the weight)"
                if d.engine else "no clear winner") for d in decisions(card, rules).values()]
