@@ -120,9 +120,8 @@ def fidelity_orders(card: CardResults, rules: Rules, key: str) -> list[tuple[str
     if statistic is None or board is None or spec is None:
         return []
     column = criterion_table(card, rules)[key]
-    measured = sorted((e for e in card.engines if column[e] is not None),
-                      key=lambda e: column[e].value if column[e] else 0.0,  # type: ignore[union-attr]
-                      reverse=not spec.lower_is_better)
+    values = {e: m.value for e, m in column.items() if m is not None}
+    measured = sorted(values, key=values.__getitem__, reverse=not spec.lower_is_better)
     pairs = []
     for ahead, behind in itertools.pairwise(measured):
         a = [t for t in card.trials.get(ahead, {}).get(board, []) if t.settled]

@@ -20,6 +20,7 @@ from galton.analysis.card_intervals import (
     measure_text,
     median_measure,
 )
+from galton.analysis.card_paper import paper_rows
 from galton.analysis.card_rules import clearly_better, decide, load_rules, ranks
 from galton.analysis.errors import WeightsError
 from galton.analysis.laws import Check
@@ -163,3 +164,19 @@ def test_the_files_say_what_card_json_holds(tmp_path: Path) -> None:
     page = files["card_html"].read_text()
     assert page.count("data:image/png;base64,") == 0  # no curve, no law plot here
     assert '<a href="laws/report.md">' in page and "<strong>embedded predictor" in page
+
+
+def test_the_papers_rows_stand_beside_their_engines_with_what_agrees() -> None:
+    """DART's χ² beside Gazebo's: both over the critical value; its balls, unlike
+    Gazebo's, not lost."""
+    column = {"board_chi2_median": {"dart": Measure(40.6, 33.0, 48.0, 4)},
+              "board_lost_percent": {"dart": Measure.exact(0.0, 4)},
+              "rtf_100": {"dart": Measure(0.17, 0.16, 0.18, 4)}}
+    rows, lines = paper_rows(["dart"], column)
+    gazebo = next(r for r in rows if r[0] == "Gazebo Harmonic")
+    assert gazebo[1].startswith("dart:") and gazebo[2:6] == ["54.84", "40.6 [33–48]",
+                                                             "54.3 %", "0 %"]
+    assert next(r for r in rows if r[0] == "Webots")[1] == "ode: not on this card"
+    (line,) = lines
+    assert "χ² agrees" in line and "balls lost does not agree" in line
+    assert "real time agrees" in line  # neither keeps real time with many balls

@@ -6,11 +6,14 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from typer.testing import CliRunner
+
 from galton.analysis.board import BoardSpec
 from galton.analysis.card_intervals import measure_text
 from galton.analysis.card_rules import load_rules
 from galton.analysis.report_card import CardResults
 from galton.client.bench.experiment import ExperimentConfig
+from galton.client.cli.app import app
 from galton.client.report_card import CardPlan, run_card, write_report_card
 from galton.client.report_card.pooled import local_trials, pooled_trials
 from galton.client.sdk.embedded import EmbeddedDaemon, free_loopback_port
@@ -65,3 +68,12 @@ def test_pool_trials_run_on_a_small_real_pool_and_fall_back_when_none_answers() 
                        said.append) as (trials_of, members):
         assert members == [] and trials_of is local_trials
     assert "no pool daemon answers" in said[-1]
+
+
+def test_a_bad_weights_file_is_refused_before_anything_is_measured(tmp_path: Path) -> None:
+    weights = tmp_path / "weights.toml"
+    weights.write_text("[uses.mine]\nweights = { fork = 2 }\n")
+    result = CliRunner().invoke(app, ["report-card", "--engines", "mujoco", "--weights",
+                                      str(weights), "--out", str(tmp_path / "card")])
+    assert result.exit_code == 2 and "did you mean 'fork_ms'" in result.output
+    assert not (tmp_path / "card").exists()
