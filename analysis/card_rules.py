@@ -157,7 +157,7 @@ def _apply(body: dict[str, Any], rules: Rules | None, where: str) -> Rules:
 def load_rules(path: Path | None = None) -> Rules:
     """The shipped criteria and uses, with the file at ``path`` read over them."""
     shipped = tomllib.loads(files("galton.analysis").joinpath(SHIPPED).read_text())
-    rules = _apply(shipped, None, SHIPPED)
+    rules = replace(_apply(shipped, None, SHIPPED), source=f"the shipped analysis/{SHIPPED}")
     return rules if path is None else replace(_apply(_read(path), rules, str(path)),
                                               source=str(path))
 
