@@ -64,6 +64,18 @@ SUPPORT: dict[str, str] = {
 }
 DATA = {"ros2_rosidl_hashes.json": "support/ros2_rosidl_hashes.json"}
 
+# Lines the longer paths push past 100 characters, wrapped again.
+REWRAPPED = {
+    "values rosidl computed (tests/support/ros2_rosidl_hashes.json, made by "
+    "tests/support/ros2_rosidl.py), and\n":
+    "values rosidl computed (tests/support/ros2_rosidl_hashes.json, made by\n"
+    "tests/support/ros2_rosidl.py), and\n",
+    "simulation_interfaces 2.1 (tests/support/ros2_rosidl_hashes.json, made by "
+    "tests/support/ros2_rosidl.py).\"\"\"\n":
+    "simulation_interfaces 2.1 (tests/support/ros2_rosidl_hashes.json, made by\n"
+    "tests/support/ros2_rosidl.py).\"\"\"\n",
+}
+
 # Where moved files are named (imports, sys.path, docstrings, pages); CHANGELOG.md and the
 # notebooks are history and keep the names of their day.
 REWRITTEN = ("tests", "benchmarks", "research", "README.md", "docs/ARCHITECTURE.md",
@@ -112,6 +124,8 @@ def rewrite(text: str, moved_depth: bool) -> str:
         for name in files:
             text = re.sub(rf"tests/client/{re.escape(name)}", f"tests/client/{room}/{name}",
                           text)
+    for long, wrapped in REWRAPPED.items():
+        text = text.replace(long, wrapped)
     if moved_depth:  # one folder deeper: the repository's root is one parent further
         text = re.sub(r"(Path\(__file__\)(?:\.resolve\(\))?\.parents)\[2\]", r"\1[3]", text)
     return text

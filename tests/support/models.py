@@ -13,10 +13,10 @@ from typing import Any
 
 import numpy as np
 import pybullet_data
-from support import Snapshot, snapshot
 
 from galton.client import Client
 from galton.protocol import JointInfo, pack_f64, unpack_f64
+from support import Snapshot, snapshot
 
 DATA = Path(pybullet_data.getDataPath())
 ROBOTS = {

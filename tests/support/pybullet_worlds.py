@@ -7,10 +7,10 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
-from support_models import ROBOTS
 
 from galton.daemon.engines.pybullet.engine import PybulletEngine
 from galton.protocol import BodyGroup
+from support.models import ROBOTS
 
 SEED = 25
 Run = list[bytes]  # every state read along a run, as raw bytes (exact, -0.0 and NaN too)

@@ -1,7 +1,8 @@
 """A ROS 2 service client written from rmw_zenoh's docs/design.md alone, sharing no code
 with the daemon's front: its own key expressions, attachments, liveliness parsing and a
 hand-written CDR reader and writer. The type hashes are the values rosidl computed from
-simulation_interfaces 2.1 (tests/ros2_rosidl_hashes.json, made by tests/ros2_rosidl.py)."""
+simulation_interfaces 2.1 (tests/support/ros2_rosidl_hashes.json, made by
+tests/support/ros2_rosidl.py)."""
 
 from __future__ import annotations
 

@@ -5,8 +5,8 @@ Run once, in a venv with ROS 2 Kilted's wheels (not a test dependency: ~280 MB, 
     python -m venv /tmp/ros2venv && /tmp/ros2venv/bin/pip install ros-rclpy \\
         ros-rmw-fastrtps-cpp ros-rosidl-generator-type-description ros-rosidl-adapter \\
         ros-std-msgs ros-rosgraph-msgs ros-geometry-msgs ros-sensor-msgs ros-service-msgs
-    /tmp/ros2venv/bin/python tests/ros2_rosidl.py SIMULATION_INTERFACES_CHECKOUT \\
-        /tmp/ros2venv/share > tests/ros2_rosidl_hashes.json
+    /tmp/ros2venv/bin/python tests/support/ros2_rosidl.py SIMULATION_INTERFACES_CHECKOUT \\
+        /tmp/ros2venv/share > tests/support/ros2_rosidl_hashes.json
 
 SIMULATION_INTERFACES_CHECKOUT is ros-simulation/simulation_interfaces at 2.1.0 (its msg/,
 srv/ and action/ folders). Each file goes through rosidl_adapter (.msg/.srv/.action to

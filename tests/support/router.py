@@ -7,10 +7,9 @@ import subprocess
 import threading
 from typing import IO
 
-from cli_support import CONSOLE_COMMAND
-
 from galton.client.cli.router import READY_PREFIX
 from galton.client.sdk.embedded import free_loopback_port
+from support.cli import CONSOLE_COMMAND
 
 START_TIMEOUT_S = 30.0
 

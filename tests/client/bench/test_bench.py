@@ -65,7 +65,7 @@ def test_trials_are_reproducible(sim: Client, engine: str) -> None:
 
 def test_bench_cli_writes_every_output(daemons: dict[str, EmbeddedDaemon],
                                        tmp_path: Path) -> None:
-    from support_daemons import start_daemon
+    from support.daemons import start_daemon
 
     daemon = start_daemon(daemons, "mujoco")
     out = tmp_path / "run"
@@ -157,7 +157,7 @@ def test_bench_never_replaces_the_world_of_a_daemon_it_was_not_pointed_at(
 def test_bench_refuses_a_misspelled_engine_before_any_trial(tmp_path: Path) -> None:
     result = runner.invoke(app, ["bench", "--engines", "mujoco,bullet", "--board", "small",
                                  "--out", str(tmp_path / "run")])
-    from cli_support import flat
+    from support.cli import flat
 
     assert result.exit_code == 2
     assert "'bullet'" in flat(result.output) and "did you mean 'pybullet'" in flat(result.output)
@@ -167,7 +167,7 @@ def test_bench_refuses_a_misspelled_engine_before_any_trial(tmp_path: Path) -> N
 def test_a_failed_bench_keeps_the_trials_it_finished(daemons: dict[str, EmbeddedDaemon],
                                                      tmp_path: Path) -> None:
     """The second engine's daemon is not there: the first engine's trials stay on disk."""
-    from support_daemons import start_daemon
+    from support.daemons import start_daemon
 
     daemon = start_daemon(daemons, "mujoco")
     out = tmp_path / "run"

@@ -7,14 +7,14 @@ import json
 from pathlib import Path
 
 import pytest
-from support_daemons import start_daemon
+from support.daemons import start_daemon
 
 from galton.analysis.board import BoardSpec
 from galton.client import Client, EmbeddedDaemon
 from galton.client.bench.experiment import ExperimentConfig
 from galton.client.bench.trial import run_trial
 
-BENCH_DEFAULTS = Path(__file__).resolve().parents[2] / "docs" / "data" / "bench-defaults"
+BENCH_DEFAULTS = Path(__file__).resolve().parents[3] / "docs" / "data" / "bench-defaults"
 
 
 @pytest.mark.slow

@@ -9,8 +9,8 @@ import struct
 from pathlib import Path
 
 import numpy as np
-from support_daemons import start_daemon
-from synthetic_runs import law_trials
+from support.daemons import start_daemon
+from support.synthetic_runs import law_trials
 from typer.testing import CliRunner
 
 from galton.analysis.board import BoardSpec

@@ -12,8 +12,8 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from cli_support import CONSOLE_COMMAND, NOWHERE, flat, invoke, run
-from support_pool import RouterProcess
+from support.cli import CONSOLE_COMMAND, NOWHERE, flat, invoke, run
+from support.router import RouterProcess
 
 from galton.analysis.board import BoardSpec
 from galton.analysis.records import ExperimentResults

@@ -48,7 +48,7 @@ def test_cells_group_by_the_swept_values() -> None:
 
 def test_sweep_cli_writes_a_map_per_engine(daemons: dict[str, EmbeddedDaemon],
                                            tmp_path: Path) -> None:
-    from support_daemons import start_daemon
+    from support.daemons import start_daemon
 
     daemon = start_daemon(daemons, "mujoco")
     result = CliRunner().invoke(app, [

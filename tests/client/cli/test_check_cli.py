@@ -12,14 +12,14 @@ from pathlib import Path
 
 import pytest
 from support import tilted_law
-from synthetic_runs import law_trials, write_results
+from support.synthetic_runs import law_trials, write_results
 from typer.testing import CliRunner
 
 from galton.analysis import stats
 from galton.client.cli.app import app
 
 runner = CliRunner()
-BENCH_DEFAULTS = Path(__file__).resolve().parents[2] / "docs" / "data" / "bench-defaults"
+BENCH_DEFAULTS = Path(__file__).resolve().parents[3] / "docs" / "data" / "bench-defaults"
 RUNS = [str(BENCH_DEFAULTS / "all-at-once"), str(BENCH_DEFAULTS / "stream" / "results.json")]
 CELL_LINE = re.compile(r"(\w+)\s+paper\s+(\S+)\s+(\d+) x")
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import json
 
 import pytest
-from cli_support import NOWHERE, flat, invoke, run, target_of
+from support.cli import NOWHERE, flat, invoke, run, target_of
 
 from galton.client import Client, EmbeddedDaemon, wait_for_daemon
 from galton.client.cli.common import package_version

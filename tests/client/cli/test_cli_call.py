@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from cli_support import CONSOLE_COMMAND, flat, invoke, run, target_of
+from support.cli import CONSOLE_COMMAND, flat, invoke, run, target_of
 
 from galton.client import Client, EmbeddedDaemon, spheres
 from galton.client.cli.call import unpacked
@@ -124,7 +124,7 @@ def test_events_prints_a_scene_change(mujoco_sim: Client, target: list[str]) -> 
 
 def readme_cli_commands() -> list[list[str]]:
     """The galton-client lines of the README's CLI section's shell snippets."""
-    text = (Path(__file__).parents[2] / "README.md").read_text()
+    text = (Path(__file__).parents[3] / "README.md").read_text()
     section = text.split("\n## CLI\n", 1)[1].split("\n## ", 1)[0]
     snippets = re.findall(r"```sh\n(.*?)```", section, flags=re.DOTALL)
     return [shlex.split(line)[1:] for snippet in snippets for line in snippet.splitlines()

@@ -5,7 +5,7 @@ control exits 1 with one line naming CONTROL_HELD and the holder."""
 from __future__ import annotations
 
 import pytest
-from cli_support import flat, invoke, run, target_of
+from support.cli import flat, invoke, run, target_of
 
 from galton.client import Client, EmbeddedDaemon
 

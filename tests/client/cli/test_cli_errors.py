@@ -7,7 +7,7 @@ import subprocess
 from pathlib import Path
 
 import pytest
-from cli_support import CONSOLE_COMMAND
+from support.cli import CONSOLE_COMMAND
 
 
 def console(*args: str) -> subprocess.CompletedProcess[str]:

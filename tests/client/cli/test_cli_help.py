@@ -7,7 +7,7 @@ import re
 
 import pytest
 import typer.main
-from cli_support import run
+from support.cli import run
 
 from galton.client.cli.app import app
 from galton.client.cli.common import help_text
@@ -17,7 +17,7 @@ from galton.protocol.operations import OPERATIONS
 COMMAND_OF_OPERATION = {"list": "entities", "get_params": "params", "set_params": "params",
                         "close_stream": "stream-states"}
 # Operations reached only through `galton-client call` (docs/ARCHITECTURE.md: a new
-# operation needs no command of its own; tests/client/test_cli_call.py calls it).
+# operation needs no command of its own; tests/client/cli/test_cli_call.py calls it).
 CALL_ONLY = {"get_entities"}
 RST_MARKUP = re.compile(r"``|:[a-z]+:`")
 

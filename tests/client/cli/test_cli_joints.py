@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pybullet_data
 import pytest
-from cli_support import NOWHERE, flat, invoke, run, target_of
+from support.cli import NOWHERE, flat, invoke, run, target_of
 
 from galton.client import Client, EmbeddedDaemon
 from galton.client.cli.common import console

@@ -9,9 +9,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from cli_support import flat, invoke, run, target_of
-from support_perception import known_scene
-from support_worlds import clean
+from support.cli import flat, invoke, run, target_of
+from support.perception import known_scene
+from support.worlds import clean
 
 from galton.client import Client, EmbeddedDaemon, boxes
 from galton.protocol.png import decode_png

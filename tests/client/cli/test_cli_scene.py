@@ -7,7 +7,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
-from cli_support import flat, invoke, run, target_of
+from support.cli import flat, invoke, run, target_of
 
 from galton.client import Client, EmbeddedDaemon
 

@@ -8,8 +8,8 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
-from cli_support import flat, invoke, run, target_of
-from support_worlds import clean
+from support.cli import flat, invoke, run, target_of
+from support.worlds import clean
 
 from galton.client import Client, EmbeddedDaemon, plane, spheres
 

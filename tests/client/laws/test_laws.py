@@ -7,8 +7,8 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from cli_support import run, target_of
-from support_daemons import start_daemon
+from support.cli import run, target_of
+from support.daemons import start_daemon
 
 from galton.analysis.laws import LawResults
 from galton.analysis.laws_report import number

@@ -306,7 +306,7 @@ def test_a_request_waiting_while_its_client_closes_gets_a_galton_error(daemons: 
     Zenoh's own ZError."""
     import threading
 
-    from support_daemons import start_daemon
+    from support.daemons import start_daemon
 
     from galton.protocol import ClientClosedError, OperationFailedError
 

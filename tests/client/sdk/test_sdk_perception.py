@@ -11,7 +11,7 @@ from collections.abc import Iterator
 
 import numpy as np
 import pytest
-from support_perception import ALL_OUTPUTS, known_scene, skip_without, top_camera
+from support.perception import ALL_OUTPUTS, known_scene, skip_without, top_camera
 
 from galton.client import (
     Client,

@@ -8,7 +8,7 @@ from collections.abc import Iterator
 
 import numpy as np
 import pytest
-from support_worlds import clean
+from support.worlds import clean
 
 from galton.client import (
     Client,

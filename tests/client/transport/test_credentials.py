@@ -6,7 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-from cli_support import run
+from support.cli import run
 from typer.testing import CliRunner
 
 from galton.client import Credentials

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from support_browser import CHROMIUM, Browser
+from support.browser import CHROMIUM, Browser
 
 from galton.client import Client, plane, spheres
 

@@ -1,4 +1,4 @@
-"""The live page's parts without a browser (tests/client/test_view_browser.py draws it in one):
+"""The live page's parts without a browser (tests/client/view/test_view_browser.py draws it in one):
 side worlds followed as ghosts, compare's score charted, a prediction drawn, operator
 actions, links and meshes drawn as their shapes, on the session's MuJoCo daemon."""
 

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from cli_support import invoke, run, target_of
+from support.cli import invoke, run, target_of
 
 from galton.client import Client, EmbeddedDaemon, meshes, plane, spheres
 from galton.client.sdk.recording import Recorder, Recording, recordings_in
@@ -147,7 +147,7 @@ def test_stream_states_prints_samples_and_closes_its_stream(
 
 def test_bench_record_saves_a_recording_per_trial_that_the_page_replays(
         daemons: dict[str, EmbeddedDaemon], tmp_path: Path) -> None:
-    from support_daemons import start_daemon
+    from support.daemons import start_daemon
 
     daemon = start_daemon(daemons, "mujoco")
     out = tmp_path / "run"

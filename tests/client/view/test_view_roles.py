@@ -8,7 +8,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
-from support_users import ALICE, BOB, users_file
+from support.users import ALICE, BOB, users_file
 
 from galton.client import Client, EmbeddedDaemon, spheres
 from galton.protocol import AccessDeniedError
