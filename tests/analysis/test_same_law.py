@@ -1,4 +1,4 @@
-"""``compare.homogeneity``: whether two count tables share a law, as the seed table uses it
+"""``same_law.homogeneity``: whether two count tables share a law, as the seed table uses it
 to test each engine's pooled balls against the exact lone ball's."""
 
 from __future__ import annotations
@@ -8,7 +8,7 @@ import pytest
 from support import tilted_law
 
 from galton.analysis import CountsError, TooFewBallsError, homogeneity, stats
-from galton.analysis.compare import merge_tails
+from galton.analysis.same_law import merge_tails
 
 
 def _draw(law: np.ndarray, balls: int, seed: int) -> np.ndarray:
