@@ -43,16 +43,16 @@ def _scene(name: str, apply: ops.SceneOp) -> Handler:
     the scene is announced, and a step job reading a deleted entity is answered now."""
     mutates = OPERATIONS[name].mutates
 
-    def handle(loop: SceneContext, call: Call, request: Args) -> Result:
-        world = loop.world_for(request)
+    def handle(ctx: SceneContext, call: Call, request: Args) -> Result:
+        world = ctx.world_for(request)
         result = apply(world, request)
         if mutates:
             event = {"kind": "scene", "op": name, "world": world.name,
                      "step": world.step_index}
             if name == "compare" and result is not None:  # the view charts the score
                 event.update(score=result["score"], sim_time=world.sim_time)
-            loop.emit(event)
-            loop.check_job_reads()
+            ctx.emit(event)
+            ctx.check_job_reads()
         return result
     return handle
 

@@ -321,12 +321,12 @@ def set_params(world: World, request: rq.SetParams) -> dict[str, Any]:
 
 
 @handles("capabilities")
-def capabilities(loop: CapabilitiesContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
+def capabilities(ctx: CapabilitiesContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
     """The engine's capabilities, with what the daemon adds (its fronts' endpoints)."""
-    caps = loop.world_for(request).engine.capabilities()
+    caps = ctx.world_for(request).engine.capabilities()
     caps.engines_available = tuple(ENGINE_CLASSES)
     caps.host = host_info()
-    return {**caps.to_wire(), **loop.advertised}
+    return {**caps.to_wire(), **ctx.advertised}
 
 
 def _wire_values(params: dict[str, Any]) -> dict[str, Any]:
