@@ -16,7 +16,7 @@ from typing import Any
 
 # Each public name and the module that defines it.
 _MODULES: dict[str, tuple[str, ...]] = {
-    "compare": ("Homogeneity", "homogeneity"),
+    "same_law": ("Homogeneity", "homogeneity"),
     "errors": (
         "AnalysisError", "CountsError", "NoSettledBallsError", "RecordError",
         "TooFewBallsError",

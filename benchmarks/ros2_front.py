@@ -3,7 +3,7 @@
 Usage: python benchmarks/ros2_front.py [--calls 1000] [--seconds 3] [--json FILE]
 
 - StepSimulation(1) round trip over the ROS 2 front (a client written from rmw_zenoh's
-  design document, tests/ros2_client.py) against the native ``Client.step(1)`` over Zenoh,
+  design document, tests/support/ros2_client.py) against the native ``Client.step(1)`` over Zenoh,
   interleaved call by call on the same paused world. Target: p50 ratio <= 1.5.
 - /clock while playing at RTF 1: messages per second and the measured RTF. Target: >= 100
   Hz, RTF unmoved.
@@ -23,7 +23,7 @@ import pybullet_data
 from common import machine, percentiles_ms, write_json
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "tests"))
-from ros2_client import (
+from support.ros2_client import (
     CLOCK_KEY,
     JOINT_STATE_KEY,
     Cdr,

@@ -10,7 +10,7 @@ password), and over ZeroMQ ipc ``zmq`` (no option) and ``zmq+curve`` (``--users`
 ``--zmq-key``: CURVE encryption, the client's key a user's).
 Each round calls status and step(1) on each daemon once, in a shuffled order
 (latency.py's ``interleaved``), so that noise falls on all alike. Certificates are made
-with the ``openssl`` command (tests/support_certs.py).
+with the ``openssl`` command (tests/support/certs.py).
 """
 
 from __future__ import annotations
@@ -32,7 +32,7 @@ from galton.client.sdk.embedded import free_loopback_port
 from galton.client.transport.zmq_keys import ZmqKeys
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
-from support_certs import Certificates, make_certificates
+from support.certs import Certificates, make_certificates
 
 PASSWORD = "bench-password"
 MODES = ("open", "users", "users+tls", "zmq", "zmq+curve")

@@ -74,7 +74,9 @@ class Operation:
     waiting for the physics thread. ``steps``: long-running, answered only when its steps
     are done (it belongs to its client, who may wait ``LONG_RUNNING_TIMEOUT_S``).
     ``timeout_floor_s``: the least a client should wait for it (rebuilding a world takes
-    seconds), whatever its default timeout.
+    seconds), whatever its default timeout. ``viewer``: a client of the ``viewer`` role may
+    ask it under ``--users`` (it changes no world: discovery, ``galton-client view``);
+    every front's access rules follow this field (daemon/access/roles.py).
     """
 
     name: str
@@ -83,11 +85,14 @@ class Operation:
     steps: bool = False
     fast: bool = False
     timeout_floor_s: float = 0.0
+    viewer: bool = False
     reply: type[rp.Reply] | None = None  # its result map (protocol/replies.py); every op has one
     args: tuple[Arg, ...] = field(init=False, default=())
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "args", args_of(self.request))
+        if self.viewer and self.mutates:
+            raise ValueError(f"operation {self.name}: a viewer may not ask one that mutates")
 
     def decode(self, args: dict[str, Any]) -> rq.Args:
         """The request's args as its declared type (INVALID_ARGUMENT when they do not fit);
@@ -131,8 +136,8 @@ GET_ENTITIES = Operation("get_entities", GetEntities, reply=rp.NamesReply)
 
 _REBUILDS = 30.0  # operations that may rebuild the engine's world wait at least this long
 OPERATIONS: dict[str, Operation] = {op.name: op for op in (
-    Operation("status", rq.NoArgs, fast=True, reply=rp.StatusReply),
-    Operation("capabilities", rq.NoArgs, reply=rp.CapabilitiesReply),
+    Operation("status", rq.NoArgs, fast=True, viewer=True, reply=rp.StatusReply),
+    Operation("capabilities", rq.NoArgs, viewer=True, reply=rp.CapabilitiesReply),
     Operation("play", rq.Play, mutates=True, reply=rp.StatusReply),
     Operation("set_rtf", rq.SetRtf, mutates=True, reply=rp.StatusReply),
     Operation("pause", rq.NoArgs, mutates=True, reply=rp.StatusReply),
@@ -146,10 +151,10 @@ OPERATIONS: dict[str, Operation] = {op.name: op for op in (
     Operation("spawn", rq.Spawn, mutates=True, timeout_floor_s=_REBUILDS, reply=rp.NamesReply),
     Operation("load_model", rq.LoadModel, mutates=True, timeout_floor_s=_REBUILDS,
               reply=rp.NamesReply),
-    Operation("list", rq.List, reply=rp.EntitiesReply),
+    Operation("list", rq.List, viewer=True, reply=rp.EntitiesReply),
     Operation("get_states", rq.NamesOrAll, reply=rp.StatesReply),
     Operation("get_bounds", rq.NamesOrAll, reply=rp.BoundsReply),
-    Operation("get_shapes", rq.NamesOrAll, reply=rp.ShapesReply),
+    Operation("get_shapes", rq.NamesOrAll, viewer=True, reply=rp.ShapesReply),
     GET_ENTITIES,
     Operation("set_states", rq.SetStates, mutates=True, reply=rp.CountReply),
     Operation("update", rq.Update, mutates=True, reply=rp.CountReply),
@@ -166,7 +171,7 @@ OPERATIONS: dict[str, Operation] = {op.name: op for op in (
               reply=rp.WorldReply),
     Operation("snapshots", rq.NoArgs, reply=rp.SnapshotsReply),
     Operation("delete_snapshot", rq.Slot, reply=rp.CountReply),
-    Operation("list_worlds", rq.NoArgs, reply=rp.WorldsReply),
+    Operation("list_worlds", rq.NoArgs, viewer=True, reply=rp.WorldsReply),
     Operation("create_world", rq.CreateWorld, timeout_floor_s=_REBUILDS,
               reply=rp.WorldReply),
     Operation("fork_world", rq.ForkWorld, timeout_floor_s=_REBUILDS, reply=rp.WorldReply),
@@ -178,15 +183,15 @@ OPERATIONS: dict[str, Operation] = {op.name: op for op in (
     Operation("remove_camera", rq.Named, mutates=True, reply=rp.CountReply),
     Operation("cameras", rq.NoArgs, reply=rp.CamerasReply),
     Operation("raycast", rq.Raycast, reply=rp.RaycastReply),
-    Operation("contacts", rq.NamesOrAll, reply=rp.ContactsReply),
+    Operation("contacts", rq.NamesOrAll, viewer=True, reply=rp.ContactsReply),
     Operation("get_params", rq.NoArgs, reply=rp.ParamsReply),
     Operation("set_params", rq.SetParams, mutates=True, reply=rp.ParamsReply),
     # The control lease (daemon/access/lease.py): they change who may mutate, not the world.
     Operation("take_control", rq.NoArgs, reply=rp.TakeControlReply),
     Operation("release_control", rq.NoArgs, reply=rp.ReleaseControlReply),
     # State streams (daemon/world/state_streams.py): poses published at a client's rate.
-    Operation("stream_states", rq.StreamStates, reply=rp.StreamReply),
-    Operation("close_stream", rq.CloseStream, reply=rp.StreamClosedReply),
+    Operation("stream_states", rq.StreamStates, viewer=True, reply=rp.StreamReply),
+    Operation("close_stream", rq.CloseStream, viewer=True, reply=rp.StreamClosedReply),
 )}
 
 

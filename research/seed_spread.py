@@ -16,7 +16,7 @@ whose w is near that line passes or fails with the seed; one well below it passe
 ``--exact EXACT_FILE`` (JSON lines of ``research/exact_lone_ball.py``) adds, to each
 group, the test of homogeneity of all its balls against the exact lone ball's balls on the
 ``paper`` board at ``--restitution`` and ``--friction`` (constant laws only;
-``galton.analysis.compare.homogeneity``): the reference a faithful simulator should match.
+``galton.analysis.same_law.homogeneity``): the reference a faithful simulator should match.
 
 ``--summary`` prints one line per group instead: how many of its seeds pass the pooled
 test, with that rate's 95 % interval beside the rate the group's pooled law predicts for a
@@ -37,7 +37,7 @@ from typing import Any
 import numpy as np
 from scipy import stats as sps
 
-from galton.analysis import compare, shape, stats
+from galton.analysis import same_law, shape, stats
 from galton.analysis.board import BoardSpec
 from galton.analysis.board_release import perturbation
 
@@ -83,7 +83,7 @@ def exact_counts(path: str, restitution: float, friction: float) -> np.ndarray:
 
 def exact_line(together: np.ndarray, exact: np.ndarray) -> str:
     """Whether a group's balls and the exact lone ball's come from one law."""
-    same = compare.homogeneity(together, exact)
+    same = same_law.homogeneity(together, exact)
     return (f"  against {int(exact.sum())} exact lone balls: chi2 {same.chi2:.1f}, "
             f"{same.dof} df, p {same.p_value:.3f} (homogeneity, outer two bins merged)")
 

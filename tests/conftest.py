@@ -12,7 +12,7 @@ from __future__ import annotations
 from collections.abc import Iterator
 
 import pytest
-from support_daemons import ENGINES, start_daemon
+from support.daemons import ENGINES, start_daemon
 
 from galton.client import Client, EmbeddedDaemon
 

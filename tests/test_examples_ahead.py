@@ -9,7 +9,7 @@ import sys
 from collections.abc import Iterator
 
 import pytest
-from support_worlds import clean
+from support.worlds import clean
 from test_examples_robots import EXAMPLES, PROGRAM_TIMEOUT_S, connect, load_example
 
 from galton.client import Client, EmbeddedDaemon

@@ -4,11 +4,13 @@ ZeroMQ's per-request check (zmq_auth.py) hold viewers to the same operations."""
 from __future__ import annotations
 
 from galton.daemon.access.users import OPERATOR, VIEWER
+from galton.protocol.operations import OPERATIONS
 
-# Read-only operations a viewer may ask: discovery (`galton-client daemons`) asks the
-# first two; `galton-client view` the others (a state stream changes no world).
-VIEWER_OPERATIONS = ("status", "capabilities", "list", "list_worlds", "contacts",
-                     "stream_states", "close_stream", "get_shapes")
+# The read-only operations a viewer may ask, as each operation declares it
+# (`Operation(viewer=True)`, protocol/operations.py): discovery (`galton-client daemons`)
+# asks status and capabilities; `galton-client view` the others (a state stream changes no
+# world).
+VIEWER_OPERATIONS = tuple(name for name, op in OPERATIONS.items() if op.viewer)
 
 
 def may_ask(role: str | None, op: str) -> bool:

@@ -14,8 +14,10 @@ operator   in: query ``@ctl/*``, subscribe telemetry and events, discovery
            ``galton/_clients/*`` (any id: the lease trusts operators). out: replies,
            telemetry, events, daemon tokens, the daemon's control queryable (a querier
            asks only where one is declared)
-viewer     in: query ``@ctl/status`` and ``@ctl/capabilities``, subscribe telemetry and
-           events, discovery. out: those replies, telemetry, events, daemon tokens, the
+viewer     in: query ``@ctl/<op>`` for the operations declared ``viewer=True``
+           (protocol/operations.py: status, capabilities and the read-only operations of
+           ``galton-client view``), subscribe telemetry, events and state streams,
+           discovery. out: those replies, telemetry, events, daemon tokens, the
            daemon's control queryable
 =========  ===========================================================================
 

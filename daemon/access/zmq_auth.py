@@ -106,8 +106,9 @@ def start_authenticator(context: zmq.Context[zmq.Socket[bytes]],
 
 
 def refuse_by_role(role: str | None, op: str) -> None:
-    """Refuse a request its sender's role may not ask: viewers read status and capabilities
-    only, as over Zenoh (daemon/access/zenoh_security.py); a key no user names gets nothing."""
+    """Refuse a request its sender's role may not ask: viewers ask only the operations
+    declared ``viewer=True`` (protocol/operations.py), as over Zenoh
+    (daemon/access/zenoh_security.py); a key no user names gets nothing."""
     if may_ask(role, op):
         return
     raise RoleDeniedError(

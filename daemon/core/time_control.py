@@ -4,7 +4,7 @@ load_world.
 The state machine: stopped → playing ⇄ paused, with step jobs while not playing. Each
 operation takes the loop, the call and its typed request (protocol/requests.py), and
 returns the reply's result map, or None when the reply comes later (a step job).
-daemon/ops/handlers.py binds them to the operations of protocol/operations.py.
+daemon/ops/time_control.py binds them to the operations of protocol/operations.py.
 """
 
 from __future__ import annotations
@@ -18,7 +18,6 @@ from galton.daemon.core.calls import Call, RestCheck, StepJob
 from galton.daemon.core.context import JobEnd, Jobs, OpContext, TimeContext
 from galton.daemon.core.reply_limit import reads_size, require_room
 from galton.daemon.core.step_queue import StepBusyError
-from galton.daemon.ops.binding import handles
 from galton.daemon.world.scene import World
 from galton.protocol import (
     IncorrectStateError,
@@ -41,7 +40,6 @@ def _rest_check(rest: rq.UntilRest | None, read: list[str] | None,
     return RestCheck(rest.speed, max(1, round(rest.every / timestep)))
 
 
-@handles("status")
 def status(loop: TimeContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
     world = loop.world_for(request)
     if world is loop.world:
@@ -65,7 +63,6 @@ def _live_only(loop: TimeContext, request: rq.Args, op: str) -> None:
                                   "side world moves by step and run_until")
 
 
-@handles("play")
 def play(loop: TimeContext, call: Call, request: rq.Play) -> dict[str, Any]:
     _live_only(loop, request, "play")
     target = loop.target_rtf if request.rtf is None else request.rtf
@@ -77,7 +74,6 @@ def play(loop: TimeContext, call: Call, request: rq.Play) -> dict[str, Any]:
     return loop.status().to_wire()
 
 
-@handles("set_rtf")
 def set_rtf(loop: TimeContext, call: Call, request: rq.SetRtf) -> dict[str, Any]:
     _live_only(loop, request, "set_rtf")
     loop.target_rtf = request.rtf
@@ -85,7 +81,6 @@ def set_rtf(loop: TimeContext, call: Call, request: rq.SetRtf) -> dict[str, Any]
     return loop.status().to_wire()
 
 
-@handles("pause")
 def pause(loop: TimeContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
     world = loop.world_for(request)
     _cancel_job_on(loop, world, "paused")
@@ -95,7 +90,6 @@ def pause(loop: TimeContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
     return loop.status().to_wire()
 
 
-@handles("stop")
 def stop(loop: TimeContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
     """Pause and rewind: time to 0 and every entity back to the state it was created in."""
     world = loop.world_for(request)
@@ -109,7 +103,6 @@ def stop(loop: TimeContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
     return loop.status().to_wire()
 
 
-@handles("step")
 def step(loop: TimeContext, call: Call, request: rq.Step) -> None:
     count = integer_in(request.count, "step.count", 1, loop.limits.max_steps)
     world = loop.world_for(request)
@@ -117,7 +110,6 @@ def step(loop: TimeContext, call: Call, request: rq.Step) -> None:
                read_joints=_read_joint_list(world, request.read_joints, "step"))
 
 
-@handles("run_until")
 def run_until(loop: TimeContext, call: Call, request: rq.RunUntil) -> dict[str, Any] | None:
     target = request.sim_time
     world = loop.world_for(request)
@@ -140,7 +132,6 @@ def run_until(loop: TimeContext, call: Call, request: rq.RunUntil) -> dict[str, 
     return None
 
 
-@handles("reset")
 def reset(loop: TimeContext, call: Call, request: rq.Reset) -> dict[str, Any]:
     scope = request.scope
     world = loop.world_for(request)
@@ -156,7 +147,6 @@ def reset(loop: TimeContext, call: Call, request: rq.Reset) -> dict[str, Any]:
     return loop.status().to_wire()
 
 
-@handles("load_world")
 def load_world(loop: TimeContext, call: Call, request: rq.LoadWorld) -> dict[str, Any]:
     """Replace the world with a fresh one on the named engine, in this process."""
     _live_only(loop, request, "load_world")

@@ -3,11 +3,12 @@
 binds each one to the function that serves it, and refuses to load when the two drift.
 
 A handler is bound where it is written, marked ``@handles("op")`` or ``@scene_op("op")``
-(daemon/ops/binding.py), in one of the modules ``OP_MODULES`` lists; the few whose handlers
-live in world/ or access/ (which do not import ops/) are bound in ``_TABLE`` below (the
-same checks hold for both).
+(daemon/ops/binding.py), in one of the modules ``OP_MODULES`` lists, all in ops/: where
+the work lives elsewhere (the time control of daemon/core/time_control.py, the lease of
+access/, the state streams and pose comparison of world/), an ops/ module holds a thin
+adapter that names the operation.
 
-Time-control operations (daemon/core/time_control.py) act on the loop; scene operations
+Time-control operations (daemon/ops/time_control.py) act on the loop; scene operations
 (daemon/ops/scene.py) act on its World and, when they change it, publish a ``scene`` event. The
 one ``fast`` operation, status, is answered on the transport's thread from the loop's
 atomic snapshot (``SimLoop.handle_readonly``) and never reaches this table's callers; it is
@@ -20,17 +21,14 @@ from collections.abc import Callable, Iterable
 from types import ModuleType
 from typing import Any
 
-from galton.daemon.access import lease
-from galton.daemon.core import predict, time_control
+from galton.daemon.core import predict
 from galton.daemon.core.calls import Call
 from galton.daemon.core.context import OpContext, SceneContext
+from galton.daemon.ops import control, streams, time_control, worlds
 from galton.daemon.ops import joints as ops_joints
 from galton.daemon.ops import perception as ops_perception
 from galton.daemon.ops import scene as ops
-from galton.daemon.ops import worlds
 from galton.daemon.ops.binding import binding_of
-from galton.daemon.world import pose_compare as compare
-from galton.daemon.world import state_streams
 from galton.protocol.operations import OPERATIONS
 from galton.protocol.requests import Args
 
@@ -45,41 +43,32 @@ def _scene(name: str, apply: ops.SceneOp) -> Handler:
     the scene is announced, and a step job reading a deleted entity is answered now."""
     mutates = OPERATIONS[name].mutates
 
-    def handle(loop: SceneContext, call: Call, request: Args) -> Result:
-        world = loop.world_for(request)
+    def handle(ctx: SceneContext, call: Call, request: Args) -> Result:
+        world = ctx.world_for(request)
         result = apply(world, request)
         if mutates:
             event = {"kind": "scene", "op": name, "world": world.name,
                      "step": world.step_index}
             if name == "compare" and result is not None:  # the view charts the score
                 event.update(score=result["score"], sim_time=world.sim_time)
-            loop.emit(event)
-            loop.check_job_reads()
+            ctx.emit(event)
+            ctx.check_job_reads()
         return result
     return handle
 
 
-# The operations whose handlers live where daemon/ops/binding.py may not be imported (world/
-# and access/ import nothing of ops/): bound here.
-_TABLE: dict[str, Handler] = {
-    "compare": _scene("compare", compare.compare),
-    "take_control": lease.take_control,
-    "release_control": lease.release_control,
-    "stream_states": state_streams.stream_states,
-    "close_stream": state_streams.close_stream,
-}
-
-
 # The modules whose marked functions are handlers (daemon/ops/binding.py): a module that
 # serves operations is listed here once, then each new handler in it binds itself.
+# (core/predict.py still binds predict where it is written: its adapter moves to ops/ once
+# that module's own changes have landed.)
 OP_MODULES: tuple[ModuleType, ...] = (ops, ops_joints, ops_perception, worlds, time_control,
-                                      predict)
+                                      control, streams, predict)
 
 
-def collect(modules: Iterable[ModuleType], table: dict[str, Handler]) -> dict[str, Handler]:
-    """``table`` and the functions marked in ``modules`` (each where it is defined), as one
-    map; an operation bound twice is refused."""
-    found = dict(table)
+def collect(modules: Iterable[ModuleType]) -> dict[str, Handler]:
+    """The functions marked in ``modules`` (each where it is defined), as one map; an
+    operation bound twice is refused."""
+    found: dict[str, Handler] = {}
     for module in modules:
         for value in vars(module).values():
             binding = binding_of(value)
@@ -93,7 +82,7 @@ def collect(modules: Iterable[ModuleType], table: dict[str, Handler]) -> dict[st
     return found
 
 
-HANDLERS: dict[str, Handler] = collect(OP_MODULES, _TABLE)
+HANDLERS: dict[str, Handler] = collect(OP_MODULES)
 
 
 # What the transport's thread can answer from the loop's snapshot (SimLoop.handle_readonly).

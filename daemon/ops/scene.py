@@ -22,6 +22,7 @@ from galton.daemon.core.reply_limit import require_room
 from galton.daemon.engines import ENGINE_CLASSES
 from galton.daemon.engines.base import FEATURE_SPAWN_INERTIA, Shape, ShapeMesh
 from galton.daemon.ops.binding import handles, scene_op
+from galton.daemon.world import pose_compare
 from galton.daemon.world.model_files import search_folders
 from galton.daemon.world.scene import World
 from galton.protocol import (
@@ -320,14 +321,19 @@ def set_params(world: World, request: rq.SetParams) -> dict[str, Any]:
 
 
 @handles("capabilities")
-def capabilities(loop: CapabilitiesContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
+def capabilities(ctx: CapabilitiesContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
     """The engine's capabilities, with what the daemon adds (its fronts' endpoints)."""
-    caps = loop.world_for(request).engine.capabilities()
+    caps = ctx.world_for(request).engine.capabilities()
     caps.engines_available = tuple(ENGINE_CLASSES)
     caps.host = host_info()
-    return {**caps.to_wire(), **loop.advertised}
+    return {**caps.to_wire(), **ctx.advertised}
 
 
 def _wire_values(params: dict[str, Any]) -> dict[str, Any]:
     return {k: list(v) if isinstance(v, tuple) else v for k, v in params.items()}
 
+
+@scene_op("compare")
+def compare(world: World, request: rq.Compare) -> dict[str, Any]:
+    """Observed poses against the world's (daemon/world/pose_compare.py does the work)."""
+    return pose_compare.compare(world, request)

@@ -35,9 +35,9 @@ if TYPE_CHECKING:
 
 
 
-def world_row(loop: WorldsContext, world: World) -> dict[str, Any]:
-    live = world is loop.world
-    state = loop.state if live else (SimState.STOPPED if world.step_index == 0
+def world_row(ctx: WorldsContext, world: World) -> dict[str, Any]:
+    live = world is ctx.world
+    state = ctx.state if live else (SimState.STOPPED if world.step_index == 0
                                      else SimState.PAUSED)
     return {"name": world.name, "live": live, "engine": world.engine.name,
             "state": state.value, "step": world.step_index, "sim_time": world.sim_time,
@@ -45,73 +45,73 @@ def world_row(loop: WorldsContext, world: World) -> dict[str, Any]:
 
 
 @handles("list_worlds")
-def list_worlds(loop: WorldsContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
-    return {"worlds": [world_row(loop, w) for w in (loop.world, *loop.side.values())]}
+def list_worlds(ctx: WorldsContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
+    return {"worlds": [world_row(ctx, w) for w in (ctx.world, *ctx.side.values())]}
 
 
-def _new_name(loop: WorldsContext, name: str, where: str) -> str:
+def _new_name(ctx: WorldsContext, name: str, where: str) -> str:
     if not name.isprintable():  # its length is declared (protocol/requests.py)
         raise InvalidArgumentError(f"{where}.name {brief(name)} must be 1-{MAX_WORLD_NAME} "
                                    "printable characters")
-    if name == loop.world.name or name in loop.side:
+    if name == ctx.world.name or name in ctx.side:
         raise NameNotUniqueError(f"a world named {name!r} exists; delete it first")
-    if 1 + len(loop.side) >= loop.limits.max_worlds:
+    if 1 + len(ctx.side) >= ctx.limits.max_worlds:
         raise ResourceLimitError(
-            f"the daemon holds {1 + len(loop.side)} worlds, its limit (galton-daemon "
-            "--limit max_worlds=N)", {"limit": "max_worlds", "max": loop.limits.max_worlds})
+            f"the daemon holds {1 + len(ctx.side)} worlds, its limit (galton-daemon "
+            "--limit max_worlds=N)", {"limit": "max_worlds", "max": ctx.limits.max_worlds})
     return name
 
 
-def _factory(loop: WorldsContext) -> Any:
-    if loop.engine_factory is None:
+def _factory(ctx: WorldsContext) -> Any:
+    if ctx.engine_factory is None:
         raise OperationFailedError("this daemon cannot make engines")
-    return loop.engine_factory
+    return ctx.engine_factory
 
 
 @handles("create_world")
-def create_world(loop: WorldsContext, call: Call, request: rq.CreateWorld) -> dict[str, Any]:
-    name = _new_name(loop, request.name, "create_world")
-    kind = request.engine or loop.world.engine.name
+def create_world(ctx: WorldsContext, call: Call, request: rq.CreateWorld) -> dict[str, Any]:
+    name = _new_name(ctx, request.name, "create_world")
+    kind = request.engine or ctx.world.engine.name
     params = request.params
-    engine: Engine = _factory(loop)(kind)
+    engine: Engine = _factory(ctx)(kind)
     try:
         if params:
             engine.set_params(params)
     except Exception:
         engine.close()
         raise
-    loop.side[name] = World(engine, name, loop.limits)
-    loop.emit({"kind": "world", "op": "create_world", "world": name})
-    return world_row(loop, loop.side[name])
+    ctx.side[name] = World(engine, name, ctx.limits)
+    ctx.emit({"kind": "world", "op": "create_world", "world": name})
+    return world_row(ctx, ctx.side[name])
 
 
 @handles("fork_world")
-def fork_world(loop: WorldsContext, call: Call, request: rq.ForkWorld) -> dict[str, Any]:
-    name = _new_name(loop, request.name, "fork_world")
-    source = loop.world_for({"world": request.source})
+def fork_world(ctx: WorldsContext, call: Call, request: rq.ForkWorld) -> dict[str, Any]:
+    name = _new_name(ctx, request.name, "fork_world")
+    source = ctx.world_for({"world": request.source})
     source.verify()
-    loop.side[name] = clone_of(source, name, loop.limits)
-    loop.emit({"kind": "world", "op": "fork_world", "world": name, "source": source.name})
-    return world_row(loop, loop.side[name])
+    ctx.side[name] = clone_of(source, name, ctx.limits)
+    ctx.emit({"kind": "world", "op": "fork_world", "world": name, "source": source.name})
+    return world_row(ctx, ctx.side[name])
 
 
 @handles("delete_world")
-def delete_world(loop: WorldsContext, call: Call, request: rq.Named) -> dict[str, Any]:
+def delete_world(ctx: WorldsContext, call: Call, request: rq.Named) -> dict[str, Any]:
     name = request.name
-    world = loop.world_for({"world": name})
-    if world is loop.world:
+    world = ctx.world_for({"world": name})
+    if world is ctx.world:
         raise InvalidArgumentError("the live world cannot be deleted (load_world replaces it)")
-    if loop.job is not None and loop.job.world is world:
-        time_control.cancel_job(loop, "its world was deleted")
-    del loop.side[name]
+    if ctx.job is not None and ctx.job.world is world:
+        time_control.cancel_job(ctx, "its world was deleted")
+    del ctx.side[name]
     world.engine.close()
-    loop.emit({"kind": "world", "op": "delete_world", "world": name})
+    ctx.emit({"kind": "world", "op": "delete_world", "world": name})
     return {"count": 1}
 
 
 @handles("snapshot")
-def snapshot(loop: WorldsContext, call: Call, request: rq.Snapshot) -> dict[str, Any]:
-    world = loop.world_for(request)
+def snapshot(ctx: WorldsContext, call: Call, request: rq.Snapshot) -> dict[str, Any]:
+    world = ctx.world_for(request)
     slot_name = request.slot
     want_blob = request.blob
     if slot_name is None and not want_blob:
@@ -121,14 +121,14 @@ def snapshot(loop: WorldsContext, call: Call, request: rq.Snapshot) -> dict[str,
         raise InvalidArgumentError(f"snapshot.slot {brief(slot_name)} must be "
                                    f"1-{MAX_WORLD_NAME} printable characters")
     world.verify()
-    blob = encode(snapshot_of(world), loop.snapshot_key)
+    blob = encode(snapshot_of(world), ctx.snapshot_key)
     if want_blob:  # checked before a slot is kept: a refused request changes nothing
-        require_room("this snapshot's blob", len(blob), loop.limits.max_reply_bytes,
+        require_room("this snapshot's blob", len(blob), ctx.limits.max_reply_bytes,
                      "keep it in a slot without 'blob'")
     kept = Slot(slot_name or "", world.name, world.engine.name, blob, world.step_index,
                 world.sim_time, len(world.entities))
     if slot_name is not None:
-        loop.slots.keep(kept)
+        ctx.slots.keep(kept)
     result = {**kept.to_wire(), "slot": slot_name}
     if want_blob:
         result["blob"] = blob
@@ -136,36 +136,36 @@ def snapshot(loop: WorldsContext, call: Call, request: rq.Snapshot) -> dict[str,
 
 
 @handles("restore")
-def restore(loop: WorldsContext, call: Call, request: rq.Restore) -> dict[str, Any]:
-    world = loop.world_for(request)
+def restore(ctx: WorldsContext, call: Call, request: rq.Restore) -> dict[str, Any]:
+    world = ctx.world_for(request)
     slot_name, blob = request.slot, request.blob
     if (slot_name is None) == (blob is None):
         raise InvalidArgumentError("restore needs exactly one of 'slot' or 'blob'")
     if slot_name is not None:
-        blob = loop.slots.get(slot_name).blob
-    data = decode(blob, loop.limits, loop.snapshot_key)
-    new = world_from(data, _factory(loop), world.name, loop.limits, world.engine.name)
-    if loop.job is not None and (loop.job.world or loop.world) is world:
-        time_control.cancel_job(loop, "its world was restored")
-    if world is loop.world:
-        loop.world = new
-        loop.tune_switch_interval()
-        loop.refresh_clock()
-        loop.rtf_window.clear()
-        loop.pacer.anchor(time.monotonic(), new.sim_time, loop.target_rtf)
+        blob = ctx.slots.get(slot_name).blob
+    data = decode(blob, ctx.limits, ctx.snapshot_key)
+    new = world_from(data, _factory(ctx), world.name, ctx.limits, world.engine.name)
+    if ctx.job is not None and (ctx.job.world or ctx.world) is world:
+        time_control.cancel_job(ctx, "its world was restored")
+    if world is ctx.world:
+        ctx.world = new
+        ctx.tune_switch_interval()
+        ctx.refresh_clock()
+        ctx.rtf_window.clear()
+        ctx.pacer.anchor(time.monotonic(), new.sim_time, ctx.target_rtf)
     else:
-        loop.side[world.name] = new
+        ctx.side[world.name] = new
     world.engine.close()
-    loop.emit({"kind": "scene", "op": "restore", "world": new.name, "step": new.step_index})
-    return world_row(loop, new)
+    ctx.emit({"kind": "scene", "op": "restore", "world": new.name, "step": new.step_index})
+    return world_row(ctx, new)
 
 
 @handles("snapshots")
-def snapshots(loop: WorldsContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
-    return {"slots": [slot.to_wire() for slot in loop.slots.by_name.values()]}
+def snapshots(ctx: WorldsContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
+    return {"slots": [slot.to_wire() for slot in ctx.slots.by_name.values()]}
 
 
 @handles("delete_snapshot")
-def delete_snapshot(loop: WorldsContext, call: Call, request: rq.Slot) -> dict[str, Any]:
-    loop.slots.delete(request.slot)
+def delete_snapshot(ctx: WorldsContext, call: Call, request: rq.Slot) -> dict[str, Any]:
+    ctx.slots.delete(request.slot)
     return {"count": 1}

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from support import tilted_law
-from synthetic_runs import law_trials, write_results
+from support.synthetic_runs import law_trials, write_results
 
 from galton.analysis import stats
 from galton.analysis.errors import RecordError

@@ -14,7 +14,7 @@ from collections.abc import Generator, Iterator
 from typing import Any
 
 import pytest
-from support_daemons import ENGINES, STATED_GAPS
+from support.daemons import ENGINES, STATED_GAPS
 
 from galton.client import Client, EmbeddedDaemon
 from galton.protocol import FeatureUnsupportedError, Reply

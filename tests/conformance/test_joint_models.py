@@ -8,8 +8,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from support_daemons import start_daemon
-from support_models import (
+from support.daemons import start_daemon
+from support.models import (
     KUKA_JOINTS,
     ROBOTS,
     Pendulum,

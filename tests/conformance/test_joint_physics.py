@@ -11,7 +11,7 @@ import math
 import numpy as np
 import pytest
 from scipy.optimize import brentq
-from support_models import (
+from support.models import (
     KUKA_JOINTS,
     KUKA_KD,
     KUKA_KP,

@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 import pytest
-from support_models import (
+from support.models import (
     KUKA_JOINTS,
     KUKA_KD,
     KUKA_KP,

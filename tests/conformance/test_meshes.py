@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 import pytest
 from support import snapshot
-from support_worlds import clean
+from support.worlds import clean
 
 from galton.client import Client, InvalidArgumentError, body_group, meshes, plane, spheres
 from galton.protocol import BodyGroup

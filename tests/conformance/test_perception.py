@@ -12,8 +12,8 @@ from typing import Any
 
 import numpy as np
 import pytest
-from support_daemons import start_daemon
-from support_perception import (
+from support.daemons import start_daemon
+from support.perception import (
     BALL_CENTRE,
     BALL_RADIUS,
     BOX_CENTRE,

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from support_models import ROBOTS, load, load_robot
+from support.models import ROBOTS, load, load_robot
 
 from galton.client import Client, ShapeInfo, body_group, meshes, spheres
 from galton.protocol import FeatureUnsupportedError, NotFoundError

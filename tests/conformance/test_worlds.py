@@ -10,8 +10,8 @@ from collections.abc import Iterator
 import numpy as np
 import pytest
 from support import snapshot
-from support_models import KUKA_JOINTS, KUKA_KD, KUKA_KP, load_robot
-from support_worlds import clean, contact_scene
+from support.models import KUKA_JOINTS, KUKA_KD, KUKA_KP, load_robot
+from support.worlds import clean, contact_scene
 
 from galton.client import (
     Client,

@@ -131,7 +131,7 @@ def test_telemetry_callback_and_events(mujoco_sim: Client) -> None:
 
 
 def test_a_raw_zenoh_msgpack_client_works(daemons: dict) -> None:
-    from support_daemons import start_daemon
+    from support.daemons import start_daemon
 
     daemon = start_daemon(daemons, "mujoco")
     with Client(daemon.instance, daemon.endpoint) as sim:
@@ -141,7 +141,7 @@ def test_a_raw_zenoh_msgpack_client_works(daemons: dict) -> None:
 
 
 def test_the_quickstart_example_runs(daemons: dict) -> None:
-    from support_daemons import start_daemon
+    from support.daemons import start_daemon
 
     daemon = start_daemon(daemons, "mujoco")
     load_example("quickstart").main([daemon.endpoint, daemon.instance])

@@ -3,9 +3,11 @@ code, every limit and every event kind the daemon publishes are documented."""
 
 from __future__ import annotations
 
+import importlib.util
 import re
 from dataclasses import fields
 from pathlib import Path
+from types import ModuleType
 
 import msgspec
 import pytest
@@ -18,6 +20,7 @@ from galton.protocol.operations import LONG_RUNNING_TIMEOUT_S, OPERATIONS, Opera
 
 PAGE = (Path(__file__).resolve().parents[2] / "docs" / "protocol.md").read_text()
 DAEMON = Path(__file__).resolve().parents[2] / "daemon"
+CONTENTS_TOOL = Path(__file__).resolve().parents[2] / "docs" / "make_contents.py"
 
 
 def section(op: str) -> str:
@@ -77,20 +80,47 @@ def test_every_event_kind_is_documented() -> None:
 
 
 def summary_row(op: Operation) -> str:
-    """The row the operations table must hold for this operation, from the registry."""
+    """The row the operations table must hold for this operation, from the registry: its
+    name linked to its section, its arguments, its flags and how long a client waits."""
     args = ", ".join(f"`{a.name}`" + ("*" if a.required else "") for a in op.args) or "–"
     if op.steps:
         wait = f"{LONG_RUNNING_TIMEOUT_S:g} s"
     else:
         wait = f"≥ {op.timeout_floor_s:g} s" if op.timeout_floor_s else "default"
-    flags = " | ".join("yes" if flag else "no" for flag in (op.mutates, op.steps, op.fast))
-    return f"| `{op.name}` | {args} | {flags} | {wait} |"
+    flags = " | ".join("yes" if flag else "no"
+                       for flag in (op.mutates, op.steps, op.fast, op.viewer))
+    return f"| [`{op.name}`](#{section_anchor(op.name)}) | {args} | {flags} | {wait} |"
+
+
+def section_anchor(op: str) -> str:
+    """The anchor of the ``###`` heading that names this operation."""
+    found = [anchor for level, title, anchor in contents_tool().headings(PAGE)
+             if level == 3 and f"`{op}`" in title]
+    assert found, f"docs/protocol.md has no section for {op!r}"
+    return found[0]
+
+
+def contents_tool() -> ModuleType:
+    spec = importlib.util.spec_from_file_location("make_contents", CONTENTS_TOOL)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
 
 
 def test_the_operations_table_is_the_registry() -> None:
-    rows = re.findall(r"^\| `\w+` \| .* \| (?:yes|no) \| (?:yes|no) \| (?:yes|no) \| .*\|$",
-                      PAGE, re.MULTILINE)
+    rows = re.findall(r"^\| \[`\w+`\]\(#[\w-]+\) \| .* \| (?:yes|no) \| (?:yes|no) \| "
+                      r"(?:yes|no) \| (?:yes|no) \| .*\|$", PAGE, re.MULTILINE)
     assert rows == [summary_row(op) for op in OPERATIONS.values()]
+
+
+def test_every_link_of_the_operations_table_reaches_its_section() -> None:
+    anchors = {anchor for _, _, anchor in contents_tool().headings(PAGE)}
+    linked = dict(re.findall(r"^\| \[`(\w+)`\]\(#([\w-]+)\) \|", PAGE, re.MULTILINE))
+    assert set(linked) == set(OPERATIONS)
+    for op, anchor in linked.items():
+        assert anchor in anchors, f"{op} links to #{anchor}, which no heading has"
+        assert anchor == section_anchor(op), f"{op} links to #{anchor}, not its section"
 
 
 def test_every_daemon_option_the_page_names_exists() -> None:

@@ -17,9 +17,9 @@ from pathlib import Path
 import msgpack
 import pytest
 import zenoh
-from support_certs import Certificates, make_certificates
-from support_daemons import start_daemon
-from support_users import ALICE, BOB, users_file
+from support.certs import Certificates, make_certificates
+from support.daemons import start_daemon
+from support.users import ALICE, BOB, users_file
 from typer.testing import CliRunner
 
 from galton.client import (

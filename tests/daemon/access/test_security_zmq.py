@@ -179,7 +179,7 @@ def test_a_key_without_users_encrypts_and_lets_any_key_in(keys: Keys, tmp_path: 
 def test_zmq_keys_writes_a_pair_and_overwrites_no_key(tmp_path: Path) -> None:
     """``galton-client zmq-keys`` used to check only NAME.key_secret, and replaced a NAME.key
     already there (say the daemon's public key, copied beside the client's keys)."""
-    from cli_support import run
+    from support.cli import run
 
     result = run(["zmq-keys", str(tmp_path / "mine")])
     assert result.exit_code == 0, result.output

@@ -11,7 +11,7 @@ from collections.abc import Iterator
 
 import numpy as np
 import pytest
-from support_models import joints, load_robot
+from support.models import joints, load_robot
 
 from galton.client import Client, EmbeddedDaemon, camera, meshes, spheres
 from galton.daemon.core.reply_limit import reads_size

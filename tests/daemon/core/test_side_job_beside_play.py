@@ -7,7 +7,7 @@ from __future__ import annotations
 from collections.abc import Iterator
 
 import pytest
-from support_worlds import clean
+from support.worlds import clean
 
 from galton.client import Client, spheres
 

@@ -11,7 +11,7 @@ import time
 import msgpack
 import pytest
 import zmq
-from support_daemons import start_daemon
+from support.daemons import start_daemon
 
 from galton.client import Client, EmbeddedDaemon
 

@@ -12,7 +12,7 @@ from typing import Any
 import msgpack
 import pytest
 import zmq
-from support_daemons import start_daemon
+from support.daemons import start_daemon
 
 from galton.client import Client, EmbeddedDaemon, plane, spheres
 from galton.daemon.core.step_queue import MAX_QUEUED_STEPS

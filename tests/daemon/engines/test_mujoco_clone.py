@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from support_mujoco_worlds import (
+from support.mujoco_worlds import (
     ALONG_Y,
     SEED,
     assert_same_runs,

@@ -16,7 +16,7 @@ from typing import Any
 import msgpack
 import numpy as np
 import pytest
-from support_mujoco_worlds import (
+from support.mujoco_worlds import (
     ALONG_Y,
     SEED,
     assert_same_runs,

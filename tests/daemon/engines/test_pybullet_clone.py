@@ -9,8 +9,8 @@ from collections.abc import Callable, Iterator
 
 import numpy as np
 import pytest
-from support_models import KUKA_JOINTS, KUKA_KD, KUKA_KP
-from support_pybullet_worlds import (
+from support.models import KUKA_JOINTS, KUKA_KD, KUKA_KP
+from support.pybullet_worlds import (
     MJCF,
     SEED,
     assert_same_run,

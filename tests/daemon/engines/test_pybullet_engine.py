@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 import pytest
-from support_urdf import ARM_URDF
+from support.urdf import ARM_URDF
 
 from galton.daemon.engines.pybullet.engine import PybulletEngine
 from galton.protocol import (

@@ -9,7 +9,7 @@ from collections.abc import Iterator
 
 import numpy as np
 import pytest
-from support_urdf import ARM_URDF
+from support.urdf import ARM_URDF
 
 from galton.daemon.engines.base import (
     FEATURE_CONTACTS,

@@ -12,8 +12,8 @@ from typing import Any
 import msgpack
 import numpy as np
 import pytest
-from support_models import KUKA_JOINTS, KUKA_KD, KUKA_KP
-from support_pybullet_worlds import (
+from support.models import KUKA_JOINTS, KUKA_KD, KUKA_KP
+from support.pybullet_worlds import (
     MJCF,
     SEED,
     assert_same_run,

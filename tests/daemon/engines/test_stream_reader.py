@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from support_mujoco_worlds import KUKA, bodies, floor
+from support.mujoco_worlds import KUKA, bodies, floor
 
 from galton.daemon.engines import create_engine
 from galton.daemon.world.scene import World

@@ -1,5 +1,5 @@
 """The ROS 2 front end to end: a real daemon with --ros2, driven by a client written from
-rmw_zenoh's design document (tests/ros2_client.py: its own keys, attachments, CDR)."""
+rmw_zenoh's design document (tests/support/ros2_client.py: its own keys, attachments, CDR)."""
 
 from __future__ import annotations
 
@@ -9,7 +9,8 @@ from collections.abc import Iterator
 from typing import Any
 
 import pytest
-from ros2_client import (
+from support.models import KUKA_JOINTS, ROBOTS, get_joint_states
+from support.ros2_client import (
     CLOCK_KEY,
     HASHES,
     JOINT_STATE_KEY,
@@ -22,8 +23,7 @@ from ros2_client import (
     read_tf,
     topic_key,
 )
-from support_models import KUKA_JOINTS, ROBOTS, get_joint_states
-from support_urdf import ARM_URDF
+from support.urdf import ARM_URDF
 
 from galton.client import Client, EmbeddedDaemon
 

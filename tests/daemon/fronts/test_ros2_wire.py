@@ -1,5 +1,6 @@
 """The ROS 2 front's wire format against fixed references: RIHS01 hashes against the
-values rosidl computed (tests/ros2_rosidl_hashes.json, made by tests/ros2_rosidl.py), and
+values rosidl computed (tests/support/ros2_rosidl_hashes.json, made by
+tests/support/ros2_rosidl.py), and
 keys, liveliness tokens and attachments against rmw_zenoh's docs/design.md examples."""
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ from galton.daemon.fronts.ros2 import interfaces, rmw_zenoh
 from galton.daemon.fronts.ros2.messages import decode, encode, header, new, tf_cdr, vector
 from galton.protocol import InvalidArgumentError
 
-ROSIDL = json.loads((Path(__file__).parents[2] / "ros2_rosidl_hashes.json").read_text())
+ROSIDL = json.loads((Path(__file__).parents[2] / "support" / "ros2_rosidl_hashes.json").read_text())
 # From rmw_zenoh docs/design.md.
 STRING_HASH = "RIHS01_df668c740482bbd48fb39d76a70dfd4bd59db1288021743503259e948f6b1a18"
 ADD_TWO_INTS_HASH = "RIHS01_e118de6bf5eeb66a2491b5bda11202e7b68f198d6f67922cf30364858239c81a"

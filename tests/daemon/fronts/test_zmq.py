@@ -15,7 +15,7 @@ from pathlib import Path
 import msgpack
 import pytest
 import zmq
-from support_daemons import start_daemon
+from support.daemons import start_daemon
 
 from galton.client import Client, EmbeddedDaemon, discover_at
 from galton.client.sdk.embedded import daemon_command, free_loopback_port
@@ -323,7 +323,7 @@ def test_an_endpoint_zeromq_cannot_parse_is_a_typed_error(endpoint: str) -> None
 
 
 def test_galton_client_daemons_shows_the_zmq_endpoints(zmq_daemon: EmbeddedDaemon) -> None:
-    from cli_support import run
+    from support.cli import run
 
     result = run(["--connect", zmq_daemon.endpoint, "daemons"])  # the table's own column
     assert result.exit_code == 0 and "Zero" in result.stdout, result.output

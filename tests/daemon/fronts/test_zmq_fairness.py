@@ -10,7 +10,7 @@ from collections.abc import Iterator
 import msgpack
 import pytest
 import zmq
-from support_daemons import start_daemon
+from support.daemons import start_daemon
 
 from galton.client import Client, EmbeddedDaemon, plane, spheres
 from galton.daemon.fronts.zmq import MAX_QUEUED_PER_CONNECTION

@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 import pytest
 from support import snapshot
-from support_urdf import ARM_URDF
+from support.urdf import ARM_URDF
 
 from galton.client import Client, meshes, plane, spheres
 from galton.client.fuzz.snapshots import open_blob, reseal, resealed_campaign

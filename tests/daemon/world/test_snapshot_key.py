@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 from support import snapshot
-from support_daemons import start_daemon
+from support.daemons import start_daemon
 
 from galton.client import Client, EmbeddedDaemon, plane, spheres, wait_for_daemon
 from galton.client.fuzz.snapshots import open_blob, reseal

@@ -7,8 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from support import send_over_the_edge, snapshot
-from support_models import get_joint_states, model_snapshot, set_joint_states, set_targets
-from support_urdf import ARM_URDF
+from support.models import get_joint_states, model_snapshot, set_joint_states, set_targets
+from support.urdf import ARM_URDF
 
 from galton.client import Client, plane, spheres
 from galton.protocol import InvalidArgumentError, PhysicsError
