@@ -80,9 +80,9 @@ def predict(loop: PredictContext, call: Call, request: rq.Predict) -> None:
         source.verify()
         copy = clone_of(source, name, loop.limits)
     else:
-        blob = loop.slots.get(slot).blob
-        data = decode(blob, loop.limits, loop.snapshot_key)
-        copy = world_from(data, loop.engine_factory, name, loop.limits)
+        factory = loop.engine_factory
+        copy = loop.slots.world_of(loop.slots.get(slot), name, lambda blob: world_from(
+            decode(blob, loop.limits, loop.snapshot_key), factory, name, loop.limits))
     try:
         job = _job(loop, call, copy, horizon, request)
     except Exception:

@@ -75,8 +75,8 @@ from galton.daemon.engines.base import (
 )
 from galton.daemon.engines.mujoco import clone as cloning
 from galton.daemon.engines.mujoco import compiled as compiling
+from galton.daemon.engines.mujoco import fast_state, models, removal, teleport, wrench
 from galton.daemon.engines.mujoco import geoms as colliders
-from galton.daemon.engines.mujoco import models, removal, teleport, wrench
 from galton.daemon.engines.mujoco import observed as observing
 from galton.daemon.engines.mujoco import perception as sensing
 from galton.daemon.engines.mujoco import pool as mp
@@ -358,6 +358,12 @@ class MujocoEngine(Engine):
 
     def entity_names(self) -> list[str]:
         return list(self.entities)
+
+    def save_state(self) -> object | None:
+        return fast_state.save(self)
+
+    def load_state(self, state: object) -> bool:
+        return fast_state.load(self, state)
 
     def clone(self) -> MujocoEngine:
         """A copy of the compiled world, no MJCF and no compile (``clone``): it goes
