@@ -122,14 +122,31 @@ class WorldMethods:
                 slot: str | None = None, set_states: Mapping[str, Any] | None = None,
                 joint_targets: Mapping[str, Any] | None = None,
                 wrenches: Mapping[str, Any] | None = None,
+                futures: int | None = None, perturb: Mapping[str, Any] | None = None,
+                seed: int | None = None, plans: Sequence[Sequence[Mapping[str, Any]]] | None
+                = None, score: Mapping[str, Any] | None = None,
                 timeout: float | None = None) -> Prediction:
         """Run a copy of the world (or of snapshot ``slot``) ``horizon`` seconds ahead,
         sampling ``read`` bodies and ``read_joints`` joints every ``every`` seconds, and
         discard it: the world is never changed. The copy may first be changed, each as its
         request's keyword arguments: ``set_states`` (names, poses, twists),
         ``joint_targets`` (names, mode, targets, kp, kd, max_effort) and ``wrenches``
-        (names, wrenches, points, duration)."""
+        (names, wrenches, points, duration).
+
+        Many futures at once: ``futures`` N, each started with seeded noise ``perturb``
+        ({"position": m, "orientation": rad, "velocity": m/s, "bodies": {name: {...}}}),
+        and/or ``plans``, one per future, each a list of {"at": s, "joint_targets":
+        {...}, "wrenches": {...}}; ``score`` {"body": name, "target": [x, y, z]} gives
+        each future's distance to the target at the horizon (docs/protocol.md)."""
         args = predict_args(horizon, every, read, read_joints, slot)
+        args.update(sdk_joints.given(futures=futures, seed=seed))
+        if perturb is not None:
+            args["perturb"] = dict(perturb)
+        if plans is not None:
+            args["plans"] = [[_plan_step(item) for item in plan] for plan in plans]
+        if score is not None:
+            args["score"] = {"body": score["body"],
+                             "target": [float(v) for v in score["target"]]}
         if set_states is not None:
             args["set_states"] = sdk_joints.set_states_args(**set_states)
         if joint_targets is not None:
@@ -153,6 +170,16 @@ class WorldMethods:
         args.update(sdk_joints.given(sigma_position=sigma_position, sigma_angle=sigma_angle,
                                      sigma_speed=sigma_speed))
         return Comparison.from_reply(self._ok("compare", args), list(names))
+
+
+def _plan_step(item: Mapping[str, Any]) -> dict[str, Any]:
+    """A plan's timed action: its joint targets and wrenches as their requests' args."""
+    out: dict[str, Any] = {"at": float(item["at"])}
+    if item.get("joint_targets") is not None:
+        out["joint_targets"] = sdk_joints.set_joint_targets_args(**item["joint_targets"])
+    if item.get("wrenches") is not None:
+        out["wrenches"] = sdk_joints.apply_wrench_args(**item["wrenches"])
+    return out
 
 
 def predict_args(horizon: float, every: float | None, read: Sequence[str] | None,
