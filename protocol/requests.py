@@ -331,6 +331,7 @@ class Compare(Args, kw_only=True, forbid_unknown_fields=True):
     sigma_angle: Positive = DEFAULT_SIGMA_ANGLE
     sigma_speed: Positive = DEFAULT_SIGMA_SPEED
     correct: Flag = False
+    spread: Values | None = None  # m per body (or one for all): a prediction's spread
 
 
 class Render(Args, kw_only=True, forbid_unknown_fields=True):

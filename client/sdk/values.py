@@ -9,6 +9,7 @@ MalformedRequestError, a field a newer daemon added is left out.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -212,6 +213,13 @@ class Prediction:
 
     def __len__(self) -> int:
         return len(self.times)
+
+    def spread_of(self, names: Sequence[str], sample: int = -1) -> FloatArray:
+        """The spread of these bodies' positions at one sample (the horizon by default),
+        as ``compare(..., spread=...)`` takes it; zeros for a single future."""
+        if self.spread is None:
+            return np.zeros(len(names))
+        return self.spread[sample, [self.names.index(n) for n in names]]
 
     def at(self, name: str) -> FloatArray:
         """The poses (samples, 7) of one body along the prediction ((futures, samples, 7)

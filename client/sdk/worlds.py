@@ -18,11 +18,12 @@ import copy
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from typing import TYPE_CHECKING, Any, Self
 
+import numpy as np
 from numpy.typing import ArrayLike
 
 from galton.client.sdk import joints as sdk_joints
 from galton.client.sdk.values import Comparison, Prediction, SnapshotInfo, Stamp, WorldInfo
-from galton.protocol import POSE_WIDTH, TWIST_WIDTH, InvalidArgumentError, Reply
+from galton.protocol import POSE_WIDTH, TWIST_WIDTH, InvalidArgumentError, Reply, pack_f64
 from galton.protocol.replies import SnapshotsReply, WorldsReply, decode_result
 
 if TYPE_CHECKING:
@@ -157,10 +158,15 @@ class WorldMethods:
 
     def compare(self, names: Sequence[str], poses: ArrayLike, twists: ArrayLike | None = None,
                 sigma_position: float | None = None, sigma_angle: float | None = None,
-                sigma_speed: float | None = None, correct: bool = False) -> Comparison:
+                sigma_speed: float | None = None, correct: bool = False,
+                spread: ArrayLike | float | None = None) -> Comparison:
         """Observed poses (rows of 7, and optionally twists) of these bodies against the
         world's at its present time: per-body errors and one anomaly score (about 1 at the
-        sigmas' noise, 3 a surprise). ``correct`` sets the bodies to the observation."""
+        sigmas' noise, 3 a surprise). ``correct`` sets the bodies to the observation.
+        ``spread`` (m, per body or one for all): the spread of position an ensemble
+        prediction expected (``Prediction.spread_of(names)``), combined with
+        ``sigma_position`` as independent noise: the score then says how surprising the
+        observation is given what was imagined."""
         count = len(names)
         args: dict[str, Any] = {
             "names": list(names), "correct": correct,
@@ -169,7 +175,20 @@ class WorldMethods:
             args["twists"] = sdk_joints.body_rows(twists, count, TWIST_WIDTH, "compare.twists")
         args.update(sdk_joints.given(sigma_position=sigma_position, sigma_angle=sigma_angle,
                                      sigma_speed=sigma_speed))
+        if spread is not None:
+            args["spread"] = spread_arg(spread, count)
         return Comparison.from_reply(self._ok("compare", args), list(names))
+
+
+def spread_arg(spread: ArrayLike | float, count: int) -> float | bytes:
+    """One spread for all bodies, or packed float64, one per body."""
+    if isinstance(spread, int | float):
+        return float(spread)
+    values = np.asarray(spread, dtype=float).reshape(-1)
+    if len(values) != count:
+        raise InvalidArgumentError(f"compare.spread has {len(values)} values for {count} "
+                                   "bodies: give one per body, or one for all")
+    return pack_f64(values)
 
 
 def _plan_step(item: Mapping[str, Any]) -> dict[str, Any]:

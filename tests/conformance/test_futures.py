@@ -115,3 +115,28 @@ def test_bad_futures_are_refused_and_change_nothing(world: Client) -> None:
     with pytest.raises(InvalidArgumentError, match="position"):
         world.predict(STEPS * dt, read=names, futures=2, perturb={"position": -1.0})
     before.assert_same(snapshot(world))
+
+
+def test_compare_measures_an_observation_against_an_ensemble(world: Client,
+                                                             engine: str) -> None:
+    """The spread a prediction expected widens compare's position sigma: an observation
+    1 cm off is a surprise against 1 mm of noise, not against a 5 cm spread."""
+    if engine != "mujoco":
+        pytest.skip("compare is the daemon's, not the engine's: one engine shows it")
+    names = contact_scene(world)[:1]
+    dt = world.status().timestep
+    found = world.predict(STEPS * dt, read=names, futures=4, seed=3,
+                          perturb={"position": 0.05})
+    spread = found.spread_of(names)
+    assert spread.shape == (1,) and spread[0] > 0
+    world.step(STEPS)
+    pose = world.get_states(names).poses.copy()
+    pose[0, 0] += 0.01
+    tight = world.compare(names, pose, sigma_position=0.001)
+    loose = world.compare(names, pose, sigma_position=0.001, spread=spread)
+    assert tight.score > 3 > loose.score
+    expected = 0.01 / np.sqrt(spread[0] ** 2 + 0.001 ** 2)
+    assert loose.score == pytest.approx(np.sqrt(expected ** 2 + loose.angle_errors[0] ** 2
+                                                 / 0.05 ** 2), rel=1e-9)
+    with pytest.raises(InvalidArgumentError, match="spread"):
+        world.compare(names, pose, spread=-1.0)
