@@ -295,6 +295,10 @@ class Engine(ABC):
         into, of the same structure); False, changing nothing, where it does not fit."""
         return False
 
+    def recycle_state(self, state: object) -> None:  # noqa: B027 - nothing to reuse
+        """A state ``save_state`` made that nobody holds any more: its memory may serve the
+        next one (a slot replaced by a newer snapshot)."""
+
     # -- perception (docs/protocol.md, "render", "raycast", "contacts") ---------------------
     def render(self, cameras: Sequence[CameraView]
                ) -> tuple[list[dict[str, np.ndarray]], list[str]]:

@@ -280,12 +280,12 @@ class World:
                 raise InvalidArgumentError(f"entity {static[0]!r} is static: it has no mass")
         self.structure = object()
         self.engine.update(names, props)
-        for name in names:
-            info = self.entities[name].info
-            for field in ("mass", "friction", "restitution", "tags"):
-                value = getattr(props, field)
-                if value is not None:
-                    setattr(info, field, value)
+        changes = {field: getattr(props, field) for field in
+                   ("mass", "friction", "restitution", "tags")
+                   if getattr(props, field) is not None}
+        for name in names:  # a new info, never an edit: a fork shares its source's
+            entity = self.entities[name]
+            entity.info = dataclasses.replace(entity.info, **changes)
 
     def set_params(self, params: dict[str, Any]) -> None:
         """The engine's parameters (part of the structure)."""

@@ -76,8 +76,12 @@ class SnapshotSlots:
         if state is not None and slot.blob is None and state.structure not in self.twins:
             assert source is not None and source.structure is state.structure
             self.twins[state.structure] = clone_of(source, f"{source.name}:twin", self.limits)
+        replaced = self.by_name.get(slot.name)
         self.by_name[slot.name] = slot
         self._drop_unused_twins()
+        if replaced is not None and replaced.state is not None and source is not None \
+                and replaced.state.engine_name == source.engine.name:
+            source.engine.recycle_state(replaced.state.engine)
 
     def get(self, name: str) -> Slot:
         found = self.by_name.get(name)

@@ -63,6 +63,7 @@ def _copy_compiled(source: MujocoEngine, engine: MujocoEngine) -> None:
     engine.warnings = engine.data.warning.number
     engine.balance = copy.deepcopy(source.balance)
     engine.cameras = None  # its own GL context, made by its first render
+    engine.spare_datas = []
 
 
 def _twins(spec: Any, twin: Any) -> dict[int, Any]:

@@ -123,6 +123,8 @@ class MujocoEngine(Engine):
     # What the last step left, frozen before an edit until the next step (a class default:
     # a clone is made without __init__).
     observed: observing.Observed | None = None
+    # MjData of dropped kept states, for the next (fast_state.recycle).
+    spare_datas: list[tuple[tuple[int, ...], mujoco.MjData]]
 
     def __init__(self) -> None:
         ms.route_warnings()
@@ -133,6 +135,7 @@ class MujocoEngine(Engine):
         self.workers = 0
         self.steps_since_look = 0
         self.cameras: rendering.CameraRig | None = None  # made by the first render
+        self.spare_datas = []
         self.build_empty()
 
     # -- compile & index ----------------------------------------------------------------
@@ -364,6 +367,9 @@ class MujocoEngine(Engine):
 
     def load_state(self, state: object) -> bool:
         return fast_state.load(self, state)
+
+    def recycle_state(self, state: object) -> None:
+        fast_state.recycle(self, state)
 
     def clone(self) -> MujocoEngine:
         """A copy of the compiled world, no MJCF and no compile (``clone``): it goes
