@@ -118,8 +118,16 @@ class FutureSet:
             return
         if self._pool is None:
             self._pool = ThreadPoolExecutor(self.threads, thread_name_prefix="galton-future")
-        for done in [self._pool.submit(world.step, count) for world in self.worlds]:
+        groups = [self.worlds[k::self.threads] for k in range(self.threads)]
+        for done in [self._pool.submit(_step_each, group, count) for group in groups
+                     if group]:
             done.result()
+
+
+def _step_each(worlds: Sequence[World], count: int) -> None:
+    """One thread's share of the futures (one hand-off per thread, not per future)."""
+    for world in worlds:
+        world.step(count)
 
 
 def spread(positions: np.ndarray) -> np.ndarray:
