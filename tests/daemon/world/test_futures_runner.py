@@ -16,6 +16,7 @@ from galton.daemon.engines import create_engine
 from galton.daemon.world import states
 from galton.daemon.world.futures import FutureSet, FutureSpec, spread
 from galton.daemon.world.scene import World
+from galton.daemon.world.slots import Slot, SnapshotSlots
 from galton.daemon.world.snapshot import clone_of
 from galton.protocol import BodyProperties
 from galton.protocol.model import BodyGroup
@@ -79,3 +80,30 @@ def test_a_kept_state_is_refused_once_the_structure_changed(world: World) -> Non
     world.update(["b"], BodyProperties(friction=0.9))
     assert not states.fits(world, kept) and not states.load(world, kept)
     assert world.step_index == 5
+
+
+def test_a_replaced_slot_lends_its_memory_and_nothing_else(world: World) -> None:
+    """A slot replaced by a newer snapshot gives its engine memory to the next one; the
+    newer slot still replays bit for bit after more snapshots are taken."""
+    slots = SnapshotSlots(DEFAULT_LIMITS)
+
+    def keep(name: str) -> None:
+        kept = states.save(world)
+        slots.keep(Slot(name, world.name, world.engine.name, None, world.step_index,
+                        world.sim_time, len(world.entities), kept), world)
+    if states.save(world) is None:
+        pytest.skip(f"{world.engine.name} keeps no state in memory (portable path)")
+    keep("s")
+    world.step(7)
+    keep("s")  # replaces the first: its memory is lent to the next snapshot
+    newer = slots.get("s")
+    world.step(10)
+    expected = world.get_states(BALLS)
+    keep("t")  # in the first's memory
+    world.step(3)
+    keep("t")
+    assert newer.state is not None and states.load(world, newer.state)
+    world.step(10)
+    np.testing.assert_array_equal(world.get_states(BALLS)[0], expected[0])
+    np.testing.assert_array_equal(world.get_states(BALLS)[1], expected[1])
+    slots.close()
