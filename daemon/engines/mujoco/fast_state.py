@@ -12,7 +12,6 @@ same, and this refuses (False) only what it can see does not fit.
 
 from __future__ import annotations
 
-import copy
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -60,7 +59,7 @@ def save(engine: MujocoEngine) -> MujocoState | None:
     arrays = {name: getattr(m, name).copy() for name in EDITED_MODEL_ARRAYS}
     books = {"joints": _copy_joints(engine.joint_book),
              "held": {n: w.copy() for n, w in engine.wrenches.held.items()},
-             "balance": copy.deepcopy(engine.balance),
+             "balance": None if engine.balance is None else engine.balance.copy(),
              "looks": (engine.diverged, engine.crowded, engine.steps_since_look)}
     nbytes = int(mujoco.mj_stateSize(m, mujoco.mjtState.mjSTATE_INTEGRATION) * 8
                  + sum(a.nbytes for a in arrays.values()))
@@ -78,7 +77,7 @@ def load(engine: MujocoEngine, state: Any) -> bool:
     books = state.books
     engine.joint_book = _copy_joints(books["joints"])
     engine.wrenches.held = {n: w.copy() for n, w in books["held"].items()}
-    engine.balance = copy.deepcopy(books["balance"])
+    engine.balance = None if books["balance"] is None else books["balance"].copy()
     engine.diverged, engine.crowded, engine.steps_since_look = books["looks"]
     engine.broken = False
     engine.observed = None
