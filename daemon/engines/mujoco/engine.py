@@ -123,8 +123,7 @@ class MujocoEngine(Engine):
     # What the last step left, frozen before an edit until the next step (a class default:
     # a clone is made without __init__).
     observed: observing.Observed | None = None
-    # MjData of dropped kept states, for the next (fast_state.recycle).
-    spare_datas: list[tuple[tuple[int, ...], mujoco.MjData]]
+    closed = False  # its MjData was given back (fast_state.give_back): never twice
 
     def __init__(self) -> None:
         ms.route_warnings()
@@ -135,7 +134,6 @@ class MujocoEngine(Engine):
         self.workers = 0
         self.steps_since_look = 0
         self.cameras: rendering.CameraRig | None = None  # made by the first render
-        self.spare_datas = []
         self.build_empty()
 
     # -- compile & index ----------------------------------------------------------------
@@ -369,7 +367,7 @@ class MujocoEngine(Engine):
         return fast_state.load(self, state)
 
     def recycle_state(self, state: object) -> None:
-        fast_state.recycle(self, state)
+        fast_state.recycle(state)
 
     def clone(self) -> MujocoEngine:
         """A copy of the compiled world, no MJCF and no compile (``clone``): it goes
@@ -417,6 +415,9 @@ class MujocoEngine(Engine):
 
     def close(self) -> None:
         self.entities.clear()
+        if self.workers == 0 and not self.broken and not self.closed:
+            fast_state.give_back(self.model, self.data)  # to serve a fork or a snapshot
+        self.closed = True
         if self.cameras is not None:
             self.cameras.close()
             self.cameras = None

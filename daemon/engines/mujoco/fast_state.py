@@ -27,9 +27,42 @@ if TYPE_CHECKING:
 # balance.BalanceGuard): kept with the state, put back with it.
 EDITED_MODEL_ARRAYS = ("actuator_gainprm", "actuator_biasprm", "actuator_forcelimited",
                        "actuator_forcerange", "dof_damping", "tree_sleep_policy")
-SPARES = 2  # dropped MjData kept for reuse
+SPARES = 2  # dropped MjData kept for reuse, per layout
 # Sizes that must agree for one model's MjData to fit another.
 SIZES = ("nq", "nv", "nu", "na", "nbody", "ngeom", "nmocap", "ntree", "nconmax", "njmax")
+
+
+# Dropped MjData by layout (every size of the model they were made for: equal sizes give
+# equal layouts), for the next snapshot or clone of a model of that layout: allocating one
+# maps its whole arena (63 MB for a 100-ball board) and faults it in as it is written,
+# milliseconds; copying into a used one, microseconds. Only the physics thread uses it.
+_SPARES: dict[tuple[int, ...], list[mujoco.MjData]] = {}
+
+
+def layout(m: mujoco.MjModel) -> tuple[int, ...]:
+    """Every size of a model (its integer fields n...): what an MjData's layout is made
+    from."""
+    if not _SIZE_NAMES:
+        _SIZE_NAMES.extend(name for name in dir(mujoco.MjModel) if name.startswith("n")
+                           and isinstance(getattr(m, name), int))
+    return tuple(getattr(m, name) for name in _SIZE_NAMES)
+
+
+_SIZE_NAMES: list[str] = []
+
+
+def data_for(m: mujoco.MjModel) -> mujoco.MjData:
+    """An MjData for ``m``: a dropped one of its layout, or a new one (its contents are
+    to be overwritten whole, by mj_copyData)."""
+    spares = _SPARES.get(layout(m))
+    return spares.pop() if spares else mujoco.MjData(m)
+
+
+def give_back(m: mujoco.MjModel, data: mujoco.MjData) -> None:
+    """Keep an MjData nobody uses any more (made for ``m``'s layout, no thread pool)."""
+    spares = _SPARES.setdefault(layout(m), [])
+    if len(spares) < SPARES:
+        spares.append(data)
 
 
 @dataclass(frozen=True)
@@ -37,6 +70,7 @@ class MujocoState:
     """One moment of a MuJoCo world (see the module docstring)."""
 
     sizes: tuple[int, ...]
+    layout: tuple[int, ...]
     data: mujoco.MjData
     model_arrays: dict[str, np.ndarray]
     books: dict[str, Any]
@@ -52,9 +86,7 @@ def save(engine: MujocoEngine) -> MujocoState | None:
     if engine.broken:
         return None
     m = engine.model
-    spares = engine.spare_datas
-    data = spares.pop() if spares and spares[-1][0] == _sizes(m) else None
-    data = data[1] if data is not None else mujoco.MjData(m)
+    data = data_for(m)
     mujoco.mj_copyData(data, m, engine.data)
     arrays = {name: getattr(m, name).copy() for name in EDITED_MODEL_ARRAYS}
     books = {"joints": _copy_joints(engine.joint_book),
@@ -63,7 +95,7 @@ def save(engine: MujocoEngine) -> MujocoState | None:
              "looks": (engine.diverged, engine.crowded, engine.steps_since_look)}
     nbytes = int(mujoco.mj_stateSize(m, mujoco.mjtState.mjSTATE_INTEGRATION) * 8
                  + sum(a.nbytes for a in arrays.values()))
-    return MujocoState(_sizes(m), data, arrays, books, nbytes)
+    return MujocoState(_sizes(m), layout(m), data, arrays, books, nbytes)
 
 
 def load(engine: MujocoEngine, state: Any) -> bool:
@@ -85,13 +117,12 @@ def load(engine: MujocoEngine, state: Any) -> bool:
     return True
 
 
-def recycle(engine: MujocoEngine, state: Any) -> None:
-    """Keep a dropped state's MjData for the next ``save`` (allocating one costs its whole
-    arena, milliseconds for a 100-ball board; copying into one, microseconds)."""
-    if isinstance(state, MujocoState) and state.sizes == _sizes(engine.model) \
-            and state.data.narena == engine.data.narena:
-        engine.spare_datas[:] = [*engine.spare_datas[-(SPARES - 1):], (state.sizes,
-                                                                      state.data)]
+def recycle(state: Any) -> None:
+    """A dropped state's MjData serves the next snapshot or clone."""
+    if isinstance(state, MujocoState):
+        spares = _SPARES.setdefault(state.layout, [])
+        if len(spares) < SPARES:
+            spares.append(state.data)
 
 
 def _copy_joints(source: Joints) -> Joints:
