@@ -173,6 +173,7 @@ class Daemon:
             self._thread.join(timeout=10)
         self.loop.streams.stop_sender()
         self.loop.world.engine.close()
+        self.loop.slots.close()
         self.fronts.close()
 
     def _publish_telemetry(self, sample: Telemetry) -> None:

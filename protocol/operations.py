@@ -30,7 +30,7 @@ from galton.protocol.errors import UnknownOperationError, did_you_mean
 from galton.protocol.vocabulary import check_fields
 
 ARG_KINDS = ("number", "count", "string", "bool", "names", "map", "groups", "poses", "twists",
-             "choice", "values", "wrenches", "points", "blob", "cameras")
+             "choice", "values", "wrenches", "points", "blob", "cameras", "plans")
 # Every request may name the world it is for (one world per daemon for now).
 WORLD_ARG = "world"
 

@@ -206,6 +206,10 @@ class PredictReply(Reply, kw_only=True):
     poses: Poses | None = None
     twists: Twists | None = None
     joints: JointSamples | None = None
+    futures: int = 1  # > 1: poses, twists and joints future after future
+    spread: Numbers | None = None  # futures > 1: (samples, bodies) std of position, m
+    scores: Numbers | None = None  # with a score: one per future
+    seed: int | None = None  # the seed the perturbation was drawn with
 
 
 class CompareReply(Reply, kw_only=True):

@@ -259,6 +259,54 @@ class Named(Args, kw_only=True, forbid_unknown_fields=True):
     name: Text
 
 
+MAX_FUTURES = 64  # futures one predict runs
+MAX_PLAN_STEPS = 1000  # timed actions in one future's plan
+MAX_SIGMA_POSITION = 10.0  # m
+MAX_SIGMA_VELOCITY = 100.0  # m/s
+FutureCount = Annotated[int, _kind("count"), msgspec.Meta(ge=1, le=MAX_FUTURES)]
+Seed = Annotated[int, _kind("count"), msgspec.Meta(ge=0, le=2**63 - 1)]
+
+
+class Sigmas(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
+    """Standard deviations of the noise a future's start is given: position (m, each
+    axis), orientation (rad, each axis of a small rotation), linear velocity (m/s)."""
+
+    position: Annotated[float, _kind("number"),
+                        msgspec.Meta(ge=0.0, le=MAX_SIGMA_POSITION)] = 0.0
+    orientation: Annotated[float, _kind("number"), msgspec.Meta(ge=0.0, le=math.pi)] = 0.0
+    velocity: Annotated[float, _kind("number"),
+                        msgspec.Meta(ge=0.0, le=MAX_SIGMA_VELOCITY)] = 0.0
+
+
+class Perturb(Sigmas, kw_only=True, forbid_unknown_fields=True):
+    """``predict``'s perturbation: these sigmas for every moving spawned body, and
+    ``bodies`` naming bodies (models' roots included) with sigmas of their own."""
+
+    bodies: Annotated[dict[str, Sigmas], _kind("map")] | None = None
+
+
+class PlanStep(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
+    """One timed action of a plan: at ``at`` seconds from the prediction's start, these
+    joint targets and/or wrenches (each as its own request's arguments)."""
+
+    at: NonNegative
+    joint_targets: Fields | None = None
+    wrenches: Fields | None = None
+
+
+Plans = Annotated[list[Annotated[list[PlanStep], msgspec.Meta(max_length=MAX_PLAN_STEPS)]],
+                  _kind("plans"), msgspec.Meta(min_length=1, max_length=MAX_FUTURES)]
+
+
+class Score(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
+    """One number per future: the distance (m) of body ``body`` to point ``target`` at the
+    horizon."""
+
+    body: Text
+    target: Annotated[list[Number], _kind("numbers"), msgspec.Meta(min_length=3,
+                                                                   max_length=3)]
+
+
 class Predict(Args, kw_only=True, forbid_unknown_fields=True):
     horizon: Positive
     every: Positive | None = None  # None: every step
@@ -268,6 +316,11 @@ class Predict(Args, kw_only=True, forbid_unknown_fields=True):
     set_states: Fields | None = None
     joint_targets: Fields | None = None
     wrenches: Fields | None = None
+    futures: FutureCount | None = None  # None: one per plan, or 1
+    perturb: Annotated[Perturb, _kind("map")] | None = None
+    seed: Seed | None = None  # None: a fresh one, sent back
+    plans: Plans | None = None
+    score: Annotated[Score, _kind("map")] | None = None
 
 
 class Compare(Args, kw_only=True, forbid_unknown_fields=True):
@@ -278,6 +331,7 @@ class Compare(Args, kw_only=True, forbid_unknown_fields=True):
     sigma_angle: Positive = DEFAULT_SIGMA_ANGLE
     sigma_speed: Positive = DEFAULT_SIGMA_SPEED
     correct: Flag = False
+    spread: Values | None = None  # m per body (or one for all): a prediction's spread
 
 
 class Render(Args, kw_only=True, forbid_unknown_fields=True):

@@ -46,6 +46,15 @@ def test_pd_arm_reaches_its_target(daemon: EmbeddedDaemon) -> None:
     np.testing.assert_allclose(final.positions, example.TARGET, atol=0.03)
 
 
+def test_imagine_plans_picks_the_best_and_lands_where_it_imagined(
+        daemon: EmbeddedDaemon) -> None:
+    choice = load_example("imagine_plans").main([*connect(daemon), "--plans", "4",
+                                                 "--horizon", "0.3"])
+    assert len(choice.scores) == 4 and len(set(choice.scores.tolist())) == 4
+    assert choice.best == int(np.argmin(choice.scores))
+    assert choice.live == choice.imagined  # bit for bit: the same physics, not a model
+
+
 def test_the_robot_examples_run_as_programs() -> None:
     for name, args in (("mirror_robot", ["--seconds", "0.2"]), ("pd_arm", ["--seconds", "0.5"])):
         done = subprocess.run([sys.executable, str(EXAMPLES / f"{name}.py"), *args],

@@ -10,6 +10,7 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
+import numpy as np
 import typer
 from rich.table import Table
 
@@ -163,16 +164,54 @@ def prediction_dict(found: Prediction) -> dict[str, Any]:
             "poses": found.poses.tolist(), "twists": found.twists.tolist(),
             "joint_names": found.joint_names,
             "joint_positions": found.joint_positions.tolist(),
-            "joint_velocities": found.joint_velocities.tolist()}
+            "joint_velocities": found.joint_velocities.tolist(),
+            "futures": found.futures, "seed": found.seed,
+            "spread": None if found.spread is None else found.spread.tolist(),
+            "scores": None if found.scores is None else found.scores.tolist()}
 
 
 def render_prediction(found: Prediction) -> None:
+    if found.futures > 1:
+        render_futures(found)
+        return
     table = Table("sim time (s)", *[f"{n} position (m)" for n in found.names],
                   *found.joint_names, title=f"{found.steps} steps ahead of {found.sim_time:.4f} s")
     for k, t in enumerate(found.times):
         cells = [", ".join(f"{v:.4g}" for v in pose[:3]) for pose in found.poses[k]]
         table.add_row(f"{t:.4f}", *cells, *[f"{q:.4g}" for q in found.joint_positions[k]])
     console.print(table)
+
+
+def render_futures(found: Prediction) -> None:
+    """Many futures: per sample, each body's spread of position across them."""
+    table = Table("sim time (s)", *[f"{n} spread (m)" for n in found.names],
+                  title=f"{found.futures} futures, {found.steps} steps ahead of "
+                        f"{found.sim_time:.4f} s (seed {found.seed})")
+    spread = found.spread if found.spread is not None else np.zeros((len(found), 0))
+    for k, t in enumerate(found.times):
+        table.add_row(f"{t:.4f}", *[f"{v:.4g}" for v in spread[k]])
+    console.print(table)
+    if found.scores is not None:
+        console.print("scores: " + ", ".join(f"{v:.4g}" for v in found.scores), markup=False)
+
+
+PERTURB_KEYS = ("position", "orientation", "velocity")
+
+
+def perturb_values(text: str) -> dict[str, float]:
+    """``position=0.001,velocity=0.01`` as predict's perturb map."""
+    out: dict[str, float] = {}
+    for item in split_list(text, "--perturb"):
+        key, sep, value = item.partition("=")
+        if not sep or key not in PERTURB_KEYS:
+            raise typer.BadParameter(f"{item!r}: give KEY=SIGMA with KEY one of "
+                                     f"{', '.join(PERTURB_KEYS)}", param_hint="--perturb")
+        try:
+            out[key] = float(value)
+        except ValueError as exc:
+            raise typer.BadParameter(f"{item!r}: {value!r} is not a number",
+                                     param_hint="--perturb") from exc
+    return out
 
 
 @commands.command(rich_help_panel=PANEL)
@@ -186,14 +225,21 @@ def predict(
         help=f"Joints to sample, {LIST_HELP}.")] = None,
     slot: Annotated[str | None, typer.Option(
         help="Start from this snapshot slot instead of the present.")] = None,
+    futures: Annotated[int | None, typer.Option(
+        help="Futures to run at once (1-64).")] = None,
+    perturb: Annotated[str | None, typer.Option(
+        help="Noise on each future's start: position=M,orientation=RAD,velocity=M/S "
+             "(standard deviations).")] = None,
+    seed: Annotated[int | None, typer.Option(help="The perturbation's seed.")] = None,
     world: WorldOpt = None, as_json: JsonOpt = False,
 ) -> None:
-    """Run a copy of a world ahead and print the sampled trajectories; the world is never
-    changed."""
+    """Run a copy of a world ahead (or many, --futures) and print the sampled trajectories
+    (with futures: each body's spread across them); the world is never changed."""
     bodies = None if read is None else split_list(read, "--read")
     joints = None if read_joints is None else split_list(read_joints, "--read-joints")
+    noise = None if perturb is None else perturb_values(perturb)
     found = with_client(ctx, lambda c: on_world(c, world).predict(
-        horizon, every, bodies, joints, slot))
+        horizon, every, bodies, joints, slot, futures=futures, perturb=noise, seed=seed))
     emit(prediction_dict(found), as_json, lambda: render_prediction(found))
 
 

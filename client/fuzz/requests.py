@@ -252,6 +252,28 @@ def _until_rest(maker: RequestMaker) -> Any:
     return maker.pick([{"speed": 0.01, "every": 0.05}, {"speed": -1}, {"speed": 1, "wat": 2}])
 
 
+def _plans(maker: RequestMaker, arg: Arg) -> Any:
+    """A plan or two of timed wrenches on the known bodies, now and then one thing wrong."""
+    step: dict[str, Any] = {"at": float(maker.rng.uniform(0, 0.05)), "wrenches": {
+        "names": maker.some_names()[:1] or ["x"], "wrenches": pack_f64(np.ones((1, 6)))}}
+    if maker.chance(0.3):
+        step[maker.pick(["at", "wrenches", "junk"])] = maker.pick([-1.0, 1e308, "x", {}])
+    return [[step] for _ in range(int(maker.rng.integers(1, 3)))]
+
+
+def _perturb(maker: RequestMaker) -> Any:
+    return maker.pick([{"position": 0.001}, {"orientation": 0.1, "velocity": 0.01},
+                       {"position": -1.0}, {"bodies": {"nobody": {"position": 0.1}}},
+                       {"position": math.nan}, {"wat": 1}])
+
+
+def _score(maker: RequestMaker) -> Any:
+    body = (maker.some_names() or ["x"])[0]
+    return maker.pick([{"body": body, "target": [0.0, 0.0, 0.0]}, {"body": body},
+                       {"body": "nobody", "target": [1, 2, 3]},
+                       {"body": body, "target": [math.inf, 0, 0]}])
+
+
 def _model_text(maker: RequestMaker) -> Any:
     name = maker.fresh_name()
     return maker.pick([MJCF.format(name=name), URDF.format(name=name), "<mujoco>", "not xml"])
@@ -299,7 +321,7 @@ KIND_VALUES: dict[str, Callable[[RequestMaker, Arg], Any]] = {
     "number": _number, "count": _count, "string": _string, "bool": lambda m, a: m.chance(0.5),
     "names": _names, "map": _map, "groups": _groups, "poses": _rows(7), "twists": _rows(6),
     "choice": _choice, "values": _values, "wrenches": _rows(6), "points": _rows(3),
-    "blob": _blob, "cameras": _cameras,
+    "blob": _blob, "cameras": _cameras, "plans": _plans,
 }
 SPECIAL: dict[tuple[str, str], Callable[[RequestMaker], Any]] = {
     ("update", "properties"): _properties,
@@ -307,6 +329,9 @@ SPECIAL: dict[tuple[str, str], Callable[[RequestMaker], Any]] = {
     ("load_world", "params"): lambda m: m.pick([{}, {"timestep": 0.002}, {"bogus": 1}]),
     ("run_until", "sim_time"): _sim_time,
     ("run_until", "until_rest"): _until_rest,
+    ("predict", "perturb"): _perturb,
+    ("predict", "score"): _score,
+    ("predict", "futures"): lambda m: int(m.rng.integers(1, 5)),
     ("load_model", "text"): _model_text,
     ("load_model", "path"): _model_path,
     ("load_model", "prefix"): _prefix,

@@ -9,6 +9,7 @@ MalformedRequestError, a field a newer daemon added is left out.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -162,10 +163,13 @@ class SnapshotInfo:
 
 @dataclass
 class Prediction:
-    """What ``predict`` sampled on a discarded copy of a world: ``times`` (samples,) from
+    """What ``predict`` sampled on discarded copies of a world: ``times`` (samples,) from
     the world's sim time, the present first; ``poses`` (samples, bodies, 7) and ``twists``
     (samples, bodies, 6) of ``names``; ``joint_positions`` and ``joint_velocities``
-    (samples, joints) of ``joint_names``. Stamped with the world's present."""
+    (samples, joints) of ``joint_names``. With ``futures`` > 1 each of those gains a
+    leading futures axis, ``spread`` (samples, bodies) is the standard deviation of each
+    body's position across futures (m), ``seed`` the perturbation's; ``scores``
+    (futures,) with a score. Stamped with the world's present."""
 
     times: FloatArray
     steps: int
@@ -177,31 +181,50 @@ class Prediction:
     joint_velocities: FloatArray
     step: int
     sim_time: float
+    futures: int = 1
+    spread: FloatArray | None = None
+    scores: FloatArray | None = None
+    seed: int | None = None
 
     @classmethod
     def from_reply(cls, reply: Reply) -> Prediction:
         result = rp.decode_result(rp.PredictReply, reply.result)
         times = _column(result.times, "times")
         samples = len(times)
+        count = result.futures
         names = result.names or []
         joints = result.joints or rp.JointSamples(names=[], positions=b"", velocities=b"")
         joint_names = joints.names
+
+        def rows(data: bytes | None, width: int, key: str, many: int) -> FloatArray:
+            out = _samples(data, count * samples, many, width, key)
+            return out.reshape(count, samples, many, width) if count > 1 else out
+        spread = None if result.spread is None else unpack_f64(
+            result.spread, max(len(names), 1), "spread").reshape(samples, len(names))
         return cls(times, result.steps, names,
-                   _samples(result.poses, samples, len(names), POSE_WIDTH, "poses"),
-                   _samples(result.twists, samples, len(names), TWIST_WIDTH, "twists"),
+                   rows(result.poses, POSE_WIDTH, "poses", len(names)),
+                   rows(result.twists, TWIST_WIDTH, "twists", len(names)),
                    joint_names,
-                   _samples(joints.positions, samples, len(joint_names), 1,
-                            "positions")[:, :, 0],
-                   _samples(joints.velocities, samples, len(joint_names), 1,
-                            "velocities")[:, :, 0],
-                   reply.step, reply.sim_time)
+                   rows(joints.positions, 1, "positions", len(joint_names))[..., 0],
+                   rows(joints.velocities, 1, "velocities", len(joint_names))[..., 0],
+                   reply.step, reply.sim_time, count, spread,
+                   None if result.scores is None else _column(result.scores, "scores"),
+                   result.seed)
 
     def __len__(self) -> int:
         return len(self.times)
 
+    def spread_of(self, names: Sequence[str], sample: int = -1) -> FloatArray:
+        """The spread of these bodies' positions at one sample (the horizon by default),
+        as ``compare(..., spread=...)`` takes it; zeros for a single future."""
+        if self.spread is None:
+            return np.zeros(len(names))
+        return self.spread[sample, [self.names.index(n) for n in names]]
+
     def at(self, name: str) -> FloatArray:
-        """The poses (samples, 7) of one body along the prediction."""
-        return self.poses[:, self.names.index(name)]
+        """The poses (samples, 7) of one body along the prediction ((futures, samples, 7)
+        with futures)."""
+        return self.poses[..., self.names.index(name), :]
 
 
 def _samples(data: bytes | None, samples: int, count: int, width: int, key: str

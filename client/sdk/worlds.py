@@ -18,11 +18,12 @@ import copy
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from typing import TYPE_CHECKING, Any, Self
 
+import numpy as np
 from numpy.typing import ArrayLike
 
 from galton.client.sdk import joints as sdk_joints
 from galton.client.sdk.values import Comparison, Prediction, SnapshotInfo, Stamp, WorldInfo
-from galton.protocol import POSE_WIDTH, TWIST_WIDTH, InvalidArgumentError, Reply
+from galton.protocol import POSE_WIDTH, TWIST_WIDTH, InvalidArgumentError, Reply, pack_f64
 from galton.protocol.replies import SnapshotsReply, WorldsReply, decode_result
 
 if TYPE_CHECKING:
@@ -122,14 +123,31 @@ class WorldMethods:
                 slot: str | None = None, set_states: Mapping[str, Any] | None = None,
                 joint_targets: Mapping[str, Any] | None = None,
                 wrenches: Mapping[str, Any] | None = None,
+                futures: int | None = None, perturb: Mapping[str, Any] | None = None,
+                seed: int | None = None, plans: Sequence[Sequence[Mapping[str, Any]]] | None
+                = None, score: Mapping[str, Any] | None = None,
                 timeout: float | None = None) -> Prediction:
         """Run a copy of the world (or of snapshot ``slot``) ``horizon`` seconds ahead,
         sampling ``read`` bodies and ``read_joints`` joints every ``every`` seconds, and
         discard it: the world is never changed. The copy may first be changed, each as its
         request's keyword arguments: ``set_states`` (names, poses, twists),
         ``joint_targets`` (names, mode, targets, kp, kd, max_effort) and ``wrenches``
-        (names, wrenches, points, duration)."""
+        (names, wrenches, points, duration).
+
+        Many futures at once: ``futures`` N, each started with seeded noise ``perturb``
+        ({"position": m, "orientation": rad, "velocity": m/s, "bodies": {name: {...}}}),
+        and/or ``plans``, one per future, each a list of {"at": s, "joint_targets":
+        {...}, "wrenches": {...}}; ``score`` {"body": name, "target": [x, y, z]} gives
+        each future's distance to the target at the horizon (docs/protocol.md)."""
         args = predict_args(horizon, every, read, read_joints, slot)
+        args.update(sdk_joints.given(futures=futures, seed=seed))
+        if perturb is not None:
+            args["perturb"] = dict(perturb)
+        if plans is not None:
+            args["plans"] = [[_plan_step(item) for item in plan] for plan in plans]
+        if score is not None:
+            args["score"] = {"body": score["body"],
+                             "target": [float(v) for v in score["target"]]}
         if set_states is not None:
             args["set_states"] = sdk_joints.set_states_args(**set_states)
         if joint_targets is not None:
@@ -140,10 +158,15 @@ class WorldMethods:
 
     def compare(self, names: Sequence[str], poses: ArrayLike, twists: ArrayLike | None = None,
                 sigma_position: float | None = None, sigma_angle: float | None = None,
-                sigma_speed: float | None = None, correct: bool = False) -> Comparison:
+                sigma_speed: float | None = None, correct: bool = False,
+                spread: ArrayLike | float | None = None) -> Comparison:
         """Observed poses (rows of 7, and optionally twists) of these bodies against the
         world's at its present time: per-body errors and one anomaly score (about 1 at the
-        sigmas' noise, 3 a surprise). ``correct`` sets the bodies to the observation."""
+        sigmas' noise, 3 a surprise). ``correct`` sets the bodies to the observation.
+        ``spread`` (m, per body or one for all): the spread of position an ensemble
+        prediction expected (``Prediction.spread_of(names)``), combined with
+        ``sigma_position`` as independent noise: the score then says how surprising the
+        observation is given what was imagined."""
         count = len(names)
         args: dict[str, Any] = {
             "names": list(names), "correct": correct,
@@ -152,7 +175,30 @@ class WorldMethods:
             args["twists"] = sdk_joints.body_rows(twists, count, TWIST_WIDTH, "compare.twists")
         args.update(sdk_joints.given(sigma_position=sigma_position, sigma_angle=sigma_angle,
                                      sigma_speed=sigma_speed))
+        if spread is not None:
+            args["spread"] = spread_arg(spread, count)
         return Comparison.from_reply(self._ok("compare", args), list(names))
+
+
+def spread_arg(spread: ArrayLike | float, count: int) -> float | bytes:
+    """One spread for all bodies, or packed float64, one per body."""
+    if isinstance(spread, int | float):
+        return float(spread)
+    values = np.asarray(spread, dtype=float).reshape(-1)
+    if len(values) != count:
+        raise InvalidArgumentError(f"compare.spread has {len(values)} values for {count} "
+                                   "bodies: give one per body, or one for all")
+    return pack_f64(values)
+
+
+def _plan_step(item: Mapping[str, Any]) -> dict[str, Any]:
+    """A plan's timed action: its joint targets and wrenches as their requests' args."""
+    out: dict[str, Any] = {"at": float(item["at"])}
+    if item.get("joint_targets") is not None:
+        out["joint_targets"] = sdk_joints.set_joint_targets_args(**item["joint_targets"])
+    if item.get("wrenches") is not None:
+        out["wrenches"] = sdk_joints.apply_wrench_args(**item["wrenches"])
+    return out
 
 
 def predict_args(horizon: float, every: float | None, read: Sequence[str] | None,

@@ -30,6 +30,10 @@ log = logging.getLogger("galton.client")
 GHOST_OPACITY = 0.5
 GHOST_TINT = (255, 150, 0)  # what the model expects: orange beside the real red
 PREDICT_TINT = (160, 80, 255)
+FUTURES = 8  # the operator's "Imagine" button: futures of 1 s, sampled every 50 ms,
+FUTURE_EVERY_S = 0.05
+FUTURE_SIGMA_M = 0.002  # from positions perturbed by this much
+FUTURE_TINT = (205, 180, 255)  # faint: the prediction's tint, washed out
 WORLDS_PERIOD_S = 1.0  # side worlds are looked for this often
 CONTACTS_PERIOD_S = 0.25
 SCORE_HISTORY = 300  # points of the anomaly chart
@@ -119,6 +123,7 @@ class LiveView:
                                        moving_only=True)
         self.scores: deque[tuple[float, float]] = deque(maxlen=SCORE_HISTORY)
         self.scores_seen = 0
+        self.future_segments = 0  # trails drawn by the last "Imagine"
         self._framed = False
         self._build_gui()
         self.events = client.on_event(self._on_event)
@@ -133,7 +138,8 @@ class LiveView:
             with gui.add_folder("Operator"):
                 for label, action in (("Play", self._play), ("Pause", self._pause),
                                       (f"Step {STEP_COUNT}", self._step),
-                                      ("Reset", self._reset), ("Predict 1 s", self._predict)):
+                                      ("Reset", self._reset), ("Predict 1 s", self._predict),
+                                      (f"Imagine {FUTURES} futures", self._imagine)):
                     gui.add_button(label).on_click(self._on_click(action))
         with gui.add_folder("Show"):
             self.show_ghosts = gui.add_checkbox("Side worlds (ghosts)", True)
@@ -177,6 +183,21 @@ class LiveView:
         infos = self.client.list()
         self.prediction.rebuild(infos, names, poses.reshape(-1, 7),
                                 shapes_for_drawing(self.client, infos))
+
+    def _imagine(self) -> None:
+        """FUTURES futures of one second, each from positions perturbed by a few mm, drawn
+        as faint trails: where the bodies may go, and how far apart."""
+        names = list(self.live.drawing.names)
+        if not names:
+            return
+        found = self.client.predict(1.0, every=FUTURE_EVERY_S, read=names, futures=FUTURES,
+                                    perturb={"position": FUTURE_SIGMA_M})
+        paths = np.asarray(found.poses)[..., :3]  # (futures, samples, bodies, 3)
+        starts, ends = paths[:, :-1], paths[:, 1:]
+        segments = np.stack([starts, ends], axis=-2).reshape(-1, 2, 3)
+        self.future_segments = len(segments)
+        self.server.scene.add_line_segments("/futures", segments, FUTURE_TINT,
+                                            thickness=2.0, thickness_units="screen")
 
     def _on_event(self, event: dict[str, Any]) -> None:
         """A scene change makes the drawing list the scene again; a comparison's score

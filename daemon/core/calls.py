@@ -7,6 +7,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Protocol
 
 if TYPE_CHECKING:
+    from galton.daemon.world.futures import FutureSet
     from galton.daemon.world.scene import World
 
 
@@ -67,6 +68,7 @@ class StepJob:
     step_cost: float = 1e-4  # seconds per step, for chunks of a side world's steps
     scratch: bool = False  # its world is a prediction's copy, closed when the job ends
     source: World | None = None  # the world a prediction copied: pausing it ends the job
+    futures: FutureSet | None = None  # a prediction's futures (world: the first of them)
 
     @property
     def done(self) -> int:
@@ -74,7 +76,9 @@ class StepJob:
 
     def release(self) -> None:
         """Close a prediction's copy of its world once the job is answered or ended."""
-        if self.scratch and self.world is not None:
+        if self.futures is not None:
+            self.futures.close()
+        elif self.scratch and self.world is not None:
             self.world.engine.close()
 
     def steps_to_next_check(self) -> int:

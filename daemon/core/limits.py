@@ -7,7 +7,8 @@ RESOURCE_LIMIT (or INVALID_ARGUMENT for a value out of its range) and changes no
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+import os
+from dataclasses import dataclass, field, fields
 from typing import Any
 
 MIB = 1024 * 1024
@@ -31,6 +32,9 @@ class Limits:
     max_reply_bytes: int = 64 * MIB  # any one reply (daemon/core/reply_limit.py)
     max_position: float = 1e6  # metres from the origin beyond which a world has diverged
     max_speed: float = 1e5  # m/s (or rad/s) beyond which a world has diverged
+    # Native threads a prediction's futures step on (engines that release the GIL): the
+    # cores this process may use.
+    future_threads: int = field(default_factory=lambda: len(os.sched_getaffinity(0)))
 
     def __post_init__(self) -> None:
         for spec in fields(self):

@@ -10,12 +10,15 @@ from typing import Any
 
 import numpy as np
 
+from galton.daemon.core import imagining
 from galton.daemon.core.calls import Call, StepJob
 from galton.daemon.core.context import PredictContext
 from galton.daemon.core.reply_limit import VALUE_BYTES, reads_size, require_room
 from galton.daemon.ops import joints as ops_joints
 from galton.daemon.ops import scene as ops
 from galton.daemon.ops.binding import handles
+from galton.daemon.world import futures as fs
+from galton.daemon.world.futures import FutureSet
 from galton.daemon.world.scene import World
 from galton.daemon.world.snapshot import clone_of, decode, world_from
 from galton.protocol import (
@@ -30,38 +33,58 @@ from galton.protocol.model import check_names
 
 @dataclass
 class PredictSampler:
-    """The samples of one prediction: sim times, body states, joint states."""
+    """The samples of one prediction's futures: sim times, body states, joint states, and
+    with a score each future's distance of a body to a point at the last sample."""
 
     every: int
     read: list[str] | None
     read_joints: list[str] | None
+    futures: FutureSet
+    score: rq.Score | None = None
     times: list[float] = field(default_factory=list)
-    poses: list[np.ndarray] = field(default_factory=list)
+    poses: list[np.ndarray] = field(default_factory=list)  # per sample (futures, bodies, 7)
     twists: list[np.ndarray] = field(default_factory=list)
-    positions: list[np.ndarray] = field(default_factory=list)
+    positions: list[np.ndarray] = field(default_factory=list)  # per sample (futures, joints)
     velocities: list[np.ndarray] = field(default_factory=list)
+    scores: np.ndarray | None = None
+    seed: int | None = None
 
     def take(self, world: World) -> None:
-        world.verify()
+        self.futures.verify()
         self.times.append(world.sim_time)
+        worlds = self.futures.worlds
         if self.read is not None:
-            poses, twists = world.get_states(self.read)
-            self.poses.append(poses)
-            self.twists.append(twists)
+            states = [w.get_states(self.read) for w in worlds]
+            self.poses.append(np.stack([p for p, _ in states]))
+            self.twists.append(np.stack([t for _, t in states]))
         if self.read_joints is not None:
-            positions, velocities, _ = world.engine.get_joint_states(self.read_joints)
-            self.positions.append(positions)
-            self.velocities.append(velocities)
+            joints = [w.engine.get_joint_states(self.read_joints) for w in worlds]
+            self.positions.append(np.stack([j[0] for j in joints]))
+            self.velocities.append(np.stack([j[1] for j in joints]))
+        if self.score is not None:
+            where = self.futures.positions([self.score.body])[:, 0]
+            self.scores = np.linalg.norm(where - np.array(self.score.target), axis=1)
 
     def result(self, steps: int) -> dict[str, Any]:
+        count = len(self.futures)
         out: dict[str, Any] = {"steps": steps, "times": pack_f64(np.array(self.times))}
+        if count > 1:
+            out["futures"] = count
+        if self.seed is not None:
+            out["seed"] = self.seed
         if self.read is not None:
-            out.update(names=self.read, poses=pack_f64(np.concatenate(self.poses)),
-                       twists=pack_f64(np.concatenate(self.twists)))
+            poses = np.stack(self.poses, axis=1)  # (futures, samples, bodies, 7)
+            out.update(names=self.read, poses=pack_f64(poses),
+                       twists=pack_f64(np.stack(self.twists, axis=1)))
+            if count > 1:
+                out["spread"] = pack_f64(np.stack([fs.spread(p[:, :, :3])
+                                                   for p in self.poses]))
         if self.read_joints is not None:
             out["joints"] = {"names": self.read_joints,
-                             "positions": pack_f64(np.concatenate(self.positions)),
-                             "velocities": pack_f64(np.concatenate(self.velocities))}
+                             "positions": pack_f64(np.stack(self.positions, axis=1)),
+                             "velocities": pack_f64(np.stack(self.velocities, axis=1))}
+        if self.scores is not None:
+            out["scores"] = pack_f64(self.scores)
         return out
 
 
@@ -80,9 +103,9 @@ def predict(loop: PredictContext, call: Call, request: rq.Predict) -> None:
         source.verify()
         copy = clone_of(source, name, loop.limits)
     else:
-        blob = loop.slots.get(slot).blob
-        data = decode(blob, loop.limits, loop.snapshot_key)
-        copy = world_from(data, loop.engine_factory, name, loop.limits)
+        factory = loop.engine_factory
+        copy = loop.slots.world_of(loop.slots.get(slot), name, lambda blob: world_from(
+            decode(blob, loop.limits, loop.snapshot_key), factory, name, loop.limits))
     try:
         job = _job(loop, call, copy, horizon, request)
     except Exception:
@@ -103,11 +126,23 @@ def _job(loop: PredictContext, call: Call, copy: World, horizon: float,
         copy.require_known(read)
     if joints is not None:
         copy.joints.require_scalar(joints, "predict.read_joints")
-    _require_reply_room(loop.limits.max_reply_bytes, steps // every + 1, read, joints)
+    count = imagining.future_count(request)
+    _require_reply_room(loop.limits.max_reply_bytes, count * (steps // every + 1), read,
+                        joints)
     _apply_changes(copy, request)
-    sampler = PredictSampler(min(every, steps), read, joints)
-    sampler.take(copy)
-    return StepJob(call, steps, steps, world=copy, sampler=sampler, scratch=True)
+    specs, seed = imagining.specs(copy, request, count, steps, dt)
+    futures = FutureSet.fork(copy, specs, loop.limits, loop.limits.future_threads,
+                             first=copy)
+    try:
+        sampler = PredictSampler(min(every, steps), read, joints, futures, request.score,
+                                 seed=seed)
+        sampler.take(copy)
+    except Exception:
+        futures.worlds, futures.events = futures.worlds[1:], futures.events[1:]
+        futures.close()  # all but the first: the caller closes it
+        raise
+    return StepJob(call, steps, steps, world=copy, sampler=sampler, scratch=True,
+                   futures=futures)
 
 
 def _require_reply_room(limit: int, samples: int, read: list[str] | None,

@@ -26,7 +26,10 @@ def run_chunk(loop: JobEnd, job: StepJob) -> None:
     count = min(job.steps_to_next_check(), max(1, int(CHUNK_WALL_S / job.step_cost)))
     started = time.perf_counter()
     try:
-        world.step(count)
+        if job.futures is not None:
+            job.futures.step(count)
+        else:
+            world.step(count)
         job.step_cost = smoothed_step_cost(job.step_cost, time.perf_counter() - started,
                                            count)
         job.remaining -= count
@@ -36,7 +39,7 @@ def run_chunk(loop: JobEnd, job: StepJob) -> None:
         checking = job.rest is not None and job.done % job.rest.every == 0
         resting = checking and job_results.at_rest(world, job)
         if finished or resting:
-            world.verify()
+            (job.futures or world).verify()
     except RemoteError as error:  # a diverged side world fails its job, not the daemon
         end(loop, job, error)
         return

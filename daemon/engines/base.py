@@ -283,6 +283,22 @@ class Engine(ABC):
         format (the daemon then discards this engine; the live world is untouched)."""
         raise self._unsupported("snapshots")
 
+    def save_state(self) -> object | None:
+        """The world's dynamic state, kept in memory, for a snapshot of an unchanged
+        structure (the World tracks structure: ``World.save_state``): loading it into this
+        engine, or a clone of it, while neither changed structure, goes on bit for bit as
+        from now. None: no fast path (snapshots take the portable one)."""
+        return None
+
+    def load_state(self, state: object) -> bool:
+        """Set a state ``save_state`` kept (of this world or of one it was cloned from or
+        into, of the same structure); False, changing nothing, where it does not fit."""
+        return False
+
+    def recycle_state(self, state: object) -> None:  # noqa: B027 - nothing to reuse
+        """A state ``save_state`` made that nobody holds any more: its memory may serve the
+        next one (a slot replaced by a newer snapshot)."""
+
     # -- perception (docs/protocol.md, "render", "raycast", "contacts") ---------------------
     def render(self, cameras: Sequence[CameraView]
                ) -> tuple[list[dict[str, np.ndarray]], list[str]]:

@@ -316,7 +316,7 @@ def get_params(world: World, request: rq.NoArgs) -> dict[str, Any]:
 
 @scene_op("set_params")
 def set_params(world: World, request: rq.SetParams) -> dict[str, Any]:
-    world.engine.set_params(request.params)
+    world.set_params(request.params)
     return {"params": _wire_values(world.engine.get_params())}
 
 

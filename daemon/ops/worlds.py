@@ -16,6 +16,7 @@ from galton.daemon.core.calls import Call
 from galton.daemon.core.context import WorldsContext
 from galton.daemon.core.reply_limit import require_room
 from galton.daemon.ops.binding import handles
+from galton.daemon.world import states
 from galton.daemon.world.scene import World
 from galton.daemon.world.slots import Slot
 from galton.daemon.world.snapshot import clone_of, decode, encode, snapshot_of, world_from
@@ -121,14 +122,18 @@ def snapshot(ctx: WorldsContext, call: Call, request: rq.Snapshot) -> dict[str, 
         raise InvalidArgumentError(f"snapshot.slot {brief(slot_name)} must be "
                                    f"1-{MAX_WORLD_NAME} printable characters")
     world.verify()
-    blob = encode(snapshot_of(world), ctx.snapshot_key)
+    state = None if slot_name is None else states.save(world)
+    blob = None
+    if want_blob or state is None:
+        blob = encode(snapshot_of(world), ctx.snapshot_key)
     if want_blob:  # checked before a slot is kept: a refused request changes nothing
+        assert blob is not None
         require_room("this snapshot's blob", len(blob), ctx.limits.max_reply_bytes,
                      "keep it in a slot without 'blob'")
     kept = Slot(slot_name or "", world.name, world.engine.name, blob, world.step_index,
-                world.sim_time, len(world.entities))
+                world.sim_time, len(world.entities), state)
     if slot_name is not None:
-        ctx.slots.keep(kept)
+        ctx.slots.keep(kept, world)
     result = {**kept.to_wire(), "slot": slot_name}
     if want_blob:
         result["blob"] = blob
@@ -137,14 +142,41 @@ def snapshot(ctx: WorldsContext, call: Call, request: rq.Snapshot) -> dict[str, 
 
 @handles("restore")
 def restore(ctx: WorldsContext, call: Call, request: rq.Restore) -> dict[str, Any]:
+    """A slot kept as a state goes back into its own structure in place (no rebuild);
+    anything else builds a new world, so a refused snapshot leaves the world as it was."""
     world = ctx.world_for(request)
     slot_name, blob = request.slot, request.blob
     if (slot_name is None) == (blob is None):
         raise InvalidArgumentError("restore needs exactly one of 'slot' or 'blob'")
-    if slot_name is not None:
-        blob = ctx.slots.get(slot_name).blob
+    slot = None if slot_name is None else ctx.slots.get(slot_name)
+    if slot is not None and slot.state is not None and states.load(world, slot.state):
+        _restored(ctx, world, world)
+        return world_row(ctx, world)
+    if slot is not None:
+        _require_engine(slot.engine, world)
+        new = ctx.slots.world_of(slot, world.name, lambda raw: _decoded(ctx, raw, world))
+    else:
+        new = _decoded(ctx, blob, world)
+    _restored(ctx, world, new)
+    return world_row(ctx, new)
+
+
+def _require_engine(kind: str, world: World) -> None:
+    if kind != world.engine.name:
+        raise InvalidArgumentError(f"the snapshot is of engine {brief(kind)}; this world "
+                                   f"runs {world.engine.name}: restore it into a world of "
+                                   "its engine")
+
+
+def _decoded(ctx: WorldsContext, blob: Any, world: World) -> World:
+    """A new world rebuilt from a blob, for ``world`` (whose engine it must be of)."""
     data = decode(blob, ctx.limits, ctx.snapshot_key)
-    new = world_from(data, _factory(ctx), world.name, ctx.limits, world.engine.name)
+    return world_from(data, _factory(ctx), world.name, ctx.limits, world.engine.name)
+
+
+def _restored(ctx: WorldsContext, world: World, new: World) -> None:
+    """``new`` (``world`` itself, set in place, or its replacement) takes ``world``'s place:
+    its job is ended, the live clock re-anchored."""
     if ctx.job is not None and (ctx.job.world or ctx.world) is world:
         time_control.cancel_job(ctx, "its world was restored")
     if world is ctx.world:
@@ -155,9 +187,9 @@ def restore(ctx: WorldsContext, call: Call, request: rq.Restore) -> dict[str, An
         ctx.pacer.anchor(time.monotonic(), new.sim_time, ctx.target_rtf)
     else:
         ctx.side[world.name] = new
-    world.engine.close()
+    if new is not world:
+        world.engine.close()
     ctx.emit({"kind": "scene", "op": "restore", "world": new.name, "step": new.step_index})
-    return world_row(ctx, new)
 
 
 @handles("snapshots")

@@ -9,12 +9,13 @@ from typing import Any
 import numpy as np
 
 from galton.daemon.world.scene import World
-from galton.protocol import pack_f64
+from galton.protocol import InvalidArgumentError, pack_f64
 from galton.protocol import requests as rq
 from galton.protocol.model import (
     check_names,
     decode_poses,
     decode_twists,
+    decode_values,
 )
 
 
@@ -23,6 +24,21 @@ def angle_between(q1: np.ndarray, q2: np.ndarray) -> np.ndarray:
     dots = np.abs(np.sum(q1 * q2, axis=1)).clip(0.0, 1.0)
     angles: np.ndarray = 2.0 * np.arccos(dots)
     return angles
+
+
+def _expected_position_sigmas(spread: float | bytes | None, count: int,
+                               sigma_p: float) -> np.ndarray | float:
+    """How far each observed position may be expected to lie from the world's: the
+    measurement noise ``sigma_position`` alone, or combined with the spread an ensemble
+    prediction gave (independent errors: their variances add)."""
+    if spread is None:
+        return sigma_p
+    values = decode_values(spread, count, "compare.spread")
+    if (values < 0).any():
+        raise InvalidArgumentError(f"compare.spread[{int(np.argmax(values < 0))}] is "
+                                   "negative: a spread is a standard deviation, at least 0")
+    sigmas: np.ndarray = np.sqrt(values ** 2 + sigma_p ** 2)
+    return sigmas
 
 
 def compare(world: World, request: rq.Compare) -> dict[str, Any]:
@@ -36,7 +52,8 @@ def compare(world: World, request: rq.Compare) -> dict[str, Any]:
     poses, world_twists = world.get_states(names)
     position_errors = np.linalg.norm(observed[:, :3] - poses[:, :3], axis=1)
     angle_errors = angle_between(observed[:, 3:7], poses[:, 3:7])
-    terms = (position_errors / sigma_p) ** 2 + (angle_errors / sigma_a) ** 2
+    expected = _expected_position_sigmas(request.spread, len(names), sigma_p)
+    terms = (position_errors / expected) ** 2 + (angle_errors / sigma_a) ** 2
     result: dict[str, Any] = {"position_errors": pack_f64(position_errors),
                               "angle_errors": pack_f64(angle_errors)}
     if twists is not None:

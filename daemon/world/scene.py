@@ -86,6 +86,10 @@ class World:
         # Counts changes of which entities the engine holds (a state stream's cached reader
         # of its names is good while this stays the same).
         self.layout = 0
+        # Who the world's structure is (bodies, shapes, joints, parameters): a new object at
+        # every change of it, shared with a clone until either changes. A state kept with
+        # ``save_state`` loads again without a rebuild while this stays the same.
+        self.structure: object = object()
 
     # -- lookup -------------------------------------------------------------------------
     def require_known(self, names: Sequence[str]) -> None:
@@ -147,6 +151,7 @@ class World:
             raise InvalidArgumentError("the request names the same entity in two groups")
         self.require_new(names)
         self.layout += 1
+        self.structure = object()
         for group in (g for g in groups if not g.static):  # a static body cannot diverge
             check_state_values(self.limits, group.poses, group.twists, "spawn")
         self.engine.spawn(groups)
@@ -171,6 +176,7 @@ class World:
             text = Path(path).read_text(encoding="utf-8", errors="replace")
         text = resolve_model(fmt, text, path, search)
         self.layout += 1
+        self.structure = object()
         infos = self.engine.load_model(fmt, text, path, prefix, fixed_base=fixed_base)
         names = [info.name for info in infos]
         try:
@@ -190,6 +196,7 @@ class World:
         self.require_known(names)
         self.require_no_links(names, "delete", "a link is deleted with its model")
         self.layout += 1
+        self.structure = object()
         self.engine.delete(names)
         roots = {n for n in names if self.entities[n].info.shape == "model"}
         gone = [*names, *(n for n, e in self.entities.items()
@@ -229,6 +236,8 @@ class World:
         moving = np.array([not self.entities[n].info.static for n in names], dtype=bool)
         check_state_values(self.limits, None if poses is None else poses[moving],
                            None if twists is None else twists[moving], "set_states")
+        if poses is not None and not moving.all():
+            self.structure = object()  # a static body's pose is part of the structure
         if self.faulted:  # nothing is read from it until a reset
             self.engine.set_states(names, poses, twists)
             return
@@ -269,13 +278,19 @@ class World:
             static = [n for n in names if self.entities[n].info.static]
             if static:
                 raise InvalidArgumentError(f"entity {static[0]!r} is static: it has no mass")
+        self.structure = object()
         self.engine.update(names, props)
-        for name in names:
-            info = self.entities[name].info
-            for field in ("mass", "friction", "restitution", "tags"):
-                value = getattr(props, field)
-                if value is not None:
-                    setattr(info, field, value)
+        changes = {field: getattr(props, field) for field in
+                   ("mass", "friction", "restitution", "tags")
+                   if getattr(props, field) is not None}
+        for name in names:  # a new info, never an edit: a fork shares its source's
+            entity = self.entities[name]
+            entity.info = dataclasses.replace(entity.info, **changes)
+
+    def set_params(self, params: dict[str, Any]) -> None:
+        """The engine's parameters (part of the structure)."""
+        self.structure = object()
+        self.engine.set_params(params)
 
     def require_valid(self) -> None:
         """Refuse to serve a faulted world, saying how it diverged (whoever noticed first:
@@ -341,6 +356,7 @@ class World:
             self._rebase_clock(0.0)
         if scope in ("spawned", "all"):
             self.layout += 1
+            self.structure = object()
             self.engine.clear()
             self.entities.clear()
             self.joints.refresh()

@@ -47,12 +47,25 @@ def clone_of(world: World, name: str, limits: Limits) -> World:
     the source is never disturbed."""
     engine = world.engine.clone()
     try:
-        copy = World(engine, name, limits)
-        _restore_registry(copy, registry_of(world))
+        twin = World(engine, name, limits)
+        _copy_registry(world, twin)
     except Exception:
         engine.close()
         raise
-    return copy
+    return twin
+
+
+def _copy_registry(world: World, twin: World) -> None:
+    """The World's own part, copied object by object (no round trip through the wire: it
+    cost a fork milliseconds on 100 bodies); the twin shares the source's structure."""
+    twin.entities = {name: Entity(e.info, e.initial_pose, e.initial_twist, e.mesh)
+                     for name, e in world.entities.items()}  # infos and arrays never edited
+    twin.layout += 1
+    twin.step_index, twin._time_base = world.step_index, world._time_base
+    twin.verified_step, twin.teleported = world.verified_step, world.teleported
+    twin.joints.by_name = dict(world.joints.by_name)
+    twin.wrenches.ends = dict(world.wrenches.ends)
+    twin.structure = world.structure
 
 
 def registry_of(world: World) -> dict[str, Any]:

@@ -84,6 +84,33 @@ def test_a_kuka_with_targets_and_a_wrench_replays_bit_for_bit(world: Client) -> 
     np.testing.assert_array_equal(first, again)
 
 
+def test_a_kuka_slot_replays_bit_for_bit_after_its_targets_changed(world: Client) -> None:
+    """A slot kept as a state (no rebuild) brings back the targets and the model numbers
+    they write, as a blob does."""
+    load_robot(world, "kuka")
+    world.set_joint_targets(KUKA_JOINTS[4:], "effort", [0.5, -0.5, 0.2])
+    world.step(30)
+    world.snapshot("arm")
+    first = drive_kuka(world)
+    world.restore("arm")
+    np.testing.assert_array_equal(first, drive_kuka(world))
+
+
+def test_a_slot_replays_bit_for_bit_after_the_structure_changed(world: Client) -> None:
+    """After a spawn and a delete (another structure), a slot restores through the portable
+    path and still goes on as the source went on."""
+    names = contact_scene(world)
+    world.step(20)
+    world.snapshot("start")
+    first = run(world, names)
+    world.spawn(spheres(["late"], [[1, 1, 1]], 0.1))
+    world.delete(["late"])
+    world.restore("start")
+    np.testing.assert_array_equal(first, run(world, names))
+    world.restore("start")  # and again in place
+    np.testing.assert_array_equal(first, run(world, names))
+
+
 def test_a_restore_brings_back_a_scene_changed_since(world: Client) -> None:
     names = contact_scene(world)
     load_robot(world, "kuka", prefix="arm_")
@@ -207,7 +234,8 @@ def test_slot_bytes_past_the_limit_are_refused(world: Client, engine: str) -> No
     """A daemon whose max_snapshot_bytes holds three and a half snapshots of a scene keeps
     three and refuses the fourth, keeping nothing of it."""
     contact_scene(world)
-    size = world.snapshot(blob=True).nbytes
+    size = world.snapshot("probe").nbytes  # a slot's bytes: its blob, or its kept state
+    blob_size = world.snapshot(blob=True).nbytes
     limit = int(3.5 * size)
     with EmbeddedDaemon(engine, instance=f"test-{engine}-slots",
                         extra_args=["--limit", f"max_snapshot_bytes={limit}"]) as daemon, \
@@ -220,4 +248,4 @@ def test_slot_bytes_past_the_limit_are_refused(world: Client, engine: str) -> No
             sim.snapshot("one_more")
         assert refused.value.details["limit"] == "max_snapshot_bytes"
         assert [s.slot for s in sim.snapshots()] == ["slot_0", "slot_1", "slot_2"]
-        assert sim.snapshot(blob=True).nbytes == size  # a blob alone is kept nowhere
+        assert sim.snapshot(blob=True).nbytes == blob_size  # a blob alone is kept nowhere

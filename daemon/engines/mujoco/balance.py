@@ -71,6 +71,15 @@ class BalanceGuard:
         # Held for HOLD_LIMIT_S in vain -> whether it has slept since: free until it wakes.
         self._let_go: dict[int, bool] = {}
 
+    def copy(self) -> BalanceGuard:
+        """A guard of the same model remembering the same (its model's arrays are shared:
+        they are never written; the books are copied)."""
+        twin: BalanceGuard = object.__new__(BalanceGuard)
+        twin._trees, twin._geoms = self._trees, self._geoms
+        twin._was_asleep = self._was_asleep.copy()
+        twin._held, twin._let_go = dict(self._held), dict(self._let_go)
+        return twin
+
     @property
     def held(self) -> list[int]:
         """Trees kept awake now (for tests and diagnostics)."""

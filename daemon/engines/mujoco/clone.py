@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Any
 
 import mujoco
 
+from galton.daemon.engines.mujoco import fast_state
 from galton.daemon.engines.mujoco import pool as mp
 from galton.daemon.engines.mujoco.entities import Assets, Entity
 from galton.daemon.engines.mujoco.joints import Joints
@@ -50,7 +51,7 @@ def _copy_compiled(source: MujocoEngine, engine: MujocoEngine) -> None:
     engine.spec.copy_during_attach = True  # (not carried by MjSpec.copy)
     engine.builders = mp.Builders()
     engine.model = copy.copy(source.model)
-    engine.data = mujoco.MjData(engine.model)
+    engine.data = fast_state.data_for(engine.model)
     mujoco.mj_copyData(engine.data, engine.model, source.data)
     engine.xml = source.xml
     engine.pool_edited = source.pool_edited

@@ -75,8 +75,8 @@ from galton.daemon.engines.base import (
 )
 from galton.daemon.engines.mujoco import clone as cloning
 from galton.daemon.engines.mujoco import compiled as compiling
+from galton.daemon.engines.mujoco import fast_state, models, removal, teleport, wrench
 from galton.daemon.engines.mujoco import geoms as colliders
-from galton.daemon.engines.mujoco import models, removal, teleport, wrench
 from galton.daemon.engines.mujoco import observed as observing
 from galton.daemon.engines.mujoco import perception as sensing
 from galton.daemon.engines.mujoco import pool as mp
@@ -123,6 +123,7 @@ class MujocoEngine(Engine):
     # What the last step left, frozen before an edit until the next step (a class default:
     # a clone is made without __init__).
     observed: observing.Observed | None = None
+    closed = False  # its MjData was given back (fast_state.give_back): never twice
 
     def __init__(self) -> None:
         ms.route_warnings()
@@ -359,6 +360,15 @@ class MujocoEngine(Engine):
     def entity_names(self) -> list[str]:
         return list(self.entities)
 
+    def save_state(self) -> object | None:
+        return fast_state.save(self)
+
+    def load_state(self, state: object) -> bool:
+        return fast_state.load(self, state)
+
+    def recycle_state(self, state: object) -> None:
+        fast_state.recycle(state)
+
     def clone(self) -> MujocoEngine:
         """A copy of the compiled world, no MJCF and no compile (``clone``): it goes
         on exactly as this one, which it leaves untouched."""
@@ -405,6 +415,9 @@ class MujocoEngine(Engine):
 
     def close(self) -> None:
         self.entities.clear()
+        if self.workers == 0 and not self.broken and not self.closed:
+            fast_state.give_back(self.model, self.data)  # to serve a fork or a snapshot
+        self.closed = True
         if self.cameras is not None:
             self.cameras.close()
             self.cameras = None

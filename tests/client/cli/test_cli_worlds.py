@@ -67,6 +67,20 @@ def test_commands_act_on_a_side_world(target: list[str]) -> None:
     assert stepped["step"] == sides["side"] == 7 and live["step"] == sides["default"] == 0
 
 
+def test_predict_many_futures_with_a_perturbation(target: list[str]) -> None:
+    found = invoke([*target, "predict", "0.02", "--every", "0.01", "--read", "ball",
+                    "--futures", "3", "--perturb", "position=0.001", "--seed", "4",
+                    "--json"])
+    assert (found["futures"], found["seed"]) == (3, 4)
+    assert len(found["poses"]) == 3 and len(found["spread"]) == len(found["times"]) == 3
+    assert found["spread"][-1][0] > 0
+    human = run([*target, "predict", "0.02", "--read", "ball", "--futures", "2",
+                 "--perturb", "position=0.001,velocity=0.01"])
+    assert human.exit_code == 0 and "2 futures" in flat(human.output)
+    bad = run([*target, "predict", "0.02", "--futures", "2", "--perturb", "size=1"])
+    assert bad.exit_code != 0 and "position" in flat(bad.output)
+
+
 def test_compare_prints_errors_and_score(target: list[str]) -> None:
     found = invoke([*target, "compare", "ball", "--poses", "0.03,0.04,0.5,0,0,0,1",
                     "--json"])

@@ -75,6 +75,8 @@ def test_compare_scores_are_charted_and_a_prediction_is_drawn(
     page._act(page._predict)
     assert page.message.content == ""
     assert page.prediction.names == ("a", "b")
+    page._act(page._imagine)  # 8 futures of 1 s, every 50 ms: 20 segments a body each
+    assert page.message.content == "" and page.future_segments == 8 * 2 * 20
     step = mujoco_sim.status().step
     page._act(page._step)
     assert mujoco_sim.status().step == step + 100

@@ -1,0 +1,136 @@
+"""A MuJoCo world's state kept in memory, for snapshots and restores of an unchanged
+structure (daemon/world/scene.py ``World.save_state``): the whole MjData (``mj_copyData``:
+contacts, warm starts, sleep books, the lot, so the world goes on bit for bit as from the
+moment it was kept), the few model arrays the engine edits between compiles (joint targets'
+gains and damping, the balance guard's sleep policies) and the engine's own books.
+
+No MJCF, no compile: tens of microseconds for a 100-ball board, where a portable snapshot
+writes and compiles the spec. The state fits any engine whose compiled model has the same
+sizes (the same world, or a clone of it); the World decides when the structure is the
+same, and this refuses (False) only what it can see does not fit.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import mujoco
+import numpy as np
+
+from galton.daemon.engines.mujoco.joints import Joints
+
+if TYPE_CHECKING:
+    from galton.daemon.engines.mujoco.engine import MujocoEngine
+
+# Model arrays the engine writes between compiles (joints.write_targets, Joints.write_law,
+# balance.BalanceGuard): kept with the state, put back with it.
+EDITED_MODEL_ARRAYS = ("actuator_gainprm", "actuator_biasprm", "actuator_forcelimited",
+                       "actuator_forcerange", "dof_damping", "tree_sleep_policy")
+SPARES = 2  # dropped MjData kept for reuse, per layout
+# Sizes that must agree for one model's MjData to fit another.
+SIZES = ("nq", "nv", "nu", "na", "nbody", "ngeom", "nmocap", "ntree", "nconmax", "njmax")
+
+
+# Dropped MjData by layout (every size of the model they were made for: equal sizes give
+# equal layouts), for the next snapshot or clone of a model of that layout: allocating one
+# maps its whole arena (63 MB for a 100-ball board) and faults it in as it is written,
+# milliseconds; copying into a used one, microseconds. Only the physics thread uses it.
+_SPARES: dict[tuple[int, ...], list[mujoco.MjData]] = {}
+
+
+def layout(m: mujoco.MjModel) -> tuple[int, ...]:
+    """Every size of a model (its integer fields n...): what an MjData's layout is made
+    from."""
+    if not _SIZE_NAMES:
+        _SIZE_NAMES.extend(name for name in dir(mujoco.MjModel) if name.startswith("n")
+                           and isinstance(getattr(m, name), int))
+    return tuple(getattr(m, name) for name in _SIZE_NAMES)
+
+
+_SIZE_NAMES: list[str] = []
+
+
+def data_for(m: mujoco.MjModel) -> mujoco.MjData:
+    """An MjData for ``m``: a dropped one of its layout, or a new one (its contents are
+    to be overwritten whole, by mj_copyData)."""
+    spares = _SPARES.get(layout(m))
+    return spares.pop() if spares else mujoco.MjData(m)
+
+
+def give_back(m: mujoco.MjModel, data: mujoco.MjData) -> None:
+    """Keep an MjData nobody uses any more (made for ``m``'s layout, no thread pool)."""
+    spares = _SPARES.setdefault(layout(m), [])
+    if len(spares) < SPARES:
+        spares.append(data)
+
+
+@dataclass(frozen=True)
+class MujocoState:
+    """One moment of a MuJoCo world (see the module docstring)."""
+
+    sizes: tuple[int, ...]
+    layout: tuple[int, ...]
+    data: mujoco.MjData
+    model_arrays: dict[str, np.ndarray]
+    books: dict[str, Any]
+    nbytes: int
+
+
+def _sizes(m: mujoco.MjModel) -> tuple[int, ...]:
+    return tuple(int(getattr(m, s, 0)) for s in SIZES)
+
+
+def save(engine: MujocoEngine) -> MujocoState | None:
+    """The engine's state now (None for a broken world: it has none worth keeping)."""
+    if engine.broken:
+        return None
+    m = engine.model
+    data = data_for(m)
+    mujoco.mj_copyData(data, m, engine.data)
+    arrays = {name: getattr(m, name).copy() for name in EDITED_MODEL_ARRAYS}
+    books = {"joints": _copy_joints(engine.joint_book),
+             "held": {n: w.copy() for n, w in engine.wrenches.held.items()},
+             "balance": None if engine.balance is None else engine.balance.copy(),
+             "looks": (engine.diverged, engine.crowded, engine.steps_since_look)}
+    nbytes = int(mujoco.mj_stateSize(m, mujoco.mjtState.mjSTATE_INTEGRATION) * 8
+                 + sum(a.nbytes for a in arrays.values()))
+    return MujocoState(_sizes(m), layout(m), data, arrays, books, nbytes)
+
+
+def load(engine: MujocoEngine, state: Any) -> bool:
+    """Set the engine to ``state``; False (nothing changed) when it does not fit."""
+    if not isinstance(state, MujocoState) or state.sizes != _sizes(engine.model):
+        return False
+    m = engine.model
+    for name, values in state.model_arrays.items():
+        getattr(m, name)[...] = values
+    mujoco.mj_copyData(engine.data, m, state.data)
+    books = state.books
+    engine.joint_book = _copy_joints(books["joints"])
+    engine.wrenches.held = {n: w.copy() for n, w in books["held"].items()}
+    engine.balance = None if books["balance"] is None else books["balance"].copy()
+    engine.diverged, engine.crowded, engine.steps_since_look = books["looks"]
+    engine.broken = False
+    engine.observed = None
+    engine.start_workers()
+    return True
+
+
+def recycle(state: Any) -> None:
+    """A dropped state's MjData serves the next snapshot or clone."""
+    if isinstance(state, MujocoState):
+        spares = _SPARES.setdefault(state.layout, [])
+        if len(spares) < SPARES:
+            spares.append(state.data)
+
+
+def _copy_joints(source: Joints) -> Joints:
+    joints = Joints()
+    joints.infos = {root: list(infos) for root, infos in source.infos.items()}
+    joints.targets = dict(source.targets)  # Target is frozen
+    joints.slot = dict(source.slot)
+    joints.qadr, joints.vadr = source.qadr.copy(), source.vadr.copy()
+    joints.own, joints.own_damping = dict(source.own), source.own_damping.copy()
+    joints.target_damping = source.target_damping.copy()
+    return joints
