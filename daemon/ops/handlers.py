@@ -21,7 +21,7 @@ from types import ModuleType
 from typing import Any
 
 from galton.daemon.access import lease
-from galton.daemon.core import predict, time_control
+from galton.daemon.core import calibrate, predict, time_control
 from galton.daemon.core.calls import Call
 from galton.daemon.core.context import OpContext, SceneContext
 from galton.daemon.ops import joints as ops_joints
@@ -73,7 +73,7 @@ _TABLE: dict[str, Handler] = {
 # The modules whose marked functions are handlers (daemon/ops/binding.py): a module that
 # serves operations is listed here once, then each new handler in it binds itself.
 OP_MODULES: tuple[ModuleType, ...] = (ops, ops_joints, ops_perception, worlds, time_control,
-                                      predict)
+                                      predict, calibrate)
 
 
 def collect(modules: Iterable[ModuleType], table: dict[str, Handler]) -> dict[str, Handler]:
