@@ -88,3 +88,24 @@ def calibrate_args(fit: Mapping[str, Sequence[float]], names: Sequence[str],
     if twists is not None:
         args["twists"] = pack_f64(np.asarray(twists, float).reshape(-1, 6))
     return args
+
+
+# A parameter's bounds when the caller names none (galton-client calibrate --fit alone).
+DEFAULT_BOUNDS: dict[str, tuple[float, float]] = {
+    "friction": (0.0, 2.0), "restitution": (0.0, 0.95), "mass": (0.01, 100.0),
+    "damping": (0.0, 10.0), "gravity": (0.0, 20.0)}
+
+
+def bounds_for(fit: Sequence[str], given: Mapping[str, tuple[float, float]]
+               ) -> dict[str, tuple[float, float]]:
+    """Each fitted parameter's bounds: given, or its property's default."""
+    unknown = sorted(set(given) - set(fit))
+    if unknown:
+        raise InvalidArgumentError(f"bounds given for {unknown[0]!r}, which is not fitted")
+    chosen = {}
+    for name in fit:
+        prop = name.rpartition(".")[2]
+        if name not in given and prop not in DEFAULT_BOUNDS:
+            raise InvalidArgumentError(f"{name!r}: no default bounds for {prop!r}; give them")
+        chosen[name] = given.get(name) or DEFAULT_BOUNDS[prop]
+    return chosen

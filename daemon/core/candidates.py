@@ -7,9 +7,9 @@ touched. The imagination issue's many-futures ``predict`` can take this function
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-import math
 
 import numpy as np
 

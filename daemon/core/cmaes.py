@@ -53,7 +53,8 @@ class CmaEs:
         values, vectors = np.linalg.eigh(self.cov)
         scale = vectors * np.sqrt(np.maximum(values, 1e-20))
         steps = self.rng.standard_normal((self.lam, self.n)) @ scale.T
-        return np.clip(self.mean + self.sigma * steps, 0.0, 1.0)
+        points: np.ndarray = np.clip(self.mean + self.sigma * steps, 0.0, 1.0)
+        return points
 
     def tell(self, points: np.ndarray, errors: np.ndarray) -> None:
         """Move the distribution towards the generation's better half."""

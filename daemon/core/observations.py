@@ -78,11 +78,13 @@ def start_twists(times: np.ndarray, poses: np.ndarray) -> np.ndarray:
 
 def _derivative_at_start(t: np.ndarray, p: np.ndarray) -> np.ndarray:
     if len(t) == 2:
-        return (p[1] - p[0]) / (t[1] - t[0])
+        slope: np.ndarray = (p[1] - p[0]) / (t[1] - t[0])
+        return slope
     h1, h2 = t[1] - t[0], t[2] - t[0]
     # Lagrange: d/dt at t0 of the quadratic through (t0, p0), (t1, p1), (t2, p2).
-    return (-(h1 + h2) / (h1 * h2) * p[0] + h2 / (h1 * (h2 - h1)) * p[1]
-            - h1 / (h2 * (h2 - h1)) * p[2])
+    derivative: np.ndarray = (-(h1 + h2) / (h1 * h2) * p[0] + h2 / (h1 * (h2 - h1)) * p[1]
+                              - h1 / (h2 * (h2 - h1)) * p[2])
+    return derivative
 
 
 def _angular(q0: np.ndarray, q1: np.ndarray, seconds: float) -> np.ndarray:
@@ -96,7 +98,8 @@ def _angular(q0: np.ndarray, q1: np.ndarray, seconds: float) -> np.ndarray:
     if sine < 1e-12:
         return np.zeros(3)
     angle = 2.0 * np.arctan2(sine, delta[3])
-    return delta[:3] / sine * angle / seconds
+    rate: np.ndarray = delta[:3] / sine * angle / seconds
+    return rate
 
 
 def _product(a: np.ndarray, b: np.ndarray) -> np.ndarray:
