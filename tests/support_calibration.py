@@ -12,7 +12,7 @@ from galton.client import Client, boxes, plane, spheres
 # The slab's (friction, restitution) per engine.
 SURFACE = {"mujoco": (0.0, 1.0), "pybullet": (1.0, 1.0), "dart": (1.0, 1.0), "ode": (0.0, 0.0)}
 BOX_SPEED = 1.5  # m/s along x
-SETTLE_S = 0.1  # the bodies settle on the slab before the box is pushed
+SETTLE_S = 0.5  # the bodies settle on the slab (its contact quiet) before the box is pushed
 
 
 def slide_and_bounce(sim: Client, engine: str, friction: float, restitution: float,
@@ -26,7 +26,7 @@ def slide_and_bounce(sim: Client, engine: str, friction: float, restitution: flo
                     friction=friction))
     moving = ["box"]
     if ball:
-        sim.spawn(spheres(["ball"], [[0.5, 0.3, 1.0]], 0.05, mass=0.2,
+        sim.spawn(spheres(["ball"], [[0.5, 0.3, 3.0]], 0.05, mass=0.2,
                           restitution=restitution))
         moving.append("ball")
     sim.step(round(SETTLE_S / sim.status().timestep))

@@ -161,7 +161,7 @@ def _start(loop: PredictContext, source: World, request: Calibrate, names: list[
         assert loop.engine_factory is not None
         return world_from(data, loop.engine_factory, name, loop.limits)
     source.require_known(names)
-    twists = (start_twists(times, poses) if request.twists is None
+    twists = (start_twists(times, poses, source.engine.timestep) if request.twists is None
               else decode_twists(request.twists, len(names), "calibrate.twists"))
     source.verify()
     copy = clone_of(source, name, loop.limits)

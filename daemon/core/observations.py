@@ -59,10 +59,14 @@ def observation(names: list[str], times: np.ndarray, poses: np.ndarray, dt: floa
     return Observation(names, steps, poses[1:, :, :3].copy())
 
 
-def start_twists(times: np.ndarray, poses: np.ndarray) -> np.ndarray:
-    """Each body's twist at the first sample: linear from the derivative of the parabola
-    through its first three positions (two: the difference), angular from the rotation
-    between its first two orientations. A body not seen then starts at rest."""
+def start_twists(times: np.ndarray, poses: np.ndarray, dt: float) -> np.ndarray:
+    """Each body's twist at the first sample: linear from the parabola through its first
+    three positions (two: the difference), angular from the rotation between its first two
+    orientations. A body not seen then starts at rest.
+
+    The engines integrate semi-implicitly (the velocity first, then the position with it),
+    so under a constant acceleration a the positions lie on a parabola whose slope at the
+    start is the velocity plus a dt / 2: that half step is taken off."""
     count = poses.shape[1]
     twists = np.zeros((count, 6))
     for body in range(count):
@@ -70,21 +74,26 @@ def start_twists(times: np.ndarray, poses: np.ndarray) -> np.ndarray:
         if len(seen) < 2 or seen[0] != 0:
             continue
         t, p = times[seen], poses[seen, body, :3]
-        twists[body, :3] = _derivative_at_start(t, p)
+        slope, curvature = _derivatives_at_start(t, p)
+        twists[body, :3] = slope - curvature * dt / 2
         twists[body, 3:] = _angular(poses[seen[0], body, 3:], poses[seen[1], body, 3:],
                                     t[1] - t[0])
     return twists
 
 
-def _derivative_at_start(t: np.ndarray, p: np.ndarray) -> np.ndarray:
+def _derivatives_at_start(t: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The first and second derivatives at t0 of the quadratic through the points (of the
+    line through two: no curvature)."""
     if len(t) == 2:
         slope: np.ndarray = (p[1] - p[0]) / (t[1] - t[0])
-        return slope
+        return slope, np.zeros(3)
     h1, h2 = t[1] - t[0], t[2] - t[0]
     # Lagrange: d/dt at t0 of the quadratic through (t0, p0), (t1, p1), (t2, p2).
     derivative: np.ndarray = (-(h1 + h2) / (h1 * h2) * p[0] + h2 / (h1 * (h2 - h1)) * p[1]
                               - h1 / (h2 * (h2 - h1)) * p[2])
-    return derivative
+    curvature: np.ndarray = 2 * (p[0] / (h1 * h2) - p[1] / (h1 * (h2 - h1))
+                                 + p[2] / (h2 * (h2 - h1)))
+    return derivative, curvature
 
 
 def _angular(q0: np.ndarray, q1: np.ndarray, seconds: float) -> np.ndarray:
