@@ -62,14 +62,17 @@ class Observed:
 
 
 def observed_in(recording: Recording, names: Sequence[str] | None = None) -> Observed:
-    """A recording's dynamic bodies (or ``names``) as an observation."""
+    """A recording's moving bodies (or ``names``) as an observation; samples that repeat
+    an earlier time (the world was paused) are left out."""
     chosen = list(names) if names is not None else [
         info.name for info in recording.infos if not info.static and info.shape != "link"]
     if not chosen:
         raise InvalidArgumentError("the recording holds no moving body to calibrate on")
     index = [recording.names.index(name) for name in chosen]
-    return Observed(chosen, np.asarray(recording.times, float),
-                    np.asarray(recording.poses, float)[:, index])
+    times = np.asarray(recording.times, float)
+    # A world recorded while paused repeats its time: each time is kept once, the first.
+    later = np.concatenate([[True], times[1:] > np.maximum.accumulate(times)[:-1]])
+    return Observed(chosen, times[later], np.asarray(recording.poses, float)[later][:, index])
 
 
 def calibrate_args(fit: Mapping[str, Sequence[float]], names: Sequence[str],
