@@ -94,7 +94,7 @@ def learn(sim: Client, engine: str, seed: int) -> LearningRun:
             peaks.append(peak)
             if surprised:
                 names, times, poses = watch.observed()
-                fit = sim.calibrate({"box.friction": (0.05, 1.5)}, names, times, poses,
+                fit = sim.calibrate({"box.friction": (0.1, 1.0)}, names, times, poses,
                                     twists=PUSH, apply=True, max_predictions=100, seed=seed)
                 fitted, predictions = fit.fitted["box.friction"], fit.predictions
     finally:

@@ -3,12 +3,21 @@
 
 from __future__ import annotations
 
+import threading
+from typing import Any
+
 import numpy as np
 import pytest
+from support import companion
 from support_calibration import slide_and_bounce
 
 from galton.client import Client
-from galton.protocol import FeatureUnsupportedError, InvalidArgumentError, NotFoundError
+from galton.protocol import (
+    FeatureUnsupportedError,
+    InvalidArgumentError,
+    NotFoundError,
+    OperationFailedError,
+)
 
 TRUE_FRICTION = 0.3
 HORIZON_S = 0.4
@@ -53,3 +62,37 @@ def test_what_cannot_be_fitted_is_refused_by_name(sim: Client, engine: str) -> N
     with pytest.raises(InvalidArgumentError, match="increasing"):
         sim.calibrate({"box.friction": (0.1, 1.0)}, moving, times[::-1], poses)
     assert sim.list(name="box")[0].friction == pytest.approx(TRUE_FRICTION)
+
+
+@pytest.mark.parametrize("engine", ["mujoco"])
+def test_a_long_calibration_reports_progress_and_ends_at_pause(sim: Client) -> None:
+    """Engine independent: a `calibration` event per generation, and `pause` ends the
+    search as it ends a prediction."""
+    moving = slide_and_bounce(sim, sim.status().engine, TRUE_FRICTION, 0.5, ball=False)
+    seen = sim.predict(HORIZON_S, every=SEEN_EVERY_S, read=moving)
+    sim.update(["box"], friction=0.8)
+    progress: list[dict[str, Any]] = []
+    paused = threading.Event()
+
+    def on_event(event: dict[str, Any]) -> None:
+        if event.get("kind") == "calibration":
+            progress.append(event)
+            paused.set()
+
+    def pause_at_first_generation() -> None:
+        assert paused.wait(30)
+        with companion(sim) as other:
+            other.pause()
+
+    with sim.on_event(on_event):
+        thread = threading.Thread(target=pause_at_first_generation)
+        thread.start()
+        try:
+            with pytest.raises(OperationFailedError, match="interrupted"):
+                sim.calibrate({"box.friction": (0.05, 1.5)}, moving, seen.times, seen.poses,
+                              twists=seen.twists[0], max_predictions=100_000, timeout=120)
+        finally:
+            thread.join(30)
+    first = progress[0]
+    assert first["generation"] == 1 and first["predictions"] == 7
+    assert set(first) >= {"world", "best_error", "spread"}
