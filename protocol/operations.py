@@ -170,7 +170,8 @@ class CalibrateReply(rp.Reply, kw_only=True):
     applied: bool
 
 
-CALIBRATE = Operation("calibrate", Calibrate, steps=True, reply=CalibrateReply)
+# It mutates as compare does: with ``apply`` it sets the fitted values (the lease applies).
+CALIBRATE = Operation("calibrate", Calibrate, mutates=True, steps=True, reply=CalibrateReply)
 
 
 _REBUILDS = 30.0  # operations that may rebuild the engine's world wait at least this long
