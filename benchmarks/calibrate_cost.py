@@ -24,7 +24,7 @@ from common import daemon_client, machine, write_json
 
 from galton.client import Client, boxes, plane, spheres
 
-SURFACE = {"mujoco": (0.0, 1.0), "pybullet": (1.0, 1.0), "dart": (1.0, 1.0), "ode": (0.0, 0.0)}
+SURFACE = {"mujoco": (0.0, 0.5), "pybullet": (1.0, 1.0), "dart": (1.0, 1.0), "ode": (0.0, 0.0)}
 FIT = {"box.friction": (0.05, 1.5), "ball.restitution": (0.0, 0.95)}
 
 

@@ -10,7 +10,7 @@ import numpy as np
 from galton.client import Client, boxes, plane, spheres
 
 # The slab's (friction, restitution) per engine.
-SURFACE = {"mujoco": (0.0, 1.0), "pybullet": (1.0, 1.0), "dart": (1.0, 1.0), "ode": (0.0, 0.0)}
+SURFACE = {"mujoco": (0.0, 0.5), "pybullet": (1.0, 1.0), "dart": (1.0, 1.0), "ode": (0.0, 0.0)}
 BOX_SPEED = 1.5  # m/s along x
 SETTLE_S = 0.5  # the bodies settle on the slab (its contact quiet) before the box is pushed
 

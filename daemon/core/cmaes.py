@@ -4,7 +4,8 @@ candidates, evaluates them one prediction at a time between the live world's ste
 tells the errors back. Why CMA-ES and not scipy's differential evolution: scipy drives its
 own loop (the daemon's physics thread cannot), and the daemon does not depend on scipy;
 CMA-ES needs few generations of few candidates (4 + 3 ln n) for a handful of parameters,
-and its final distribution gives each value's spread."""
+and its final distribution gives each value's spread. calibrate starts it from the best of
+a Latin hypercube over the bounds (contact makes the error landscape rugged)."""
 
 from __future__ import annotations
 

@@ -94,5 +94,5 @@ def test_a_long_calibration_reports_progress_and_ends_at_pause(sim: Client) -> N
         finally:
             thread.join(30)
     first = progress[0]
-    assert first["generation"] == 1 and first["predictions"] == 7
+    assert first["generation"] == 0 and first["predictions"] == 13  # the design: 2 x 6
     assert set(first) >= {"world", "best_error", "spread"}
