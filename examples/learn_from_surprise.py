@@ -23,8 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from galton.client import Client, EmbeddedDaemon, boxes, plane
-from galton.client.sdk.surprise import SurpriseWatch
+from galton.client import Client, EmbeddedDaemon, SurpriseWatch, boxes, plane
 
 CYCLE_S = 0.05
 CYCLES = 12  # an episode: 0.6 s, the box at rest before its end
