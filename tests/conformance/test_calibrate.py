@@ -11,7 +11,7 @@ import pytest
 from support import companion
 from support_calibration import slide_and_bounce
 
-from galton.client import Client
+from galton.client import Client, spheres
 from galton.protocol import (
     FeatureUnsupportedError,
     InvalidArgumentError,
@@ -96,3 +96,21 @@ def test_a_long_calibration_reports_progress_and_ends_at_pause(sim: Client) -> N
     first = progress[0]
     assert first["generation"] == 0 and first["predictions"] == 13  # the design: 2 x 6
     assert set(first) >= {"world", "best_error", "spread"}
+
+
+@pytest.mark.parametrize("engine", ["mujoco", "ode"])  # set_params' gravity: engine-blind
+def test_gravity_is_fitted_and_a_mass_it_cannot_see_stays_loose(sim: Client) -> None:
+    """A ball in free fall pins gravity; its mass, which free fall does not show, keeps a
+    wide interval (the search's spread says what the observation cannot tell). On the two
+    engines whose copies are cheapest (100 predictions)."""
+    sim.spawn(spheres(["ball"], [[0.0, 0.0, 2.0]], 0.05, mass=0.2))
+    seen = sim.predict(0.3, every=0.02, read=["ball"])
+    sim.set_params({"gravity": [0.0, 0.0, -5.0]})
+    result = sim.calibrate({"gravity": (1.0, 20.0), "ball.mass": (0.05, 1.0)}, ["ball"],
+                           seen.times, seen.poses, twists=seen.twists[0], max_predictions=100)
+    assert result.fitted["gravity"] == pytest.approx(9.81, rel=0.05)
+    assert result.error_after * 10 < result.error_before
+    gravity_width = np.diff(result.intervals["gravity"])[0] / 19.0
+    mass_width = np.diff(result.intervals["ball.mass"])[0] / 0.95
+    assert mass_width > 3 * gravity_width, result.intervals
+    assert sim.get_params()["gravity"][2] == pytest.approx(-5.0)  # not applied
