@@ -62,7 +62,8 @@ class Calibration:
         self.max_predictions = request.max_predictions
         self.predictions = 0
         self.error_before = float("nan")
-        self.best: dict[str, float] = dict(self.before)
+        self.best: dict[str, float] = {p.name: p.from_unit(u) for p, u in
+                                       zip(params, mean, strict=True)}
         self.best_error = float("inf")
         self.pending: list[np.ndarray] = []
         self.generation: list[tuple[np.ndarray, float]] = []
@@ -73,10 +74,13 @@ class Calibration:
         return {p.name: p.from_unit(float(u)) for p, u in zip(self.params, unit, strict=True)}
 
     def _evaluate(self, values: dict[str, float]) -> float:
+        """One prediction's error; the best so far kept (a value outside its bounds, as
+        the world's own may be, is never the fit)."""
         error = float(evaluate_candidates(self.start, self.params, [values], self.seen,
                                           self.limits)[0])
         self.predictions += 1
-        if error < self.best_error:
+        inside = all(p.low <= values[p.name] <= p.high for p in self.params)
+        if error < self.best_error and inside:
             self.best, self.best_error = dict(values), error
         return error
 
@@ -119,7 +123,10 @@ class Calibration:
                 or self.best_error <= PERFECT)
 
     def intervals(self) -> dict[str, list[float]]:
-        """Each value's range over the search's last selected candidates, and the fit."""
+        """Each value's range over the search's last selected candidates, and the fit;
+        before the search's first generation, its bounds (nothing narrower is known)."""
+        if self.search.generation == 0:
+            return {p.name: [p.low, p.high] for p in self.params}
         selected = [self.values(unit) for unit in self.search.selected]
         return {p.name: [min(self.best[p.name], *(s[p.name] for s in selected)),
                          max(self.best[p.name], *(s[p.name] for s in selected))]
