@@ -169,7 +169,7 @@ def calibrate(loop: PredictContext, call: Call, request: Calibrate) -> None:
     run.emit = lambda event: loop.emit({**event, "world": source.name})
     if request.apply:
         run.on_result = lambda values: _apply(loop, source, run.params, values)
-    total = (run.max_predictions + 1) * run.seen.horizon
+    total = run.max_predictions * run.seen.horizon
     job = StepJob(call, total, total, world=start, scratch=True, driver=run)
     job.source = source
     loop.start_job(job)
@@ -180,10 +180,13 @@ def _calibration(loop: PredictContext, start: World, request: Calibrate, names: 
     start.require_known(names)
     params = parameters(start, request.fit)
     seen = observation(names, times, poses, start.engine.timestep)
-    if seen.horizon > loop.limits.max_steps:
+    limit = loop.limits.max_steps  # the whole search's steps, as one step request's
+    if seen.horizon * request.max_predictions > limit:
         raise InvalidArgumentError(
-            f"calibrate.times span {seen.horizon} steps; at most {loop.limits.max_steps}",
-            {"max_steps": loop.limits.max_steps})
+            f"calibrate: {request.max_predictions} predictions of {seen.horizon} steps "
+            f"would take {seen.horizon * request.max_predictions} steps; at most {limit} "
+            "(ask for fewer max_predictions, or observe a shorter time)",
+            {"max_steps": limit})
     return Calibration(start, params, seen, loop.limits, request)
 
 
