@@ -15,6 +15,10 @@ from typing import TYPE_CHECKING
 from galton.protocol.lazy import lazy_exports
 
 if TYPE_CHECKING:
+    from galton.client.sdk.calibration import (
+        CalibrationResult,
+        observed_in,
+    )
     from galton.client.sdk.client import (
         Client,
         body_group,
@@ -28,6 +32,9 @@ if TYPE_CHECKING:
     )
     from galton.client.sdk.perception import (
         camera,
+    )
+    from galton.client.sdk.surprise import (
+        SurpriseWatch,
     )
     from galton.client.sdk.telemetry import (
         Subscription,
@@ -108,6 +115,8 @@ _SOURCES: dict[str, tuple[str, ...]] = {
         "Comparison", "Contacts", "Image", "JointStates", "Prediction", "RayHits",
         "ShapeInfo", "SnapshotInfo", "Stamp", "States", "WorldInfo"),
     "galton.client.transport.zmq_keys": ("ZmqKeys",),
+    "galton.client.sdk.calibration": ("CalibrationResult", "observed_in"),
+    "galton.client.sdk.surprise": ("SurpriseWatch",),
     "galton.protocol": (
         "AccessDeniedError", "BodyGroup", "BodyProperties", "Capabilities",
         "ClientClosedError", "ControlHeldError", "DaemonUnreachableError", "EntityInfo",
@@ -124,6 +133,7 @@ __all__ = [
     "AccessDeniedError",
     "BodyGroup",
     "BodyProperties",
+    "CalibrationResult",
     "Capabilities",
     "Client",
     "ClientClosedError",
@@ -162,6 +172,7 @@ __all__ = [
     "Stamp",
     "States",
     "Subscription",
+    "SurpriseWatch",
     "Telemetry",
     "TelemetryStream",
     "UnknownOperationError",
@@ -176,6 +187,7 @@ __all__ = [
     "instances",
     "lockstep",
     "meshes",
+    "observed_in",
     "plane",
     "spheres",
     "wait_for_daemon",

@@ -20,7 +20,7 @@ to them by a test. Each argument's ``kind`` names the value it takes on the wire
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Annotated, Any
 
 import msgspec
 
@@ -134,6 +134,51 @@ class GetEntities(rq.Args, kw_only=True, forbid_unknown_fields=True):
 GET_ENTITIES = Operation("get_entities", GetEntities, reply=rp.NamesReply)
 
 
+# calibrate's field types (declared with it, below GET_ENTITIES).
+CalibrationTimes = Annotated[bytes, msgspec.Meta(extra={
+    "kind": "values", "description": "packed float64, one sample time (s) per sample"})]
+Bounds = Annotated[list[rq.Number], msgspec.Meta(min_length=2, max_length=2)]
+FitBounds = Annotated[dict[str, Bounds], msgspec.Meta(min_length=1, max_length=16,
+                                                       extra={"kind": "map"})]
+MaxPredictions = Annotated[int, msgspec.Meta(ge=2, le=100_000, extra={"kind": "count"})]
+Population = Annotated[int, msgspec.Meta(ge=2, le=1024, extra={"kind": "count"})]
+Seed = Annotated[int, msgspec.Meta(ge=0, le=2**32 - 1, extra={"kind": "count"})]
+
+
+class Calibrate(rq.Args, kw_only=True, forbid_unknown_fields=True):
+    """calibrate: fit body and world parameters so that a prediction from ``times[0]``
+    matches what was observed (docs/protocol.md, "calibrate"). ``fit`` maps each parameter
+    ("box.friction", "ball*.restitution", "box.mass", "gravity") to its [low, high];
+    ``poses`` holds ``len(times)`` samples of ``names`` (a NaN row: not seen then)."""
+
+    names: rq.Names
+    times: CalibrationTimes
+    poses: rq.Poses
+    fit: FitBounds
+    slot: rq.Text | None = None  # start from this snapshot; None: the world, set to sample 0
+    twists: rq.Twists | None = None  # sample 0's twists; None: from its first samples
+    apply: rq.Flag = False
+    max_predictions: MaxPredictions = 200
+    population: Population | None = None  # None: 4 + 3 ln(parameters), at least 6
+    seed: Seed = 0
+
+
+class CalibrateReply(rp.Reply, kw_only=True):
+    fitted: dict[str, float]
+    intervals: dict[str, list[float]]
+    error_before: float
+    error_after: float
+    predictions: int
+    generations: int
+    steps: int
+    converged: bool
+    applied: bool
+
+
+# It mutates as compare does: with ``apply`` it sets the fitted values (the lease applies).
+CALIBRATE = Operation("calibrate", Calibrate, mutates=True, steps=True, reply=CalibrateReply)
+
+
 _REBUILDS = 30.0  # operations that may rebuild the engine's world wait at least this long
 OPERATIONS: dict[str, Operation] = {op.name: op for op in (
     Operation("status", rq.NoArgs, fast=True, viewer=True, reply=rp.StatusReply),
@@ -192,6 +237,7 @@ OPERATIONS: dict[str, Operation] = {op.name: op for op in (
     # State streams (daemon/world/state_streams.py): poses published at a client's rate.
     Operation("stream_states", rq.StreamStates, viewer=True, reply=rp.StreamReply),
     Operation("close_stream", rq.CloseStream, viewer=True, reply=rp.StreamClosedReply),
+    CALIBRATE,
 )}
 
 

@@ -19,6 +19,7 @@ import typer
 from galton.client.cli import (
     auth,
     bench,
+    calibrate,
     call,
     check,
     control,
@@ -51,6 +52,7 @@ app = typer.Typer(add_completion=False, help=__doc__, no_args_is_help=True)
 COMMAND_GROUPS: tuple[typer.Typer, ...] = (
     auth.commands,
     bench.commands,
+    calibrate.commands,
     call.commands,
     check.commands,
     control.commands,

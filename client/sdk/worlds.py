@@ -22,6 +22,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from galton.client.sdk import joints as sdk_joints
+from galton.client.sdk.calibration import CalibrationResult, calibrate_args
 from galton.client.sdk.values import Comparison, Prediction, SnapshotInfo, Stamp, WorldInfo
 from galton.protocol import POSE_WIDTH, TWIST_WIDTH, InvalidArgumentError, Reply, pack_f64
 from galton.protocol.replies import SnapshotsReply, WorldsReply, decode_result
@@ -178,6 +179,23 @@ class WorldMethods:
         if spread is not None:
             args["spread"] = spread_arg(spread, count)
         return Comparison.from_reply(self._ok("compare", args), list(names))
+
+    def calibrate(self, fit: Mapping[str, Sequence[float]], names: Sequence[str],
+                  times: ArrayLike, poses: ArrayLike, *, twists: ArrayLike | None = None,
+                  slot: str | None = None, apply: bool = False,
+                  max_predictions: int | None = None, population: int | None = None,
+                  seed: int | None = None, timeout: float | None = None
+                  ) -> CalibrationResult:
+        """Fit ``fit``'s parameters ({"box.friction": (low, high), "gravity": ...}) so that
+        a prediction from the first sample (or snapshot ``slot``) lands where ``names`` were
+        seen at ``times`` (``poses``: samples x bodies rows of 7, NaN: not seen). The
+        first sample's twists are ``twists``, or estimated from the first samples. With
+        ``apply`` the fitted values are set in this world; otherwise it is not changed.
+        ``observed_in(recording)`` (galton.client) gives names, times and poses."""
+        args = calibrate_args(fit, names, times, poses, twists, {
+            "slot": slot, "apply": apply, "max_predictions": max_predictions,
+            "population": population, "seed": seed})
+        return CalibrationResult.from_reply(self._ok("calibrate", args, timeout))
 
 
 def spread_arg(spread: ArrayLike | float, count: int) -> float | bytes:

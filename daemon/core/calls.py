@@ -21,6 +21,18 @@ class Sampler(Protocol):
     def result(self, steps: int) -> dict[str, Any]: ...
 
 
+class Driver(Protocol):
+    """A side job that is no plain stepping (calibrate's search): it does one chunk of
+    work at a time between the live world's steps, and makes the reply when finished."""
+
+    @property
+    def finished(self) -> bool: ...
+
+    def advance(self) -> int: ...  # one chunk; returns the steps it took
+
+    def result(self) -> dict[str, Any]: ...
+
+
 @dataclass
 class Call:
     """One request: which op, its bytes, and how to answer it (exactly once)."""
@@ -69,6 +81,7 @@ class StepJob:
     scratch: bool = False  # its world is a prediction's copy, closed when the job ends
     source: World | None = None  # the world a prediction copied: pausing it ends the job
     futures: FutureSet | None = None  # a prediction's futures (world: the first of them)
+    driver: Driver | None = None  # a side job's own work in place of plain steps
 
     @property
     def done(self) -> int:

@@ -34,6 +34,8 @@ def at_rest(world: World, job: StepJob) -> bool:
 def job_result(world: World, job: StepJob) -> dict[str, Any]:
     """{steps}, the states it asked to read (after the last step, verified), and with
     until_rest whether they rest; a prediction: its samples."""
+    if job.driver is not None:
+        return job.driver.result()
     if job.sampler is not None:
         return job.sampler.result(job.done)
     result: dict[str, Any] = {"steps": job.done}

@@ -21,6 +21,9 @@ CHUNK_WALL_S = 0.002
 
 def run_chunk(loop: JobEnd, job: StepJob) -> None:
     """One chunk of a side job's steps; answers it when done, at rest, or failed."""
+    if job.driver is not None:
+        run_driven(loop, job)
+        return
     world = job.world
     assert world is not None
     count = min(job.steps_to_next_check(), max(1, int(CHUNK_WALL_S / job.step_cost)))
@@ -49,6 +52,26 @@ def run_chunk(loop: JobEnd, job: StepJob) -> None:
                                             f"{brief(str(exc))}"))
         return
     if finished or resting:
+        loop.end_job()
+        loop.finish_job(job)
+
+
+def run_driven(loop: JobEnd, job: StepJob) -> None:
+    """One chunk of a driven side job (calibrate's: one prediction); answers it when its
+    driver has finished, or failed."""
+    assert job.driver is not None
+    try:
+        job.remaining = max(0, job.remaining - job.driver.advance())
+        finished = job.driver.finished
+    except RemoteError as error:
+        end(loop, job, error)
+        return
+    except Exception as exc:
+        log.exception("a driven side job failed")
+        end(loop, job, OperationFailedError(f"the engine failed: {type(exc).__name__}: "
+                                            f"{brief(str(exc))}"))
+        return
+    if finished:
         loop.end_job()
         loop.finish_job(job)
 

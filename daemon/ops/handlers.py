@@ -21,7 +21,7 @@ from collections.abc import Callable, Iterable
 from types import ModuleType
 from typing import Any
 
-from galton.daemon.core import predict
+from galton.daemon.core import calibrate, predict
 from galton.daemon.core.calls import Call
 from galton.daemon.core.context import OpContext, SceneContext
 from galton.daemon.ops import control, streams, time_control, worlds
@@ -62,7 +62,7 @@ def _scene(name: str, apply: ops.SceneOp) -> Handler:
 # (core/predict.py still binds predict where it is written: its adapter moves to ops/ once
 # that module's own changes have landed.)
 OP_MODULES: tuple[ModuleType, ...] = (ops, ops_joints, ops_perception, worlds, time_control,
-                                      control, streams, predict)
+                                      control, streams, predict, calibrate)
 
 
 def collect(modules: Iterable[ModuleType]) -> dict[str, Handler]:

@@ -259,6 +259,8 @@ CALLS: dict[str, Callable[[Client], object]] = {
     "delete_snapshot": lambda c: c.delete_snapshot("s"),
     "predict": lambda c: c.predict(0.1),
     "compare": lambda c: c.compare(["a"], np.zeros(7)),
+    "calibrate": lambda c: c.calibrate({"a.friction": (0, 1)}, ["a"], [0, 1],
+                                       np.zeros((2, 1, 7))),
     "render": lambda c: c.render(camera((0, 0, 1), (0, 0, 0), up=(0, 1, 0))),
     "add_camera": lambda c: c.add_camera("cam", camera((0, 0, 1), (0, 0, 0), up=(0, 1, 0))),
     "remove_camera": lambda c: c.remove_camera("cam"),

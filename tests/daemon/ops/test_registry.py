@@ -73,6 +73,6 @@ def test_client_timeouts_follow_the_declaration(op: Operation) -> None:
 def test_only_status_is_fast_and_only_stepping_operations_are_long_running() -> None:
     assert [name for name, op in OPERATIONS.items() if op.fast] == ["status"]
     assert [name for name, op in OPERATIONS.items() if op.steps] == ["step", "run_until",
-                                                                      "predict"]
+                                                                      "predict", "calibrate"]
     assert all(op.mutates for op in OPERATIONS.values() if op.steps and op.name != "predict")
     assert operation("spawn").timeout_floor_s >= 30
