@@ -24,7 +24,6 @@ from galton.daemon.core.observations import (
     sample_times,
     start_twists,
 )
-from galton.daemon.ops.binding import handles
 from galton.daemon.world.scene import World
 from galton.daemon.world.snapshot import clone_of, decode, world_from
 from galton.protocol import (
@@ -149,7 +148,6 @@ def latin_hypercube(count: int, dimensions: int, rng: np.random.Generator) -> np
     return points
 
 
-@handles("calibrate")
 def calibrate(loop: PredictContext, call: Call, request: Calibrate) -> None:
     """Start a calibration job (answered when its search ends)."""
     if loop.job is not None:

@@ -16,7 +16,6 @@ from galton.daemon.core.context import PredictContext
 from galton.daemon.core.reply_limit import VALUE_BYTES, reads_size, require_room
 from galton.daemon.ops import joints as ops_joints
 from galton.daemon.ops import scene as ops
-from galton.daemon.ops.binding import handles
 from galton.daemon.world import futures as fs
 from galton.daemon.world.futures import FutureSet
 from galton.daemon.world.scene import World
@@ -88,7 +87,6 @@ class PredictSampler:
         return out
 
 
-@handles("predict")
 def predict(loop: PredictContext, call: Call, request: rq.Predict) -> None:
     """Start a prediction job (answered when its horizon is done)."""
     if loop.job is not None:

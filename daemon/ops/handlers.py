@@ -21,10 +21,9 @@ from collections.abc import Callable, Iterable
 from types import ModuleType
 from typing import Any
 
-from galton.daemon.core import calibrate, predict
 from galton.daemon.core.calls import Call
 from galton.daemon.core.context import OpContext, SceneContext
-from galton.daemon.ops import control, streams, time_control, worlds
+from galton.daemon.ops import control, look_ahead, streams, time_control, worlds
 from galton.daemon.ops import joints as ops_joints
 from galton.daemon.ops import perception as ops_perception
 from galton.daemon.ops import scene as ops
@@ -59,10 +58,8 @@ def _scene(name: str, apply: ops.SceneOp) -> Handler:
 
 # The modules whose marked functions are handlers (daemon/ops/binding.py): a module that
 # serves operations is listed here once, then each new handler in it binds itself.
-# (core/predict.py still binds predict where it is written: its adapter moves to ops/ once
-# that module's own changes have landed.)
 OP_MODULES: tuple[ModuleType, ...] = (ops, ops_joints, ops_perception, worlds, time_control,
-                                      control, streams, predict, calibrate)
+                                      control, streams, look_ahead)
 
 
 def collect(modules: Iterable[ModuleType]) -> dict[str, Handler]:

@@ -44,9 +44,8 @@ def test_a_marked_handler_binds_itself_and_twice_is_refused() -> None:
     assert collect([module])["get_bounds"] is module.bounds_again
 
 
-# predict's handler is still written in core/predict.py (to move to ops/ once that module's
-# own changes have landed); every other operation's is in ops/.
-BOUND_OUTSIDE_OPS = {"predict"}
+# Every operation's handler is bound in ops/ (thin adapters where the work lives elsewhere).
+BOUND_OUTSIDE_OPS: set[str] = set()
 
 
 def test_every_handler_is_bound_in_ops() -> None:
