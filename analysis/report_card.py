@@ -213,8 +213,20 @@ def about_lines(card: CardResults) -> list[str]:
             f"- command: `{config.get('command', 'galton-client report-card')}`",
             *([f"- the Galton trials ran on a pool of {len(config['pool'])} daemons: "
                f"{', '.join(config['pool'])}"] if config.get("pool") else []),
+            *ray_lines(config.get("executor") or {}),
             "- the Galton board is built from primitives (paper) and, as the paper imported "
             "it, from triangle meshes (paper-mesh; not measured on engines without meshes)"]
+
+
+def ray_lines(executor: dict[str, Any]) -> list[str]:
+    """Where the Galton trials ran when on Ray, and the trials it retried."""
+    if executor.get("kind") != "ray":
+        return []
+    retried = [f"{r['engine']} {r['balls']} balls rep {r['repetition'] + 1}"
+               for r in executor.get("retried", [])]
+    return [f"- the Galton trials ran on Ray ({executor.get('address')}): "
+            f"{executor.get('actors')} actors on {executor.get('nodes')} node(s); retried: "
+            f"{', '.join(retried) or 'none'}"]
 
 
 def render_card(card: CardResults, plots: list[str] | None = None) -> str:
