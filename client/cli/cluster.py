@@ -6,7 +6,6 @@ has every other command.
 
 from __future__ import annotations
 
-import importlib.util
 from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import TYPE_CHECKING, Annotated
@@ -42,9 +41,12 @@ def refuse_with_ray(ray: str | None, **others: object) -> None:
 
 
 def require_ray() -> None:
-    if importlib.util.find_spec("ray") is None:
+    """Ray is importable, or a clear error naming the extra that brings it."""
+    try:
+        import ray  # noqa: F401
+    except ImportError as error:
         raise InvalidArgumentError(
-            "--ray needs the [cluster] extra: pip install 'galton-bridge[cluster]'")
+            "--ray needs the [cluster] extra: pip install 'galton-bridge[cluster]'") from error
 
 
 @contextmanager
