@@ -1,64 +1,64 @@
 """The plan on Ray: ``galton-client bench --ray ADDRESS`` (and ``sweep``, ``report-card``).
 
-Each worker is a Ray actor (``DaemonActor``) that starts a daemon of its own on its node's
-loopback and holds the CPUs it reserves; each trial is a task on an actor, and the records
-stream back as they finish (``ray.wait``). Faults are Ray's to handle: an actor exits as
-soon as its daemon dies (a real process death, which Ray sees), Ray restarts it
-(``max_restarts``: a fresh daemon) and reruns the trial it held (``max_task_retries``).
-The driver learns of it from the actor's incarnation (a new one per start), and the
-results say which trials were retried. A trial is seeded by its own config, so it gives the
-same bins here as on a plain run.
+Each worker is a Ray actor (``ray_actor.DaemonActor``) that starts a daemon of its own on
+its node's loopback and holds the CPUs it reserves; each trial is a task on an actor, one in
+flight per actor, and the records stream back as they finish (``ray.wait``). Faults are
+Ray's to handle: an actor whose daemon dies exits, Ray restarts it (``max_restarts``: a
+fresh daemon, on any node with room) and reruns the trial it held (``max_task_retries``).
+The driver learns of it from the actor's incarnation, and the results say which trials were
+retried. Once no trial waits, an actor that finishes is stopped if the cluster is full, so
+that an actor displaced by a lost node finds room to restart in. A trial is seeded by its
+own config, so it gives the same bins here as on a plain run.
 
-This is the only module that imports ``ray`` (the ``[cluster]`` extra); nothing imports it
-unless ``--ray`` is given.
+This module and ``ray_actor`` are the only ones that import ``ray`` (the ``[cluster]``
+extra); nothing imports them unless ``--ray`` is given.
 """
 
 from __future__ import annotations
 
 import logging
-import os
-import tempfile
-import threading
-import uuid
 from collections import deque
 from collections.abc import Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import ray
-from ray.exceptions import RayActorError, RayTaskError
+from ray.exceptions import (
+    ActorUnavailableError,
+    GetTimeoutError,
+    RayActorError,
+    RayTaskError,
+)
 
 from galton.analysis.records import TrialRecord
 from galton.client.bench.executor import Ran, Retry, TrialHooks
-from galton.client.bench.picture import Animation, first_trials, take_pictures
-from galton.client.bench.trial import TrialConfig, run_trial
-from galton.client.sdk.client import Client
-from galton.client.sdk.embedded import EmbeddedDaemon
-from galton.protocol import (
-    DaemonUnreachableError,
-    GaltonError,
-    InvalidArgumentError,
-    RequestTimeoutError,
+from galton.client.bench.picture import Animation, first_trials
+from galton.client.bench.ray_actor import (
+    PICTURES_FOLDER,
+    RECORDING_KEY,
+    ActorFacts,
+    ActorResult,
+    DaemonActor,
 )
+from galton.client.bench.trial import TrialConfig
+from galton.protocol import DaemonUnreachableError, GaltonError, InvalidArgumentError
 
 RAY_LOCAL = "local"
 # How often Ray may restart one actor, and rerun one trial, before the run fails.
 MAX_RESTARTS = 3
 MAX_TASK_RETRIES = 3
-# The exit status of an actor whose daemon died (any non-zero status: Ray restarts it).
-DAEMON_LOST_EXIT = 75
 ACTOR_START_TIMEOUT_S = 300.0
 CLOSE_TIMEOUT_S = 30.0
-RECORDING_KEY = "recording"
+RETRY_REASON = "its actor died (its daemon or node lost); Ray restarted it and reran the trial"
 
 
 @dataclass(frozen=True)
 class RaySettings:
     """Where and how wide: a cluster address (``local``, ``auto``, ``ray://HOST:PORT``),
     the CPUs each actor reserves, and how many actors (None: as many as the cluster's CPUs
-    hold, at most ``most``)."""
+    hold, at most the trials)."""
 
     address: str = RAY_LOCAL
     cpus_per_daemon: float = 1.0
@@ -72,92 +72,20 @@ class RaySettings:
             raise InvalidArgumentError(f"--ray-actors must be at least 1, got {self.actors}")
 
 
-@dataclass(frozen=True)
-class ActorFacts:
-    """What an actor says of itself: its daemon (pid, endpoint, instance), its node, and
-    its incarnation (new at each start, so a restart is seen)."""
-
-    name: str
-    incarnation: str
-    node: str
-    daemon_pid: int
-    endpoint: str
-    host: dict[str, Any]
-
-
-@dataclass
-class ActorResult:
-    """A finished trial: its record, the incarnation that ran it, and the files it made
-    (pictures, a recording) as bytes, since the actor's node may not be the driver's."""
-
-    record: TrialRecord
-    incarnation: str
-    files: dict[str, bytes] = field(default_factory=dict)
-    taken: dict[str, str] = field(default_factory=dict)
-
-
-class DaemonActor:
-    """A Ray actor hosting one daemon on its node's loopback; trials run through the SDK.
-
-    It exits the moment its daemon dies (or stops answering mid-trial), so Ray sees a dead
-    actor, restarts it with a fresh daemon and reruns the trial it held."""
-
-    def __init__(self, name: str, engine: str, timeout: float) -> None:
-        self.name = name
-        self.incarnation = uuid.uuid4().hex
-        self.closing = False
-        self.daemon = EmbeddedDaemon(engine, instance=name).start()
-        self.client = Client(name, self.daemon.endpoint, timeout=timeout)
-        threading.Thread(target=self._exit_with_daemon, name="daemon-watch",
-                         daemon=True).start()
-
-    def _exit_with_daemon(self) -> None:
-        assert self.daemon.process is not None
-        self.daemon.process.wait()
-        if not self.closing:
-            os._exit(DAEMON_LOST_EXIT)
-
-    def facts(self) -> ActorFacts:
-        assert self.daemon.process is not None
-        return ActorFacts(self.name, self.incarnation, ray.get_runtime_context().get_node_id(),
-                          self.daemon.process.pid, self.daemon.endpoint,
-                          self.client.capabilities().host)
-
-    def run(self, trial: TrialConfig, pictures: bool, animation: Animation | None
-            ) -> ActorResult:
-        """One trial (with its pictures, if asked, and its recording, as bytes)."""
-        with tempfile.TemporaryDirectory(prefix="galton-ray-") as folder:
-            here = Path(folder)
-            local = trial if trial.recording is None else replace(
-                trial, recording=here / RECORDING_KEY)
-            try:
-                record = run_trial(self.client, local)
-                taken = take_pictures(self.client, trial, here / "pictures",
-                                      animation) if pictures else {}
-            except (DaemonUnreachableError, RequestTimeoutError):
-                self.daemon.process.kill()  # type: ignore[union-attr]
-                os._exit(DAEMON_LOST_EXIT)  # gone or silent: Ray restarts us, reruns it
-            record.daemon = self.name
-            files = {p.relative_to(here).as_posix(): p.read_bytes()
-                     for p in here.rglob("*") if p.is_file()}
-        return ActorResult(record, self.incarnation, files, taken)
-
-    def close(self) -> None:
-        self.closing = True
-        self.client.close()
-        self.daemon.stop()
-
-
 class RayExecutor:
-    """The executor over ``DaemonActor``s (executor.py): one trial in flight per actor."""
+    """The executor over ``DaemonActor``s (executor.py); start it with ``ray_executor``."""
 
-    def __init__(self, settings: RaySettings, actors: dict[str, Any],
-                 facts: dict[str, ActorFacts]) -> None:
+    def __init__(self, settings: RaySettings, engine: str, timeout: float) -> None:
         self.settings = settings
-        self.actors = actors
-        self.facts = facts
-        self.incarnations = {name: f.incarnation for name, f in facts.items()}
+        self.engine = engine
+        self.timeout = timeout
+        self.actors: dict[str, Any] = {}  # name -> actor handle (None once stopped)
+        self.facts: dict[str, ActorFacts] = {}
+        self.incarnations: dict[str, str] = {}
         self.retried: list[Retry] = []  # every run's, in the order seen
+        self._remote = ray.remote(DaemonActor).options(
+            num_cpus=settings.cpus_per_daemon, max_restarts=MAX_RESTARTS,
+            max_task_retries=MAX_TASK_RETRIES, scheduling_strategy="SPREAD")
 
     def workers(self) -> list[str]:
         return list(self.actors)
@@ -170,7 +98,45 @@ class RayExecutor:
 
     def run(self, plan: list[TrialConfig], hooks: TrialHooks, pictures: Path | None = None,
             animation: Animation | None = None) -> Ran:
+        self.start([name for name, actor in self.actors.items() if actor is None])
         return _RayRun(self, plan, hooks, pictures, animation).run()
+
+    def start(self, names: list[str]) -> None:
+        """These actors started (spread over the nodes), each with its daemon ready."""
+        started: dict[str, Any] = {
+            name: self._remote.remote(name, self.engine, self.timeout) for name in names}
+        self.actors |= started
+        try:
+            facts = ray.get([a.facts.remote() for a in started.values()],
+                            timeout=ACTOR_START_TIMEOUT_S)
+        except (RayActorError, RayTaskError, GetTimeoutError) as error:
+            raise DaemonUnreachableError(
+                f"--ray {self.settings.address}: the actors' daemons did not start ({error}); "
+                "each node needs galton-bridge with its engines and the [cluster] extra, in "
+                "the same Python as the driver") from error
+        for fact in facts:
+            self.facts[fact.name] = fact
+            self.incarnations[fact.name] = fact.incarnation
+
+    def stop(self, name: str) -> None:
+        """Stop this actor's daemon, then the actor (its CPUs freed)."""
+        actor, self.actors[name] = self.actors[name], None
+        if actor is not None:
+            try:
+                ray.wait([actor.close.remote()], timeout=CLOSE_TIMEOUT_S)
+            finally:
+                ray.kill(actor)
+
+    def make_room(self, name: str) -> None:
+        """Stop this idle actor if the cluster has no room for one more: an actor that
+        lost its node may be waiting for that room to restart in."""
+        free = ray.available_resources().get("CPU", 0.0)  # type: ignore[no-untyped-call]
+        if free < self.settings.cpus_per_daemon:
+            self.stop(name)
+
+    def close(self) -> None:
+        for name in list(self.actors):
+            self.stop(name)
 
 
 class _RayRun:
@@ -186,6 +152,7 @@ class _RayRun:
         self.in_flight: dict[Any, tuple[str, int, str]] = {}
         self.records: list[TrialRecord | None] = [None] * len(plan)
         self.taken: dict[str, str] = {}
+        self.unavailable: dict[int, int] = {}  # trial -> times its actor was lost under it
 
     def run(self) -> Ran:
         for name in self.executor.actors:
@@ -193,46 +160,63 @@ class _RayRun:
         while self.in_flight:
             (ready,), _ = ray.wait(list(self.in_flight), num_returns=1)
             name, index, incarnation = self.in_flight.pop(ready)
-            self.settle(name, index, incarnation, self.result(ready, name, index))
-            self.submit(name)
+            result = self.result(ready, name, index)
+            if result is None:  # lost with its node: again, once Ray has restarted it
+                self.send(name, index, incarnation)
+                continue
+            self.settle(name, index, incarnation, result)
+            if not self.submit(name) and self.in_flight:
+                self.executor.make_room(name)
         records = [r for r in self.records if r is not None]
         hosts = {name: f.host for name, f in self.executor.facts.items()}
         return Ran(records, {}, self.taken, hosts)
 
-    def submit(self, name: str) -> None:
+    def submit(self, name: str) -> bool:
+        """Hand this actor the next trial; False if none is left."""
         if not self.pending:
-            return
+            return False
         index = self.pending.popleft()
-        trial = self.plan[index]
-        ref = self.executor.actors[name].run.remote(trial, index in self.firsts,
-                                                    self.animation)
-        self.in_flight[ref] = (name, index, self.executor.incarnations[name])
-        self.hooks.started(name, trial)
+        self.send(name, index, self.executor.incarnations[name])
+        self.hooks.started(name, self.plan[index])
+        return True
 
-    def result(self, ref: Any, name: str, index: int) -> ActorResult:
-        """The trial's result; its own error if it failed, or why Ray gave it up."""
+    def send(self, name: str, index: int, incarnation: str) -> None:
+        """The trial as a task on the actor (queued by Ray while the actor restarts)."""
+        ref = self.executor.actors[name].run.remote(self.plan[index], index in self.firsts,
+                                                    self.animation)
+        self.in_flight[ref] = (name, index, incarnation)
+
+    def result(self, ref: Any, name: str, index: int) -> ActorResult | None:
+        """The trial's result; None if its actor was lost under it (a node lost: Ray
+        gives such a task up at once, though it restarts the actor); the trial's own error
+        if it failed, or why Ray gave it up."""
         try:
             result: ActorResult = ray.get(ref)
         except RayTaskError as error:
-            cause = error.cause
-            if isinstance(cause, GaltonError):
-                raise cause from None
+            if isinstance(error.cause, GaltonError):
+                raise error.cause from None
             raise
+        except ActorUnavailableError as error:
+            self.unavailable[index] = self.unavailable.get(index, 0) + 1
+            if self.unavailable[index] <= MAX_TASK_RETRIES:
+                return None
+            raise self.not_run(name, index, error) from error
         except RayActorError as error:
-            trial = self.plan[index]
-            raise DaemonUnreachableError(
-                f"Ray actor {name} died and was not restarted (up to {MAX_RESTARTS} restarts, "
-                f"{MAX_TASK_RETRIES} reruns of a trial): trial {index + 1} ({trial.engine}, "
-                f"{trial.balls} balls, rep {trial.repetition + 1}) did not run: "
-                f"{error}") from error
+            raise self.not_run(name, index, error) from error
         return result
+
+    def not_run(self, name: str, index: int, error: RayActorError) -> DaemonUnreachableError:
+        trial = self.plan[index]
+        return DaemonUnreachableError(
+            f"Ray actor {name} died and was not restarted (up to {MAX_RESTARTS} restarts, "
+            f"{MAX_TASK_RETRIES} reruns of a trial): trial {index + 1} ({trial.engine}, "
+            f"{trial.balls} balls, rep {trial.repetition + 1}) did not run: {error}")
 
     def settle(self, name: str, index: int, incarnation: str, result: ActorResult) -> None:
         trial = self.plan[index]
         if result.incarnation != incarnation:
             retry = Retry(name, index, trial.engine, trial.balls, trial.repetition,
-                          "its actor died (its daemon lost) and Ray restarted it and reran "
-                          "the trial")
+                          RETRY_REASON)
             self.executor.retried.append(retry)
             if self.hooks.on_retry is not None:
                 self.hooks.on_retry(retry)
@@ -243,11 +227,12 @@ class _RayRun:
 
     def write_files(self, trial: TrialConfig, result: ActorResult) -> None:
         """The actor's pictures into the pictures folder, its recording where asked."""
+        pictures = f"{PICTURES_FOLDER}/"
         for name, data in result.files.items():
             if name == RECORDING_KEY and trial.recording is not None:
                 target = trial.recording
-            elif self.pictures is not None and name.startswith("pictures/"):
-                target = self.pictures / name.removeprefix("pictures/")
+            elif self.pictures is not None and name.startswith(pictures):
+                target = self.pictures / name.removeprefix(pictures)
             else:
                 continue
             target.parent.mkdir(parents=True, exist_ok=True)
@@ -286,48 +271,20 @@ def actor_count(settings: RaySettings, most: int) -> int:
     return wanted
 
 
-def start_actors(count: int, settings: RaySettings, engine: str, timeout: float
-                 ) -> tuple[dict[str, Any], dict[str, ActorFacts]]:
-    """``count`` actors spread over the nodes, each with its daemon ready."""
-    remote = ray.remote(DaemonActor).options(
-        num_cpus=settings.cpus_per_daemon, max_restarts=MAX_RESTARTS,
-        max_task_retries=MAX_TASK_RETRIES, scheduling_strategy="SPREAD")
-    actors: dict[str, Any] = {f"ray-{i + 1}": remote.remote(f"ray-{i + 1}", engine, timeout)
-                              for i in range(count)}
-    try:
-        facts = ray.get([a.facts.remote() for a in actors.values()],
-                        timeout=ACTOR_START_TIMEOUT_S)
-    except (RayActorError, RayTaskError, ray.exceptions.GetTimeoutError) as error:
-        stop_actors(actors)
-        raise DaemonUnreachableError(
-            f"--ray {settings.address}: the actors' daemons did not start ({error}); each "
-            "node needs galton-bridge with the engines installed") from error
-    return actors, dict(zip(actors, facts, strict=True))
-
-
-def stop_actors(actors: dict[str, Any]) -> None:
-    """Stop each actor's daemon, then the actor."""
-    closing = [a.close.remote() for a in actors.values()]
-    try:
-        ray.wait(closing, num_returns=len(closing), timeout=CLOSE_TIMEOUT_S)
-    finally:
-        for actor in actors.values():
-            ray.kill(actor)
-
-
 @contextmanager
 def ray_executor(settings: RaySettings, engine: str, timeout: float, most: int
                  ) -> Iterator[RayExecutor]:
     """A RayExecutor on the cluster at ``settings.address`` with its actors started (their
-    daemons with ``engine``); on exit the actors are stopped and a Ray instance started
-    here (``local``) is shut down."""
+    daemons with ``engine``; at most ``most`` unless the settings say); on exit the actors
+    are stopped and a Ray instance started here (``local``) is shut down."""
     owned = connect(settings.address)
     try:
-        actors, facts = start_actors(actor_count(settings, most), settings, engine, timeout)
+        executor = RayExecutor(settings, engine, timeout)
         try:
-            yield RayExecutor(settings, actors, facts)
+            executor.start([f"ray-{i + 1}" for i in range(actor_count(settings, most))])
+            yield executor
         finally:
-            stop_actors(actors)
+            executor.close()
     finally:
         if owned:
             ray.shutdown()
