@@ -79,7 +79,7 @@ def test_the_base_install_names_no_engine_and_no_plotting() -> None:
     assert extras["all"] == ["galton-bridge[daemon,bench,ode,dart,view]"]
     assert {"yourdfpy"} <= {d.split(">")[0] for d in extras["ode"]}
     assert extras["dart"] == ["dartpy>=6.20"]
-    assert {d.split(">")[0] for d in extras["cluster"]} == {"ray"}
+    assert {d.split(">")[0] for d in extras["cluster"]} == {"ray[client]"}
     assert "cluster" in extras["test"][0] and "ray" not in " ".join(extras["all"])
 
 
