@@ -1,7 +1,8 @@
 """The install's extras hold: a client without the ``[daemon]`` and ``[bench]`` extras drives
-a daemon (SDK and CLI), a workstation without engines runs the benchmark against a
-remote daemon, and nothing imports Ray (``[cluster]``) unless ``--ray`` is given. The client runs in a subprocess in which importing a left-out package fails,
-as it would where that package is not installed; the daemon it drives is a real one."""
+a daemon (SDK and CLI), a workstation without engines runs the benchmark against a remote
+daemon, and nothing imports Ray (``[cluster]``) unless ``--ray`` is given. The client runs
+in a subprocess in which importing a left-out package fails, as it would where that
+package is not installed; the daemon it drives is a real one."""
 
 from __future__ import annotations
 

@@ -10,6 +10,7 @@ import os
 import signal
 import threading
 from collections.abc import Iterator
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -26,7 +27,9 @@ from galton.client.bench.executor import Retry, TrialHooks
 from galton.client.bench.experiment import ExperimentConfig, run_experiment, run_plan
 from galton.client.bench.ray_executor import RayExecutor, RaySettings, ray_executor
 from galton.client.bench.sweep import run_sweep
+from galton.client.cli.bench import executor_lines
 from galton.client.report_card.pooled import executor_trials
+from galton.client.sdk.recording import Recording
 
 TIMEOUT_S = 30.0
 # Four logical CPUs on any machine: room for the module's two actors and two more.
@@ -68,11 +71,18 @@ def plain(daemons: dict[str, EmbeddedDaemon]) -> ExperimentResults:
 
 
 def test_ray_gives_the_plain_runs_bins_trial_for_trial(
-        executor: RayExecutor, plain: ExperimentResults) -> None:
+        executor: RayExecutor, plain: ExperimentResults, tmp_path: Path) -> None:
+    """... and the files the actors made (a picture, the recordings) come back here."""
     finished: list[str] = []
-    results = run_plan(executor, small_config(), TrialHooks(
-        on_trial=lambda worker, trial, record: finished.append(worker)))
+    config = replace(small_config(), recordings=tmp_path / "recordings")
+    results = run_plan(executor, config, TrialHooks(
+        on_trial=lambda worker, trial, record: finished.append(worker)), pictures=tmp_path)
     assert bins(results.trials) == bins(plain.trials)
+    assert results.extra["pictures"] == {
+        "mujoco: the board after its first trial": "board_mujoco.png"}
+    assert (tmp_path / "board_mujoco.png").read_bytes().startswith(b"\x89PNG")
+    assert all(Recording.load(trial.recording).times.size  # type: ignore[arg-type]
+               for trial in config.trials())
     assert all(t.settled == t.balls for t in results.trials)
     assert plain.executor == {"kind": "local"}
     assert results.executor == {"kind": "ray", "address": "local", "nodes": 1, "actors": 2,
@@ -125,3 +135,12 @@ def test_ray_refuses_daemons_already_running_and_more_actors_than_cpus(
     assert wide.exit_code == 1
     assert "9 Ray actor(s) of 1 CPU(s) each need 9 CPUs; the cluster at local has 4" in (
         wide.output)
+
+
+def test_the_output_says_which_trials_were_retried() -> None:
+    retry = Retry("ray-2", 1, "mujoco", 10, 1, "its actor died")
+    said = executor_lines({"kind": "ray", "address": "auto", "nodes": 2, "actors": 4,
+                           "retried": [retry.to_dict()]})
+    assert said == ["Ran on Ray (auto): 4 actor(s) on 2 node(s); 1 trial(s) retried",
+                    "  retried: trial 2 (mujoco 10 balls rep 2) on ray-2: its actor died"]
+    assert executor_lines({"kind": "local"}) == []
