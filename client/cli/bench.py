@@ -239,6 +239,7 @@ def _run_spread(executor: Executor, config: ExperimentConfig, quiet: bool, pictu
 
         def advance(name: str, trial: TrialConfig, record: TrialRecord) -> None:
             if journal is not None:
+                journal.executor = executor.describe()  # with the retries so far
                 journal.add(trial, record)
             progress.update(rows[name], advance=1, description=(
                 f"{name}: {_trial_text(trial)}: lost {record.lost}, RTF {record.rtf or 0:.2f}"))
