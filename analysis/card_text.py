@@ -5,6 +5,8 @@ they bear on, the paper's rows beside their stand-ins, and the RTF curve."""
 
 from __future__ import annotations
 
+from typing import Any
+
 from galton.analysis.card_blocks import Block, Grid, Heading, Items, Para, Picture
 from galton.analysis.card_intervals import NEAR_LINE, measure_text, number
 from galton.analysis.card_paper import paper_rows
@@ -46,8 +48,20 @@ def about_lines(card: CardResults) -> list[str]:
             f"command: `{config.get('command', 'galton-client report-card')}`",
             *([f"the Galton trials ran on a pool of {len(config['pool'])} daemons: "
                f"{', '.join(config['pool'])}"] if config.get("pool") else []),
+            *ray_lines(config.get("executor") or {}),
             "each figure is followed by its 95 % interval in brackets (docs/report-card/"
             "reading.md says how each is made); `(#2)` is a rank, shared on a tie"]
+
+
+def ray_lines(executor: dict[str, Any]) -> list[str]:
+    """Where the Galton trials ran when on Ray, and the trials it retried."""
+    if executor.get("kind") != "ray":
+        return []
+    retried = [f"{r['engine']} {r['balls']} balls rep {r['repetition'] + 1}"
+               for r in executor.get("retried", [])]
+    return [f"the Galton trials ran on Ray ({executor.get('address')}): "
+            f"{executor.get('actors')} actors on {executor.get('nodes')} node(s); retried: "
+            f"{', '.join(retried) or 'none'}"]
 
 
 def _versus(spec: CriterionSpec, table: Table, key: str, a: str, b: str) -> str:

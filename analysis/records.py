@@ -134,6 +134,9 @@ class ExperimentResults:
     extra: dict[str, Any] = field(default_factory=dict)
     # The machines that ran the trials, by daemon instance (capabilities' ``host``).
     hosts: dict[str, dict[str, Any]] = field(default_factory=dict)
+    # Where the trials ran: {"kind": "local"}, {"kind": "pool", ...} or {"kind": "ray", ...}
+    # (empty in results written before executors were recorded).
+    executor: dict[str, Any] = field(default_factory=dict)
     schema: int = RESULTS_SCHEMA
 
     def to_dict(self) -> dict[str, Any]:
@@ -151,7 +154,7 @@ class ExperimentResults:
             raise RecordError(
                 f"results schema {data['schema']} is newer than this reader ({RESULTS_SCHEMA})")
         meta = {k: data[k] for k in ("date", "host", "versions", "command", "extra", "hosts",
-                                     "schema") if k in data}
+                                     "executor", "schema") if k in data}
         return cls(trials=[TrialRecord.from_dict(t) for t in data["trials"]], **meta)
 
     def to_json(self, path: str | Path) -> Path:

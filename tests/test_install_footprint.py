@@ -1,7 +1,8 @@
 """The install's extras hold: a client without the ``[daemon]`` and ``[bench]`` extras drives
-a daemon (SDK and CLI), and a workstation without engines runs the benchmark against a
-remote daemon. The client runs in a subprocess in which importing a left-out package fails,
-as it would where that package is not installed; the daemon it drives is a real one."""
+a daemon (SDK and CLI), a workstation without engines runs the benchmark against a remote
+daemon, and nothing imports Ray (``[cluster]``) unless ``--ray`` is given. The client runs
+in a subprocess in which importing a left-out package fails, as it would where that
+package is not installed; the daemon it drives is a real one."""
 
 from __future__ import annotations
 
@@ -21,6 +22,7 @@ ROOT = Path(__file__).resolve().parents[1]
 ENGINES = ("mujoco", "pybullet", "pybullet_data", "pybullet_utils", "dartpy")
 BENCH_ONLY = ("matplotlib", "scipy")
 DAEMON_ONLY = ("psutil",)
+CLUSTER_ONLY = ("ray",)
 BLOCKER = textwrap.dedent('''
     import importlib.abc, os, sys
 
@@ -69,7 +71,7 @@ def test_the_blocker_blocks(tmp_path: Path) -> None:
 def test_the_base_install_names_no_engine_and_no_plotting() -> None:
     project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
     base = " ".join(project["dependencies"])
-    for left_out in ("mujoco", "pybullet", "dartpy", "matplotlib", "scipy", "psutil"):
+    for left_out in ("mujoco", "pybullet", "dartpy", "matplotlib", "scipy", "psutil", "ray"):
         assert left_out not in base
     extras = project["optional-dependencies"]
     assert {"mujoco", "pybullet", "psutil"} <= {d.split(">")[0] for d in extras["daemon"]}
@@ -78,11 +80,13 @@ def test_the_base_install_names_no_engine_and_no_plotting() -> None:
     assert extras["all"] == ["galton-bridge[daemon,bench,ode,dart,view]"]
     assert {"yourdfpy"} <= {d.split(">")[0] for d in extras["ode"]}
     assert extras["dart"] == ["dartpy>=6.20"]
+    assert {d.split(">")[0] for d in extras["cluster"]} == {"ray[client]"}
+    assert "cluster" in extras["test"][0] and "ray" not in " ".join(extras["all"])
 
 
 @pytest.mark.parametrize("engine", ["pybullet"])
 def test_a_client_only_install_drives_a_daemon(daemon: EmbeddedDaemon, tmp_path: Path) -> None:
-    blocked = ENGINES + BENCH_ONLY + DAEMON_ONLY
+    blocked = ENGINES + BENCH_ONLY + DAEMON_ONLY + CLUSTER_ONLY
     target = ["--connect", daemon.endpoint, "--instance", daemon.instance]
     status = run_without(blocked, [console_command("galton-client"), *target, "status",
                                    "--json"], tmp_path)
@@ -99,13 +103,26 @@ def test_a_client_only_install_drives_a_daemon(daemon: EmbeddedDaemon, tmp_path:
 def test_a_workstation_without_engines_runs_the_bench_remotely(
         daemon: EmbeddedDaemon, tmp_path: Path) -> None:
     out = tmp_path / "results"
-    done = run_without(ENGINES + DAEMON_ONLY, [
+    done = run_without(ENGINES + DAEMON_ONLY + CLUSTER_ONLY, [
         console_command("galton-client"), "bench", "--connect", daemon.endpoint,
         "--instances", daemon.instance, "--engines", daemon.engine, "--board", "small",
         "--balls", "5", "--repetitions", "1", "--out", str(out), "--json"], tmp_path,
         timeout=240)
     assert done.returncode == 0, done.stderr
     assert (out / "results.json").is_file() and (out / "report.md").is_file()
+
+
+def test_ray_is_asked_for_only_with_ray(tmp_path: Path) -> None:
+    """Without the [cluster] extra, --ray says which extra to install (and no daemon or
+    trial starts); the runs above imported no Ray."""
+    done = run_without(CLUSTER_ONLY, [
+        console_command("galton-client"), "bench", "--ray", "local", "--engines", "mujoco",
+        "--board", "small", "--balls", "5", "--repetitions", "1", "--out",
+        str(tmp_path / "results")], tmp_path)
+    assert done.returncode == 1, done.stderr
+    assert "--ray needs the [cluster] extra: pip install 'galton-bridge[cluster]'" in (
+        done.stderr)
+    assert not (tmp_path / "results" / "results.json").exists()
 
 
 def test_the_daemon_runs_without_plotting(tmp_path: Path) -> None:

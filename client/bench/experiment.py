@@ -23,15 +23,13 @@ from galton.client.bench.defaults import (
     DEFAULT_MAX_SIM_TIME_S,
     DEFAULT_REPETITIONS,
 )
-from galton.client.bench.picture import Animation, animate_trial, first_trials, render_board
-from galton.client.bench.trial import (
-    DEFAULT_CHECK_INTERVAL_S,
-    TrialConfig,
-    run_trial,
-)
+from galton.client.bench.executor import Executor, LocalExecutor, TrialHooks
+from galton.client.bench.picture import Animation
+from galton.client.bench.picture import take_pictures as take_pictures  # moved; kept here
+from galton.client.bench.trial import DEFAULT_CHECK_INTERVAL_S, TrialConfig
 from galton.client.sdk.client import Client
 from galton.client.sdk.recording import SUFFIX as RECORDING_SUFFIX
-from galton.protocol import ENGINE_NAMES, GaltonError, InvalidArgumentError
+from galton.protocol import ENGINE_NAMES, InvalidArgumentError
 from galton.protocol.errors import did_you_mean
 
 
@@ -116,17 +114,22 @@ def run_experiment(clients: dict[str, Client], config: ExperimentConfig,
     """Run every trial of the plan on the daemon serving its engine. With ``pictures`` (a
     folder), each engine's first trial is rendered there once recorded (board_ENGINE.png)
     and, with ``animation``, replayed as an animated PNG (board_ENGINE_trial.png)."""
-    records, plan = [], config.trials()
-    firsts = first_trials(plan) if pictures is not None else {}
-    taken: dict[str, str] = {}
-    for index, trial in enumerate(plan):
-        record = run_trial(clients[trial.engine], trial)
-        records.append(record)
-        if index in firsts and pictures is not None:
-            taken |= take_pictures(clients[trial.engine], trial, pictures, animation)
-        if on_trial is not None:
-            on_trial(trial, record)
-    return experiment_results(records, config, {"pictures": taken} if taken else {})
+    hooks = TrialHooks(on_trial=None if on_trial is None else (
+        lambda _worker, trial, record: on_trial(trial, record)))
+    return run_plan(LocalExecutor(clients), config, hooks, pictures, animation)
+
+
+def run_plan(executor: Executor, config: ExperimentConfig, hooks: TrialHooks | None = None,
+             pictures: Path | None = None, animation: Animation | None = None,
+             plan: list[TrialConfig] | None = None) -> ExperimentResults:
+    """Run the plan (``config``'s, unless one is given: a sweep's grid) through
+    ``executor`` (executor.py); the results record the executor and what it adds."""
+    ran = executor.run(config.trials() if plan is None else plan, hooks or TrialHooks(),
+                       pictures, animation)
+    extra = ran.extra | ({"pictures": ran.pictures} if ran.pictures else {})
+    results = experiment_results(ran.records, config, extra, ran.hosts)
+    results.executor = executor.describe()
+    return results
 
 
 def experiment_results(records: list[TrialRecord], config: ExperimentConfig,
@@ -138,24 +141,6 @@ def experiment_results(records: list[TrialRecord], config: ExperimentConfig,
                              host=host_description(), versions=versions(),
                              command=" ".join(sys.argv),
                              extra=dict(config.extra) | (extra or {}), hosts=hosts or {})
-
-
-def take_pictures(sim: Client, trial: TrialConfig, folder: Path,
-                  animation: Animation | None) -> dict[str, str]:
-    """The finished trial's picture (and its replay's animation): file names by what they
-    show, or why there is none (an engine that cannot render leaves the bench going)."""
-    taken: dict[str, str] = {}
-    board, replay = f"{trial.engine}: the board after its first trial", (
-        f"{trial.engine}: its first trial, replayed")
-    try:
-        taken[board] = render_board(sim, trial.board,
-                                    folder / f"board_{trial.engine}.png").name
-        if animation is not None:
-            taken[replay] = animate_trial(
-                sim, trial, folder / f"board_{trial.engine}_trial.png", animation).name
-    except GaltonError as error:
-        taken.setdefault(board, f"no picture ({error})")
-    return taken
 
 
 def host_description() -> str:

@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 from galton.analysis.records import ExperimentResults, TrialRecord
 from galton.client.bench.experiment import ExperimentConfig, experiment_results
@@ -20,6 +21,7 @@ class Journal:
         self.path = out / RESULTS_JSON
         self._order = {_key(t): i for i, t in enumerate(config.trials())}
         self._done: dict[int, TrialRecord] = {}
+        self.executor: dict[str, Any] = {}  # results.json's "executor", once known
 
     def add(self, trial: TrialConfig, record: TrialRecord) -> None:
         """Keep this trial's record and save every record kept so far."""
@@ -29,7 +31,9 @@ class Journal:
 
     def results(self) -> ExperimentResults:
         records = [self._done[i] for i in sorted(self._done)]
-        return experiment_results(records, self.config, {"partial": True})
+        results = experiment_results(records, self.config, {"partial": True})
+        results.executor = dict(self.executor)
+        return results
 
     @property
     def count(self) -> int:

@@ -22,7 +22,7 @@ from galton.client.bench.build import ball_group
 from galton.client.bench.trial import TrialConfig, prepare_world
 from galton.client.sdk.client import Client
 from galton.client.sdk.perception import camera
-from galton.protocol import OperationFailedError
+from galton.protocol import GaltonError, OperationFailedError
 from galton.protocol.png import SIGNATURE, chunk, encode_png
 
 PICTURE_SIZE = (540, 720)  # width, height: the board is taller than wide
@@ -130,3 +130,21 @@ def first_trials(plan: list[TrialConfig]) -> dict[int, str]:
         if trial.engine not in found.values():
             found[index] = trial.engine
     return found
+
+
+def take_pictures(sim: Client, trial: TrialConfig, folder: Path,
+                  animation: Animation | None) -> dict[str, str]:
+    """The finished trial's picture (and its replay's animation): file names by what they
+    show, or why there is none (an engine that cannot render leaves the bench going)."""
+    taken: dict[str, str] = {}
+    board, replay = f"{trial.engine}: the board after its first trial", (
+        f"{trial.engine}: its first trial, replayed")
+    try:
+        taken[board] = render_board(sim, trial.board,
+                                    folder / f"board_{trial.engine}.png").name
+        if animation is not None:
+            taken[replay] = animate_trial(
+                sim, trial, folder / f"board_{trial.engine}_trial.png", animation).name
+    except GaltonError as error:
+        taken.setdefault(board, f"no picture ({error})")
+    return taken

@@ -14,14 +14,15 @@ from __future__ import annotations
 
 import threading
 from collections import deque
-from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass, field
+from collections.abc import Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from galton.analysis.records import ExperimentResults, TrialRecord
-from galton.client.bench.experiment import ExperimentConfig, experiment_results, take_pictures
-from galton.client.bench.picture import Animation, first_trials
+from galton.client.bench.executor import Failover, Ran, TrialHooks
+from galton.client.bench.experiment import ExperimentConfig, run_plan
+from galton.client.bench.picture import Animation, first_trials, take_pictures
 from galton.client.bench.trial import TrialConfig, run_trial
 from galton.client.sdk.client import Client
 from galton.protocol import (
@@ -38,28 +39,8 @@ FAILOVER_ERRORS = (DaemonUnreachableError, RequestTimeoutError, ControlHeldError
                    AccessDeniedError)
 
 
-@dataclass
-class Failover:
-    """A daemon dropped from the pool, and the trial it left unfinished."""
-
-    daemon: str
-    trial: int  # index in the plan
-    engine: str
-    balls: int
-    repetition: int
-    error: str
-
-    def to_dict(self) -> dict[str, Any]:
-        return asdict(self)
-
-
-@dataclass
-class PoolHooks:
-    """Callbacks from the worker threads (keep them short; they may run concurrently)."""
-
-    on_start: Callable[[str, TrialConfig], None] | None = None
-    on_trial: Callable[[str, TrialConfig, TrialRecord], None] | None = None
-    on_drop: Callable[[Failover], None] | None = None
+# The pool's hooks are every executor's (kept under their old name).
+PoolHooks = TrialHooks
 
 
 class TrialQueue:
@@ -113,7 +94,7 @@ class PoolRun:
 
     clients: dict[str, Client]
     plan: list[TrialConfig]
-    hooks: PoolHooks = field(default_factory=PoolHooks)
+    hooks: TrialHooks = field(default_factory=TrialHooks)
     pictures: Path | None = None
     animation: Animation | None = None
 
@@ -168,8 +149,7 @@ class PoolRun:
 
     def run_one(self, name: str, client: Client, index: int) -> None:
         trial = self.plan[index]
-        if self.hooks.on_start is not None:
-            self.hooks.on_start(name, trial)
+        self.hooks.started(name, trial)
         record = run_trial(client, trial)
         record.daemon = name
         if index in self.firsts and self.pictures is not None:
@@ -178,8 +158,7 @@ class PoolRun:
                 self.taken |= pictures
         with self.lock:
             self.records[index] = record
-        if self.hooks.on_trial is not None:
-            self.hooks.on_trial(name, trial, record)
+        self.hooks.finished(name, trial, record)
 
     def drop(self, name: str, index: int, error: GaltonError) -> None:
         trial = self.plan[index]
@@ -192,20 +171,40 @@ class PoolRun:
             self.hooks.on_drop(failover)
 
 
+class PoolExecutor:
+    """The executor over daemons already running (``bench --pool``): one worker thread
+    each, a lost daemon dropped and its trial re-run on the others."""
+
+    def __init__(self, clients: dict[str, Client],
+                 hosts: dict[str, dict[str, Any]] | None = None) -> None:
+        if not clients:
+            raise DaemonUnreachableError("the pool has no daemon to run trials on")
+        self.clients = clients
+        self.hosts = hosts or {}
+
+    def workers(self) -> list[str]:
+        return list(self.clients)
+
+    def describe(self) -> dict[str, Any]:
+        """The pool's daemons, and how many machines (hostnames) they run on."""
+        machines = {h.get("hostname") for h in self.hosts.values()} - {None}
+        return {"kind": "pool", "daemons": len(self.clients), "nodes": len(machines) or None}
+
+    def run(self, plan: list[TrialConfig], hooks: TrialHooks, pictures: Path | None = None,
+            animation: Animation | None = None) -> Ran:
+        pool = PoolRun(self.clients, plan, hooks, pictures, animation)
+        records = pool.run()
+        return Ran(records, {"pool": pool_record(list(self.clients), pool.failovers)},
+                   pool.taken, self.hosts)
+
+
 def run_pool(clients: dict[str, Client], config: ExperimentConfig,
-             hosts: dict[str, dict[str, Any]] | None = None, hooks: PoolHooks | None = None,
+             hosts: dict[str, dict[str, Any]] | None = None, hooks: TrialHooks | None = None,
              pictures: Path | None = None, animation: Animation | None = None,
              ) -> ExperimentResults:
     """Run the plan on every daemon of ``clients`` at once (instance -> Client); ``hosts``
     (instance -> capabilities' host map) goes into the results as they are."""
-    if not clients:
-        raise DaemonUnreachableError("the pool has no daemon to run trials on")
-    pool = PoolRun(clients, config.trials(), hooks or PoolHooks(), pictures, animation)
-    records = pool.run()
-    extra: dict[str, Any] = {"pool": pool_record(list(clients), pool.failovers)}
-    if pool.taken:
-        extra["pictures"] = pool.taken
-    return experiment_results(records, config, extra, hosts or {})
+    return run_plan(PoolExecutor(clients, hosts), config, hooks, pictures, animation)
 
 
 def pool_record(daemons: Sequence[str], failovers: list[Failover]) -> dict[str, Any]:

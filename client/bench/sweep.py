@@ -11,7 +11,8 @@ from typing import Any
 from galton.analysis.board import BoardSpec, EngineContacts
 from galton.analysis.records import ExperimentResults, TrialRecord
 from galton.analysis.sweep import SweepAxis
-from galton.client.bench.experiment import ExperimentConfig, run_experiment
+from galton.client.bench.executor import Executor, LocalExecutor, TrialHooks
+from galton.client.bench.experiment import ExperimentConfig, run_plan
 from galton.client.bench.trial import TrialConfig
 from galton.client.sdk.client import Client
 from galton.protocol import InvalidArgumentError
@@ -43,22 +44,31 @@ def with_params(board: BoardSpec, engine: str, params: dict[str, Any]) -> BoardS
     return board.replace(contacts=contacts)
 
 
-def run_sweep(clients: dict[str, Client], base: ExperimentConfig, axes: Sequence[SweepAxis],
-              on_trial: Callable[[TrialConfig, TrialRecord], None] | None = None,
-              ) -> ExperimentResults:
-    """Run the base experiment at every grid point, per engine; one results set."""
+def sweep_plan(base: ExperimentConfig, axes: Sequence[SweepAxis]) -> list[TrialConfig]:
+    """Every trial of the grid: per engine, per grid point, the base plan with the point's
+    parameters on that engine's board."""
     if not 1 <= len(axes) <= 2:
         raise InvalidArgumentError(f"a sweep takes one or two --param axes, got {len(axes)}")
-    trials: list[TrialRecord] = []
-    results = None
+    plan: list[TrialConfig] = []
     for engine in base.engines:
         for point in itertools.product(*(a.values for a in axes)):
             params = {a.name: v for a, v in zip(axes, point, strict=True)}
-            config = replace(base, engines=(engine,),
-                             board=with_params(base.board, engine, params))
-            results = run_experiment(clients, config, on_trial)
-            trials.extend(results.trials)
-    assert results is not None
+            plan += replace(base, engines=(engine,),
+                            board=with_params(base.board, engine, params)).trials()
+    return plan
+
+
+def run_sweep(runner: dict[str, Client] | Executor, base: ExperimentConfig,
+              axes: Sequence[SweepAxis],
+              on_trial: Callable[[TrialConfig, TrialRecord], None] | None = None,
+              ) -> ExperimentResults:
+    """Run the base experiment at every grid point, per engine, as one plan through the
+    executor (or, given clients, one daemon per engine here); one results set."""
+    plan = sweep_plan(base, axes)
+    executor = LocalExecutor(runner) if isinstance(runner, dict) else runner
+    hooks = TrialHooks(on_trial=None if on_trial is None else (
+        lambda _worker, trial, record: on_trial(trial, record)))
+    results = run_plan(executor, base, hooks, plan=plan)
     sweep = {"axes": [{"name": a.name, "values": [list(v) if isinstance(v, tuple) else v
                                                    for v in a.values]} for a in axes]}
-    return replace(results, trials=trials, extra={**results.extra, "sweep": sweep})
+    return replace(results, extra={**results.extra, "sweep": sweep})

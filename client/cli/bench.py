@@ -9,6 +9,7 @@ from __future__ import annotations
 import itertools
 import json
 from collections.abc import Callable
+from contextlib import ExitStack
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
@@ -24,6 +25,7 @@ from galton.client.bench.defaults import (
     DEFAULT_REPETITIONS,
     default_pool_size,
 )
+from galton.client.cli.cluster import RayActorsOpt, RayCpusOpt, RayOpt, ray_run, refuse_with_ray
 from galton.client.cli.common import JsonOpt, console, fail, run_guarded
 from galton.protocol import GaltonError
 
@@ -32,11 +34,12 @@ if TYPE_CHECKING:
 
     from galton.analysis.board import BoardSpec
     from galton.analysis.records import ExperimentResults, TrialRecord
+    from galton.client.bench.executor import Executor, Failover, Retry
     from galton.client.bench.experiment import ExperimentConfig
     from galton.client.bench.journal import Journal
     from galton.client.bench.picture import Animation
-    from galton.client.bench.pool import Failover
     from galton.client.bench.trial import TrialConfig
+    from galton.client.sdk.client import Client
     from galton.client.transport.credentials import Credentials
 
 if TYPE_CHECKING:
@@ -120,6 +123,9 @@ def bench(
     pool_size: Annotated[int, typer.Option(
         help="Embedded daemons for --pool when none runs (default: cores, at most 4).",
         min=1)] = default_pool_size(),
+    ray: RayOpt = None,
+    ray_cpus_per_daemon: RayCpusOpt = 1.0,
+    ray_actors: RayActorsOpt = None,
     as_json: JsonOpt = False,
 ) -> None:
     """Run the paper's Galton-board experiment through the bridge and report it, with a
@@ -129,6 +135,8 @@ def bench(
     from galton.client.bench.picture import Animation
     if release is not None and release not in ("all-at-once", "stream"):
         raise typer.BadParameter(f"--release must be all-at-once or stream, got {release!r}")
+    refuse_with_ray(ray, **{"--pool": pool, "--connect": connect, "--instances": instances,
+                            "--use-running": use_running})
     config = checked(lambda: ExperimentConfig(
         board=load_board(board), engines=tuple(_csv(engines, "--engines")),
         balls=_ints(balls, "--balls"), repetitions=repetitions, release=release, seed=seed,
@@ -137,7 +145,11 @@ def bench(
     names = _csv(instances, "--instances") if instances else None
     shown = Animation() if animation else None
     journal = Journal(config, out)
-    if pool:
+    if ray is not None:
+        results = _kept(journal, lambda: _run_ray(
+            config, ray, ray_cpus_per_daemon, ray_actors, ctx.obj.timeout, as_json, out,
+            shown, journal))
+    elif pool:
         results = _kept(journal, lambda: _run_pool(
             config, endpoints, names, ctx.obj.timeout, pool_size, as_json, out, shown,
             ctx.obj.credentials, use_running, journal))
@@ -167,6 +179,8 @@ def _run(config: ExperimentConfig, connect: list[str] | None, instances: list[st
     from galton.client.bench.daemons import bench_clients
     from galton.client.bench.experiment import run_experiment
     plan = config.trials()
+    if journal is not None:
+        journal.executor = {"kind": "local"}
     with bench_clients(config.engines, connect, instances, max(timeout, 30.0),
                        credentials, use_running) as clients, \
             _progress(quiet) as progress:
@@ -188,33 +202,69 @@ def _run_pool(config: ExperimentConfig, connect: list[str] | None,
               journal: Journal | None = None) -> ExperimentResults:
     """The plan over a pool of daemons: a progress row per daemon and one for the whole."""
     from galton.client.bench.daemons import pool_clients
-    from galton.client.bench.pool import PoolHooks, run_pool
+    from galton.client.bench.pool import PoolExecutor
     with pool_clients(connect, instances, max(timeout, 30.0), size, config.engines[0],
-                      credentials, use_running) as \
-            daemons, _progress(quiet) as progress:
-        overall = progress.add_task(f"Galton trials on {len(daemons.clients)} daemons",
-                                    total=len(config.trials()))
-        rows = {name: progress.add_task(f"{name}: starting", total=None)
-                for name in daemons.clients}
+                      credentials, use_running) as daemons:
+        return _run_spread(PoolExecutor(daemons.clients, daemons.hosts), config, quiet,
+                           pictures, animation, journal)
+
+
+def _run_ray(config: ExperimentConfig, address: str, cpus_per_daemon: float,
+             actors: int | None, timeout: float, quiet: bool, pictures: Path,
+             animation: Animation | None, journal: Journal | None = None) -> ExperimentResults:
+    """The plan over Ray actors, each with a daemon of its own: rows as for the pool."""
+    with ray_run(address, cpus_per_daemon, actors, config.engines[0], max(timeout, 30.0),
+                 len(config.trials())) as executor:
+        return _run_spread(executor, config, quiet, pictures, animation, journal)
+
+
+def _run_spread(executor: Executor, config: ExperimentConfig, quiet: bool, pictures: Path,
+                animation: Animation | None, journal: Journal | None = None
+                ) -> ExperimentResults:
+    """The plan through an executor of several workers (a pool's daemons, Ray's actors):
+    a progress row per worker and one for the whole; the journal rewritten after each
+    trial, and each dropped daemon or retried trial said."""
+    from galton.client.bench.executor import TrialHooks
+    from galton.client.bench.experiment import run_plan
+    workers = executor.workers()
+    if journal is not None:
+        journal.executor = executor.describe()
+    with _progress(quiet) as progress:
+        overall = progress.add_task(f"Galton trials on {len(workers)} "
+                                    f"{_workers_word(executor)}", total=len(config.trials()))
+        rows = {name: progress.add_task(f"{name}: starting", total=None) for name in workers}
 
         def start(name: str, trial: TrialConfig) -> None:
-            progress.update(rows[name], description=(
-                f"{name}: {trial.engine} {trial.balls} balls rep {trial.repetition + 1}"))
+            progress.update(rows[name], description=f"{name}: {_trial_text(trial)}")
 
         def advance(name: str, trial: TrialConfig, record: TrialRecord) -> None:
             if journal is not None:
+                journal.executor = executor.describe()  # with the retries so far
                 journal.add(trial, record)
             progress.update(rows[name], advance=1, description=(
-                f"{name}: {trial.engine} {trial.balls} balls rep {trial.repetition + 1}: "
-                f"lost {record.lost}, RTF {record.rtf or 0:.2f}"))
+                f"{name}: {_trial_text(trial)}: lost {record.lost}, RTF {record.rtf or 0:.2f}"))
             progress.update(overall, advance=1)
 
         def dropped(failover: Failover) -> None:
             progress.update(rows[failover.daemon], description=(
                 f"{failover.daemon}: dropped, trial {failover.trial + 1} re-queued "
                 f"({failover.error})"))
-        hooks = PoolHooks(on_start=start, on_trial=advance, on_drop=dropped)
-        return run_pool(daemons.clients, config, daemons.hosts, hooks, pictures, animation)
+
+        def retried(retry: Retry) -> None:
+            if not quiet:
+                progress.console.print(
+                    f"{retry.worker}: trial {retry.trial + 1} ({retry.engine} {retry.balls} "
+                    f"balls rep {retry.repetition + 1}) retried: {retry.reason}", markup=False)
+        hooks = TrialHooks(on_start=start, on_trial=advance, on_drop=dropped, on_retry=retried)
+        return run_plan(executor, config, hooks, pictures, animation)
+
+
+def _workers_word(executor: Executor) -> str:
+    return "Ray actors" if executor.describe()["kind"] == "ray" else "daemons"
+
+
+def _trial_text(trial: TrialConfig) -> str:
+    return f"{trial.engine} {trial.balls} balls rep {trial.repetition + 1}"
 
 
 def _finish(results: ExperimentResults, out: Path, as_json: bool) -> None:
@@ -230,11 +280,26 @@ def _finish(results: ExperimentResults, out: Path, as_json: bool) -> None:
         raise typer.Exit(1) from error
     if as_json:
         typer.echo(json.dumps({"files": {k: str(v) for k, v in written.items()},
-                               "engines": [_headline(s) for s in summaries]}, indent=2))
+                               "engines": [_headline(s) for s in summaries],
+                               "executor": saved.executor}, indent=2))
         return
     console.print(table2(summaries, saved.trials[0].rows if saved.trials else 11))
+    for line in executor_lines(saved.executor):
+        console.print(line, markup=False, highlight=False)
     console.print(f"Report, results and plots in {out}/ (report.md, results.json, results.csv, "
                   "*.png)")
+
+
+def executor_lines(executor: dict[str, Any]) -> list[str]:
+    """Where the trials ran, when not here, and every trial Ray retried."""
+    if executor.get("kind") != "ray":
+        return []
+    retried = executor.get("retried", [])
+    lines = [f"Ran on Ray ({executor['address']}): {executor['actors']} actor(s) on "
+             f"{executor['nodes']} node(s); {len(retried) or 'no'} trial(s) retried"]
+    lines += [f"  retried: trial {r['trial'] + 1} ({r['engine']} {r['balls']} balls rep "
+              f"{r['repetition'] + 1}) on {r['worker']}: {r['reason']}" for r in retried]
+    return lines
 
 
 def _headline(summary: EngineSummary) -> dict[str, Any]:
@@ -307,6 +372,9 @@ def sweep(
     seed: Annotated[int, typer.Option(min=0)] = 0,
     max_sim_time: Annotated[float, typer.Option(min=0.1)] = DEFAULT_MAX_SIM_TIME_S,
     out: Annotated[Path, typer.Option(help="Output folder.")] = Path("galton-sweep"),
+    ray: RayOpt = None,
+    ray_cpus_per_daemon: RayCpusOpt = 1.0,
+    ray_actors: RayActorsOpt = None,
     as_json: JsonOpt = False,
 ) -> None:
     """The benchmark over a grid of one or two parameters: a fidelity map per engine."""
@@ -314,6 +382,8 @@ def sweep(
     from galton.client.bench.daemons import bench_clients
     from galton.client.bench.experiment import ExperimentConfig
     from galton.client.bench.sweep import parse_axis, run_sweep
+    refuse_with_ray(ray, **{"--connect": connect, "--instances": instances,
+                            "--use-running": use_running})
     axes = run_guarded(lambda: [parse_axis(p) for p in param])
     config = checked(lambda: ExperimentConfig(
         board=load_board(board), engines=tuple(_csv(engines, "--engines")), balls=(balls,),
@@ -323,11 +393,19 @@ def sweep(
     total = len(config.trials()) * len(list(itertools.product(*(a.values for a in axes))))
 
     def go() -> ExperimentResults:
-        with bench_clients(config.engines, endpoints, names, max(ctx.obj.timeout, 30.0),
-                           ctx.obj.credentials, use_running) as \
-                clients, _progress(as_json) as progress:
+        with ExitStack() as stack:
+            runner: dict[str, Client] | Executor
+            if ray is None:
+                runner = stack.enter_context(bench_clients(
+                    config.engines, endpoints, names, max(ctx.obj.timeout, 30.0),
+                    ctx.obj.credentials, use_running))
+            else:
+                runner = stack.enter_context(ray_run(
+                    ray, ray_cpus_per_daemon, ray_actors, config.engines[0],
+                    max(ctx.obj.timeout, 30.0), total))
+            progress = stack.enter_context(_progress(as_json))
             task = progress.add_task("sweep", total=total)
-            return run_sweep(clients, config, axes,
+            return run_sweep(runner, config, axes,
                              lambda t, r: progress.update(task, advance=1))
     results = run_guarded(go)
     out.mkdir(parents=True, exist_ok=True)
@@ -341,6 +419,8 @@ def sweep(
                                "files": [str(p) for p in plots]}, indent=2))
     else:
         console.print(table)
+        for line in executor_lines(results.executor):
+            console.print(line, markup=False, highlight=False)
         console.print(f"Fidelity maps and results in {out}/")
 
 

@@ -10,10 +10,11 @@ import shlex
 import sys
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
+from galton.client.cli.cluster import RayActorsOpt, RayCpusOpt, RayOpt, ray_run, refuse_with_ray
 from galton.client.cli.common import console, run_guarded
 
 if TYPE_CHECKING:
@@ -59,6 +60,9 @@ def report_card(
     weights: Annotated[Path | None, typer.Option(
         help="A TOML of criteria and uses read over the shipped one (card_uses.toml: "
              "thresholds, weights per use; docs/report-card/reading.md).")] = None,
+    ray: RayOpt = None,
+    ray_cpus_per_daemon: RayCpusOpt = 1.0,
+    ray_actors: RayActorsOpt = None,
 ) -> None:
     """Measure every engine on daemons started here (the Galton board, the physical laws,
     footprint, embedding costs) and write a ranked report card: report-card.md, a
@@ -66,7 +70,8 @@ def report_card(
     from galton.analysis.card_rules import load_rules
     from galton.analysis.errors import WeightsError
     from galton.client.report_card import CardPlan, run_card, write_report_card
-    from galton.client.report_card.pooled import pooled_trials
+    from galton.client.report_card.pooled import executor_trials, pooled_trials
+    refuse_with_ray(ray, **{"--pool": pool})
     try:
         rules = load_rules(weights)  # a bad file fails before anything is measured
     except WeightsError as error:
@@ -77,11 +82,21 @@ def report_card(
     endpoints = connect.split(",") if connect else ctx.obj.connect
     names = [n.strip() for n in instances.split(",") if n.strip()] if instances else None
     pooled: list[str] = []
+    executor: dict[str, Any] = {"kind": "local"}
 
     def say(line: str) -> None:
         console.print(f"[dim]{line}[/dim]", highlight=False)
 
     def run() -> tuple[CardResults, LawResults]:
+        if ray is not None:
+            with ray_run(ray, ray_cpus_per_daemon, ray_actors, "mujoco",
+                         max(ctx.obj.timeout, 30.0), plan.repetitions) as on_ray:
+                say(f"--ray: the Galton trials run on {len(on_ray.workers())} Ray actors")
+                try:
+                    return run_card(chosen or offered_engines(), plan, seed, say=say,
+                                    trials_of=executor_trials(on_ray))
+                finally:
+                    executor.update(on_ray.describe())
         if not pool:
             return run_card(chosen or offered_engines(), plan, seed, say=say)
         with pooled_trials(endpoints, names, max(ctx.obj.timeout, 30.0), say) as (
@@ -91,6 +106,8 @@ def report_card(
                             trials_of=trials_of)
     card, laws = run_guarded(run)
     card.config["pool"] = pooled
+    card.config["executor"] = executor if not pooled else {"kind": "pool",
+                                                           "daemons": len(pooled)}
     card.config |= {"quick": quick, "board_plan": plan.describe(), "machine_note": note,
                     "taken": datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC"),
                     "command": "galton-client " + shlex.join(sys.argv[1:])}

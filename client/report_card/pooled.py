@@ -1,7 +1,7 @@
-"""``report-card --pool``: the card's Galton trials (the paper board, its mesh twin and the
-RTF curve) spread over the daemons of a pool when they answer; else, said so, on each
-engine's own daemon as without --pool. Footprint, round trips and the law suite stay on that
-engine's own daemon here: they measure one engine alone."""
+"""``report-card --pool`` (or ``--ray``): the card's Galton trials (the paper board, its mesh
+twin and the RTF curve) spread over the daemons of a pool when they answer (else, said so,
+on each engine's own daemon as without --pool), or over Ray actors. Footprint, round trips
+and the law suite stay on that engine's own daemon here: they measure one engine alone."""
 
 from __future__ import annotations
 
@@ -10,7 +10,8 @@ from contextlib import ExitStack, contextmanager
 
 from galton.analysis.records import TrialRecord
 from galton.client.bench.daemons import names_running, pool_clients
-from galton.client.bench.experiment import ExperimentConfig, run_experiment
+from galton.client.bench.executor import Executor
+from galton.client.bench.experiment import ExperimentConfig, run_experiment, run_plan
 from galton.client.bench.pool import run_pool
 from galton.client.sdk.client import Client
 from galton.protocol import GaltonError
@@ -52,3 +53,11 @@ def pooled_trials(connect: list[str] | None, instances: Sequence[str] | None,
         def on_pool(sim: Client, engine: str, config: ExperimentConfig) -> list[TrialRecord]:
             return run_pool(daemons.clients, config, daemons.hosts).trials
         yield on_pool, names
+
+
+def executor_trials(executor: Executor) -> TrialRunner:
+    """A runner that spreads each plan over ``executor``'s workers (``report-card --ray``:
+    Ray actors), whatever engine's daemon the card has open."""
+    def on_executor(sim: Client, engine: str, config: ExperimentConfig) -> list[TrialRecord]:
+        return run_plan(executor, config).trials
+    return on_executor

@@ -178,4 +178,5 @@ def test_a_failed_bench_keeps_the_trials_it_finished(daemons: dict[str, Embedded
     assert result.exit_code == 1, result.output
     kept = ExperimentResults.from_json(out / "results.json")
     assert [(t.engine, t.balls) for t in kept.trials] == [("mujoco", 5), ("mujoco", 5)]
+    assert kept.executor == {"kind": "local"}
     assert "2 trial(s) finished before the failure are kept" in result.output

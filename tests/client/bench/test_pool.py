@@ -97,6 +97,7 @@ def test_bench_pool_spreads_the_plan_over_all_three(
     assert set(results.hosts) == set(names)
     assert all(set(host) == HOST_KEYS for host in results.hosts.values())
     assert results.extra["pool"] == {"daemons": names, "failovers": []}
+    assert results.executor == {"kind": "pool", "daemons": 3, "nodes": 1}
     assert json.loads((out / "results.json").read_text())["trials"][0]["daemon"] in names
     # A trial's bins do not depend on the daemon: run each engine's first elsewhere.
     for index in (0, 3):
