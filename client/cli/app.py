@@ -37,7 +37,13 @@ from galton.client.cli import (
     worlds,
     zmq_keys,
 )
-from galton.client.cli.common import Target, help_text, package_version, tidy_help
+from galton.client.cli.common import (
+    Target,
+    help_text,
+    package_version,
+    tidy_help,
+    widen_help_when_piped,
+)
 from galton.client.transport.credentials import resolve_credentials
 from galton.protocol import GaltonError
 
@@ -152,6 +158,7 @@ def _zmq_keys(key: Path | None, server_key: str | None) -> ZmqKeys | None:
 def main() -> None:
     """The console command: every error is one line on stderr, exit code 2 for a bad
     command line (typer's boxed usage text and pydantic's "Value error, " left out)."""
+    widen_help_when_piped()
     try:
         code = app(standalone_mode=False)
     except typer.Abort:

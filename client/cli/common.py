@@ -5,7 +5,9 @@ from __future__ import annotations
 
 import inspect
 import json
+import os
 import re
+import sys
 from collections.abc import Callable
 from dataclasses import asdict
 from importlib.metadata import PackageNotFoundError, version
@@ -13,7 +15,7 @@ from typing import TYPE_CHECKING, Annotated, Any, TypeVar
 
 import typer
 from rich import box
-from rich.console import Console
+from rich.console import Console, ConsoleDimensions
 from rich.markup import escape
 from rich.table import Table
 
@@ -32,9 +34,22 @@ if TYPE_CHECKING:  # the SDK (numpy, Zenoh, ZeroMQ) is imported when a command n
     from galton.protocol import SimStatus
 
 class ReadableConsole(Console):
-    """A console whose tables keep every character at 80 columns: the first column (the
+    """A console whose tables keep every character: in a terminal, the first column (the
     names a user types back: joints, links, parameters) as wide as its longest cell (up to
-    KEY_WIDTH), the others folded onto more lines instead of cut to "…", light borders."""
+    KEY_WIDTH), the others folded onto more lines instead of cut to "…", light borders;
+    into a pipe or a file (no terminal, no COLUMNS), as wide as they are: nothing folded,
+    nothing cut (rich would otherwise assume 80 columns)."""
+
+    @property
+    def size(self) -> ConsoleDimensions:
+        measured = Console.size.fget(self)  # type: ignore[attr-defined]
+        if unlimited_width(self.is_terminal):
+            return ConsoleDimensions(PIPE_WIDTH, measured.height)
+        return measured  # type: ignore[no-any-return]
+
+    @size.setter
+    def size(self, new_size: tuple[int, int]) -> None:
+        Console.size.fset(self, new_size)  # type: ignore[attr-defined]
 
     def print(self, *objects: Any, **kwargs: Any) -> None:
         for item in objects:
@@ -44,6 +59,24 @@ class ReadableConsole(Console):
 
 
 KEY_WIDTH = 40
+PIPE_WIDTH = 10_000  # "unlimited": a table or line is as wide as its text
+HELP_PIPE_WIDTH = 160  # --help into a pipe: wide enough that no cell is cut to "…"
+
+
+def unlimited_width(is_terminal: bool) -> bool:
+    """Whether output goes where nobody reads it at a terminal's width (a pipe, a file)
+    and no width was asked for (COLUMNS)."""
+    return not is_terminal and not os.environ.get("COLUMNS")
+
+
+def widen_help_when_piped() -> None:
+    """--help into a pipe at HELP_PIPE_WIDTH columns instead of rich's 80, which cut long
+    words in the options' help to "…" (TERMINAL_WIDTH, when set, still decides)."""
+    if unlimited_width(sys.stdout.isatty()) and not os.environ.get("TERMINAL_WIDTH"):
+        os.environ["TERMINAL_WIDTH"] = str(HELP_PIPE_WIDTH)
+        rich_utils = sys.modules.get("typer.rich_utils")
+        if rich_utils is not None:
+            rich_utils.MAX_WIDTH = HELP_PIPE_WIDTH  # type: ignore[attr-defined]
 
 
 def readable(table: Table) -> None:
