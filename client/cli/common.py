@@ -116,6 +116,30 @@ class Target:
                       credentials=None if over_zmq else self.credentials,
                       zmq_keys=self.zmq_keys if over_zmq else None, client_id=client_id)
 
+    def call(self, op: str, args: dict[str, Any] | None = None) -> dict[str, Any]:
+        """One request and its result map, through the transport alone: the SDK's Client
+        (numpy, and pyzmq unless the endpoint is a zmq+ one) is not imported, so a command
+        that only asks or sets the clock (status, play, pause ...) starts sooner. A refusal
+        raises its typed error, as the SDK's does."""
+        import uuid
+
+        from galton.client.transport.base import transport_for, zmq_endpoint
+        from galton.protocol import Keys
+        from galton.protocol.operations import OPERATIONS
+
+        over_zmq = zmq_endpoint(self.connect) is not None
+        client_id = uuid.uuid4().hex  # as the SDK's: a request names its client
+        transport = transport_for(Keys(self.instance), client_id, self.connect,
+                                  credentials=None if over_zmq else self.credentials,
+                                  zmq_keys=self.zmq_keys if over_zmq else None)
+        try:
+            reply = transport.request(op, args, OPERATIONS[op].client_timeout(self.timeout),
+                                      client_id)
+        finally:
+            transport.close()
+        reply.raise_for_code()
+        return dict(reply.result)
+
 
 def package_version() -> str:
     """The installed distribution's version (one source of truth: pyproject.toml)."""
@@ -168,6 +192,15 @@ def with_client(ctx: typer.Context, action: Callable[[Client], T]) -> T:
         with target.client() as client:
             return action(client)
     return run_guarded(go)
+
+
+def status_call(ctx: typer.Context, op: str, args: dict[str, Any] | None = None
+                ) -> SimStatus:
+    """An operation that answers the clock (status, play, pause ...), without the SDK
+    (Target.call); errors turned into exit code 1."""
+    from galton.protocol.status import SimStatus
+    target: Target = ctx.obj
+    return run_guarded(lambda: SimStatus.from_wire(target.call(op, args)))
 
 
 def show_status(status: SimStatus, as_json: bool) -> None:
