@@ -1,0 +1,44 @@
+"""The lists the docs give are the code's: every place that names the engines a daemon can
+host names all of them (the engine registry), and help texts make no unmeasured claim."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+from cli_support import flat, run
+
+from galton.daemon.engines import ENGINE_CLASSES
+from galton.protocol.vocabulary import ENGINE_NAMES
+
+ROOT = Path(__file__).resolve().parents[1]
+README = (ROOT / "README.md").read_text(encoding="utf-8")
+PROTOCOL = (ROOT / "docs" / "protocol.md").read_text(encoding="utf-8")
+SHOWN = {"mujoco": "MuJoCo", "pybullet": "PyBullet", "ode": "ODE", "dart": "DART"}
+
+
+def _line(text: str, pattern: str) -> str:
+    found = re.search(pattern, text, re.MULTILINE)
+    assert found, f"no line matches {pattern!r}"
+    return found.group(0)
+
+
+def test_the_protocol_names_the_engines_of_the_registry() -> None:
+    assert ENGINE_NAMES == tuple(ENGINE_CLASSES) and set(SHOWN) == set(ENGINE_NAMES)
+
+
+def test_every_list_of_engines_in_the_docs_is_whole() -> None:
+    intro = _line(README, r"^- \*\*`galton-daemon`\*\* hosts a physics engine.*$")
+    assert all(SHOWN[name] in intro for name in ENGINE_NAMES), intro
+    for text, pattern in ((README, r"^\| `load-world ENGINE.*$"),
+                          (PROTOCOL, r"^\| `engine` \| str \|.*$"),  # capabilities
+                          (PROTOCOL, r"^`engine` \(.*default the live world's.*$"),  # create
+                          (PROTOCOL, r"^Args: `engine` \(str: .*$")):  # load_world
+        line = _line(text, pattern)
+        assert all(f"`{name}`" in line for name in ENGINE_NAMES), line
+
+
+def test_report_card_quick_states_what_was_measured() -> None:
+    result = run(["report-card", "--help"])
+    assert "about 10 minutes" not in result.output
+    assert "8 min 9 s" in flat(result.output)
