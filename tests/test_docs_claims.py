@@ -8,6 +8,7 @@ from pathlib import Path
 
 from cli_support import flat, run
 
+from galton.daemon.access.roles import VIEWER_OPERATIONS
 from galton.daemon.engines import ENGINE_CLASSES
 from galton.protocol.vocabulary import ENGINE_NAMES
 
@@ -42,3 +43,19 @@ def test_report_card_quick_states_what_was_measured() -> None:
     result = run(["report-card", "--help"])
     assert "about 10 minutes" not in result.output
     assert "8 min 9 s" in flat(result.output)
+
+
+VIEWER_LIST = re.compile(r"viewer\s+operations\s+\(?((?:`\w+`(?:,|\s|and)*)+)")
+
+
+def test_every_list_of_the_viewer_operations_is_the_code_s() -> None:
+    """protocol.md (Security, ZeroMQ) and SECURITY.md (the ACL and CURVE tables) list the
+    operations a viewer may ask as daemon/access/roles.py's VIEWER_OPERATIONS; get_shapes'
+    section says a viewer may ask it, and it is one of them."""
+    security = (ROOT / "docs" / "SECURITY.md").read_text(encoding="utf-8")
+    for text, at_least in ((PROTOCOL, 2), (security, 2)):
+        lists = [re.findall(r"`(\w+)`", found) for found in VIEWER_LIST.findall(text)]
+        assert len(lists) >= at_least, lists
+        for names in lists:
+            assert sorted(names) == sorted(VIEWER_OPERATIONS), names
+    assert "get_shapes" in VIEWER_OPERATIONS and "A viewer may ask it" in PROTOCOL
