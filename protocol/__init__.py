@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from galton.protocol.lazy import lazy_exports
+from galton.protocol.lazy import lazy_dir, lazy_exports
 
 if TYPE_CHECKING:
     from galton.protocol.arrays import (
@@ -110,6 +110,7 @@ _SOURCES: dict[str, tuple[str, ...]] = {
         "WRENCH_WIDTH", "SimState"),
 }
 __getattr__ = lazy_exports("galton.protocol", _SOURCES, globals())
+__dir__ = lazy_dir(_SOURCES, globals())
 
 __all__ = [
     "BODY_SHAPES",

@@ -25,7 +25,7 @@ def _line(text: str, pattern: str) -> str:
 
 
 def test_the_protocol_names_the_engines_of_the_registry() -> None:
-    assert ENGINE_NAMES == tuple(ENGINE_CLASSES) and set(SHOWN) == set(ENGINE_NAMES)
+    assert tuple(ENGINE_CLASSES) == ENGINE_NAMES and set(SHOWN) == set(ENGINE_NAMES)
 
 
 def test_every_list_of_engines_in_the_docs_is_whole() -> None:

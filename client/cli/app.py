@@ -175,9 +175,22 @@ def usage_error(error: typer.TyperException) -> int:
     message = message.replace("Value error, ", "")
     context = getattr(error, "ctx", None)
     command = context.command_path if context is not None else "galton-client"
+    option = getattr(error, "option_name", None)
+    if isinstance(option, str) and _is_number(option):
+        # "No such option: -1": a negative number where an argument goes
+        message = (f"{option} is read as an option, not a number: put -- before a negative "
+                   f"argument ({command} -- {option})")
     typer.echo(f"galton-client: {message} (see '{command} --help')", err=True)
     code: int = getattr(error, "exit_code", 2)
     return code
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
 
 
 register(app, COMMAND_GROUPS)

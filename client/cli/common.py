@@ -43,7 +43,7 @@ class ReadableConsole(Console):
     @property
     def size(self) -> ConsoleDimensions:
         measured = Console.size.fget(self)  # type: ignore[attr-defined]
-        if unlimited_width(self.is_terminal):
+        if self._width is None and unlimited_width(self.is_terminal):  # no width was set
             return ConsoleDimensions(PIPE_WIDTH, measured.height)
         return measured  # type: ignore[no-any-return]
 
