@@ -35,7 +35,6 @@ CONTACTS_PERIOD_S = 0.25
 SCORE_HISTORY = 300  # points of the anomaly chart
 PROBE_TIMEOUT_S = 2.0
 STEP_COUNT = 100
-WAITING = "**waiting for the first sample**"
 
 
 class Latest:
@@ -78,14 +77,9 @@ class Followed:
         self.latest = Latest(wake)
         self.stream: StateStream = client.stream_states(rate=rate, callback=self.latest.put)
         self.stale = True  # the scene must be listed again before the next draw
-        self.drawn_step: int | None = None
 
     def draw(self) -> StateSample | None:
-        """Draw the newest sample, if any; the scene is listed again when its names change.
-        A sample of the step already drawn (a paused world) sends nothing to the page:
-        every message wakes the browser's render loop, and the page's panel is applied
-        in that loop (viser), so a page kept busy redrawing a still scene in software GL
-        drew its panel late or not at all."""
+        """Draw the newest sample, if any; the scene is listed again when its names change."""
         sample = self.latest.take()
         if sample is None:
             return None
@@ -96,9 +90,8 @@ class Followed:
             self.drawing.rebuild(infos, sample.names, sample.poses,
                                  shapes_for_drawing(self.client, infos))
             self.stale = False
-        elif sample.step != self.drawn_step:
+        else:
             self.drawing.update(sample.poses)
-        self.drawn_step = sample.step
         return sample
 
     def close(self) -> None:
@@ -118,7 +111,6 @@ class LiveView:
         self.camera = camera
         self.wake = threading.Event()
         self.operator = may_operate(client) if operator is None else operator
-        self._build_gui()  # the panel first: a page that connects gets it before the scene
         server.scene.set_up_direction("+z")
         server.scene.add_grid("/grid", width=10, height=10, plane="xy", position=(0, 0, -0.01))
         self.live = Followed(client, WorldDrawing(server.scene, "/live"), rate, self.wake)
@@ -128,13 +120,14 @@ class LiveView:
         self.scores: deque[tuple[float, float]] = deque(maxlen=SCORE_HISTORY)
         self.scores_seen = 0
         self._framed = False
+        self._build_gui()
         self.events = client.on_event(self._on_event)
 
     # -- the page ---------------------------------------------------------------------
     def _build_gui(self) -> None:
         gui = self.server.gui
         gui.configure_theme(dark_mode=False, control_width="medium")
-        self.clock = gui.add_markdown(WAITING)
+        self.clock = gui.add_markdown("**waiting for the first sample**")
         self.message = gui.add_markdown("")
         if self.operator:
             with gui.add_folder("Operator"):
@@ -233,12 +226,11 @@ class LiveView:
             return
         if not self._framed:
             self._frame(sample)
-        clock = (f"**{sample.state}**  world `{sample.world}`  \n"
-                 f"sim time **{sample.sim_time:.3f} s**  step {sample.step}  \n"
-                 f"RTF **{sample.rtf:.3f}**  bodies {len(sample.names)}  \n"
-                 f"role: {'operator' if self.operator else 'viewer (read only)'}")
-        if clock != self.clock.content:  # a paused world's page stays quiet
-            self.clock.content = clock
+        self.clock.content = (
+            f"**{sample.state}**  world `{sample.world}`  \n"
+            f"sim time **{sample.sim_time:.3f} s**  step {sample.step}  \n"
+            f"RTF **{sample.rtf:.3f}**  bodies {len(sample.names)}  \n"
+            f"role: {'operator' if self.operator else 'viewer (read only)'}")
 
     def _frame(self, sample: StateSample) -> None:
         """Point the camera at the bodies once there are some (or where --camera says)."""
