@@ -59,3 +59,15 @@ def test_every_list_of_the_viewer_operations_is_the_code_s() -> None:
         for names in lists:
             assert sorted(names) == sorted(VIEWER_OPERATIONS), names
     assert "get_shapes" in VIEWER_OPERATIONS and "A viewer may ask it" in PROTOCOL
+
+
+def test_the_laws_times_in_the_readme_are_the_stored_run_s() -> None:
+    """The README's time for `galton-client laws` is the stored run's own record."""
+    import json
+    stored = json.loads((ROOT / "docs" / "data" / "laws" / "results.json").read_text())
+    said = " ".join(README.split())
+    for record in stored["engines"]:
+        assert f"{SHOWN[record['engine']]} {record['wall_s']:.1f} s" in said, record["engine"]
+    from galton.client.laws import EXPERIMENTS
+    words = {13: "thirteen"}
+    assert f"{words[len(EXPERIMENTS)]} closed-form experiments" in said
