@@ -3,7 +3,8 @@ under: the interpreter alone and typer + rich (issue 33: each command took about
 
 Usage: python benchmarks/cli_startup.py [--runs 15] [--json FILE]
 Each command runs --runs times as a fresh process; medians and minima in seconds. `status`
-asks a daemon started here (MuJoCo), so it includes Zenoh, numpy and one round trip.
+asks a daemon started here (MuJoCo), so it includes a Zenoh session and one round trip
+(neither numpy nor the SDK's Client since issue 47).
 """
 
 from __future__ import annotations
@@ -49,6 +50,8 @@ def main() -> None:
     print(f"{'command':32} {'median s':>9} {'min s':>7}")
     for name, (median, least) in found.items():
         print(f"{name:32} {median:9.3f} {least:7.3f}")
+    ratio = found["galton-client status"][0] / found["galton-client --version"][0]
+    print(f"status / --version (medians): {ratio:.1f} x (issue 47 asks at most 4 x)")
     if args.json:
         with open(args.json, "w", encoding="utf-8") as out:
             json.dump({k: {"median_s": v[0], "min_s": v[1]} for k, v in found.items()}, out,

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from galton.protocol.lazy import lazy_exports
+from galton.protocol.lazy import lazy_dir, lazy_exports
 
 if TYPE_CHECKING:
     from galton.client.sdk.calibration import (
@@ -128,6 +128,7 @@ _SOURCES: dict[str, tuple[str, ...]] = {
         "UnsupportedVersionError"),
 }
 __getattr__ = lazy_exports("galton.client", _SOURCES, globals())
+__dir__ = lazy_dir(_SOURCES, globals())
 
 __all__ = [
     "AccessDeniedError",

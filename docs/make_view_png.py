@@ -1,6 +1,9 @@
 """Make docs/img/view.png, the README's picture of `galton-client view`: a MuJoCo daemon,
 the small Galton board with its balls falling, a fork of the world as a ghost, the page
-drawn by headless Chromium (software WebGL).
+drawn by headless Chromium (software WebGL) driven as the view's tests drive it
+(tests/support_browser.py): the picture is taken once the page shows its panel and the
+balls are drawn, not after a guessed delay (a one-shot ``--screenshot`` run photographs the
+page before viser has applied its panel, which it does in the 3-D view's render loop).
 
     python docs/make_view_png.py [--out docs/img/view.png]
 """
@@ -13,13 +16,24 @@ import subprocess
 import sys
 from pathlib import Path
 
-from galton.analysis.board import BoardSpec
-from galton.analysis.board_release import perturbation
-from galton.client import Client, EmbeddedDaemon, wait_for_daemon
-from galton.client.bench.build import ball_group, ball_names, board_groups
+import numpy as np
 
-BOARD = Path(__file__).resolve().parents[1] / "client" / "boards" / "small.toml"
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests"))  # the browser driver the view's tests use
+
+from support_browser import Browser  # noqa: E402
+
+from galton.analysis.board import BoardSpec  # noqa: E402
+from galton.analysis.board_release import perturbation  # noqa: E402
+from galton.client import Client, EmbeddedDaemon, wait_for_daemon  # noqa: E402
+from galton.client.bench.build import ball_group, ball_names, board_groups  # noqa: E402
+
+BOARD = ROOT / "client" / "boards" / "small.toml"
 CLI = str(Path(sys.executable).with_name("galton-client"))
+WIDTH, HEIGHT = 1200, 800
+DRAWN_TIMEOUT_S = 300.0  # software WebGL on a loaded machine
+PANEL_WORDS = ("sim time", "Play", "Predict 1 s", "compare: anomaly score")
+PANEL_LEFT = 0.7  # the panel covers the page right of this at 1200 px
 
 
 def free_port() -> int:
@@ -28,9 +42,24 @@ def free_port() -> int:
         return int(probe.getsockname()[1])
 
 
+def scene_drawn(image: np.ndarray) -> bool:
+    """Balls (red) drawn in the 3-D view, left of the panel."""
+    scene = image[:, : int(PANEL_LEFT * image.shape[1])]
+    red, green, blue = scene[..., 0], scene[..., 1], scene[..., 2]
+    return int(((red > 120) & (green < 90) & (blue < 90)).sum()) > 200
+
+
+def photograph(url: str, out: Path) -> None:
+    from PIL import Image
+    with Browser(url, WIDTH, HEIGHT, scale=1.0) as browser:
+        browser.text_until(lambda text: all(w in text for w in PANEL_WORDS), DRAWN_TIMEOUT_S)
+        image = browser.wait_for(scene_drawn, DRAWN_TIMEOUT_S)
+    Image.fromarray(image.astype(np.uint8)).save(out)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser()
-    parser.add_argument("--out", type=Path, default=Path("docs/img/view.png"))
+    parser.add_argument("--out", type=Path, default=ROOT / "docs" / "img" / "view.png")
     out = parser.parse_args().out.resolve()
     board = BoardSpec.load(BOARD)
     with EmbeddedDaemon("mujoco", instance="view-picture") as daemon, \
@@ -51,12 +80,7 @@ def main() -> None:
             assert view.stderr is not None
             while "serving" not in view.stderr.readline():
                 pass
-            subprocess.run(["chromium-headless-shell", "--no-sandbox",
-                            "--enable-unsafe-swiftshader", "--use-gl=angle",
-                            "--use-angle=swiftshader", "--window-size=1200,800",
-                            "--timeout=10000", f"--screenshot={out}",
-                            f"http://127.0.0.1:{port}"], check=True, capture_output=True,
-                           timeout=180)
+            photograph(f"http://127.0.0.1:{port}", out)
         finally:
             view.terminate()
             view.wait(30)

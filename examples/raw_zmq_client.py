@@ -1,7 +1,7 @@
 """A client written with nothing but pyzmq, msgpack and docs/protocol.md ("ZeroMQ").
 
-Spawns 100 spheres, steps 500 times, reads their poses, reads one telemetry sample and
-deletes the spheres. Run a daemon with a ZeroMQ endpoint first
+Spawns a ground plane and 100 spheres above it, steps 500 times, reads their poses, reads
+one telemetry sample and deletes what it spawned. Run a daemon with a ZeroMQ endpoint first
 (`galton-daemon --zmq ipc:///tmp/galton.sock`), then:
 python examples/raw_zmq_client.py [ENDPOINT]
 """
@@ -63,16 +63,19 @@ def main(endpoint: str = "ipc:///tmp/galton.sock") -> tuple[list[float], dict]:
         poses = b"".join(struct.pack("<7d", (i % 10) * 0.3, (i // 10) * 0.3, 2.0, 0, 0, 0, 1)
                          for i in range(100))
         group = {"shape": "sphere", "size": [0.1], "names": names, "poses": poses}
-        client.call("spawn", {"groups": [group]})
+        ground = {"shape": "plane", "size": [5.0, 5.0], "names": ["raw_ground"],
+                  "poses": struct.pack("<7d", 0, 0, 0, 0, 0, 0, 1), "static": True}
+        client.call("spawn", {"groups": [ground, group]})
         client.call("step", {"count": 500})
         result = client.call("get_states", {"names": names})
         heights = [struct.unpack_from("<7d", result["poses"], 56 * i)[2] for i in range(100)]
         telemetry = client.call("capabilities", {})["zmq"]["telemetry"][0]
         sample = one_telemetry_sample(context, telemetry)
-        client.call("delete", {"names": names})
+        client.call("delete", {"names": [*names, "raw_ground"]})
     finally:
         context.destroy(linger=0)
-    print(f"100 spheres fell from 2.0 m to {min(heights):.3f}..{max(heights):.3f} m; "
+    print(f"100 spheres fell from 2.0 m onto the ground: heights "
+          f"{min(heights):.3f}..{max(heights):.3f} m; "
           f"telemetry: step {sample['step']}, rss {sample['rss_bytes'] / 2**20:.0f} MiB")
     return heights, sample
 

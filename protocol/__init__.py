@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from galton.protocol.lazy import lazy_exports
+from galton.protocol.lazy import lazy_dir, lazy_exports
 
 if TYPE_CHECKING:
     from galton.protocol.arrays import (
@@ -66,9 +66,9 @@ if TYPE_CHECKING:
         Capabilities,
         EntityInfo,
         JointInfo,
-        SimStatus,
         Telemetry,
     )
+    from galton.protocol.status import SimStatus
     from galton.protocol.vocabulary import (
         BODY_SHAPES,
         ENGINE_NAMES,
@@ -102,13 +102,15 @@ _SOURCES: dict[str, tuple[str, ...]] = {
         "DEFAULT_PORT", "Keys", "instance_from_liveliness_key", "validate_instance_name"),
     "galton.protocol.model": (
         "BodyGroup", "BodyProperties", "Capabilities", "EntityInfo", "JointInfo",
-        "SimStatus", "Telemetry"),
+        "Telemetry"),
+    "galton.protocol.status": ("SimStatus",),
     "galton.protocol.vocabulary": (
         "BODY_SHAPES", "ENGINE_NAMES", "JOINT_TYPES", "MODEL_SHAPES", "POSE_WIDTH",
         "RESET_SCOPES", "SCALAR_JOINT_TYPES", "SIM_STATES", "TARGET_MODES", "TWIST_WIDTH",
         "WRENCH_WIDTH", "SimState"),
 }
 __getattr__ = lazy_exports("galton.protocol", _SOURCES, globals())
+__dir__ = lazy_dir(_SOURCES, globals())
 
 __all__ = [
     "BODY_SHAPES",

@@ -23,3 +23,14 @@ def lazy_exports(package: str, sources: Mapping[str, tuple[str, ...]],
         namespace[name] = value
         return value
     return get
+
+
+def lazy_dir(sources: Mapping[str, tuple[str, ...]],
+             namespace: Mapping[str, Any]) -> Callable[[], list[str]]:
+    """A module ``__dir__`` that lists the lazy names beside those already loaded, so that
+    ``dir()`` and tab completion show every export before its first use."""
+    names = {name for exported in sources.values() for name in exported}
+
+    def listing() -> list[str]:
+        return sorted(names | set(namespace))
+    return listing

@@ -7,7 +7,7 @@ quaternion, as ROS and scipy), a twist 6 floats ``vx vy vz wx wy wz`` in the wor
 from __future__ import annotations
 
 import math
-from dataclasses import MISSING, asdict, dataclass, field, fields
+from dataclasses import asdict, dataclass, field
 from typing import Any, TypeVar, overload
 
 import msgspec
@@ -16,7 +16,8 @@ import numpy as np
 from galton.protocol import mesh as mesh_wire
 from galton.protocol.arrays import pack_f64, unpack_f64
 from galton.protocol.errors import InvalidArgumentError, brief
-from galton.protocol.replies import CapabilitiesReply, StatusReply, decode_result
+from galton.protocol.replies import CapabilitiesReply, decode_result
+from galton.protocol.status import known_fields, older_defaults, shallow_dict
 from galton.protocol.vocabulary import (
     BODY_SHAPES,
     MAX_BATCH,
@@ -177,11 +178,6 @@ def check_rgba(value: Any, where: str) -> tuple[float, float, float, float] | No
         raise InvalidArgumentError(f"{where} must hold 4 numbers (r g b a in 0..1)")
     r, g, b, a = (finite_number(v, f"{where}[{i}]", low=0, high=1) for i, v in enumerate(value))
     return (r, g, b, a)
-
-
-def shallow_dict(record: Any) -> dict[str, Any]:
-    """A flat record's fields as a dict, without ``asdict``'s deep copy (hot paths)."""
-    return {f.name: getattr(record, f.name) for f in fields(record)}
 
 
 @dataclass
@@ -412,51 +408,6 @@ class JointInfo:
         axis = body.get("axis", (0.0, 0.0, 0.0))
         return cls(**{**known_fields(cls, body),
                       "axis": (float(axis[0]), float(axis[1]), float(axis[2]))})
-
-
-def older_defaults(cls: type) -> dict[str, Any]:
-    """The defaults of a record's fields that an older daemon's reply may leave out."""
-    found: dict[str, Any] = {}
-    for spec in fields(cls):
-        if spec.default is not MISSING:
-            found[spec.name] = spec.default
-        elif spec.default_factory is not MISSING:
-            found[spec.name] = spec.default_factory()
-    return found
-
-
-def known_fields(cls: type, body: dict[str, Any]) -> dict[str, Any]:
-    """The fields of ``body`` the dataclass knows: a newer daemon's extra fields (a reply
-    that grew, as ``status`` grew ``controller``) are left out, not an error."""
-    names = {f.name for f in fields(cls)}
-    return {key: value for key, value in body.items() if key in names}
-
-
-@dataclass
-class SimStatus:
-    """The simulation's clock and state at one instant."""
-
-    state: SimState
-    step: int
-    sim_time: float
-    timestep: float
-    target_rtf: float
-    rtf: float
-    entity_count: int
-    engine: str
-    instance: str
-    world: str = "default"
-    faulted: bool = False
-    controller: str | None = None  # who holds control (take_control); absent from old daemons
-
-    def to_wire(self) -> dict[str, Any]:
-        return shallow_dict(self)
-
-    @classmethod
-    def from_wire(cls, body: dict[str, Any]) -> SimStatus:
-        """A status reply, through its declaration (protocol/replies.py)."""
-        status = decode_result(StatusReply, {**older_defaults(cls), **body})
-        return cls(**{**msgspec.structs.asdict(status), "state": SimState(status.state)})
 
 
 @dataclass

@@ -38,7 +38,7 @@ ROOMS: dict[str, tuple[str, ...]] = {
               "test_ray_cli.py", "test_ray_cluster.py"),
     "laws": ("test_laws.py",),
     "view": ("test_view_browser.py", "test_view_live.py", "test_view_replay.py",
-             "test_view_roles.py"),
+             "test_view_roles.py", "test_view_picture.py"),
     "fuzz": ("test_fuzz.py",),
     "report_card": ("test_report_card.py",),
 }

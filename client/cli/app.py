@@ -38,7 +38,13 @@ from galton.client.cli import (
     worlds,
     zmq_keys,
 )
-from galton.client.cli.common import Target, help_text, package_version, tidy_help
+from galton.client.cli.common import (
+    Target,
+    help_text,
+    package_version,
+    tidy_help,
+    widen_help_when_piped,
+)
 from galton.client.transport.credentials import resolve_credentials
 from galton.protocol import GaltonError
 
@@ -154,6 +160,7 @@ def _zmq_keys(key: Path | None, server_key: str | None) -> ZmqKeys | None:
 def main() -> None:
     """The console command: every error is one line on stderr, exit code 2 for a bad
     command line (typer's boxed usage text and pydantic's "Value error, " left out)."""
+    widen_help_when_piped()
     try:
         code = app(standalone_mode=False)
     except typer.Abort:
@@ -170,9 +177,22 @@ def usage_error(error: typer.TyperException) -> int:
     message = message.replace("Value error, ", "")
     context = getattr(error, "ctx", None)
     command = context.command_path if context is not None else "galton-client"
+    option = getattr(error, "option_name", None)
+    if isinstance(option, str) and _is_number(option):
+        # "No such option: -1": a negative number where an argument goes
+        message = (f"{option} is read as an option, not a number: put -- before a negative "
+                   f"argument ({command} -- {option})")
     typer.echo(f"galton-client: {message} (see '{command} --help')", err=True)
     code: int = getattr(error, "exit_code", 2)
     return code
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
 
 
 register(app, COMMAND_GROUPS)

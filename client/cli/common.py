@@ -5,7 +5,9 @@ from __future__ import annotations
 
 import inspect
 import json
+import os
 import re
+import sys
 from collections.abc import Callable
 from dataclasses import asdict
 from importlib.metadata import PackageNotFoundError, version
@@ -13,7 +15,7 @@ from typing import TYPE_CHECKING, Annotated, Any, TypeVar
 
 import typer
 from rich import box
-from rich.console import Console
+from rich.console import Console, ConsoleDimensions
 from rich.markup import escape
 from rich.table import Table
 
@@ -32,9 +34,22 @@ if TYPE_CHECKING:  # the SDK (numpy, Zenoh, ZeroMQ) is imported when a command n
     from galton.protocol import SimStatus
 
 class ReadableConsole(Console):
-    """A console whose tables keep every character at 80 columns: the first column (the
+    """A console whose tables keep every character: in a terminal, the first column (the
     names a user types back: joints, links, parameters) as wide as its longest cell (up to
-    KEY_WIDTH), the others folded onto more lines instead of cut to "…", light borders."""
+    KEY_WIDTH), the others folded onto more lines instead of cut to "…", light borders;
+    into a pipe or a file (no terminal, no COLUMNS), as wide as they are: nothing folded,
+    nothing cut (rich would otherwise assume 80 columns)."""
+
+    @property
+    def size(self) -> ConsoleDimensions:
+        measured = Console.size.fget(self)  # type: ignore[attr-defined]
+        if self._width is None and unlimited_width(self.is_terminal):  # no width was set
+            return ConsoleDimensions(PIPE_WIDTH, measured.height)
+        return measured  # type: ignore[no-any-return]
+
+    @size.setter
+    def size(self, new_size: tuple[int, int]) -> None:
+        Console.size.fset(self, new_size)  # type: ignore[attr-defined]
 
     def print(self, *objects: Any, **kwargs: Any) -> None:
         for item in objects:
@@ -44,6 +59,24 @@ class ReadableConsole(Console):
 
 
 KEY_WIDTH = 40
+PIPE_WIDTH = 10_000  # "unlimited": a table or line is as wide as its text
+HELP_PIPE_WIDTH = 160  # --help into a pipe: wide enough that no cell is cut to "…"
+
+
+def unlimited_width(is_terminal: bool) -> bool:
+    """Whether output goes where nobody reads it at a terminal's width (a pipe, a file)
+    and no width was asked for (COLUMNS)."""
+    return not is_terminal and not os.environ.get("COLUMNS")
+
+
+def widen_help_when_piped() -> None:
+    """--help into a pipe at HELP_PIPE_WIDTH columns instead of rich's 80, which cut long
+    words in the options' help to "…" (TERMINAL_WIDTH, when set, still decides)."""
+    if unlimited_width(sys.stdout.isatty()) and not os.environ.get("TERMINAL_WIDTH"):
+        os.environ["TERMINAL_WIDTH"] = str(HELP_PIPE_WIDTH)
+        rich_utils = sys.modules.get("typer.rich_utils")
+        if rich_utils is not None:
+            rich_utils.MAX_WIDTH = HELP_PIPE_WIDTH  # type: ignore[attr-defined]
 
 
 def readable(table: Table) -> None:
@@ -82,6 +115,30 @@ class Target:
         return Client(self.instance, self.connect, timeout=self.timeout,
                       credentials=None if over_zmq else self.credentials,
                       zmq_keys=self.zmq_keys if over_zmq else None, client_id=client_id)
+
+    def call(self, op: str, args: dict[str, Any] | None = None) -> dict[str, Any]:
+        """One request and its result map, through the transport alone: the SDK's Client
+        (numpy, and pyzmq unless the endpoint is a zmq+ one) is not imported, so a command
+        that only asks or sets the clock (status, play, pause ...) starts sooner. A refusal
+        raises its typed error, as the SDK's does."""
+        import uuid
+
+        from galton.client.transport.base import transport_for, zmq_endpoint
+        from galton.protocol import Keys
+        from galton.protocol.operations import OPERATIONS
+
+        over_zmq = zmq_endpoint(self.connect) is not None
+        client_id = uuid.uuid4().hex  # as the SDK's: a request names its client
+        transport = transport_for(Keys(self.instance), client_id, self.connect,
+                                  credentials=None if over_zmq else self.credentials,
+                                  zmq_keys=self.zmq_keys if over_zmq else None)
+        try:
+            reply = transport.request(op, args, OPERATIONS[op].client_timeout(self.timeout),
+                                      client_id)
+        finally:
+            transport.close()
+        reply.raise_for_code()
+        return dict(reply.result)
 
 
 def package_version() -> str:
@@ -135,6 +192,15 @@ def with_client(ctx: typer.Context, action: Callable[[Client], T]) -> T:
         with target.client() as client:
             return action(client)
     return run_guarded(go)
+
+
+def status_call(ctx: typer.Context, op: str, args: dict[str, Any] | None = None
+                ) -> SimStatus:
+    """An operation that answers the clock (status, play, pause ...), without the SDK
+    (Target.call); errors turned into exit code 1."""
+    from galton.protocol.status import SimStatus
+    target: Target = ctx.obj
+    return run_guarded(lambda: SimStatus.from_wire(target.call(op, args)))
 
 
 def show_status(status: SimStatus, as_json: bool) -> None:

@@ -205,8 +205,10 @@ def load_model(
         help="A model file on the daemon's machine: the daemon reads it.")] = None,
     fmt: Annotated[ModelFormat | None, typer.Option(
         "--format", help="Model format (default: from the suffix, .xml is mjcf).")] = None,
-    prefix: Annotated[str, typer.Option(help="Prepended to every entity and joint name.")
-                      ] = "",
+    prefix: Annotated[str, typer.Option(
+        help="Names the model's entities and joints PREFIX/<name>, as the ROS 2 front names "
+             "a spawned model's; a PREFIX that ends in a separator (/ _ - . :) is prepended "
+             "as it is (f_ gives f_<name>).")] = "",
     fixed_base: Annotated[bool | None, typer.Option(
         "--fixed-base/--floating-base",
         help="URDF: weld the root link to the world, or give it a free joint (default: "
@@ -226,10 +228,21 @@ def load_model(
     if file is not None:
         folders = with_own_folder(file, text or "", folders)
     loaded = with_client(ctx, lambda c: c.load_model(
-        chosen, text=text, path=path, prefix=prefix, fixed_base=fixed_base,
+        chosen, text=text, path=path, prefix=separated(prefix), fixed_base=fixed_base,
         search_path=folders))
     emit({"names": loaded}, as_json, lambda: console.print(
         f"loaded {counted(len(loaded), 'entity', 'entities')}: {', '.join(loaded)}", markup=False))
+
+
+PREFIX_SEPARATORS = ("/", "_", "-", ".", ":")
+
+
+def separated(prefix: str) -> str:
+    """load-model's --prefix as the wire's ``prefix``: ``arm`` names links ``arm/<link>``
+    (the ROS 2 front's rule), not ``arm<link>``; one ending in a separator stays as it is."""
+    if not prefix or prefix.endswith(PREFIX_SEPARATORS):
+        return prefix
+    return f"{prefix}/"
 
 
 # An attribute by which a URDF or MJCF file names another file (a mesh, a texture, ...).
@@ -260,7 +273,7 @@ def entities(
     found = with_client(ctx, lambda c: c.list(name, tag, None if kind is None else str(kind)))
 
     def render() -> None:
-        table = Table("name", "shape", "size (m)", "static", "mass (kg)", "friction",
+        table = Table("name", "shape", "half sizes (m)", "static", "mass (kg)", "friction",
                       "restitution", "tags", "source")
         for e in found:
             table.add_row(e.name, e.shape, ", ".join(f"{s:g}" for s in e.size), str(e.static),

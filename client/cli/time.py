@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 from galton.client.cli.choices import LIST_HELP, ResetScope, counted, numbers, split_list
-from galton.client.cli.common import JsonOpt, show_stamp, show_status, with_client
+from galton.client.cli.common import JsonOpt, show_stamp, show_status, status_call, with_client
 from galton.client.cli.joints import joint_states_dict, render_joint_states, show_joint_states
 from galton.client.cli.states import show_states, states_dict
 from galton.client.cli.worlds import WorldOpt, on_world
@@ -36,25 +36,25 @@ def play(ctx: typer.Context,
                   "target).", min=0.0)] = None,
          as_json: JsonOpt = False) -> None:
     """Run the simulation continuously."""
-    show_status(with_client(ctx, lambda c: c.play(rtf)), as_json)
+    show_status(status_call(ctx, "play", {} if rtf is None else {"rtf": rtf}), as_json)
 
 
 @commands.command("set-rtf", rich_help_panel=PANEL)
 def set_rtf(ctx: typer.Context, rtf: Rtf, as_json: JsonOpt = False) -> None:
     """Change the target real-time factor, playing or not."""
-    show_status(with_client(ctx, lambda c: c.set_rtf(rtf)), as_json)
+    show_status(status_call(ctx, "set_rtf", {"rtf": rtf}), as_json)
 
 
 @commands.command(rich_help_panel=PANEL)
 def pause(ctx: typer.Context, as_json: JsonOpt = False) -> None:
     """Pause the simulation clock (a running step request ends)."""
-    show_status(with_client(ctx, lambda c: c.pause()), as_json)
+    show_status(status_call(ctx, "pause"), as_json)
 
 
 @commands.command(rich_help_panel=PANEL)
 def stop(ctx: typer.Context, as_json: JsonOpt = False) -> None:
     """Pause and rewind: time to 0, entities back to their created state."""
-    show_status(with_client(ctx, lambda c: c.stop()), as_json)
+    show_status(status_call(ctx, "stop"), as_json)
 
 
 @commands.command(rich_help_panel=PANEL)
@@ -66,7 +66,7 @@ def reset(ctx: typer.Context,
     """Reset time, states, spawned entities, or all (parameters are kept). A playing or
     paused world stays so (a paused world at time 0 is not "stopped": stop rewinds and
     stops)."""
-    show_status(with_client(ctx, lambda c: c.reset(str(scope))), as_json)
+    show_status(status_call(ctx, "reset", {"scope": str(scope)}), as_json)
 
 
 def read_names(read: str | None, where: str = "--read") -> list[str] | None:

@@ -16,6 +16,7 @@ from galton.client.cli.common import (
     emit,
     run_guarded,
     show_status,
+    status_call,
     with_client,
 )
 
@@ -69,7 +70,7 @@ def host_line(host: dict[str, Any]) -> str:
 @commands.command(rich_help_panel=PANEL)
 def status(ctx: typer.Context, as_json: JsonOpt = False) -> None:
     """Show the simulation state and clock of one daemon."""
-    show_status(with_client(ctx, lambda c: c.status()), as_json)
+    show_status(status_call(ctx, "status"), as_json)
 
 
 @commands.command(rich_help_panel=PANEL)

@@ -19,7 +19,7 @@ import builtins
 import os
 import uuid
 from collections.abc import Callable, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import zenoh
@@ -40,11 +40,9 @@ from galton.client.sdk.values import (
     shapes_of,
 )
 from galton.client.sdk.worlds import WorldMethods
-from galton.client.transport.base import Transport, ZenohTransport, zmq_endpoint
+from galton.client.transport.base import ZenohTransport, transport_for
 from galton.client.transport.credentials import Credentials
 from galton.client.transport.session import checked_timeout
-from galton.client.transport.zmq import ZmqTransport
-from galton.client.transport.zmq_keys import ZmqKeys
 from galton.protocol import (
     POSE_WIDTH,
     BodyGroup,
@@ -72,6 +70,9 @@ from galton.protocol.replies import (
     StepReply,
     decode_result,
 )
+
+if TYPE_CHECKING:  # pyzmq loads only for a zmq+ endpoint (transport_for)
+    from galton.client.transport.zmq_keys import ZmqKeys
 
 DEFAULT_TIMEOUT_S = 5.0
 
@@ -103,8 +104,8 @@ class Client(WorldMethods, PerceptionMethods, ControlMethods, StreamMethods):
         # VIEWER_ID_PREFIX + hex, the token a viewer may hold under --users).
         self.client_id = client_id or uuid.uuid4().hex
         self._own_transport = True
-        self.transport = _transport(self.keys, self.client_id, connect, session, config_file,
-                                    credentials, zmq_keys)
+        self.transport = transport_for(self.keys, self.client_id, connect, session,
+                                       config_file, credentials, zmq_keys)
 
     @property
     def session(self) -> zenoh.Session:
@@ -401,24 +402,6 @@ class Client(WorldMethods, PerceptionMethods, ControlMethods, StreamMethods):
     def on_event(self, callback: Callable[[dict[str, Any]], None]) -> Subscription:
         self._check_open()
         return subscribe_events(self.transport, callback)
-
-
-def _transport(keys: Keys, client_id: str, connect: str | Sequence[str] | None,
-               session: zenoh.Session | None, config_file: str | None,
-               credentials: Credentials | None = None,
-               zmq_keys: ZmqKeys | None = None) -> Transport:
-    """ZeroMQ for a ``zmq+ipc://`` or ``zmq+tcp://`` endpoint (CURVE keys from ``zmq_keys``,
-    else GALTON_ZMQ_KEY and GALTON_ZMQ_SERVER_KEY), else Zenoh."""
-    endpoint = zmq_endpoint(connect)
-    if endpoint is None:
-        if zmq_keys is not None:
-            raise InvalidArgumentError("ZeroMQ keys are for a zmq+ endpoint, not Zenoh")
-        return ZenohTransport(keys, client_id, session, connect, config_file, credentials)
-    if session is not None or config_file is not None or credentials is not None:
-        raise InvalidArgumentError(
-            "a ZeroMQ endpoint takes no Zenoh session, config file or credentials: its "
-            "security is CURVE keys (zmq_keys)")
-    return ZmqTransport(endpoint, keys=zmq_keys or ZmqKeys.from_env())
 
 
 def spheres(names: Sequence[str], positions: Sequence[Sequence[float]] | np.ndarray,

@@ -37,7 +37,8 @@ QUEUE_DEPTH = 8  # samples a StateStream keeps for its reader; older ones are dr
 @dataclass(frozen=True)
 class StateSample:
     """One sample of a state stream: where each entity was at one step. ``ended`` says
-    why the daemon ended the stream (its side world was deleted); then it holds no poses."""
+    why the daemon ended the stream (its side world was deleted, or its client went); then
+    it holds no poses."""
 
     stream: str
     seq: int

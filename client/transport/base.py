@@ -6,7 +6,7 @@ replies; ``transport_for`` picks one from the endpoint a user gives.
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import zenoh
 
@@ -22,6 +22,9 @@ from galton.client.transport.session import (
 from galton.protocol import DaemonUnreachableError, InvalidArgumentError, Keys, Reply
 from galton.protocol.errors import ClientClosedError, brief
 from galton.protocol.keys import client_token_key
+
+if TYPE_CHECKING:  # ZeroMQ is imported only for a zmq+ endpoint
+    from galton.client.transport.zmq_keys import ZmqKeys
 
 ZMQ_SCHEME = "zmq+"
 Topic = str  # "telemetry", "events", or a state stream's "states/<id>"
@@ -59,6 +62,27 @@ def zmq_endpoint(connect: str | Sequence[str] | None) -> str | None:
         raise InvalidArgumentError(
             f"a ZeroMQ endpoint names one daemon: give it alone, not with {brief(items)}")
     return wanted[0][len(ZMQ_SCHEME):]
+
+
+def transport_for(keys: Keys, client_id: str, connect: str | Sequence[str] | None,
+                  session: zenoh.Session | None = None, config_file: str | None = None,
+                  credentials: Credentials | None = None,
+                  zmq_keys: ZmqKeys | None = None) -> Transport:
+    """ZeroMQ for a ``zmq+ipc://`` or ``zmq+tcp://`` endpoint (CURVE keys from ``zmq_keys``,
+    else GALTON_ZMQ_KEY and GALTON_ZMQ_SERVER_KEY), else Zenoh. pyzmq is imported only for
+    the first (a command line that asks one Zenoh daemon starts without it)."""
+    endpoint = zmq_endpoint(connect)
+    if endpoint is None:
+        if zmq_keys is not None:
+            raise InvalidArgumentError("ZeroMQ keys are for a zmq+ endpoint, not Zenoh")
+        return ZenohTransport(keys, client_id, session, connect, config_file, credentials)
+    if session is not None or config_file is not None or credentials is not None:
+        raise InvalidArgumentError(
+            "a ZeroMQ endpoint takes no Zenoh session, config file or credentials: its "
+            "security is CURVE keys (zmq_keys)")
+    from galton.client.transport.zmq import ZmqTransport
+    from galton.client.transport.zmq_keys import ZmqKeys
+    return ZmqTransport(endpoint, keys=zmq_keys or ZmqKeys.from_env())
 
 
 class ZenohTransport:

@@ -14,6 +14,7 @@ from galton.client.sdk.recording import Recording, recordings_in
 from galton.client.view.scene import WorldDrawing, framing
 
 FRAME_PERIOD_S = 1 / 30
+TIME_STEP_S = 0.001  # the time slider's resolution (sim time)
 HIDDEN_Z = -1e3  # an entity absent from a sample (not yet released) is drawn out of sight
 
 
@@ -26,23 +27,28 @@ def visible_poses(poses: np.ndarray) -> np.ndarray:
 
 
 class ReplayView:
-    """The replay page; ``run`` plays until ``stop`` is set."""
+    """The replay page; ``run`` plays until ``stop`` is set. Its panel: the recording, the
+    clock, Play and Pause, the speed and a time slider (seconds of sim time) to seek."""
 
     def __init__(self, paths: list[Path], server: viser.ViserServer,
                  camera: tuple[np.ndarray, np.ndarray] | None) -> None:
         self.paths = {path.name: path for path in paths}
         self.server = server
         self.camera = camera
-        self.drawing = WorldDrawing(server.scene, "/replay")
-        server.scene.set_up_direction("+z")
-        server.scene.add_grid("/grid", width=10, height=10, plane="xy", position=(0, 0, -0.01))
-        gui = server.gui
+        gui = server.gui  # the panel first: a page that connects gets it before the scene
         gui.configure_theme(dark_mode=False, control_width="medium")
         self.choice = gui.add_dropdown("Recording", tuple(self.paths))
         self.clock = gui.add_markdown("")
-        self.playing = gui.add_checkbox("Playing", True)
+        self.playing = True
+        self.drew = threading.Event()  # set at each new drawing (a test waits on it)
+        gui.add_button("Play").on_click(lambda _event: self.play(True))
+        gui.add_button("Pause").on_click(lambda _event: self.play(False))
         self.speed = gui.add_slider("Speed", min=0.05, max=4.0, step=0.05, initial_value=1.0)
-        self.frame = gui.add_slider("Frame", min=0, max=1, step=1, initial_value=0)
+        self.time = gui.add_slider("Time (s)", min=0.0, max=1.0, step=TIME_STEP_S,
+                                   initial_value=0.0)
+        self.drawing = WorldDrawing(server.scene, "/replay")
+        server.scene.set_up_direction("+z")
+        server.scene.add_grid("/grid", width=10, height=10, plane="xy", position=(0, 0, -0.01))
         self.recording = self._load(self.choice.value)
         self.choice.on_update(lambda _event: self._switch())
 
@@ -51,11 +57,18 @@ class ReplayView:
              camera: tuple[np.ndarray, np.ndarray] | None) -> ReplayView:
         return cls(recordings_in(source), server, camera)
 
+    def play(self, playing: bool) -> None:
+        """Play or pause (the buttons); paused, the time slider alone moves the replay."""
+        self.playing = playing
+
     def _load(self, name: str) -> Recording:
         recording = Recording.load(self.paths[name])
-        self.frame.max = max(len(recording.times) - 1, 1)
-        self.frame.value = 0  # type: ignore[misc]  # viser's handles take assignments
-        first = visible_poses(recording.poses[0]) if len(recording.times) else np.zeros((0, 7))
+        times = recording.times
+        self.time.min = float(times[0]) if len(times) else 0.0
+        self.time.max = max(float(times[-1]) if len(times) else 0.0,
+                            self.time.min + TIME_STEP_S)
+        self.time.value = self.time.min  # type: ignore[misc]  # viser's handles take assignments
+        first = visible_poses(recording.poses[0]) if len(times) else np.zeros((0, 7))
         self.drawing.rebuild(recording.infos, recording.names, first, recording.shapes)
         framed = self.camera or framing(recording.infos, recording.names,
                                         np.nan_to_num(recording.poses[-1]))
@@ -67,25 +80,33 @@ class ReplayView:
     def _switch(self) -> None:
         self.recording = self._load(self.choice.value)
 
+    def frame_at(self, sim_time: float) -> int:
+        """The index of the last sample at or before ``sim_time``."""
+        found = int(np.searchsorted(self.recording.times, sim_time, side="right")) - 1
+        return min(max(found, 0), len(self.recording.times) - 1)
+
     def run(self, stop: threading.Event) -> None:
-        sim_clock = 0.0
         last = time.monotonic()
+        drawn: tuple[int, bool] | None = None
         while not stop.wait(FRAME_PERIOD_S):
             now = time.monotonic()
             recording, times = self.recording, self.recording.times
             if not len(times):
                 continue
-            index = int(self.frame.value)
-            if self.playing.value:
-                sim_clock = max(sim_clock, float(times[index])) + (now - last) * self.speed.value
-                index = int(np.searchsorted(times, sim_clock, side="right")) - 1
-                if index >= len(times) - 1:
-                    index, sim_clock = 0, float(times[0])  # loop
-                self.frame.value = max(index, 0)  # type: ignore[misc]
-            else:
-                sim_clock = float(times[index])
+            sim_clock = float(self.time.value)
+            if self.playing:
+                sim_clock += (now - last) * self.speed.value
+                if sim_clock > float(times[-1]):
+                    sim_clock = float(times[0])  # loop
+                self.time.value = sim_clock  # type: ignore[misc]
             last = now
-            self.drawing.update(visible_poses(recording.poses[max(index, 0)]))
+            index = self.frame_at(sim_clock)
+            if (index, self.playing) == drawn:
+                continue  # nothing new to draw: the page stays quiet
+            drawn = index, self.playing
+            self.drawing.update(visible_poses(recording.poses[index]))
             self.clock.content = (f"replay **{self.choice.value}**  \n"
-                                  f"sim time **{times[max(index, 0)]:.3f} s**  "
-                                  f"frame {index} of {len(times) - 1}")
+                                  f"sim time **{times[index]:.3f} s**  "
+                                  f"frame {index} of {len(times) - 1}  \n"
+                                  f"{'playing' if self.playing else 'paused'}")
+            self.drew.set()

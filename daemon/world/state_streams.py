@@ -38,7 +38,7 @@ from galton.protocol.keys import STREAMS_CHUNK
 MAX_STREAMS = 32  # open streams in one daemon, all clients together
 NO_OWNER = ("a state stream belongs to a client, and ends when it goes: the request needs "
             "a 'client' id in its envelope (the SDK sends one)")
-
+CLIENT_GONE = "its client went"  # the ``ended`` of a stream whose client went
 
 
 @dataclass
@@ -114,9 +114,10 @@ class StateStreams:
         return {"stream": stream_id, "closed": True}
 
     def owner_gone(self, owner: str) -> None:
-        """Its client went: its streams end."""
+        """Its client went: its streams end, each with a last sample that says so (another
+        subscriber of the stream's key learns it ended, not that it went quiet)."""
         for stream in [s for s in self.streams.values() if s.owner == owner]:
-            self._end(stream)
+            self._end(stream, CLIENT_GONE)
 
     def publish_due(self, loop: StreamContext, now: float) -> None:
         """Publish a sample of every stream that is due, and schedule each one's next."""

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from galton.client import Client, spheres
+from galton.client.sdk.streams import StateStream
 from galton.protocol import InvalidArgumentError, NotFoundError
 
 pytestmark = pytest.mark.parametrize("engine", ["mujoco"])
@@ -104,3 +105,25 @@ def test_a_side_world_stream_ends_with_a_sample_that_says_why_when_it_is_deleted
         if "ahead" in [w.name for w in sim.list_worlds()]:
             sim.delete_world("ahead")
     assert "deleted" in last.ended
+
+
+def test_a_stream_ends_with_a_sample_that_says_why_when_its_client_goes(
+        sim: Client, daemon: object, transport: str) -> None:
+    """Watched by another client on its key, a stream whose client goes ends with a last
+    sample saying so, over either transport (the Zenoh token, the ZeroMQ connection)."""
+    _balls(sim)
+    endpoint = daemon.endpoint if transport == "zenoh" else daemon.zmq_endpoint  # type: ignore[attr-defined]
+    other = Client(sim.instance, endpoint, timeout=20.0)
+    try:
+        opened = other.call("stream_states", {"rate": RATE_HZ})
+        watched = StateStream(other, sim.transport, opened, None, 10.0)
+    except BaseException:
+        other.close()
+        raise
+    with watched:
+        assert watched.next().stream == opened["stream"]
+        other.close()
+        last = watched.next()
+        while last.ended is None:
+            last = watched.next()
+    assert last.ended == "its client went" and len(last.poses) == 0

@@ -136,8 +136,13 @@ def test_a_raw_zenoh_msgpack_client_works(daemons: dict) -> None:
     daemon = start_daemon(daemons, "mujoco")
     with Client(daemon.instance, daemon.endpoint) as sim:
         sim.load_world("mujoco")
-    heights = load_example("raw_protocol_client").main(daemon.endpoint, daemon.instance)
-    assert len(heights) == 100 and max(heights) < 2.0
+        sim.spawn(spheres(["mine"], [[0.0, 0.0, 3.0]], radius=0.1))
+        before = sim.list()
+        heights = load_example("raw_protocol_client").main(daemon.endpoint, daemon.instance)
+        # In a world of its own, on its ground: the live world is as it was, no side world left.
+        assert [e.name for e in sim.list()] == [e.name for e in before] == ["mine"]
+        assert [w.name for w in sim.list_worlds()] == ["default"]
+    assert len(heights) == 100 and max(heights) < 2.0 and min(heights) > 0.05
 
 
 def test_the_quickstart_example_runs(daemons: dict) -> None:

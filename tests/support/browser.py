@@ -25,8 +25,8 @@ from websockets.sync.client import ClientConnection, connect
 
 CHROMIUM = shutil.which("chromium-headless-shell")
 FLAGS = ("--no-sandbox", "--enable-unsafe-swiftshader", "--use-gl=angle",
-         "--use-angle=swiftshader", "--remote-debugging-port=0",
-         "--force-device-scale-factor=0.5")  # a quarter of the pixels: software GL is slow
+         "--use-angle=swiftshader", "--remote-debugging-port=0")
+TEST_SCALE = 0.5  # a quarter of the pixels: software GL is slow
 START_TIMEOUT_S = 60.0
 CALL_TIMEOUT_S = 150.0  # a screenshot waits for a frame: seconds on a loaded machine
 DEVTOOLS_LINE = re.compile(r"DevTools listening on (ws://\S+)")
@@ -35,11 +35,12 @@ DEVTOOLS_LINE = re.compile(r"DevTools listening on (ws://\S+)")
 class Browser:
     """One headless Chromium showing one page; ``close`` ends it."""
 
-    def __init__(self, url: str, width: int, height: int) -> None:
+    def __init__(self, url: str, width: int, height: int, scale: float = TEST_SCALE) -> None:
         assert CHROMIUM is not None, "chromium-headless-shell is not installed"
         self._profile = tempfile.TemporaryDirectory(prefix="galton-chromium-")
         self._process = subprocess.Popen(
             [CHROMIUM, *FLAGS, f"--window-size={width},{height}",
+             f"--force-device-scale-factor={scale}",
              f"--user-data-dir={self._profile.name}", url],
             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
             start_new_session=True)  # its GPU and renderer processes end with its group
@@ -69,6 +70,34 @@ class Browser:
                 if "error" in message:
                     raise RuntimeError(f"{method}: {message['error']}")
                 return dict(message.get("result", {}))
+
+    def evaluate(self, expression: str) -> Any:
+        """The value of a JavaScript expression in the page (JSON-able values only)."""
+        result = self._call(self._page, "Runtime.evaluate", expression=expression,
+                            returnByValue=True)
+        return result.get("result", {}).get("value")
+
+    def reload(self, timeout: float = START_TIMEOUT_S) -> None:
+        """Load the page again, as a user pressing F5 (a new document, a new connection),
+        returning once the old document is gone (what is read next is the new one's)."""
+        self.evaluate("window.__galtonOldPage = true")
+        self._call(self._page, "Page.reload", ignoreCache=True)
+        deadline = time.monotonic() + timeout
+        while self.evaluate("window.__galtonOldPage === true"):
+            assert time.monotonic() < deadline, f"the page did not reload in {timeout} s"
+            time.sleep(0.05)  # the old document until the new one replaces it
+
+    def text_until(self, drawn: Callable[[str], bool], timeout: float) -> str:
+        """The page's text, read until ``drawn`` says it shows what is awaited;
+        AssertionError with the last text after ``timeout`` seconds."""
+        deadline = time.monotonic() + timeout
+        while True:
+            text = str(self.evaluate("document.body ? document.body.innerText : ''") or "")
+            if drawn(text):
+                return text
+            assert time.monotonic() < deadline, (
+                f"the page did not show what was awaited in {timeout} s; it shows {text!r}")
+            time.sleep(0.2)  # polling a page's DOM: nothing to wait on from here
 
     def screenshot(self) -> np.ndarray:
         """The page as drawn now: RGB, height x width x 3."""

@@ -17,6 +17,7 @@ absolute; the snapshot holds the names, not the files).
 
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING, Any
 
 import mujoco
@@ -174,6 +175,10 @@ def restore(engine: MujocoEngine, data: Any) -> None:
         spec.copy_back(model)
     except MUJOCO_ERRORS as exc:
         raise InvalidArgumentError(f"snapshot.model does not fit its spec: {exc}") from exc
+    # copy_back carries the model's statistics into the spec, and a spec that sets
+    # meaninertia (deprecated by MuJoCo: it does not affect simulation) makes every later
+    # compile log a deprecation warning: each compile works it out again instead.
+    spec.stat.meaninertia = math.nan
     state = mujoco.MjData(model)
     arrays.write_data_numbers(model, state, data["data"])
     engine.values, engine.spec = values, spec

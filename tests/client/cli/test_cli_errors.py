@@ -21,6 +21,8 @@ def console(*args: str) -> subprocess.CompletedProcess[str]:
     (["spawn", "cube", "a"], "'cube' is not one of 'sphere'"),
     (["--timeout", "-1", "status"], "--timeout must be a number of seconds above 0"),
     (["no-such-command"], "No such command 'no-such-command'"),
+    (["predict", "-1"], "-1 is read as an option, not a number: put -- before a negative "
+                        "argument (galton-client predict -- -1)"),
 ])
 def test_a_bad_command_line_is_one_line_and_exit_2(args: list[str], says: str,
                                                    tmp_path: Path) -> None:

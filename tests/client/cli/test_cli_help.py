@@ -7,10 +7,11 @@ import re
 
 import pytest
 import typer.main
+import typer.rich_utils
 from support.cli import run
 
 from galton.client.cli.app import app
-from galton.client.cli.common import help_text
+from galton.client.cli.common import HELP_PIPE_WIDTH, help_text
 from galton.protocol.operations import OPERATIONS
 
 # Operations whose command is not the operation's name with dashes (README, "CLI").
@@ -34,10 +35,15 @@ def test_every_operation_has_a_command_besides_call() -> None:
 
 
 @pytest.mark.parametrize("command", [None, *commands()])
-def test_help_has_no_rst_markup(command: str | None) -> None:
+def test_help_has_no_rst_markup_and_nothing_cut_in_a_pipe(
+        command: str | None, monkeypatch: pytest.MonkeyPatch) -> None:
+    # The width --help has in a pipe (galton.client.cli.common.widen_help_when_piped;
+    # test_cli_pipes.py reads one through a real pipe): no cell cut to "…".
+    monkeypatch.setattr(typer.rich_utils, "MAX_WIDTH", HELP_PIPE_WIDTH)
     result = run(["--help"] if command is None else [command, "--help"])
     assert result.exit_code == 0, result.output
     assert not RST_MARKUP.search(result.output), result.output
+    assert "…" not in result.output, result.output
 
 
 def test_help_text_joins_paragraph_lines_and_keeps_brackets() -> None:

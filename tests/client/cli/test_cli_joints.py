@@ -32,6 +32,15 @@ def kuka(target: list[str]) -> list[str]:
     return target
 
 
+def test_a_prefix_names_a_model_as_the_ros2_front_does(target: list[str]) -> None:
+    """--prefix arm names the links arm/<link> (issue 47: it gave armlbr_iiwa_link_0)."""
+    loaded = invoke([*target, "load-model", "--file", str(KUKA), "--search-path",
+                     str(KUKA.parent), "--prefix", "arm", "--json"])
+    assert loaded["names"][:2] == ["arm/lbr_iiwa_link_0", "arm/lbr_iiwa_link_1"]
+    joints = invoke([*target, "joints", "--json"])
+    assert "arm/lbr_iiwa_joint_1" in [j["name"] for j in joints]
+
+
 def test_load_model_bases_and_the_joint_table(target: list[str],
                                              monkeypatch: pytest.MonkeyPatch) -> None:
     loaded = invoke([*target, "load-model", "--file", str(FREE_KUKA), "--search-path",

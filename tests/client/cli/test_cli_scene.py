@@ -37,6 +37,9 @@ def test_spawn_options_reach_the_world(target: list[str]) -> None:
     assert shapes == {"crate_1": [{"kind": "box", "size": [0.1, 0.2, 0.3],
                                    "pose": [0, 0, 0, 0, 0, 0, 1], "triangles": None}]}
     assert "box" in run([*target, "get-shapes"]).output
+    # The table says what --size was: half sizes (issue 47: "size (m)" read as full ones).
+    table = run([*target, "entities"]).output
+    assert "half sizes (m)" in table and "0.1, 0.2, 0.3" in table
 
 
 def test_spawn_a_mesh_from_an_obj_file_and_a_box_mesh_with_an_inertia(

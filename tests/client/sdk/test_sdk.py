@@ -5,8 +5,11 @@ operation registry's defaults, a closed Client, and what ``galton.client`` expor
 from __future__ import annotations
 
 import inspect
+import json
 import math
 import queue
+import subprocess
+import sys
 import time
 from collections.abc import Callable, Iterator
 from concurrent.futures import ThreadPoolExecutor
@@ -54,6 +57,21 @@ def test_value_types_are_exported_from_galton_client() -> None:
               "BodyProperties", "Stamp", "States", "Reply", "ResultCode", "DaemonInfo"}
     assert wanted <= set(galton.client.__all__)
     assert all(hasattr(galton.client, name) for name in galton.client.__all__)
+
+
+def test_dir_lists_every_export_before_its_first_use() -> None:
+    """dir() and tab completion see the lazy exports too (issue 47: only loaded ones),
+    and listing them loads nothing."""
+    probe = ("import sys, json, galton.client, galton.protocol\n"
+             "print(json.dumps([dir(galton.client), dir(galton.protocol), "
+             "'numpy' in sys.modules]))")
+    done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                          timeout=60, check=True)
+    client_names, protocol_names, numpy_loaded = json.loads(done.stdout)
+    assert set(galton.client.__all__) <= set(client_names)
+    assert {"Client", "spheres", "EmbeddedDaemon", "SimStatus"} <= set(client_names)
+    assert {"Keys", "SimStatus", "ENGINE_NAMES"} <= set(protocol_names)
+    assert not numpy_loaded
 
 
 # -- stamps -------------------------------------------------------------------------------

@@ -27,6 +27,10 @@ WIDTH, HEIGHT = 800, 600
 PANEL_LEFT = 0.575  # viser's control panel covers the page right of this (at 800 px wide)
 MIN_PIXELS = 25  # red pixels that make the five balls (at half scale)
 AXES_CORNER = 0.15  # viser draws an axes gizmo in the bottom-left corner
+LOADS = 10  # the page loaded this many times in a row must show its panel each time
+PANEL_TIMEOUT_S = 60.0  # one load's panel, on a loaded machine (seconds when quiet)
+PANEL_WORDS = ("sim time", "Play", "Pause", "Step 100", "Reset", "Predict 1 s",
+               "Side worlds (ghosts)", "compare: anomaly score")
 CLI = str(Path(sys.executable).with_name("galton-client"))
 
 
@@ -89,6 +93,7 @@ def test_the_page_draws_the_red_balls_and_they_fall_while_playing(
     with Browser(view_url, WIDTH, HEIGHT) as browser:
         paused = _red_pixels(browser.wait_for(lambda image: len(_red_pixels(image)) > MIN_PIXELS,
                                               DRAWN_TIMEOUT_S))
+        browser.text_until(_shows_panel, PANEL_TIMEOUT_S)  # the panel beside the scene
         after = sim.get_states(names)
         assert after.step == before.step  # opening the page never disturbs the world
         np.testing.assert_array_equal(after.poses, before.poses)
@@ -100,6 +105,7 @@ def test_the_page_draws_the_red_balls_and_they_fall_while_playing(
         try:
             browser.wait_for(lambda image: _fell(_red_pixels(image), rows.mean()),
                              DRAWN_TIMEOUT_S)
+            assert "playing" in browser.text_until(_shows_panel, PANEL_TIMEOUT_S)
         finally:
             sim.pause()
     assert sim.get_states(names).poses[:, 2].max() < 2.0
@@ -108,3 +114,26 @@ def test_the_page_draws_the_red_balls_and_they_fall_while_playing(
 def _fell(pixels: np.ndarray, first_row: float) -> bool:
     """The balls are drawn, lower on the page than they were."""
     return len(pixels) > MIN_PIXELS and pixels[:, 0].mean() > first_row + 0.02
+
+
+def _shows_panel(text: str) -> bool:
+    """The operator's panel is drawn: the clock, the buttons, the ghosts' switch, the chart."""
+    return all(word in text for word in PANEL_WORDS)
+
+
+@pytest.mark.timeout(600)
+def test_the_panel_is_drawn_on_every_load(mujoco_sim: Client, view_url: str) -> None:
+    """Loaded ten times in a row (a fresh page and connection each time), the page shows
+    its whole panel every time, and loading it changes nothing in the world."""
+    mujoco_sim.spawn(spheres(["red_0"], [[0.0, 0.0, 1.0]], radius=0.06, tags=["red"]))
+    mujoco_sim.step(1)
+    before = mujoco_sim.get_states(["red_0"])
+    with Browser(view_url, WIDTH, HEIGHT) as browser:
+        for load in range(LOADS):
+            if load:
+                browser.reload()
+            text = browser.text_until(_shows_panel, PANEL_TIMEOUT_S)
+            assert f"step {before.step}" in text, f"load {load}: {text!r}"
+    after = mujoco_sim.get_states(["red_0"])
+    assert after.step == before.step
+    np.testing.assert_array_equal(after.poses, before.poses)

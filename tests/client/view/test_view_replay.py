@@ -5,7 +5,10 @@ from __future__ import annotations
 
 import json
 import socket
+import threading
+import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -57,8 +60,38 @@ def test_a_recording_keeps_every_entity_and_replays_in_the_page(
         page = ReplayView.open(tmp_path, server, None)
         assert page.drawing.names == tuple(recording.names)
         assert visible_poses(recording.poses[0])[late, 2] < -100  # drawn out of sight
+        _seek_while_paused(page, recording)
     finally:
         server.stop()
+
+
+def _seek_while_paused(page: Any, recording: Recording) -> None:
+    """The time slider spans the recording's sim time; paused (the Pause button), moving
+    it draws the sample of that time, and Play moves it on again."""
+    times = recording.times
+    assert (page.time.min, page.time.max) == pytest.approx((times[0], times[-1]))
+    page.play(False)
+    middle = len(times) // 2
+    page.time.value = float(times[middle])
+    stop = threading.Event()
+    runner = threading.Thread(target=page.run, args=(stop,))
+    runner.start()
+    try:
+        _until(page, lambda: f"frame {middle} of" in page.clock.content and
+               "paused" in page.clock.content)
+        page.play(True)
+        _until(page, lambda: "playing" in page.clock.content)
+    finally:
+        stop.set()
+        runner.join()
+
+
+def _until(page: Any, done: Any) -> None:
+    """Wait on the page's drawings until ``done()``."""
+    deadline = time.monotonic() + WAIT_S
+    while not done():
+        assert page.drew.wait(max(0.0, deadline - time.monotonic())), "nothing drawn"
+        page.drew.clear()
 
 
 PYRAMID = (np.array([[-0.1, -0.1, 0.0], [0.1, -0.1, 0.0], [0.1, 0.1, 0.0], [-0.1, 0.1, 0.0],

@@ -316,3 +316,18 @@ def test_a_target_without_an_effort_limit_restores(snapshot: dict[str, Any]) -> 
     restored_engine.restore(held)
     modes = {j.name: j.mode for j in restored_engine.joints()}
     assert modes["k/lbr_iiwa_joint_1"] == "position"
+
+
+def test_a_restored_model_world_compiles_again_without_a_deprecation_warning(
+        engine: MujocoEngine, caplog: pytest.LogCaptureFixture) -> None:
+    """A loaded model's world restored, then edited (a recompile), logs no MuJoCo warning:
+    restoring once carried the model's meaninertia into the spec, and every later compile
+    logged MuJoCo's deprecation of it (issue 47)."""
+    engine.spawn([floor()])
+    kuka(engine)
+    engine.step(5)
+    copy = restored(engine.snapshot())
+    with caplog.at_level("WARNING"):
+        copy.spawn([BodyGroup(shape="sphere", size=(0.1,), names=["late"],
+                              poses=np.array([[0.0, 0.0, 3.0, 0.0, 0.0, 0.0, 1.0]]))])
+    assert not [r for r in caplog.records if "MuJoCo" in r.getMessage()], caplog.text

@@ -62,7 +62,9 @@ def test_a_raw_pyzmq_msgpack_client_works(zmq_daemon: EmbeddedDaemon) -> None:
     spec.loader.exec_module(module)
     assert zmq_daemon.zmq_endpoint is not None
     heights, sample = module.main(zmq_daemon.zmq_endpoint.removeprefix("zmq+"))
-    assert len(heights) == 100 and max(heights) < 2.0
+    # On the ground it spawns (issue 47: they fell through to -2.9 m): radius 0.1 m, piled
+    # at most a few deep, none through the plane.
+    assert len(heights) == 100 and max(heights) < 2.0 and min(heights) > 0.05
     assert sample["instance"] == zmq_daemon.instance and sample["step"] >= 500
 
 
