@@ -12,10 +12,9 @@ from rich.table import Table
 
 from galton.client.cli.choices import split_list
 from galton.client.cli.common import JsonOpt, console, emit, with_client
-from galton.client.sdk.calibration import CalibrationResult, bounds_for, observed_in
-from galton.client.sdk.recording import Recording
 
 if TYPE_CHECKING:
+    from galton.client.sdk.calibration import CalibrationResult
     from galton.client.sdk.client import Client
 
 # This group's commands; galton.client.cli.app registers them on the CLI.
@@ -59,6 +58,10 @@ def calibrate(
     as_json: JsonOpt = False,
 ) -> None:
     """Fit body and world parameters so the world's predictions match a recording."""
+    # numpy and the SDK load only when this command runs (the CLI's start stays light).
+    from galton.client.sdk.calibration import bounds_for, observed_in
+    from galton.client.sdk.recording import Recording
+
     names = split_list(fit, "--fit")
     try:
         chosen = bounds_for(names, parse_bounds(bounds))

@@ -10,7 +10,6 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
-import numpy as np
 import typer
 from rich.table import Table
 
@@ -187,9 +186,9 @@ def render_futures(found: Prediction) -> None:
     table = Table("sim time (s)", *[f"{n} spread (m)" for n in found.names],
                   title=f"{found.futures} futures, {found.steps} steps ahead of "
                         f"{found.sim_time:.4f} s (seed {found.seed})")
-    spread = found.spread if found.spread is not None else np.zeros((len(found), 0))
     for k, t in enumerate(found.times):
-        table.add_row(f"{t:.4f}", *[f"{v:.4g}" for v in spread[k]])
+        row = [] if found.spread is None else found.spread[k]
+        table.add_row(f"{t:.4f}", *[f"{v:.4g}" for v in row])
     console.print(table)
     if found.scores is not None:
         console.print("scores: " + ", ".join(f"{v:.4g}" for v in found.scores), markup=False)
