@@ -51,6 +51,11 @@ MAX_ROUTING_FRAME_BYTES = 256
 # that never reads cannot grow the daemon). Fairness: ``receive`` takes one request per
 # ROUTER per call, which ZeroMQ deals out fairly between connections (issue 35, item 8).
 MAX_QUEUED_PER_CONNECTION = 64
+# A liveness check on every connection (ZMTP heartbeats, answered by the client's ZeroMQ I/O
+# thread whatever its program does): a connection that answers no PING for
+# HEARTBEAT_TIMEOUT_MS is closed, and with it end its client's streams, step and lease, as
+# when its socket closes. A stopped (SIGSTOP) or wedged client no longer keeps them.
+HEARTBEAT_IVL_MS, HEARTBEAT_TIMEOUT_MS = 1000, 3000
 LOOPBACK = "127.0.0.1"
 
 
@@ -142,6 +147,8 @@ class ZmqFront:
         router.setsockopt(zmq.LINGER, 0)
         router.setsockopt(zmq.RCVHWM, MAX_QUEUED_PER_CONNECTION)
         router.setsockopt(zmq.SNDHWM, MAX_QUEUED_PER_CONNECTION)
+        router.setsockopt(zmq.HEARTBEAT_IVL, HEARTBEAT_IVL_MS)
+        router.setsockopt(zmq.HEARTBEAT_TIMEOUT, HEARTBEAT_TIMEOUT_MS)
         if self.security is not None:
             self.security.secure(router)
         _refuse_if_served(endpoint)
