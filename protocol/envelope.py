@@ -9,6 +9,7 @@ import msgpack
 
 from galton.protocol.codes import ResultCode
 from galton.protocol.errors import (
+    InvalidArgumentError,
     MalformedRequestError,
     RemoteError,
     ResourceLimitError,
@@ -140,7 +141,7 @@ def _client_id(value: Any) -> str | None:
             f"'client' must be a string of 1-{CLIENT_ID_LENGTH} characters, got {brief(value)}")
     if NOT_IN_CLIENT_ID.intersection(value) or value.startswith("@") or \
             not value.isprintable() or any(c.isspace() for c in value):
-        raise MalformedRequestError(
+        raise InvalidArgumentError(
             f"'client' {brief(value)} is not a client id: it names one liveliness token "
             "galton/_clients/<id>, so it holds no '/', '*', '$', '?', '#' or space and does "
             "not start with '@'")

@@ -123,7 +123,7 @@ def test_a_wildcard_or_key_expression_is_no_client_id(sim: Client, client_id: st
     replies = raw_replies(sim, "stream_states", payload)
     assert len(replies) == 1
     reply = decode_reply(replies[0])
-    assert reply.code == ResultCode.MALFORMED_REQUEST and "client id" in reply.message
+    assert reply.code == ResultCode.INVALID_ARGUMENT and "client id" in reply.message
 
 
 def test_the_stream_pool_is_shared_and_its_refusals_name_their_limit(sim: Client) -> None:
