@@ -127,7 +127,7 @@ def serve(
         help="Seconds between checkpoints with --state-dir.", min=0.1)] = 10.0,
     ros2: Annotated[bool, typer.Option(
         help="Also serve ROS 2 nodes on rmw_zenoh: simulation_interfaces services, /clock, "
-             "/tf (docs/ROS2.md; needs the [ros2] extra).")] = False,
+             "/tf (docs/ROS2.md; needs the \\[ros2] extra).")] = False,
     ros_domain_id: Annotated[int, typer.Option(
         help="The ROS_DOMAIN_ID of --ros2's keys.")] = 0,
     ros_namespace: Annotated[str, typer.Option(

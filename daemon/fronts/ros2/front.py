@@ -22,6 +22,7 @@ from typing import Any
 import zenoh
 
 from galton.daemon.core.calls import Call, CallPort
+from galton.daemon.fronts.base import EVENTS
 from galton.daemon.fronts.ros2 import codes, rmw_zenoh
 from galton.daemon.fronts.ros2.action import SimulateStepsServer
 from galton.daemon.fronts.ros2.interfaces import dds_type_name, service_type, type_hash
@@ -68,10 +69,19 @@ class Ros2Front:
         self._reply_thread.start()
         self._declared: list[Any] = [session.liveliness().declare_token(
             self.identity.node_token())]
+        self._wake_topics: Callable[[], None] = lambda: None  # the topic loop's, once made
         for name, handler in HANDLERS.items():
             self._serve(name, handler)
         self.action = SimulateStepsServer(self)
         self.topics = TopicLoop(self, options)
+        self._wake_topics = self.topics.wake
+
+    def summary(self) -> str:
+        """What the daemon's ready line says of this front: its node, domain and services
+        (the action's three counted apart)."""
+        node = self.qualified(self.identity.node)
+        return (f"ros2_node={node} ros2_domain={self.identity.domain} "
+                f"ros2_services={len(HANDLERS)} ros2_actions=1")
 
     def qualified(self, name: str) -> str:
         """A name in the node's namespace (an absolute name, ``/clock``, stays as it is)."""
@@ -106,6 +116,7 @@ class Ros2Front:
         def on_query(query: zenoh.Query) -> None:
             read = _read_query(query, request_type)
             if read is not None:
+                self._wake_topics()  # a request may move the clock: /clock follows at once
                 attachment, request = read
                 take(request, lambda response: _answer(query, attachment, response,
                                                        response_type))
@@ -152,7 +163,10 @@ class Ros2Front:
         """Nothing more to start: the node serves from construction (it needs the session)."""
 
     def publish(self, topic: str, data: bytes) -> None:
-        """Not this front's: /clock, /tf and joint states are read by its own topic loop."""
+        """Not this front's: /clock, /tf and joint states are read by its own topic loop,
+        which an event wakes (the clock may start moving: play, a step, a new world)."""
+        if topic == EVENTS:
+            self._wake_topics()
 
     def advertised(self) -> dict[str, Any]:
         return {}

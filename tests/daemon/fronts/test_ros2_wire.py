@@ -157,3 +157,13 @@ def test_the_fast_tf_writer_equals_the_general_one() -> None:
                              z=pose[5], w=pose[6])))
         for name, pose in zip(names, poses, strict=True)])
     assert tf_cdr(names, poses, 12.345678901) == encode(general, interfaces.TF_MESSAGE)
+
+
+def test_daemon_help_keeps_the_ros2_extras_brackets() -> None:
+    """Issue 47: rich read "[ros2]" as markup and printed "needs the  extra"."""
+    from typer.testing import CliRunner
+
+    from galton.daemon.cli import app
+    result = CliRunner().invoke(app, ["--help"], env={"COLUMNS": "250", "TERM": "dumb"})
+    assert result.exit_code == 0
+    assert "needs the [ros2] extra" in result.output
