@@ -50,7 +50,8 @@ def main() -> None:
     print("| --- | --- |")
     print(f"| plain | {plain:.2f} |")
     print(f"| --ros2 | {ros2:.2f} |")
-    print(f"target: --ros2 <= 2 x plain + 0.5 = {bound:.2f}: {'met' if ros2 <= bound else 'MISSED'}")
+    verdict = "met" if ros2 <= bound else "MISSED"
+    print(f"target: --ros2 <= 2 x plain + 0.5 = {bound:.2f}: {verdict}")
     write_json(args.json, {"engine": args.engine, "seconds": args.seconds,
                            "plain_percent": plain, "ros2_percent": ros2, "bound": bound})
 

@@ -70,6 +70,7 @@ class Ros2Front:
         self._declared: list[Any] = [session.liveliness().declare_token(
             self.identity.node_token())]
         self._wake_topics: Callable[[], None] = lambda: None  # the topic loop's, once made
+        self._core: CallPort | None = None  # set by open()
         for name, handler in HANDLERS.items():
             self._serve(name, handler)
         self.action = SimulateStepsServer(self)
@@ -144,12 +145,20 @@ class Ros2Front:
         op, args = asked
         self.call(op, args, lambda answer: self.run(steps, finish, response_type, answer))
 
-    def call(self, op: str, args: dict[str, Any], then: Callable[[Reply], None]) -> None:
+    def call(self, op: str, args: dict[str, Any], then: Callable[[Reply], None],
+             client: str | None = None) -> None:
         """One native request through the daemon's own dispatch; ``then`` gets its Reply
         on the front's reply thread, so ROS-side work (CDR, the next request of a handler)
-        never holds the physics thread that answered."""
-        self.dispatch(Call(op, encode_request(op, args),
+        never holds the physics thread that answered. ``client``: the id it is sent as (a
+        goal's, so that ``lose`` can end its step)."""
+        self.dispatch(Call(op, encode_request(op, args, client),
                            lambda data: self._replies.put((then, data))))
+
+    def lose(self, client: str) -> None:
+        """End the step request sent as ``client`` now, running or waiting (the core ends a
+        gone client's step between two steps): how a cancelled goal stops at once."""
+        if self._core is not None:
+            self._core.lose_client(client)
 
     def _take_replies(self) -> None:
         while (item := self._replies.get()) is not None:
@@ -160,7 +169,9 @@ class Ros2Front:
                 log.exception("ROS 2 front: a reply's continuation failed")
 
     def open(self, core: CallPort) -> None:
-        """Nothing more to start: the node serves from construction (it needs the session)."""
+        """Nothing more to start: the node serves from construction (it needs the session);
+        the core's call interface is kept for ``lose``."""
+        self._core = core
 
     def publish(self, topic: str, data: bytes) -> None:
         """Not this front's: /clock, /tf and joint states are read by its own topic loop,

@@ -276,6 +276,64 @@ def test_a_canceled_goal_stops_between_chunks(ros: RosClient) -> None:
     assert state.get("B") == 2  # paused where it got to
 
 
+def _start_long_goal(ros: RosClient, native: Client, goal: bytes) -> int:
+    """Send a 10^8-step goal (chunks of 10^6 steps) and return once it steps."""
+    base = f"{NODE}/simulate_steps/_action"
+    before = native.status().step
+    sent, _ = ros.call(f"{base}/send_goal", f"{ACTION}_SendGoal",
+                       bytes(Cdr.writer().put("16B", *goal).put("Q", 100_000_000).data))
+    assert sent.get("B") == 1
+    deadline = time.monotonic() + 10.0
+    while native.status().step == before and time.monotonic() < deadline:
+        pass  # polling the daemon's own answer: it steps once the goal's first chunk runs
+    assert native.status().stepping
+    return native.status().step
+
+
+def _result_of(ros: RosClient, goal: bytes) -> int:
+    result, _ = ros.call(f"{NODE}/simulate_steps/_action/get_result", f"{ACTION}_GetResult",
+                         bytes(Cdr.writer().put("16B", *goal).data))
+    return int(result.get("b"))
+
+
+def test_a_cancel_stops_a_long_goal_within_a_steps_work(ros: RosClient,
+                                                        native: Client) -> None:
+    """Issue 46: a cancelled goal ran on to the end of its chunk (937,901 steps, 14.6 s);
+    now its running chunk ends between two steps."""
+    goal = bytes(range(31, 47))
+    _start_long_goal(ros, native, goal)
+    cancel = Cdr.writer().put("16B", *goal).put("iI", 0, 0)
+    asked = time.monotonic()
+    at_cancel = native.status().step
+    ros.call(f"{NODE}/simulate_steps/_action/cancel_goal", "action_msgs/srv/CancelGoal",
+             bytes(cancel.data))
+    assert _result_of(ros, goal) == 5  # CANCELED
+    took = time.monotonic() - asked
+    after = native.status()
+    assert not after.stepping
+    assert after.step - at_cancel < 100_000  # a tenth of the chunk it would have finished
+    assert took < 1.5
+    assert native.status().step == after.step  # and it stays stopped
+
+
+def test_step_simulation_while_a_goal_runs_is_refused_at_once_and_paused_pauses_it(
+        ros: RosClient, native: Client) -> None:
+    """Issue 46: StepSimulation waited silently behind a running step; SetSimulationState
+    (PAUSED) answered "already paused" and the goal stepped on."""
+    goal = bytes(range(51, 67))
+    _start_long_goal(ros, native, goal)
+    asked = time.monotonic()
+    step = call(ros, "step_simulation", bytes(Cdr.writer().put("Q", 1).data))
+    assert step.get_result()[0] == 3  # RESULT_INCORRECT_STATE
+    assert time.monotonic() - asked < 2.0
+    paused = call(ros, "set_simulation_state", bytes(Cdr.writer().put("B", 2).data))
+    assert paused.get_result() == (OK, "")
+    assert _result_of(ros, goal) == 6  # ABORTED: the pause ended it
+    assert not native.status().stepping
+    assert call(ros, "step_simulation", bytes(Cdr.writer().put("Q", 1).data)
+                ).get_result() == (OK, "")
+
+
 def spawn_request(cdr: Cdr, name: str, uri: str, text: str, z: float) -> None:
     cdr.put_string(name).put("B", 0).put_string(uri).put_string(text).put_string("")
     put_pose_stamped(cdr, "world", (0.0, 0.0, z))
