@@ -3,6 +3,7 @@ nowhere else. The fronts themselves live in daemon/fronts/ (Zenoh, ZeroMQ, ROS 2
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import os
 import select
@@ -150,7 +151,8 @@ class Daemon:
                 Ros2Front,  # [ros2] extra: imported here only
             )
             ros2 = Ros2Front(self.zenoh.session, self.loop.dispatch, self.options.instance,
-                             self.options.ros2)
+                             dataclasses.replace(self.options.ros2, max_request_bytes=(
+                                 self.options.limits.max_request_bytes)))
             ros2.open(self.loop)
             self.fronts.fronts.append(ros2)
             self.ros2_summary = " " + ros2.summary()

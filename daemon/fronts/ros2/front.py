@@ -23,6 +23,7 @@ import zenoh
 
 from galton.daemon.core.calls import Call, CallPort
 from galton.daemon.fronts.base import EVENTS
+from galton.daemon.fronts.memory import after_request_of
 from galton.daemon.fronts.ros2 import codes, rmw_zenoh
 from galton.daemon.fronts.ros2.action import SimulateStepsServer
 from galton.daemon.fronts.ros2.interfaces import dds_type_name, service_type, type_hash
@@ -115,7 +116,7 @@ class Ros2Front:
         request_type, response_type = f"{ros_type}_Request", f"{ros_type}_Response"
 
         def on_query(query: zenoh.Query) -> None:
-            read = _read_query(query, request_type)
+            read = _read_query(query, request_type, self.options.max_request_bytes)
             if read is not None:
                 self._wake_topics()  # a request may move the clock: /clock follows at once
                 attachment, request = read
@@ -194,15 +195,21 @@ class Ros2Front:
         self._declared.clear()
 
 
-def _read_query(query: zenoh.Query, request_type: str) -> tuple[rmw_zenoh.Attachment,
-                                                                  Any] | None:
+def _read_query(query: zenoh.Query, request_type: str, max_bytes: int
+                ) -> tuple[rmw_zenoh.Attachment, Any] | None:
     """The attachment and decoded request of a query; one that cannot be read gets an error
-    reply (rcl would drop it), never silence, and None."""
+    reply (rcl would drop it), never silence, and None. One over ``max_bytes`` is refused
+    before Python copies it; after a big one the heap's free pages go back (memory.py)."""
+    size = len(query.payload) if query.payload is not None else 0
+    after_request_of(size)
     try:
         if query.attachment is None:
             raise GaltonError("the query has no rmw_zenoh attachment (sequence number, "
                               "timestamp, GID): docs/ROS2.md")
         attachment = rmw_zenoh.Attachment.decode(query.attachment.to_bytes())
+        if size > max_bytes:
+            raise GaltonError(f"the request is {size} bytes; at most {max_bytes} (the "
+                              "daemon's max_request_bytes)")
         payload = query.payload.to_bytes() if query.payload is not None else b""
         return attachment, decode(payload, request_type)
     except GaltonError as error:

@@ -449,3 +449,32 @@ def test_extreme_numbers_through_ros2_are_refused_on_ode(ode_ros2: EmbeddedDaemo
         assert running.process is not None and running.process.poll() is None
     finally:
         ros.close()
+
+
+def test_trailing_bytes_and_oversized_requests_are_refused(ros: RosClient) -> None:
+    """Issue 46: a GetSimulationState with 50 MB of trailing bytes was answered OK. A few
+    stay allowed (rclpy leaves 8)."""
+    padded = call(ros, "get_simulation_state", EMPTY + b"\0" * 8)
+    padded.get("B")  # the state, then the result
+    assert padded.get_result() == (OK, "")
+    with pytest.raises(RuntimeError, match="bytes past the end"):
+        call(ros, "get_simulation_state", EMPTY + b"\0" * 1_000_000)
+    with pytest.raises(RuntimeError, match="max_request_bytes"):
+        call(ros, "get_simulation_state", EMPTY + b"\0" * 20_000_000)
+
+
+def test_a_50_mb_request_does_not_leave_the_daemon_bigger(ros: RosClient,
+                                                          daemon: EmbeddedDaemon) -> None:
+    """Issue 46: one 50 MB payload left the daemon's RSS about 45 MiB up for good (Zenoh's
+    buffers freed into glibc's heap, which kept them); now the pages go back after it."""
+    assert daemon.process is not None
+    process = psutil.Process(daemon.process.pid)
+    before = process.memory_info().rss
+    with pytest.raises(RuntimeError):
+        call(ros, "get_simulation_state", EMPTY + b"\0" * 50_000_000)
+    deadline = time.monotonic() + 10.0
+    grown = process.memory_info().rss - before
+    while grown > 20 * 2**20 and time.monotonic() < deadline:
+        time.sleep(0.1)  # polling the process's RSS until the trim (0.5 s after) lands
+        grown = process.memory_info().rss - before
+    assert grown <= 20 * 2**20, f"RSS grew {grown / 2**20:.0f} MiB"
