@@ -210,6 +210,11 @@ def decode_wrenches(data: Any, count: int, where: str) -> np.ndarray:
                       WRENCH_BOUNDS)
 
 
+def decode_directions(data: Any, count: int, where: str) -> np.ndarray:
+    """Direction vectors: finite, of any length (only their direction is used)."""
+    return check_rows(unpack_f64(data, 3, where), count, 3, where)
+
+
 def decode_points(data: Any, count: int, where: str) -> np.ndarray:
     return check_rows(unpack_f64(data, 3, where), count, 3, where, POINT_BOUNDS)
 

@@ -315,9 +315,13 @@ class AddCamera(Args, kw_only=True, forbid_unknown_fields=True):
     camera: Fields
 
 
+Directions = Annotated[bytes, _kind("points", description="packed float64 rows, 3 wide: "
+                                    "directions, finite, of any length")]
+
+
 class Raycast(Args, kw_only=True, forbid_unknown_fields=True):
     origins: Points
-    directions: Points | None = None
+    directions: Directions | None = None
     ends: Points | None = None
     max_length: Positive = DEFAULT_MAX_LENGTH
 
