@@ -131,7 +131,8 @@ def check_rows(rows: np.ndarray, count: int, width: int, where: str,
             row, col = np.argwhere(beyond)[0].tolist()
             raise InvalidArgumentError(
                 f"{where} row {row}: {what} {float(rows[row, start + col]):g} is beyond the "
-                f"protocol's bound of {bound:g}", {"field": where, "max": bound})
+                f"protocol's {what} limit of {bound:g} (docs/protocol.md, \"Bounds\")",
+                {"field": where, "max": bound})
     return rows
 
 
@@ -163,10 +164,9 @@ def normalise_quaternions(poses: np.ndarray, where: str) -> np.ndarray:
 
 
 POSE_BOUNDS = ((0, 3, MAX_COORDINATE, "position"),)
-TWIST_BOUNDS = ((0, 6, MAX_TWIST, "velocity component"),)
-WRENCH_BOUNDS = ((0, 3, MAX_FORCE, "force component (N)"),
-                 (3, 6, MAX_TORQUE, "torque component (N m)"))
-POINT_BOUNDS = ((0, 3, MAX_COORDINATE, "coordinate (m)"),)
+TWIST_BOUNDS = ((0, 6, MAX_TWIST, "speed"),)
+WRENCH_BOUNDS = ((0, 3, MAX_FORCE, "force"), (3, 6, MAX_TORQUE, "torque"))
+POINT_BOUNDS = ((0, 3, MAX_COORDINATE, "position"),)
 
 
 def decode_poses(data: Any, count: int, where: str) -> np.ndarray:
@@ -200,7 +200,8 @@ def decode_values(data: Any, count: int, where: str, *, bound: float,
     if beyond.any():
         i = int(np.argmax(beyond))
         raise InvalidArgumentError(
-            f"{where}[{i}] is {values[i]:g}: beyond the protocol's bound of {bound:g}",
+            f"{where}[{i}] is {values[i]:g}: beyond the protocol's limit of {bound:g} "
+            "(docs/protocol.md, \"Bounds\")",
             {"field": where, "max": bound})
     return values
 

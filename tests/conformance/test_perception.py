@@ -396,6 +396,9 @@ def test_bad_rays_are_refused(scene: Client) -> None:
         scene.call("raycast", {"origins": np.zeros(3).tobytes()}).raise_for_code()
 
 
+FAR = r"too far from its origin|position limit"
+
+
 def test_huge_and_tiny_ray_vectors_are_directions_or_refused(scene: Client) -> None:
     """A direction's length does not matter, however far from 1: its norm once overflowed
     to inf, the ray became zero, and MuJoCo's mj_ray aborted the daemon."""
@@ -408,9 +411,9 @@ def test_huge_and_tiny_ray_vectors_are_directions_or_refused(scene: Client) -> N
     with pytest.raises(InvalidArgumentError, match="zero direction"):
         scene.raycast([[0, 0, 1]], directions=[[0, 0, -1e-200]])  # shorter than 1e-12
     # Ends past the protocol's bound on coordinates (docs/protocol.md, "Bounds").
-    with pytest.raises(InvalidArgumentError, match="too far from its origin|protocol's bound"):
+    with pytest.raises(InvalidArgumentError, match=FAR):
         scene.raycast([[0, 0, -1e308]], ends=[[0, 0, 1e308]])
-    with pytest.raises(InvalidArgumentError, match="too far from its origin|protocol's bound"):
+    with pytest.raises(InvalidArgumentError, match=FAR):
         scene.raycast([[0, 0, 0]], ends=[[1.5e308, 1.5e308, 1.5e308]])  # its length: inf
     assert scene.status().entity_count == 3 and not scene.status().faulted  # still serving
 
