@@ -236,3 +236,22 @@ def test_a_hostile_snapshot_is_refused_before_ode_sees_it(engine: OdeEngine) -> 
         copy.step(5)
     finally:
         copy.close()
+
+
+@pytest.mark.parametrize(("old", "new"), [
+    ('<mass value="0.5"/>', '<mass value="1e-300"/>'),
+    ('ixx=".001" iyy=".001" izz=".001"', 'ixx="1e-320" iyy="1e-320" izz="1e-320"'),
+    ('ixx=".001" iyy=".001" izz=".001"', 'ixx=".001" iyy=".001" izz="-1"'),
+])
+def test_a_link_ode_would_abort_on_is_refused(engine: OdeEngine, old: str, new: str) -> None:
+    """Issue 46: a URDF link of 1e-300 kg (or a degenerate inertia) pushed by an effort made
+    ODE's quaternion infinite (SIGABRT in dxNormalize4); now load_model refuses it, and
+    the world holds nothing of it."""
+    from galton.client.fuzz.extremes import ARM
+    from galton.protocol import InvalidArgumentError
+    assert old in ARM
+    with pytest.raises(InvalidArgumentError, match="upper"):
+        engine.load_model("urdf", ARM.replace(old, new, 1), None, "t_", fixed_base=True)
+    assert engine.joints() == []
+    engine.spawn([ground(), balls(["ball"], [0.0, 0.0, 1.0])])
+    engine.step(5)
