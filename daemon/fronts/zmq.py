@@ -51,11 +51,10 @@ MAX_ROUTING_FRAME_BYTES = 256
 # that never reads cannot grow the daemon). Fairness: ``receive`` takes one request per
 # ROUTER per call, which ZeroMQ deals out fairly between connections (issue 35, item 8).
 MAX_QUEUED_PER_CONNECTION = 64
-# A liveness check on every connection (ZMTP heartbeats, answered by the client's ZeroMQ I/O
-# thread whatever its program does): a connection that answers no PING for
-# HEARTBEAT_TIMEOUT_MS is closed, and with it end its client's streams, step and lease, as
-# when its socket closes. A stopped (SIGSTOP) or wedged client no longer keeps them.
-HEARTBEAT_IVL_MS, HEARTBEAT_TIMEOUT_MS = 1000, 3000
+# No ZMTP heartbeats (a liveness check of each connection): with libzmq 4.3.5 a heartbeat
+# timer firing after an I/O error aborts the process ("Assertion failed: !_io_error
+# (src/stream_engine_base.cpp:310)"), seen under the test suite's load (issue 46). A stopped
+# client keeps its connection, and so at most its share of the streams and step queue.
 LOOPBACK = "127.0.0.1"
 
 
@@ -147,8 +146,6 @@ class ZmqFront:
         router.setsockopt(zmq.LINGER, 0)
         router.setsockopt(zmq.RCVHWM, MAX_QUEUED_PER_CONNECTION)
         router.setsockopt(zmq.SNDHWM, MAX_QUEUED_PER_CONNECTION)
-        router.setsockopt(zmq.HEARTBEAT_IVL, HEARTBEAT_IVL_MS)
-        router.setsockopt(zmq.HEARTBEAT_TIMEOUT, HEARTBEAT_TIMEOUT_MS)
         if self.security is not None:
             self.security.secure(router)
         _refuse_if_served(endpoint)
