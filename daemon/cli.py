@@ -66,8 +66,20 @@ def _users(path: Path | None) -> dict[str, User] | None:
     return found
 
 
-def _ros2(on: bool, domain: int, namespace: str, mirrors: list[str]) -> Ros2Options | None:
-    """--ros2's options; its sub-options without --ros2 are refused, not ignored."""
+ROS2_WITH_USERS = (
+    "--ros2 cannot be used with --users: a ROS 2 caller (rmw_zenoh) sends no user name, "
+    "password or certificate the daemon could give a role to, so under --users every ROS 2 "
+    "request would be refused (the Zenoh ACL admits only its users' keys). Serve ROS 2 from "
+    "a daemon without --users on a network you trust, or reach this one through the native "
+    "protocol (docs/SECURITY.md, \"The ROS 2 front\")")
+
+
+def _ros2(on: bool, domain: int, namespace: str, mirrors: list[str],
+          users: Path | None = None) -> Ros2Options | None:
+    """--ros2's options; its sub-options without --ros2 are refused, not ignored, and so is
+    --ros2 with --users (``ROS2_WITH_USERS`` says why)."""
+    if on and users is not None:
+        raise InvalidArgumentError(ROS2_WITH_USERS)
     if not on:
         if mirrors or namespace or domain:
             raise InvalidArgumentError("--ros-domain-id, --ros-namespace and --ros2-mirror "
@@ -127,7 +139,7 @@ def serve(
         help="Seconds between checkpoints with --state-dir.", min=0.1)] = 10.0,
     ros2: Annotated[bool, typer.Option(
         help="Also serve ROS 2 nodes on rmw_zenoh: simulation_interfaces services, /clock, "
-             "/tf (docs/ROS2.md; needs the [ros2] extra).")] = False,
+             "/tf (docs/ROS2.md; needs the \\[ros2] extra).")] = False,
     ros_domain_id: Annotated[int, typer.Option(
         help="The ROS_DOMAIN_ID of --ros2's keys.")] = 0,
     ros_namespace: Annotated[str, typer.Option(
@@ -154,7 +166,7 @@ def serve(
             checkpoint_period_s=checkpoint_every, zmq=zmq or [],
             users=_users(users), zmq_key=zmq_key,
             tls=_tls_files(tls_cert, tls_key, tls_ca),
-            ros2=_ros2(ros2, ros_domain_id, ros_namespace, ros2_mirror or []),
+            ros2=_ros2(ros2, ros_domain_id, ros_namespace, ros2_mirror or [], users),
             snapshot_key=_snapshot_key(snapshot_key))
         code = run_daemon(options, announce=lambda line: print(line, flush=True))
     except GaltonError as error:

@@ -3,6 +3,7 @@ nowhere else. The fronts themselves live in daemon/fronts/ (Zenoh, ZeroMQ, ROS 2
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import os
 import select
@@ -114,6 +115,7 @@ class Daemon:
         self.loop.client_alive = self.zenoh.client_alive
         self._thread: threading.Thread | None = None
         self.finished = threading.Event()
+        self.ros2_summary = ""  # the ready line's words on the ROS 2 front, once it serves
 
     def _first_world(self, engine: Engine) -> World:
         """The checkpointed world when --state-dir holds one, else an empty world."""
@@ -149,9 +151,11 @@ class Daemon:
                 Ros2Front,  # [ros2] extra: imported here only
             )
             ros2 = Ros2Front(self.zenoh.session, self.loop.dispatch, self.options.instance,
-                             self.options.ros2)
+                             dataclasses.replace(self.options.ros2, max_request_bytes=(
+                                 self.options.limits.max_request_bytes)))
             ros2.open(self.loop)
             self.fronts.fronts.append(ros2)
+            self.ros2_summary = " " + ros2.summary()
 
     def start(self) -> None:
         """Serve with the physics loop on a thread of its own (for embedding in a process
@@ -275,7 +279,8 @@ def run_daemon(options: DaemonOptions, announce: Callable[[str], None] = print) 
     threading.Thread(target=stop_on_signal, name="signals", daemon=True).start()
     zmq = f" zmq={','.join(daemon.zmq.control)}" if daemon.zmq is not None else ""
     announce(f"galton-daemon ready: instance={options.instance} engine={options.engine} "
-             f"listen={','.join(listening_on(options))}{zmq} engines={','.join(ENGINE_CLASSES)}")
+             f"listen={','.join(listening_on(options))}{zmq}{daemon.ros2_summary} "
+             f"engines={','.join(ENGINE_CLASSES)}")
     try:
         daemon.loop.run()
         daemon.save_checkpoint()  # on SIGTERM or SIGINT, after the last request

@@ -9,6 +9,7 @@ import msgpack
 
 from galton.protocol.codes import ResultCode
 from galton.protocol.errors import (
+    InvalidArgumentError,
     MalformedRequestError,
     RemoteError,
     ResourceLimitError,
@@ -124,12 +125,26 @@ def decode_request(payload: bytes, op_from_key: str | None = None,
 ENVELOPE_FIELDS = frozenset({"v", "op", "args", "client"})
 
 
+# Characters a client id may not hold: it names one liveliness token, one key chunk
+# galton/_clients/<id>, so no '/', no key-expression wildcard ('*', '**', '$*'), nothing Zenoh
+# refuses in a key ('?', '#'), no space; and it may not start with '@' (a verbatim chunk).
+NOT_IN_CLIENT_ID = frozenset("/*$?#")
+
+
 def _client_id(value: Any) -> str | None:
+    """The envelope's client id, an id (issue 46): "*" once opened a stream every client
+    would keep alive."""
     if value is None:
         return None
     if not isinstance(value, str) or not 0 < len(value) <= CLIENT_ID_LENGTH:
         raise MalformedRequestError(
             f"'client' must be a string of 1-{CLIENT_ID_LENGTH} characters, got {brief(value)}")
+    if NOT_IN_CLIENT_ID.intersection(value) or value.startswith("@") or \
+            not value.isprintable() or any(c.isspace() for c in value):
+        raise InvalidArgumentError(
+            f"'client' {brief(value)} is not a client id: it names one liveliness token "
+            "galton/_clients/<id>, so it holds no '/', '*', '$', '?', '#' or space and does "
+            "not start with '@'")
     return value
 
 

@@ -21,10 +21,17 @@ from galton.protocol.status import known_fields, older_defaults, shallow_dict
 from galton.protocol.vocabulary import (
     BODY_SHAPES,
     MAX_BATCH,
+    MAX_COORDINATE,
+    MAX_FORCE,
     MAX_FRICTION,
     MAX_MASS,
     MAX_NAME_LENGTH,
+    MAX_TORQUE,
+    MAX_TWIST,
+    MIN_INERTIA,
+    MIN_MASS,
     POSE_WIDTH,
+    QUATERNION_NORM_BAND,
     SCALAR_JOINT_TYPES,
     SIZE_LAYOUT,
     TWIST_WIDTH,
@@ -108,7 +115,10 @@ def check_names(value: Any, where: str) -> list[str]:
     return names
 
 
-def check_rows(rows: np.ndarray, count: int, width: int, where: str) -> np.ndarray:
+def check_rows(rows: np.ndarray, count: int, width: int, where: str,
+               bounds: tuple[tuple[int, int, float, str], ...] = ()) -> np.ndarray:
+    """``rows`` if they are ``count`` rows of ``width`` finite numbers, each column run
+    ``(start, stop, bound, what)`` of ``bounds`` within +-bound (docs/protocol.md, "Bounds")."""
     if rows.shape != (count, width):
         raise InvalidArgumentError(
             f"{where} holds {rows.shape[0]} rows of {width} numbers; expected {count}"
@@ -116,33 +126,66 @@ def check_rows(rows: np.ndarray, count: int, width: int, where: str) -> np.ndarr
     if not np.isfinite(rows).all():
         bad = int(np.argwhere(~np.isfinite(rows))[0][0])
         raise InvalidArgumentError(f"{where} row {bad} holds NaN or infinity: {rows[bad].tolist()}")
+    for start, stop, bound, what in bounds:
+        beyond = np.abs(rows[:, start:stop]) > bound
+        if beyond.any():
+            row, col = np.argwhere(beyond)[0].tolist()
+            raise InvalidArgumentError(
+                f"{where} row {row}: {what} {float(rows[row, start + col]):g} is beyond the "
+                f"protocol's {what} limit of {bound:g} (docs/protocol.md, \"Bounds\")",
+                {"field": where, "max": bound})
     return rows
 
 
+def quaternion_norms(quaternions: np.ndarray) -> np.ndarray:
+    """Each row's norm, without the overflow of squaring a huge component (1e155 squared
+    is infinite; a norm of infinity would normalise the quaternion to zero)."""
+    scale = np.abs(quaternions).max(axis=1)
+    safe = np.where(scale > 0, scale, 1.0)
+    norms: np.ndarray = scale * np.linalg.norm(quaternions / safe[:, None], axis=1)
+    return norms
+
+
 def normalise_quaternions(poses: np.ndarray, where: str) -> np.ndarray:
-    """Return poses with unit quaternions; a zero quaternion is an error."""
-    norms = np.linalg.norm(poses[:, 3:7], axis=1)
-    if (norms < 1e-9).any():
-        bad = int(np.argmax(norms < 1e-9))
-        raise InvalidArgumentError(f"{where} row {bad} has a zero quaternion (qx qy qz qw)")
+    """Return poses with unit quaternions: each quaternion's norm must lie within
+    QUATERNION_NORM_BAND of 1 (a zero, huge or tiny one is refused, naming the row)."""
+    low, high = QUATERNION_NORM_BAND
+    norms = quaternion_norms(poses[:, 3:7])
+    outside = ~((norms >= low) & (norms <= high))
+    if outside.any():
+        bad = int(np.argmax(outside))
+        zero = " (a zero quaternion)" if norms[bad] == 0 else ""
+        raise InvalidArgumentError(
+            f"{where} row {bad}: the quaternion (qx qy qz qw) {poses[bad, 3:7].tolist()} has "
+            f"norm {float(norms[bad]):g}{zero}; its norm must lie in [{low:g}, {high:g}] "
+            "(it is normalised within that band)", {"field": where, "row": bad})
     out = poses.copy()
     out[:, 3:7] /= norms[:, None]
     return out
 
 
+POSE_BOUNDS = ((0, 3, MAX_COORDINATE, "position"),)
+TWIST_BOUNDS = ((0, 6, MAX_TWIST, "speed"),)
+WRENCH_BOUNDS = ((0, 3, MAX_FORCE, "force"), (3, 6, MAX_TORQUE, "torque"))
+POINT_BOUNDS = ((0, 3, MAX_COORDINATE, "position"),)
+
+
 def decode_poses(data: Any, count: int, where: str) -> np.ndarray:
-    rows = check_rows(unpack_f64(data, POSE_WIDTH, where), count, POSE_WIDTH, where)
+    rows = check_rows(unpack_f64(data, POSE_WIDTH, where), count, POSE_WIDTH, where,
+                      POSE_BOUNDS)
     return normalise_quaternions(rows, where)
 
 
 def decode_twists(data: Any, count: int, where: str) -> np.ndarray:
-    return check_rows(unpack_f64(data, TWIST_WIDTH, where), count, TWIST_WIDTH, where)
+    return check_rows(unpack_f64(data, TWIST_WIDTH, where), count, TWIST_WIDTH, where,
+                      TWIST_BOUNDS)
 
 
-def decode_values(data: Any, count: int, where: str, *, allow_inf: bool = False
-                  ) -> np.ndarray:
+def decode_values(data: Any, count: int, where: str, *, bound: float,
+                  allow_inf: bool = False) -> np.ndarray:
     """One number per joint: a number (the same for all ``count``) or msgpack bin of
-    ``count`` float64; finite (or +inf where ``allow_inf``: an effort without a limit)."""
+    ``count`` float64; finite and within +-``bound`` (or +inf where ``allow_inf``: an
+    effort without a limit)."""
     if isinstance(data, int | float) and not isinstance(data, bool):
         values = np.full(count, float(data))
     else:
@@ -154,15 +197,28 @@ def decode_values(data: Any, count: int, where: str, *, allow_inf: bool = False
     if bad.any():
         i = int(np.argmax(bad))
         raise InvalidArgumentError(f"{where}[{i}] is {values[i]}: a finite number is needed")
+    beyond = np.isfinite(values) & (np.abs(values) > bound)
+    if beyond.any():
+        i = int(np.argmax(beyond))
+        raise InvalidArgumentError(
+            f"{where}[{i}] is {values[i]:g}: beyond the protocol's limit of {bound:g} "
+            "(docs/protocol.md, \"Bounds\")",
+            {"field": where, "max": bound})
     return values
 
 
 def decode_wrenches(data: Any, count: int, where: str) -> np.ndarray:
-    return check_rows(unpack_f64(data, WRENCH_WIDTH, where), count, WRENCH_WIDTH, where)
+    return check_rows(unpack_f64(data, WRENCH_WIDTH, where), count, WRENCH_WIDTH, where,
+                      WRENCH_BOUNDS)
+
+
+def decode_directions(data: Any, count: int, where: str) -> np.ndarray:
+    """Direction vectors: finite, of any length (only their direction is used)."""
+    return check_rows(unpack_f64(data, 3, where), count, 3, where)
 
 
 def decode_points(data: Any, count: int, where: str) -> np.ndarray:
-    return check_rows(unpack_f64(data, 3, where), count, 3, where)
+    return check_rows(unpack_f64(data, 3, where), count, 3, where, POINT_BOUNDS)
 
 
 def check_tags(value: Any, where: str) -> tuple[str, ...]:
@@ -200,7 +256,7 @@ class BodyProperties:
         check_fields(args, ("mass", "friction", "restitution", "rgba", "tags"), where)
         tags = args.get("tags")
         return cls(
-            mass=optional_number(args, "mass", where, low=0, low_open=True, high=MAX_MASS),
+            mass=optional_number(args, "mass", where, low=MIN_MASS, high=MAX_MASS),
             friction=optional_number(args, "friction", where, low=0, high=MAX_FRICTION),
             restitution=optional_number(args, "restitution", where, low=0, high=1),
             rgba=check_rgba(args.get("rgba"), f"{where}.rgba"),
@@ -285,7 +341,7 @@ class BodyGroup:
             raise InvalidArgumentError(f"{where}: static bodies cannot have a non-zero twist")
         return cls(
             shape=shape, size=size, names=names, poses=poses, twists=twists, static=static,
-            mass=optional_number(body, "mass", where, low=0, low_open=True, high=MAX_MASS),
+            mass=optional_number(body, "mass", where, low=MIN_MASS, high=MAX_MASS),
             friction=optional_number(body, "friction", where, low=0, high=MAX_FRICTION),
             restitution=optional_number(body, "restitution", where, low=0, high=1),
             rgba=check_rgba(body.get("rgba"), f"{where}.rgba"),
@@ -328,7 +384,7 @@ def _check_inertia(value: Any, static: bool, where: str) -> tuple[float, float, 
                                    f"got {len(value)}")
     if static:
         raise InvalidArgumentError(f"{where}: a static body has no inertia to set")
-    ixx, iyy, izz = (finite_number(v, f"{where}[{i}]", low=0, low_open=True, high=MAX_MASS)
+    ixx, iyy, izz = (finite_number(v, f"{where}[{i}]", low=MIN_INERTIA, high=MAX_MASS)
                      for i, v in enumerate(value))
     if ixx + iyy < izz or iyy + izz < ixx or ixx + izz < iyy:
         raise InvalidArgumentError(f"{where} {[ixx, iyy, izz]} breaks the triangle "

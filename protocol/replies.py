@@ -57,6 +57,7 @@ class StatusReply(Reply, kw_only=True):
     world: str
     faulted: bool
     controller: str | None
+    stepping: bool = False  # a step request runs on the live world now (absent: older daemon)
 
 
 class CountReply(Reply, kw_only=True):

@@ -34,13 +34,23 @@ from galton.protocol.vocabulary import (
     MAX_BATCH,
     MAX_CAMERA_NAME,
     MAX_CAMERAS_PER_REQUEST,
+    MAX_COORDINATE,
+    MAX_EFFORT,
+    MAX_FORCE,
     MAX_FRICTION,
+    MAX_GAIN,
+    MAX_JOINT_POSITION,
+    MAX_JOINT_SPEED,
     MAX_MASS,
     MAX_RATE_HZ,
     MAX_RTF,
+    MAX_TORQUE,
+    MAX_TWIST,
     MAX_WORLD_NAME,
+    MIN_MASS,
     MIN_RATE_HZ,
     MODEL_FORMATS,
+    QUATERNION_NORM_BAND,
     EngineName,
     EntityKind,
     ImageFormat,
@@ -82,12 +92,28 @@ Fields = Annotated[dict[str, Any], _kind("map")]
 Groups = Annotated[list[dict[str, Any]], _kind("groups")]
 Cameras = Annotated[list[dict[str, Any]], _kind("cameras"),
                     msgspec.Meta(min_length=1, max_length=MAX_CAMERAS_PER_REQUEST)]
-Poses = Annotated[bytes, _kind("poses", description="packed float64 rows, 7 wide")]
-Twists = Annotated[bytes, _kind("twists", description="packed float64 rows, 6 wide")]
-Wrenches = Annotated[bytes, _kind("wrenches", description="packed float64 rows, 6 wide")]
-Points = Annotated[bytes, _kind("points", description="packed float64 rows, 3 wide")]
+# Packed rows and per-joint values carry their bounds (docs/protocol.md, "Bounds"): msgspec
+# cannot range-check the numbers inside bytes, so protocol/model.py's decoders check them,
+# before any engine sees them, against these same constants (``value_bound`` reads them).
+Poses = Annotated[bytes, _kind("poses", description="packed float64 rows, 7 wide",
+                               bound=MAX_COORDINATE, quaternion_norm=QUATERNION_NORM_BAND)]
+Twists = Annotated[bytes, _kind("twists", description="packed float64 rows, 6 wide",
+                                bound=MAX_TWIST)]
+Wrenches = Annotated[bytes, _kind("wrenches", description="packed float64 rows, 6 wide",
+                                  bound=(MAX_FORCE, MAX_TORQUE))]
+Points = Annotated[bytes, _kind("points", description="packed float64 rows, 3 wide",
+                                bound=MAX_COORDINATE)]
 Blob = Annotated[bytes, _kind("blob", long_text=True)]
-Values = Annotated[float | bytes, _kind("values")]
+# A spread of positions (compare.spread): m, as far as a coordinate may go.
+Spreads = Annotated[float | bytes, _kind("values", bound=MAX_COORDINATE)]
+JointPositions = Annotated[float | bytes, _kind("values", bound=MAX_JOINT_POSITION)]
+JointSpeeds = Annotated[float | bytes, _kind("values", bound=MAX_JOINT_SPEED)]
+# A target's bound is its mode's quantity: an angle or length, a speed, an effort.
+Targets = Annotated[float | bytes, _kind("values", bound={
+    "none": MAX_JOINT_POSITION, "position": MAX_JOINT_POSITION,
+    "velocity": MAX_JOINT_SPEED, "effort": MAX_EFFORT})]
+Gains = Annotated[float | bytes, _kind("values", bound=MAX_GAIN)]
+Efforts = Annotated[float | bytes, _kind("values", bound=MAX_EFFORT)]
 # A load_model format the engine does not load is FEATURE_UNSUPPORTED, not a bad argument:
 # its choices are advertised, the handler checks them against the engine.
 Format = Annotated[str, _kind("choice", choices=MODEL_FORMATS)]
@@ -189,7 +215,7 @@ class UpdateProperties(msgspec.Struct, kw_only=True, forbid_unknown_fields=True)
     """``update``'s properties; one not sent (or nil) is left as it is. Each tag's form
     (a printable entity-like name) is the handler's check."""
 
-    mass: Annotated[float, _kind("number"), msgspec.Meta(gt=0.0, le=MAX_MASS)] | None = None
+    mass: Annotated[float, _kind("number"), msgspec.Meta(ge=MIN_MASS, le=MAX_MASS)] | None = None
     friction: Annotated[float, _kind("number"), msgspec.Meta(ge=0.0, le=MAX_FRICTION)] | None = None
     restitution: Unit | None = None
     rgba: Annotated[list[Unit], _kind("numbers"),
@@ -209,18 +235,18 @@ class Joints(Args, kw_only=True, forbid_unknown_fields=True):
 
 class SetJointStates(Args, kw_only=True, forbid_unknown_fields=True):
     names: Names
-    positions: Values
-    velocities: Values | None = None
+    positions: JointPositions
+    velocities: JointSpeeds | None = None
     read: Names | None = None
 
 
 class SetJointTargets(Args, kw_only=True, forbid_unknown_fields=True):
     names: Names
     mode: Mode
-    targets: Values | None = None
-    kp: Values | None = None
-    kd: Values | None = None
-    max_effort: Values | None = None
+    targets: Targets | None = None
+    kp: Gains | None = None
+    kd: Gains | None = None
+    max_effort: Efforts | None = None  # +inf: no cap
 
 
 class ApplyWrench(Args, kw_only=True, forbid_unknown_fields=True):
@@ -331,7 +357,7 @@ class Compare(Args, kw_only=True, forbid_unknown_fields=True):
     sigma_angle: Positive = DEFAULT_SIGMA_ANGLE
     sigma_speed: Positive = DEFAULT_SIGMA_SPEED
     correct: Flag = False
-    spread: Values | None = None  # m per body (or one for all): a prediction's spread
+    spread: Spreads | None = None  # m per body (or one for all): a prediction's spread
 
 
 class Render(Args, kw_only=True, forbid_unknown_fields=True):
@@ -344,9 +370,13 @@ class AddCamera(Args, kw_only=True, forbid_unknown_fields=True):
     camera: Fields
 
 
+Directions = Annotated[bytes, _kind("points", description="packed float64 rows, 3 wide: "
+                                    "directions, finite, of any length")]
+
+
 class Raycast(Args, kw_only=True, forbid_unknown_fields=True):
     origins: Points
-    directions: Points | None = None
+    directions: Directions | None = None
     ends: Points | None = None
     max_length: Positive = DEFAULT_MAX_LENGTH
 
@@ -484,6 +514,16 @@ def _value_at(args: Any, steps: list[str | int]) -> Any:
         except (KeyError, IndexError, TypeError):
             return None
     return value
+
+
+def value_bound(declared: type[msgspec.Struct], name: str, mode: str | None = None) -> float:
+    """The bound (+-) a packed or per-joint field's numbers must keep, as declared in its
+    type; a target's depends on its ``mode``."""
+    extra: dict[str, Any] = {}
+    for meta in _metas(declared, name)[1]:
+        extra.update(meta.extra or {})
+    bound = extra["bound"]
+    return float(bound[mode or "none"] if isinstance(bound, dict) else bound)
 
 
 def field_kind(declared: type[msgspec.Struct], name: str) -> tuple[str, tuple[str, ...], bool]:

@@ -51,6 +51,9 @@ class SimStatus:
     world: str = "default"
     faulted: bool = False
     controller: str | None = None  # who holds control (take_control); absent from old daemons
+    # Whether a step request (step, run_until, predict, a ROS 2 goal's chunk) is running:
+    # another waits for its turn (issue 46); absent from old daemons.
+    stepping: bool = False
 
     def to_wire(self) -> dict[str, Any]:
         return shallow_dict(self)

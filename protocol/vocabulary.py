@@ -17,6 +17,22 @@ MAX_MASS = 1e9  # kg: a body's mass (spawn, update, snapshot edits), and its pri
 MAX_FRICTION = 100.0  # a body's friction coefficient
 MAX_WORLD_NAME = 64  # a world's or a snapshot slot's name
 MAX_CAMERA_NAME = 64
+# The bounds of every number a client sends that reaches an engine (docs/protocol.md,
+# "Bounds"), the same on every engine and front: each is finite and well inside what every
+# engine integrates without overflowing (ODE aborts the process on a quaternion that a
+# product of two such numbers turns infinite). The daemon's own max_position / max_speed
+# limits (tighter by default) still apply to poses and twists on top of these.
+QUATERNION_NORM_BAND = (0.5, 2.0)  # a pose's quaternion norm: normalised within, refused out
+MAX_COORDINATE = 1e9  # m: a position in a pose, an apply_wrench point, a ray's origin or end
+MAX_TWIST = 1e7  # m/s or rad/s: each component of a twist
+MAX_FORCE = 1e9  # N: apply_wrench's force components
+MAX_TORQUE = 1e9  # N m: apply_wrench's torque components
+MAX_EFFORT = 1e9  # N or N m: effort targets and max_effort (which may also be +inf: no cap)
+MAX_JOINT_POSITION = 1e6  # rad or m: joint positions and position targets
+MAX_JOINT_SPEED = 1e7  # rad/s or m/s: joint velocities and velocity targets
+MAX_GAIN = 1e9  # kp (N/m or N m/rad) and kd (N s/m or N m s/rad)
+MIN_MASS = 1e-6  # kg: the lightest body (spawn, update); lighter ones overflow a push
+MIN_INERTIA = 1e-12  # kg m²: the smallest principal moment a spawn's inertia may set
 # Ranges and defaults of request fields that are the protocol's, not a daemon's option
 # (protocol/requests.py declares them; the daemon's own limits stay in its Limits).
 MAX_RTF = 1e6  # play / set_rtf

@@ -18,7 +18,7 @@ from galton.protocol import Reply, ResultCode, pack_f64
 
 REFUSALS = (ResultCode.RESOURCE_LIMIT, ResultCode.INVALID_ARGUMENT)
 ABSURD_HORIZON_S = 1e6  # sampled every step: gigabytes of times alone
-MAX_SIDE = 4096  # a camera of the default max_pixels (4096 x 4096), every output raw
+MAX_SIDE = 4096  # a camera of 4096 x 4096 (past the default max_pixels), every output raw
 BODY_BYTES = 8 * 13  # a body's pose and twist in a step's reply, its name on top
 RAY_BYTES = 1 + 8 * 7  # a ray's hit flag, point, normal and distance at least
 MAX_PILE = 5_000  # bodies the campaign spawns to make a step's reads pass the limit

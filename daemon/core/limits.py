@@ -26,7 +26,12 @@ class Limits:
     max_worlds: int = 8  # worlds one daemon holds, the live one included
     max_snapshots: int = 16  # named snapshot slots one daemon holds
     max_snapshot_bytes: int = 256 * MIB  # all slots together
-    max_pixels: int = 4096 * 4096  # pixels one render request asks for, all cameras together
+    # Pixels one render request asks for, all cameras together: a full-HD frame (the lead's
+    # benchmarks/render_rtf.py holds a playing 100-ball world at RTF >= 0.95 under it).
+    max_pixels: int = 1920 * 1080
+    # Seconds a render may hold the physics thread, expected from its pixels at the rate its
+    # engine's renders were measured at: one telemetry period at the default 10 Hz.
+    max_render_seconds: float = 0.1
     max_rays: int = 1_000_000  # rays one raycast request casts
     max_steps: int = 1_000_000_000  # steps one step / run_until request may take
     max_reply_bytes: int = 64 * MIB  # any one reply (daemon/core/reply_limit.py)

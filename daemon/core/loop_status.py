@@ -40,16 +40,19 @@ log = logging.getLogger("galton.daemon")
 
 def snapshot(loop: SimLoop) -> tuple[Any, ...]:
     """Everything a status reply says, read once: equal snapshots give equal replies."""
+    job = loop.job
     return (loop.clock, loop.state, loop.target_rtf, loop.rtf, loop.world,
-            loop.lease.controller)
+            loop.lease.controller, job is not None)
 
 
 def status_from(loop: SimLoop, taken: tuple[Any, ...]) -> SimStatus:
-    (step, sim_time, timestep, count, faulted), state, target_rtf, rtf, world, controller = taken
+    (step, sim_time, timestep, count, faulted), state, target_rtf, rtf, world, controller, \
+        stepping = taken
     return SimStatus(
         state=state, step=step, sim_time=sim_time, timestep=timestep,
         target_rtf=target_rtf, rtf=rtf, entity_count=count, engine=world.engine.name,
-        instance=loop.instance, world=world.name, faulted=faulted, controller=controller)
+        instance=loop.instance, world=world.name, faulted=faulted, controller=controller,
+        stepping=stepping)
 
 
 def answer_status(loop: SimLoop, call: Call) -> None:

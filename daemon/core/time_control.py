@@ -54,7 +54,7 @@ def side_status(loop: TimeContext, world: World) -> SimStatus:
         step=world.step_index, sim_time=world.sim_time, timestep=world.engine.timestep,
         target_rtf=0.0, rtf=0.0, entity_count=len(world.entities), engine=world.engine.name,
         instance=loop.instance, world=world.name, faulted=world.faulted,
-        controller=loop.lease.controller)
+        controller=loop.lease.controller, stepping=loop.job is not None)
 
 
 def _live_only(loop: TimeContext, request: rq.Args, op: str) -> None:

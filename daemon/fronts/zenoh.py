@@ -17,6 +17,7 @@ import zenoh
 from galton.daemon.access.zenoh_security import remove_private_files
 from galton.daemon.core.calls import Call, CallPort
 from galton.daemon.fronts.base import EVENTS, TELEMETRY
+from galton.daemon.fronts.memory import after_request_of
 from galton.daemon.fronts.zenoh_config import file_says, merge
 from galton.protocol import Keys
 from galton.protocol.keys import (
@@ -91,6 +92,7 @@ class ZenohFront:
     def _on_query(self, query: zenoh.Query) -> None:
         op = op_from_control_key(str(query.key_expr))
         payload = query.payload.to_bytes() if query.payload is not None else b""
+        after_request_of(len(payload))  # a big one's buffers go back to the OS after it
         assert self._core is not None  # the queryable is declared in open()
         self._core.dispatch(Call(op, payload, _responder(query)))
 

@@ -56,10 +56,12 @@ def get_joint_states(world: World, request: rq.NamesOrAll) -> dict[str, Any]:
 def set_joint_states(world: World, request: rq.SetJointStates) -> dict[str, Any]:
     names = check_names(request.names, "set_joint_states.names")
     infos = world.joints.require_scalar(names, "set_joint_states")
-    positions = decode_values(request.positions, len(names), "set_joint_states.positions")
+    positions = decode_values(request.positions, len(names), "set_joint_states.positions",
+                              bound=rq.value_bound(rq.SetJointStates, "positions"))
     raw = request.velocities
-    velocities = None if raw is None else decode_values(raw, len(names),
-                                                        "set_joint_states.velocities")
+    velocities = None if raw is None else decode_values(
+        raw, len(names), "set_joint_states.velocities",
+        bound=rq.value_bound(rq.SetJointStates, "velocities"))
     world.joints.check_limits(infos, positions, "set_joint_states.positions")
     read = request.read
     if read is not None:
@@ -82,7 +84,7 @@ def set_joint_targets(world: World, request: rq.SetJointTargets) -> dict[str, An
     count = len(names)
     if mode != "none" and request.targets is None:
         raise InvalidArgumentError(f"a {mode} target needs 'targets' (one per joint)")
-    targets = _values(request.targets, "targets", count, 0.0)
+    targets = _values(request.targets, "targets", count, 0.0, mode)
     kp = _values(request.kp, "kp", count, 0.0)
     kd = _values(request.kd, "kd", count, 0.0)
     max_effort = _values(request.max_effort, "max_effort", count, np.inf, allow_inf=True)
@@ -91,11 +93,13 @@ def set_joint_targets(world: World, request: rq.SetJointTargets) -> dict[str, An
     return {"count": count}
 
 
-def _values(raw: float | bytes | None, key: str, count: int, default: float, *,
-            allow_inf: bool = False) -> np.ndarray:
+def _values(raw: float | bytes | None, key: str, count: int, default: float,
+            mode: str | None = None, *, allow_inf: bool = False) -> np.ndarray:
+    """A per-joint field, within the bound its declaration gives (a target's: its mode's)."""
     if raw is None:
         return np.full(count, default)
-    return decode_values(raw, count, f"set_joint_targets.{key}", allow_inf=allow_inf)
+    return decode_values(raw, count, f"set_joint_targets.{key}", allow_inf=allow_inf,
+                         bound=rq.value_bound(rq.SetJointTargets, key, mode))
 
 
 @scene_op("apply_wrench")

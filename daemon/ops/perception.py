@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+import statistics
+import time
 from typing import Any
 
 import numpy as np
@@ -14,7 +16,7 @@ from galton.daemon.world.scene import World
 from galton.protocol import InvalidArgumentError, NotFoundError, ResourceLimitError, pack_f64
 from galton.protocol import requests as rq
 from galton.protocol.errors import brief
-from galton.protocol.model import check_names, check_type, decode_points
+from galton.protocol.model import check_names, check_type, decode_directions, decode_points
 from galton.protocol.png import depth_png, encode_png, segmentation_png
 from galton.protocol.vocabulary import MAX_CAMERA_NAME, check_fields
 
@@ -59,10 +61,46 @@ def render(world: World, request: rq.Render) -> dict[str, Any]:
     for camera in cameras:
         if camera.attach is not None:
             world.require_known([camera.attach])
+    _require_time(world, pixels, fmt)
     world.verify()
+    started = time.perf_counter()
     images, labels = world.engine.render([view_of(world, c) for c in cameras])
-    return {"images": [_image(c, i, fmt) for c, i in zip(cameras, images, strict=True)],
-            "labels": labels, "format": fmt}
+    encoded = [_image(c, i, fmt) for c, i in zip(cameras, images, strict=True)]
+    _measured(world, pixels, time.perf_counter() - started, fmt)
+    return {"images": encoded, "labels": labels, "format": fmt}
+
+
+# Renders this small are never refused for time (65,536 pixels at even 1 µs each: 65 ms),
+# and renders from LEARNT_FROM_PIXELS teach the cost per pixel (a smaller one is mostly its
+# fixed cost; a larger estimate from it only refuses more until bigger ones correct it).
+MEASURED_FROM_PIXELS = 65_536
+LEARNT_FROM_PIXELS = 4_096
+PNG_FACTOR = 2.0  # a png render costs about this many raw ones (zlib on the physics thread)
+
+
+def _require_time(world: World, pixels: int, fmt: str) -> None:
+    """Refuse up front a render expected to hold the physics thread past
+    ``max_render_seconds`` (issue 46: one 4096² render stalled a playing world for 2.6-9.4
+    s), saying how many pixels fit."""
+    budget = world.limits.max_render_seconds
+    cost = statistics.median(world.render_costs) * (PNG_FACTOR if fmt == "png" else 1.0)
+    expected = pixels * cost
+    if expected <= budget or pixels < MEASURED_FROM_PIXELS or \
+            "render" not in world.engine.capabilities().features:  # the engine says why not
+        return
+    fits = int(budget / cost)
+    raise ResourceLimitError(
+        f"render asks for {pixels} pixels: about {expected:.2f} s of the physics thread at "
+        f"this engine's measured {1e-6 / cost:.1f} Mpixel/s ({fmt}), past "
+        f"max_render_seconds {budget:g} s; ask for at most {fits} pixels",
+        {"limit": "max_render_seconds", "max": budget, "pixels": fits})
+
+
+def _measured(world: World, pixels: int, seconds: float, fmt: str) -> None:
+    """Learn the engine's cost per raw pixel from a render big enough to show it (one of
+    the samples whose median is the estimate: a one-off slow render does not move it)."""
+    if pixels >= LEARNT_FROM_PIXELS:
+        world.render_costs.append(seconds / pixels / (PNG_FACTOR if fmt == "png" else 1.0))
 
 
 def _image(camera: Camera, image: dict[str, np.ndarray], fmt: str) -> dict[str, Any]:
@@ -136,7 +174,7 @@ def raycast(world: World, request: rq.Raycast) -> dict[str, Any]:
                 f"raycast ray {int(np.argmin(np.isfinite(vectors).all(axis=1)))}: its end is "
                 "too far from its origin (the difference overflows)")
     else:
-        vectors = decode_points(request.directions, count, "raycast.directions")
+        vectors = decode_directions(request.directions, count, "raycast.directions")
     units, norms = unit_rows(vectors)
     lengths = norms if request.ends is not None else np.full(count, max_length)
     if not np.isfinite(lengths).all():

@@ -33,7 +33,8 @@ def _expected_position_sigmas(spread: float | bytes | None, count: int,
     prediction gave (independent errors: their variances add)."""
     if spread is None:
         return sigma_p
-    values = decode_values(spread, count, "compare.spread")
+    values = decode_values(spread, count, "compare.spread",
+                           bound=rq.value_bound(rq.Compare, "spread"))
     if (values < 0).any():
         raise InvalidArgumentError(f"compare.spread[{int(np.argmax(values < 0))}] is "
                                    "negative: a spread is a standard deviation, at least 0")

@@ -10,6 +10,7 @@ import contextlib
 import dataclasses
 import fnmatch
 import math
+from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -65,6 +66,13 @@ def frozen_mesh(vertices: np.ndarray | None, faces: np.ndarray | None) -> Mesh |
     return kept
 
 
+DEFAULT_SECONDS_PER_PIXEL = 1e-7  # before any render is measured: 10 Mpixel/s
+# Renders whose measures make the estimate: their median, so that a one-off slow render
+# (a renderer's context made for a new size: 1.4 s on MuJoCo) does not move it, while an
+# engine slower than the default shows after three renders.
+RENDER_SAMPLES = 5
+
+
 class World:
     """One simulated world: an engine, its entities by name, and its clock."""
 
@@ -82,6 +90,10 @@ class World:
         self._time_base = (0, 0.0, engine.timestep)  # (step, sim time, dt) since dt changed
         self.joints = JointTable(engine)
         self.cameras: dict[str, Any] = {}  # named cameras (daemon/world/cameras.py Camera)
+        # What one pixel of a render (and its encoding) costs the physics thread: the last
+        # few renders' measures (ops/perception.py), whose median a render is costed at.
+        self.render_costs: deque[float] = deque([DEFAULT_SECONDS_PER_PIXEL] * RENDER_SAMPLES,
+                                                maxlen=RENDER_SAMPLES)
         self.wrenches = WrenchSchedule()
         # Counts changes of which entities the engine holds (a state stream's cached reader
         # of its names is good while this stays the same).

@@ -26,6 +26,7 @@ from galton.protocol import (
     TWIST_WIDTH,
     EntityInfo,
     InvalidArgumentError,
+    RemoteError,
     pack_f64,
     unpack_f64,
 )
@@ -170,9 +171,14 @@ def world_from(data: dict[str, Any], make_engine: Callable[[str], Engine], name:
         world = World(engine, name, limits)
         _restore_registry(world, data)
         checks.check_agrees(world)
-    except Exception:
+    except RemoteError:
         engine.close()
         raise
+    except Exception as exc:  # a re-sealed hostile body no check above foresaw (issue 46)
+        engine.close()
+        raise InvalidArgumentError(
+            f"the snapshot is malformed and was not restored: {type(exc).__name__}: "
+            f"{brief(str(exc))}") from exc
     return world
 
 

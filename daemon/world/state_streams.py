@@ -35,7 +35,10 @@ from galton.protocol.arrays import pack_f64
 from galton.protocol.errors import brief
 from galton.protocol.keys import STREAMS_CHUNK
 
-MAX_STREAMS = 32  # open streams in one daemon, all clients together
+MAX_STREAMS = 32  # open streams in one daemon, all clients together ("max_streams")
+# Open streams one client may hold ("max_streams_per_client"): the pool is shared, so no
+# client can hold all of it (issue 46).
+MAX_STREAMS_PER_CLIENT = 8
 NO_OWNER = ("a state stream belongs to a client, and ends when it goes: the request needs "
             "a 'client' id in its envelope (the SDK sends one)")
 CLIENT_GONE = "its client went"  # the ``ended`` of a stream whose client went
@@ -88,10 +91,7 @@ class StateStreams:
         if names is not None:
             world.require_known(names)
         owner = _owner(loop, call)
-        if len(self.streams) >= MAX_STREAMS:
-            raise ResourceLimitError(
-                f"stream_states: {MAX_STREAMS} state streams are open already (each client's "
-                "end when it goes): close one with close_stream", {"limit": MAX_STREAMS})
+        self._require_room(owner)
         named = request.world
         stream = StateStream(secrets.token_hex(8), owner,
                              named if isinstance(named, str) and world is not loop.world
@@ -102,6 +102,22 @@ class StateStreams:
         self.next_due = min(self.next_due, stream.next_due)
         return {"stream": stream.stream_id, "key": f"{Keys(loop.instance).prefix}/{stream.topic}",
                 "topic": stream.topic, "rate": rate, "world": world.name}
+
+    def _require_room(self, owner: str) -> None:
+        """RESOURCE_LIMIT past the pool, or past this client's share of it (docs/protocol.md,
+        "Limits": ``details.limit`` names the limit, ``details.max`` gives its value)."""
+        if len(self.streams) >= MAX_STREAMS:
+            raise ResourceLimitError(
+                f"stream_states: {MAX_STREAMS} state streams are open already (each client's "
+                "end when it goes): close one with close_stream",
+                {"limit": "max_streams", "max": MAX_STREAMS})
+        held = sum(1 for s in self.streams.values() if s.owner == owner)
+        if held >= MAX_STREAMS_PER_CLIENT:
+            raise ResourceLimitError(
+                f"stream_states: this client holds {held} state streams, at most "
+                f"{MAX_STREAMS_PER_CLIENT} a client (the pool of {MAX_STREAMS} is shared): "
+                "close one with close_stream",
+                {"limit": "max_streams_per_client", "max": MAX_STREAMS_PER_CLIENT})
 
     def close(self, call: Call, request: rq.CloseStream) -> dict[str, Any]:
         """Close a stream; a client may close only its own."""

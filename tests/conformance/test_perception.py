@@ -42,6 +42,7 @@ from galton.client import (
     spheres,
     wait_for_daemon,
 )
+from galton.daemon.core.limits import DEFAULT_LIMITS
 from galton.daemon.engines import create_engine
 
 PLANE_DEPTH_TOL = 2e-3  # m: a flat surface's depth, float32 and the depth buffer's precision
@@ -359,7 +360,29 @@ def test_too_many_pixels_is_a_resource_limit(scene: Client) -> None:
     with pytest.raises(ResourceLimitError, match="pixels") as refused:
         scene.render([huge, huge])
     assert refused.value.details["limit"] == "max_pixels"
-    assert refused.value.details["max"] == 4096 * 4096
+    assert refused.value.details["max"] == DEFAULT_LIMITS.max_pixels
+
+
+def test_a_render_that_would_hold_the_physics_thread_too_long_is_refused_saying_what_fits(
+        scene: Client) -> None:
+    """Issue 46: one render at max_pixels held a playing world 2.6-9.4 s. In a fresh world
+    a render is costed at 10 Mpixel/s until one is measured: a full-HD frame (about 0.2 s)
+    is refused naming the pixels that fit max_render_seconds, and that many render."""
+    if "render" not in scene.capabilities().features:
+        pytest.skip("this engine does not render")
+    frame = camera((0, 0, 3), (0, 0, 0), up=(0, 1, 0), size=(1920, 1080))
+    before = scene.status().step
+    with pytest.raises(ResourceLimitError, match="max_render_seconds") as refused:
+        scene.render(frame)
+    details = refused.value.details
+    assert details["limit"] == "max_render_seconds"
+    assert details["max"] == DEFAULT_LIMITS.max_render_seconds
+    fits = details["pixels"]
+    assert 65_536 <= fits < 1920 * 1080
+    side = math.isqrt(fits)
+    (image,) = scene.render(camera((0, 0, 3), (0, 0, 0), up=(0, 1, 0), size=(side, side)))
+    assert image.rgb is not None and image.rgb.shape[:2] == (side, side)
+    assert scene.status().step == before
 
 
 def test_bad_rays_are_refused(scene: Client) -> None:
@@ -373,6 +396,9 @@ def test_bad_rays_are_refused(scene: Client) -> None:
         scene.call("raycast", {"origins": np.zeros(3).tobytes()}).raise_for_code()
 
 
+FAR = r"too far from its origin|position limit"
+
+
 def test_huge_and_tiny_ray_vectors_are_directions_or_refused(scene: Client) -> None:
     """A direction's length does not matter, however far from 1: its norm once overflowed
     to inf, the ray became zero, and MuJoCo's mj_ray aborted the daemon."""
@@ -384,9 +410,10 @@ def test_huge_and_tiny_ray_vectors_are_directions_or_refused(scene: Client) -> N
     np.testing.assert_allclose(scaled.distances, down.distances, atol=RAY_TOL)
     with pytest.raises(InvalidArgumentError, match="zero direction"):
         scene.raycast([[0, 0, 1]], directions=[[0, 0, -1e-200]])  # shorter than 1e-12
-    with pytest.raises(InvalidArgumentError, match="too far from its origin"):
+    # Ends past the protocol's bound on coordinates (docs/protocol.md, "Bounds").
+    with pytest.raises(InvalidArgumentError, match=FAR):
         scene.raycast([[0, 0, -1e308]], ends=[[0, 0, 1e308]])
-    with pytest.raises(InvalidArgumentError, match="too far from its origin"):
+    with pytest.raises(InvalidArgumentError, match=FAR):
         scene.raycast([[0, 0, 0]], ends=[[1.5e308, 1.5e308, 1.5e308]])  # its length: inf
     assert scene.status().entity_count == 3 and not scene.status().faulted  # still serving
 

@@ -24,6 +24,8 @@ from galton.client import (
     spheres,
     wait_for_daemon,
 )
+from galton.client.fuzz.extremes import ARM
+from galton.client.fuzz.snapshots import open_blob, reseal
 
 STEPS = 150
 OTHER_ENGINE = {"mujoco": "pybullet", "pybullet": "mujoco", "ode": "mujoco", "dart": "mujoco"}
@@ -249,3 +251,25 @@ def test_slot_bytes_past_the_limit_are_refused(world: Client, engine: str) -> No
         assert refused.value.details["limit"] == "max_snapshot_bytes"
         assert [s.slot for s in sim.snapshots()] == ["slot_0", "slot_1", "slot_2"]
         assert sim.snapshot(blob=True).nbytes == blob_size  # a blob alone is kept nowhere
+
+
+def test_a_hostile_resealed_blob_is_a_typed_refusal(world: Client) -> None:
+    """Issue 46: a re-sealed body whose link names were lists or maps reached Python's own
+    TypeError (OPERATION_FAILED, raw) on DART; every such body is INVALID_ARGUMENT, and the
+    world stays as it was."""
+    world.spawn(spheres(["a", "b"], [[0, 0, 1], [0.2, 0, 1]], 0.05))
+    world.call("load_model", {"format": "urdf", "text": ARM, "prefix": "x_"})
+    world.step(5)
+    own = world.snapshot(blob=True).blob
+    assert own is not None
+    body = open_blob(own)
+    links = [i for i, e in enumerate(body["entities"]) if e.get("shape") == "link"]
+    before = snapshot(world)
+    for index in links[:2]:
+        for key in ("name", "model"):
+            for odd in ([], {}):
+                edited = open_blob(own)
+                edited["entities"][index][key] = odd
+                with pytest.raises(InvalidArgumentError):
+                    world.restore(blob=reseal(edited))
+                before.assert_same(snapshot(world))

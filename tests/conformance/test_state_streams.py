@@ -5,12 +5,21 @@ from __future__ import annotations
 
 import time
 
+import msgpack
 import numpy as np
 import pytest
+from support import companion, raw_replies
 
 from galton.client import Client, spheres
 from galton.client.sdk.streams import StateStream
-from galton.protocol import InvalidArgumentError, NotFoundError
+from galton.protocol import (
+    PROTOCOL_VERSION,
+    InvalidArgumentError,
+    NotFoundError,
+    ResourceLimitError,
+    ResultCode,
+    decode_reply,
+)
 
 pytestmark = pytest.mark.parametrize("engine", ["mujoco"])
 
@@ -127,3 +136,38 @@ def test_a_stream_ends_with_a_sample_that_says_why_when_its_client_goes(
         while last.ended is None:
             last = watched.next()
     assert last.ended == "its client went" and len(last.poses) == 0
+
+
+@pytest.mark.parametrize("client_id", ["*", "**", "$*", "a/b", "@ctl", "a*", "x y", "?q"])
+def test_a_wildcard_or_key_expression_is_no_client_id(sim: Client, client_id: str) -> None:
+    """Issue 46: ``client: "*"`` opened a stream every client's token kept alive, for good."""
+    payload = msgpack.packb({"v": PROTOCOL_VERSION, "op": "stream_states",
+                             "args": {"rate": 5}, "client": client_id})
+    replies = raw_replies(sim, "stream_states", payload)
+    assert len(replies) == 1
+    reply = decode_reply(replies[0])
+    assert reply.code == ResultCode.INVALID_ARGUMENT and "client id" in reply.message
+
+
+def test_the_stream_pool_is_shared_and_its_refusals_name_their_limit(sim: Client) -> None:
+    """One client holds at most 8 of the 32 streams; each refusal is RESOURCE_LIMIT with
+    ``details.limit`` naming the limit and ``details.max`` its value (docs/protocol.md)."""
+    others = [companion(sim) for _ in range(4)]
+    try:
+        opened = [sim.call("stream_states", {"rate": 1}) for _ in range(8)]
+        with pytest.raises(ResourceLimitError) as mine:
+            sim.call("stream_states", {"rate": 1})
+        assert mine.value.details == {"limit": "max_streams_per_client", "max": 8}
+        for other in others[:3]:
+            for _ in range(8):
+                other.call("stream_states", {"rate": 1})
+        with pytest.raises(ResourceLimitError) as pool:
+            others[3].call("stream_states", {"rate": 1})
+        assert pool.value.details == {"limit": "max_streams", "max": 32}
+        sim.call("close_stream", {"stream": opened[0]["stream"]})
+        others[3].call("stream_states", {"rate": 1})  # a freed place is anyone's
+    finally:
+        for other in others:
+            other.close()
+    for stream in opened[1:]:
+        sim.call("close_stream", {"stream": stream["stream"]})

@@ -62,9 +62,10 @@ class Cdr:
         return self.get("B"), self.get_string()
 
 
-def put_pose_stamped(cdr: Cdr, frame: str, xyz: tuple[float, float, float]) -> None:
+def put_pose_stamped(cdr: Cdr, frame: str, xyz: tuple[float, float, float],
+                     quaternion: tuple[float, ...] = (0.0, 0.0, 0.0, 1.0)) -> None:
     cdr.put("iI", 0, 0).put_string(frame)
-    cdr.put("3d", *xyz).put("4d", 0.0, 0.0, 0.0, 1.0)
+    cdr.put("3d", *xyz).put("4d", *quaternion)
 
 
 @dataclass

@@ -80,6 +80,7 @@ FEATURES = (FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDATE_MAS
             FEATURE_CONTACTS, FEATURE_SPAWN_INERTIA, FEATURE_MODEL_SHAPES)
 
 
+MAX_SPIN = 1e8  # rad/s: the most spin ODE integrates in a body (above the protocol's MAX_TWIST)
 SHAPES = BODY_SHAPES  # a mesh: an ODE trimesh (trimesh.py, docs/ENGINES.md "Meshes")
 
 
@@ -90,6 +91,11 @@ class OdeEngine(Snapshots, Engine):
 
     def __init__(self) -> None:
         self._world = int(LIB.dWorldCreate())
+        # ODE aborts the process (dxNormalize4) on a quaternion its step made infinite; with
+        # every pushed number bounded (docs/protocol.md, "Bounds"), capping the spin each body
+        # integrates keeps it finite. The cap is far past max_speed: a body near it has
+        # diverged, and the step's check says so.
+        LIB.dWorldSetMaxAngularSpeed(self._world, MAX_SPIN)
         # Sweep and prune: a hash space rebuilds its table every step, 0.26 ms for the
         # paper board's 121 geoms alone; this halves the cost of a 100-ball step.
         self._space = int(LIB.dSweepAndPruneSpaceCreate(None, SAP_AXES_XZY))

@@ -27,6 +27,7 @@ from galton.daemon.engines.ode.native import LIB
 from galton.daemon.engines.ode.spawn import Body
 from galton.protocol import InvalidArgumentError, JointInfo, NotFoundError
 from galton.protocol.errors import did_you_mean
+from galton.protocol.vocabulary import MAX_EFFORT
 
 LO_STOP, HI_STOP, MOTOR_VELOCITY, MOTOR_MAX_FORCE, MOTOR_CFM = 0, 1, 2, 5, 8  # ODE's dParam*
 HINGES = ("revolute", "continuous")
@@ -119,7 +120,7 @@ class Robots:
             if mode == "none" and damping <= 0:
                 continue
             q, rate = joint.read()
-            limit = joint.max_effort
+            limit = min(joint.max_effort, MAX_EFFORT)  # no law pushes past the protocol's bound
             explicit = 0.0  # what is pushed now; the motor adds the damping with the step
             if mode == "position":
                 explicit = float(np.clip(joint.kp * (joint.target - q), -limit, limit))

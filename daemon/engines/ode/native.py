@@ -64,6 +64,7 @@ _SIGNATURES: dict[str, tuple[Any, tuple[Any, ...]]] = {
     "dWorldCreate": (P, ()), "dWorldDestroy": (None, (P,)),
     "dWorldSetGravity": (None, (P, D, D, D)), "dWorldSetCFM": (None, (P, D)),
     "dWorldSetERP": (None, (P, D)), "dWorldStep": (N, (P, D)),
+    "dWorldSetMaxAngularSpeed": (None, (P, D)),
     "dWorldQuickStep": (N, (P, D)), "dWorldSetQuickStepNumIterations": (None, (P, N)),
     "dWorldSetAutoDisableFlag": (None, (P, N)), "dWorldSetAutoDisableTime": (None, (P, D)),
     "dWorldSetAutoDisableSteps": (None, (P, N)),

@@ -16,10 +16,24 @@ from typing import Any
 
 import numpy as np
 
-from galton.daemon.engines.ode.native import STATE_LENGTH
+from galton.daemon.engines.ode.native import AVEL, LVEL, POS, QUAT, ROT, STATE_LENGTH
 from galton.daemon.engines.ode.spawn import Body
 from galton.protocol import BODY_SHAPES, TARGET_MODES, InvalidArgumentError
 from galton.protocol import mesh as mesh_wire
+from galton.protocol.vocabulary import (
+    MAX_COORDINATE,
+    MAX_EFFORT,
+    MAX_FORCE,
+    MAX_GAIN,
+    MAX_TORQUE,
+    MAX_TWIST,
+    QUATERNION_NORM_BAND,
+)
+
+# How far a stored quaternion's norm may be from 1, and a rotation matrix's entries from
+# [-1, 1]: ODE stores them unit; a re-sealed body holding a zero or huge one would abort the
+# process (dxNormalize4) at the next step (issue 46).
+UNIT_TOLERANCE = 1e-6
 
 FORMAT = "galton-ode-snapshot"
 VERSION = 1
@@ -116,9 +130,12 @@ def _check_body(body: Any, where: str) -> None:
         mass = _numbers([body.get("mass")], 1, f"{where}.mass")[0]
         if not (mass > 0 and math.isfinite(mass)):
             raise _fail(f"{where}.mass", "must be positive")
-        _numbers(body.get("state"), STATE_LENGTH, f"{where}.state")
+        _check_state(_numbers(body.get("state"), STATE_LENGTH, f"{where}.state"),
+                     f"{where}.state")
+    if body["static"]:
+        _check_quaternion(_numbers(body.get("pose"), 7, f"{where}.pose")[3:], f"{where}.pose")
     if body.get("wrench") is not None:
-        _numbers(body["wrench"], 6, f"{where}.wrench")
+        _check_wrench(_numbers(body["wrench"], 6, f"{where}.wrench"), f"{where}.wrench")
     if body.get("unit_inertia") is not None and (body["static"] or not all(
             v > 0 and math.isfinite(v)
             for v in _numbers(body["unit_inertia"], 3, f"{where}.unit_inertia"))):
@@ -149,11 +166,13 @@ def check_model(entry: Any, where: str) -> None:
         if not isinstance(link, dict) or not isinstance(link.get("name"), str) or \
                 not isinstance(link.get("enabled"), bool):
             raise _fail(f"{where}.links[{k}]", "must name the link and its sleep flag")
-        _numbers(link.get("state"), STATE_LENGTH, f"{where}.links[{k}].state")
+        _check_state(_numbers(link.get("state"), STATE_LENGTH, f"{where}.links[{k}].state"),
+                     f"{where}.links[{k}].state")
         for key in ("friction", "restitution"):
             _numbers([link.get(key)], 1, f"{where}.links[{k}].{key}")
         if link.get("wrench") is not None:
-            _numbers(link["wrench"], 6, f"{where}.links[{k}].wrench")
+            _check_wrench(_numbers(link["wrench"], 6, f"{where}.links[{k}].wrench"),
+                          f"{where}.links[{k}].wrench")
         follows = link.get("follows")
         if not isinstance(follows, list) or len(follows) != 2 or not all(
                 isinstance(f, bool) for f in follows):
@@ -162,5 +181,47 @@ def check_model(entry: Any, where: str) -> None:
         if not isinstance(joint, dict) or not isinstance(joint.get("name"), str) or \
                 joint.get("mode") not in TARGET_MODES:
             raise _fail(f"{where}.joints[{k}]", "must name the joint and its mode")
-        _numbers([joint.get(f) for f in JOINT_FIELDS], len(JOINT_FIELDS),
-                 f"{where}.joints[{k}]")
+        values = _numbers([joint.get(f) for f in JOINT_FIELDS], len(JOINT_FIELDS),
+                          f"{where}.joints[{k}]")
+        _check_joint(dict(zip(JOINT_FIELDS, values, strict=True)), f"{where}.joints[{k}]")
+
+
+def _check_state(state: list[float], where: str) -> None:
+    """A moving body's 28 doubles as ODE could hold them: finite, within the protocol's
+    bounds, a unit quaternion and a rotation matrix's entries."""
+    values = np.array(state)
+    if not np.isfinite(values).all():
+        raise _fail(where, "holds NaN or infinity")
+    bounds = ((POS, POS + 3, MAX_COORDINATE), (ROT, ROT + 12, 1.0 + UNIT_TOLERANCE),
+              (LVEL, LVEL + 3, MAX_TWIST), (AVEL, AVEL + 3, MAX_TWIST))
+    for start, stop, bound in bounds:
+        if (np.abs(values[start:stop]) > bound).any():
+            raise _fail(where, f"holds a value past {bound:g} in doubles {start}..{stop - 1}")
+    norm = math.hypot(*values[QUAT:QUAT + 4])  # scaled: no overflow on a 1e155 component
+    if abs(norm - 1.0) > UNIT_TOLERANCE:
+        raise _fail(where, f"holds a quaternion of norm {norm:g}, not a unit one")
+
+
+def _check_quaternion(quaternion: list[float], where: str) -> None:
+    low, high = QUATERNION_NORM_BAND
+    norm = math.hypot(*quaternion)  # scaled: no overflow on a 1e155 component
+    if not (math.isfinite(norm) and low <= norm <= high):
+        raise _fail(where, f"holds a quaternion of norm {norm:g}, outside [{low:g}, {high:g}]")
+
+
+def _check_wrench(wrench: list[float], where: str) -> None:
+    if not all(math.isfinite(v) for v in wrench) or \
+            max(map(abs, wrench[:3])) > MAX_FORCE or max(map(abs, wrench[3:])) > MAX_TORQUE:
+        raise _fail(where, f"must be finite, forces within {MAX_FORCE:g} N and torques "
+                           f"within {MAX_TORQUE:g} N m")
+
+
+def _check_joint(joint: dict[str, float], where: str) -> None:
+    """A joint's target, gains and efforts: finite (max_effort may be +inf: no cap) and
+    within the protocol's bounds, as set_joint_targets checks them."""
+    for key, value in joint.items():
+        bound = MAX_GAIN if key in ("kp", "kd") else MAX_EFFORT if key != "target" else \
+            max(MAX_EFFORT, MAX_COORDINATE)
+        uncapped = key == "max_effort" and value == math.inf
+        if not uncapped and not (math.isfinite(value) and abs(value) <= bound):
+            raise _fail(f"{where}.{key}", f"must be finite and within {bound:g}")

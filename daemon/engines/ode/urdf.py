@@ -25,6 +25,7 @@ from galton.daemon.engines.ode.joints import HI_STOP, HINGES, LO_STOP, Joint, Mo
 from galton.daemon.engines.ode.native import LIB, Mass, body_state, quaternion
 from galton.daemon.engines.ode.spawn import AWAKE, Body, make_geom
 from galton.protocol import EntityInfo, InvalidArgumentError, JointInfo, NameNotUniqueError
+from galton.protocol.vocabulary import MAX_MASS, MIN_INERTIA, MIN_MASS
 
 MODEL_FORMATS = ("urdf",)
 MASSLESS = 1e-3  # kg of a link that gives no inertial
@@ -117,6 +118,25 @@ def _mesh_box(mesh: Any, origin: frames.Frame) -> tuple[str, tuple[float, ...], 
     return "box", tuple(half.tolist()), centre
 
 
+def _check_inertial(link: str, mass: float, inertia: np.ndarray) -> None:
+    """Refuse a link ODE would abort on (dMassCheck), or whose push by a bounded effort
+    would make ODE's quaternion infinite (issue 46): its mass within the protocol's
+    [MIN_MASS, MAX_MASS], its inertia finite, symmetric-positive, each principal moment at
+    least MIN_INERTIA."""
+    if not (math.isfinite(mass) and MIN_MASS <= mass <= MAX_MASS):
+        raise InvalidArgumentError(
+            f"link {link!r}: mass {mass:g} kg is outside the protocol's [{MIN_MASS:g}, "
+            f"{MAX_MASS:g}] kg (docs/protocol.md, \"Bounds\")")
+    if not np.isfinite(inertia).all() or (np.abs(inertia) > MAX_MASS).any():
+        raise InvalidArgumentError(f"link {link!r}: its inertia must be finite numbers "
+                                   f"within {MAX_MASS:g} kg m²")
+    moments = np.linalg.eigvalsh((inertia + inertia.T) / 2)
+    if moments.min() < MIN_INERTIA:
+        raise InvalidArgumentError(
+            f"link {link!r}: its inertia's smallest principal moment is {moments.min():g} "
+            f"kg m², under the protocol's {MIN_INERTIA:g} (docs/protocol.md, \"Bounds\")")
+
+
 def _mass(link: Any) -> tuple[float, Mass, frames.Frame]:
     """The link's mass, ODE mass about its centre, and the centre's frame in the link."""
     mass = Mass()
@@ -129,6 +149,7 @@ def _mass(link: Any) -> tuple[float, Mass, frames.Frame]:
         np.asarray(inertial.origin, dtype=float))
     i = np.asarray(inertial.inertia if inertial.inertia is not None else np.eye(3) * 1e-6,
                    dtype=float)
+    _check_inertial(link.name, float(inertial.mass), i)
     LIB.dMassSetParameters(ctypes.addressof(mass), float(inertial.mass), 0, 0, 0, i[0, 0],
                            i[1, 1], i[2, 2], i[0, 1], i[0, 2], i[1, 2])
     return float(inertial.mass), mass, origin

@@ -5,8 +5,10 @@
 A goal is accepted when ``steps`` is at least 1 and runs as native ``step`` requests of at
 most ``ceil(steps / 100)`` steps each (feedback after each chunk: every step for up to 100
 steps); it ends SUCCEEDED with RESULT_OK, ABORTED with the step's failure (OPERATION_FAILED
-while playing, as the standard says), or CANCELED between two chunks. ``get_result``
-is answered when its goal ends.
+while playing, as the standard says), or CANCELED. Each goal's steps are sent as a client
+of its own (``ros2-goal-<id>``): a cancel ends its running chunk between two steps, as a
+native client's going does (issue 46: it used to run to the chunk's end, a million steps
+for a 10^8-step goal). ``get_result`` is answered when its goal ends.
 """
 
 from __future__ import annotations
@@ -44,6 +46,7 @@ class Goal:
     accepted_at: float
     done: int = 0
     status: int = EXECUTING
+    client: str = ""  # the native client id its steps are sent as
     result: tuple[int, str] = (codes.OK, "")
     waiting: list[Callable[[Any], None]] = field(default_factory=list)
 
@@ -66,7 +69,7 @@ class SimulateStepsServer:
         """Accept a goal of at least one step (and a new goal id), record it before the
         answer leaves (a get_result may follow at once), then start it."""
         steps, uuid = int(request.goal.steps), bytes(request.goal_id.uuid)
-        goal = Goal(uuid, steps, time.time())
+        goal = Goal(uuid, steps, time.time(), client=f"ros2-goal-{uuid.hex()}")
         with self._lock:
             accepted = steps >= 1 and uuid not in self.goals
             if accepted:
@@ -81,16 +84,22 @@ class SimulateStepsServer:
             self._next_chunk(goal)
 
     def _next_chunk(self, goal: Goal) -> None:
-        if goal.status == CANCELING:
-            self._finish(goal, CANCELED, (codes.OPERATION_FAILED, "canceled"))
-            return
         chunk = min(goal.steps - goal.done, math.ceil(goal.steps / FEEDBACK_CHUNKS))
-        self.front.call("step", {"count": chunk}, lambda reply: self._stepped(goal, chunk,
-                                                                               reply))
+        with self._lock:  # a cancel's lose() comes after this chunk's call, or before it
+            canceled = goal.status == CANCELING
+            if not canceled:
+                self.front.call("step", {"count": chunk},
+                                lambda reply: self._stepped(goal, chunk, reply), goal.client)
+        if canceled:
+            self._finish(goal, CANCELED, (codes.OPERATION_FAILED, "canceled"))
 
     def _stepped(self, goal: Goal, chunk: int, reply: Reply) -> None:
         if not reply.ok:
-            self._finish(goal, ABORTED, (codes.OPERATION_FAILED, reply.message))
+            if goal.status == CANCELING:  # its chunk was ended by the cancel
+                goal.done += int(reply.details.get("steps_done", 0))
+                self._finish(goal, CANCELED, (codes.OPERATION_FAILED, "canceled"))
+            else:
+                self._finish(goal, ABORTED, (codes.OPERATION_FAILED, reply.message))
             return
         goal.done += chunk
         self.feedback.put(new(f"{ACTION}_FeedbackMessage", goal_id=_uuid(goal.uuid),
@@ -134,6 +143,7 @@ class SimulateStepsServer:
             running = [goal for goal in chosen if goal.status == EXECUTING]
             for goal in running:
                 goal.status = CANCELING
+                self.front.lose(goal.client)  # its running or waiting chunk ends now
         code = (CANCEL_NONE if running else CANCEL_TERMINATED if chosen
                 else CANCEL_UNKNOWN_GOAL)
         answer(new("action_msgs/srv/CancelGoal_Response", return_code=code,

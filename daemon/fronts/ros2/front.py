@@ -22,6 +22,8 @@ from typing import Any
 import zenoh
 
 from galton.daemon.core.calls import Call, CallPort
+from galton.daemon.fronts.base import EVENTS
+from galton.daemon.fronts.memory import after_request_of
 from galton.daemon.fronts.ros2 import codes, rmw_zenoh
 from galton.daemon.fronts.ros2.action import SimulateStepsServer
 from galton.daemon.fronts.ros2.interfaces import dds_type_name, service_type, type_hash
@@ -68,10 +70,20 @@ class Ros2Front:
         self._reply_thread.start()
         self._declared: list[Any] = [session.liveliness().declare_token(
             self.identity.node_token())]
+        self._wake_topics: Callable[[], None] = lambda: None  # the topic loop's, once made
+        self._core: CallPort | None = None  # set by open()
         for name, handler in HANDLERS.items():
             self._serve(name, handler)
         self.action = SimulateStepsServer(self)
         self.topics = TopicLoop(self, options)
+        self._wake_topics = self.topics.wake
+
+    def summary(self) -> str:
+        """What the daemon's ready line says of this front: its node, domain and services
+        (the action's three counted apart)."""
+        node = self.qualified(self.identity.node)
+        return (f"ros2_node={node} ros2_domain={self.identity.domain} "
+                f"ros2_services={len(HANDLERS)} ros2_actions=1")
 
     def qualified(self, name: str) -> str:
         """A name in the node's namespace (an absolute name, ``/clock``, stays as it is)."""
@@ -104,8 +116,9 @@ class Ros2Front:
         request_type, response_type = f"{ros_type}_Request", f"{ros_type}_Response"
 
         def on_query(query: zenoh.Query) -> None:
-            read = _read_query(query, request_type)
+            read = _read_query(query, request_type, self.options.max_request_bytes)
             if read is not None:
+                self._wake_topics()  # a request may move the clock: /clock follows at once
                 attachment, request = read
                 take(request, lambda response: _answer(query, attachment, response,
                                                        response_type))
@@ -133,12 +146,20 @@ class Ros2Front:
         op, args = asked
         self.call(op, args, lambda answer: self.run(steps, finish, response_type, answer))
 
-    def call(self, op: str, args: dict[str, Any], then: Callable[[Reply], None]) -> None:
+    def call(self, op: str, args: dict[str, Any], then: Callable[[Reply], None],
+             client: str | None = None) -> None:
         """One native request through the daemon's own dispatch; ``then`` gets its Reply
         on the front's reply thread, so ROS-side work (CDR, the next request of a handler)
-        never holds the physics thread that answered."""
-        self.dispatch(Call(op, encode_request(op, args),
+        never holds the physics thread that answered. ``client``: the id it is sent as (a
+        goal's, so that ``lose`` can end its step)."""
+        self.dispatch(Call(op, encode_request(op, args, client),
                            lambda data: self._replies.put((then, data))))
+
+    def lose(self, client: str) -> None:
+        """End the step request sent as ``client`` now, running or waiting (the core ends a
+        gone client's step between two steps): how a cancelled goal stops at once."""
+        if self._core is not None:
+            self._core.lose_client(client)
 
     def _take_replies(self) -> None:
         while (item := self._replies.get()) is not None:
@@ -149,10 +170,15 @@ class Ros2Front:
                 log.exception("ROS 2 front: a reply's continuation failed")
 
     def open(self, core: CallPort) -> None:
-        """Nothing more to start: the node serves from construction (it needs the session)."""
+        """Nothing more to start: the node serves from construction (it needs the session);
+        the core's call interface is kept for ``lose``."""
+        self._core = core
 
     def publish(self, topic: str, data: bytes) -> None:
-        """Not this front's: /clock, /tf and joint states are read by its own topic loop."""
+        """Not this front's: /clock, /tf and joint states are read by its own topic loop,
+        which an event wakes (the clock may start moving: play, a step, a new world)."""
+        if topic == EVENTS:
+            self._wake_topics()
 
     def advertised(self) -> dict[str, Any]:
         return {}
@@ -169,15 +195,21 @@ class Ros2Front:
         self._declared.clear()
 
 
-def _read_query(query: zenoh.Query, request_type: str) -> tuple[rmw_zenoh.Attachment,
-                                                                  Any] | None:
+def _read_query(query: zenoh.Query, request_type: str, max_bytes: int
+                ) -> tuple[rmw_zenoh.Attachment, Any] | None:
     """The attachment and decoded request of a query; one that cannot be read gets an error
-    reply (rcl would drop it), never silence, and None."""
+    reply (rcl would drop it), never silence, and None. One over ``max_bytes`` is refused
+    before Python copies it; after a big one the heap's free pages go back (memory.py)."""
+    size = len(query.payload) if query.payload is not None else 0
+    after_request_of(size)
     try:
         if query.attachment is None:
             raise GaltonError("the query has no rmw_zenoh attachment (sequence number, "
                               "timestamp, GID): docs/ROS2.md")
         attachment = rmw_zenoh.Attachment.decode(query.attachment.to_bytes())
+        if size > max_bytes:
+            raise GaltonError(f"the request is {size} bytes; at most {max_bytes} (the "
+                              "daemon's max_request_bytes)")
         payload = query.payload.to_bytes() if query.payload is not None else b""
         return attachment, decode(payload, request_type)
     except GaltonError as error:

@@ -50,10 +50,16 @@ def encode(message: Any, typename: str) -> bytes:
     return bytes(typestore().serialize_cdr(message, typename))
 
 
+# Bytes a request may carry past its message's end: rclpy's serialize_message leaves 8
+# there (Kilted), and padding to an 8-byte boundary may add up to 7. More is refused
+# (issue 46: 50 MB of them were answered OK).
+MAX_TRAILING_BYTES = 16
+
+
 def decode(payload: bytes, typename: str) -> Any:
-    """A message from CDR bytes; bytes that do not parse are INVALID_ARGUMENT. Bytes past
-    the message's end are ignored: rclpy's serialize_message leaves 8 there (Kilted), which
-    rosbags' own deserialize_cdr refuses ("size mismatch")."""
+    """A message from CDR bytes; bytes that do not parse are INVALID_ARGUMENT, and so are
+    more than MAX_TRAILING_BYTES past the message's end (a few are allowed: rclpy leaves 8
+    there, which rosbags' own deserialize_cdr refuses as a "size mismatch")."""
     if len(payload) < 4 or payload[:2] not in (b"\x00\x00", b"\x00\x01"):
         raise InvalidArgumentError(
             f"the payload is not CDR: it starts {payload[:4].hex() or 'empty'}, not an "
@@ -61,11 +67,16 @@ def decode(payload: bytes, typename: str) -> Any:
     definition = typestore().get_msgdef(typename)
     read = definition.deserialize_cdr_le if payload[1] else definition.deserialize_cdr_be
     try:
-        message, _ = read(memoryview(payload)[4:], 0, definition.cls, typestore())
-        return message
+        message, end = read(memoryview(payload)[4:], 0, definition.cls, typestore())
     except Exception as exc:
         raise InvalidArgumentError(
             f"the payload is not a CDR {typename}: {brief(str(exc))}") from exc
+    trailing = len(payload) - 4 - end
+    if trailing > MAX_TRAILING_BYTES:
+        raise InvalidArgumentError(
+            f"the payload holds {trailing} bytes past the end of its {typename} (at most "
+            f"{MAX_TRAILING_BYTES} are allowed): not one request")
+    return message
 
 
 def time_msg(seconds: float) -> Any:

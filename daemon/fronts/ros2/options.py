@@ -20,6 +20,7 @@ class Ros2Options:
     mirrors: dict[str, str] = field(default_factory=dict)  # model root -> JointState topic
     clock_rate_hz: float = 200.0
     tf_rate_hz: float = 20.0
+    max_request_bytes: int = 16 * 1024 * 1024  # one ROS request (the daemon's limit's)
 
 
 def parse_mirror(text: str) -> tuple[str, str]:

@@ -64,7 +64,10 @@ def set_simulation_state(request: Any) -> Gen:
         raise Refusal(codes.INCORRECT_TRANSITION, f"state {target} cannot be set: set "
                       "STOPPED (0), PLAYING (1) or PAUSED (2)")
     status = yield from ask("status")
-    if codes.STATE_OF[status["state"]] == target:
+    # PAUSED pauses whatever is stepping, as native pause does: a paused world running a
+    # step request (StepSimulation, a goal, a native step) is not yet "already paused".
+    stepping = target == codes.PAUSED and status.get("stepping", False)
+    if codes.STATE_OF[status["state"]] == target and not stepping:
         raise Refusal(codes.ALREADY_IN_TARGET_STATE, f"already {status['state']}")
     yield from ask(op, code_of=lambda reply: codes.STATE_TRANSITION_ERROR)
     return response("SetSimulationState", result=result())
@@ -91,6 +94,11 @@ def _reset_scopes(bits: int) -> list[str]:
 def step_simulation(request: Any) -> Gen:
     if request.steps < 1:
         raise Refusal(codes.OPERATION_FAILED, "steps must be at least 1")
+    status = yield from ask("status")
+    if status.get("stepping", False):  # it would wait its turn: say so now, not after it
+        raise Refusal(codes.INCORRECT_STATE, "another step request is running (a "
+                      "SimulateSteps goal, StepSimulation or a native step): try again when "
+                      "it ends, or pause it with SetSimulationState(PAUSED)")
     yield from ask("step", {"count": int(request.steps)},
                    code_of=lambda reply: codes.OPERATION_FAILED)  # the standard's code
     return response("StepSimulation", result=result())

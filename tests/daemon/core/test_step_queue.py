@@ -15,8 +15,8 @@ import zmq
 from support.daemons import start_daemon
 
 from galton.client import Client, EmbeddedDaemon, plane, spheres
-from galton.daemon.core.step_queue import MAX_QUEUED_STEPS
-from galton.protocol import ResultCode
+from galton.daemon.core.step_queue import MAX_QUEUED_PER_CLIENT, MAX_QUEUED_STEPS
+from galton.protocol import ResourceLimitError, ResultCode
 
 LONG = 10**8  # steps of a request that runs until it is ended
 WAIT_MS = 30_000
@@ -125,18 +125,71 @@ def collect(sockets: list[zmq.Socket], count: int) -> list[dict[str, Any]]:
     return got
 
 
-def test_steps_past_the_bound_are_refused_at_once(crowd: Crowd) -> None:
+def test_steps_past_a_clients_share_are_refused_at_once(crowd: Crowd) -> None:
+    """Each client has at most MAX_QUEUED_PER_CLIENT steps waiting (issue 46: one client's
+    flood once filled the queue for all)."""
     runner, boss = crowd.client(), crowd.client()
     crowd.send(runner, "step", {"count": LONG})
     senders = [crowd.client() for _ in range(4)]
-    each = MAX_QUEUED_STEPS // len(senders) + 2
+    each = MAX_QUEUED_PER_CLIENT + 5
     for socket in senders:
         for _ in range(each):
             socket.send(envelope("step", {"count": 1}))
-    refused = collect(senders, len(senders) * each - MAX_QUEUED_STEPS)  # the rest wait
+    waiting = len(senders) * MAX_QUEUED_PER_CLIENT
+    refused = collect(senders, len(senders) * each - waiting)  # the rest wait
     assert {r["code"] for r in refused} == {ResultCode.RESOURCE_LIMIT}
-    assert refused[0]["details"] == {"limit": "queued_steps", "max": MAX_QUEUED_STEPS}
+    assert refused[0]["details"] == {"limit": "queued_steps_per_client",
+                                     "max": MAX_QUEUED_PER_CLIENT}
     boss.send(envelope("pause"))
     assert reply(boss)["code"] == 0
-    ended = collect(senders, MAX_QUEUED_STEPS)
+    ended = collect(senders, waiting)
     assert {r["code"] for r in ended} == {ResultCode.OPERATION_FAILED}
+
+
+def test_past_the_shared_bound_only_a_client_with_none_waiting_gets_in(crowd: Crowd) -> None:
+    runner, boss, polite = crowd.client(), crowd.client(), crowd.client()
+    crowd.send(runner, "step", {"count": LONG})
+    senders = [crowd.client() for _ in range(MAX_QUEUED_STEPS // MAX_QUEUED_PER_CLIENT)]
+    for socket in senders:
+        for _ in range(MAX_QUEUED_PER_CLIENT):
+            crowd.send(socket, "step", {"count": 1})  # 64 waiting in all
+    crowd.send(polite, "step", {"count": 1})  # still taken: it has none waiting
+    polite.send(envelope("step", {"count": 1}))  # its second is past the shared bound
+    second = reply(polite)
+    assert second["code"] == ResultCode.RESOURCE_LIMIT
+    assert second["details"] == {"limit": "queued_steps", "max": MAX_QUEUED_STEPS}
+    boss.send(envelope("pause"))
+    assert reply(boss)["code"] == 0
+    assert reply(polite)["code"] == ResultCode.OPERATION_FAILED  # its first was waiting
+    collect(senders, MAX_QUEUED_STEPS)
+
+
+def test_a_polite_clients_steps_are_answered_under_twenty_hammering_clients(
+        crowd: Crowd) -> None:
+    """Issue 46: with twenty DEALERs each keeping 64 step(1) in flight, a polite client's
+    step(1) was refused 422 times of 596; now it waits its turn, and is answered."""
+    hammers = [crowd.client() for _ in range(20)]
+    in_flight = dict.fromkeys(hammers, 0)
+    poller = zmq.Poller()
+    for socket in hammers:
+        poller.register(socket, zmq.POLLIN)
+    polite = Client(crowd.sim.instance, f"zmq+{crowd.endpoint}", timeout=30.0)
+    answered = 0
+    try:
+        for _ in range(10):
+            for socket in hammers:  # keep every hammer's pipeline full
+                while in_flight[socket] < 64:
+                    socket.send(envelope("step", {"count": 1}))
+                    in_flight[socket] += 1
+            for socket, _ in poller.poll(0):
+                while socket.poll(0):
+                    socket.recv_multipart()
+                    in_flight[socket] -= 1
+            try:
+                polite.step(1)
+                answered += 1
+            except ResourceLimitError:
+                pass
+    finally:
+        polite.close()
+    assert answered >= 9

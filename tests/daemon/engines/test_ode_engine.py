@@ -185,3 +185,73 @@ def test_a_mesh_off_its_origin_weighs_its_volume_and_replays_bit_for_bit(
             assert np.array_equal(mine, theirs)
     finally:
         copy.close()
+
+
+def _hostile_copies(data: dict[str, Any]) -> Iterator[tuple[str, dict[str, Any]]]:
+    """The snapshot with one moving body's or link's numbers made hostile: each would abort
+    ODE (dxNormalize4) at the next step if it were written into ODE's memory."""
+    import copy as copying
+
+    from galton.daemon.engines.ode.native import AVEL, QUAT
+    ball = next(k for k, b in enumerate(data["bodies"]) if b.get("name") == "ball")
+    model = next(k for k, b in enumerate(data["bodies"]) if "model" in b)
+    for label, start, values in (("zero quaternion", QUAT, [0.0] * 4),
+                                 ("huge quaternion", QUAT, [1e155, 0.0, 0.0, 0.0]),
+                                 ("huge spin", AVEL, [1e300, 0.0, 0.0])):
+        edited = copying.deepcopy(data)
+        edited["bodies"][ball]["state"][start:start + len(values)] = values
+        yield f"ball {label}", edited
+        edited = copying.deepcopy(data)
+        edited["bodies"][model]["links"][1]["state"][start:start + len(values)] = values
+        yield f"link {label}", edited
+    edited = copying.deepcopy(data)
+    edited["bodies"][ball]["wrench"] = [1e308, 0.0, 0.0, 0.0, 0.0, 0.0]
+    yield "huge wrench", edited
+    edited = copying.deepcopy(data)
+    edited["bodies"][model]["joints"][0]["kp"] = 1e308
+    yield "huge gain", edited
+
+
+def test_a_hostile_snapshot_is_refused_before_ode_sees_it(engine: OdeEngine) -> None:
+    """Issue 46: a re-sealed blob's body state is written straight into ODE's memory; a
+    zero quaternion, a huge spin or a huge wrench or gain in it must be refused first."""
+    from galton.daemon.engines.check.joints import RIG
+    from galton.protocol import InvalidArgumentError
+    engine.load_model("urdf", RIG, None, "r_", fixed_base=True)
+    engine.spawn([ground(), balls(["ball"], [0.3, 0.0, 2.0])])
+    engine.set_wrenches(["ball"], np.array([[0.0, 0.0, 1.0, 0.0, 0.0, 0.0]]), None)
+    engine.step(5)
+    data = engine.snapshot()
+    for label, hostile in _hostile_copies(data):
+        copy = OdeEngine()
+        try:
+            with pytest.raises(InvalidArgumentError):
+                copy.restore(hostile)
+        finally:
+            copy.close()
+        assert label
+    copy = OdeEngine()
+    try:
+        copy.restore(data)  # the untouched one still restores, and steps
+        copy.step(5)
+    finally:
+        copy.close()
+
+
+@pytest.mark.parametrize(("old", "new"), [
+    ('<mass value="0.5"/>', '<mass value="1e-300"/>'),
+    ('ixx=".001" iyy=".001" izz=".001"', 'ixx="1e-320" iyy="1e-320" izz="1e-320"'),
+    ('ixx=".001" iyy=".001" izz=".001"', 'ixx=".001" iyy=".001" izz="-1"'),
+])
+def test_a_link_ode_would_abort_on_is_refused(engine: OdeEngine, old: str, new: str) -> None:
+    """Issue 46: a URDF link of 1e-300 kg (or a degenerate inertia) pushed by an effort made
+    ODE's quaternion infinite (SIGABRT in dxNormalize4); now load_model refuses it, and
+    the world holds nothing of it."""
+    from galton.client.fuzz.extremes import ARM
+    from galton.protocol import InvalidArgumentError
+    assert old in ARM
+    with pytest.raises(InvalidArgumentError, match="upper"):
+        engine.load_model("urdf", ARM.replace(old, new, 1), None, "t_", fixed_base=True)
+    assert engine.joints() == []
+    engine.spawn([ground(), balls(["ball"], [0.0, 0.0, 1.0])])
+    engine.step(5)

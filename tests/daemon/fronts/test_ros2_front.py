@@ -5,9 +5,11 @@ from __future__ import annotations
 
 import queue
 import struct
+import time
 from collections.abc import Iterator
 from typing import Any
 
+import psutil
 import pytest
 from support.models import KUKA_JOINTS, ROBOTS, get_joint_states
 from support.ros2_client import (
@@ -274,6 +276,64 @@ def test_a_canceled_goal_stops_between_chunks(ros: RosClient) -> None:
     assert state.get("B") == 2  # paused where it got to
 
 
+def _start_long_goal(ros: RosClient, native: Client, goal: bytes) -> int:
+    """Send a 10^8-step goal (chunks of 10^6 steps) and return once it steps."""
+    base = f"{NODE}/simulate_steps/_action"
+    before = native.status().step
+    sent, _ = ros.call(f"{base}/send_goal", f"{ACTION}_SendGoal",
+                       bytes(Cdr.writer().put("16B", *goal).put("Q", 100_000_000).data))
+    assert sent.get("B") == 1
+    deadline = time.monotonic() + 10.0
+    while native.status().step == before and time.monotonic() < deadline:
+        pass  # polling the daemon's own answer: it steps once the goal's first chunk runs
+    assert native.status().stepping
+    return native.status().step
+
+
+def _result_of(ros: RosClient, goal: bytes) -> int:
+    result, _ = ros.call(f"{NODE}/simulate_steps/_action/get_result", f"{ACTION}_GetResult",
+                         bytes(Cdr.writer().put("16B", *goal).data))
+    return int(result.get("b"))
+
+
+def test_a_cancel_stops_a_long_goal_within_a_steps_work(ros: RosClient,
+                                                        native: Client) -> None:
+    """Issue 46: a cancelled goal ran on to the end of its chunk (937,901 steps, 14.6 s);
+    now its running chunk ends between two steps."""
+    goal = bytes(range(31, 47))
+    _start_long_goal(ros, native, goal)
+    cancel = Cdr.writer().put("16B", *goal).put("iI", 0, 0)
+    asked = time.monotonic()
+    at_cancel = native.status().step
+    ros.call(f"{NODE}/simulate_steps/_action/cancel_goal", "action_msgs/srv/CancelGoal",
+             bytes(cancel.data))
+    assert _result_of(ros, goal) == 5  # CANCELED
+    took = time.monotonic() - asked
+    after = native.status()
+    assert not after.stepping
+    assert after.step - at_cancel < 100_000  # a tenth of the chunk it would have finished
+    assert took < 1.5
+    assert native.status().step == after.step  # and it stays stopped
+
+
+def test_step_simulation_while_a_goal_runs_is_refused_at_once_and_paused_pauses_it(
+        ros: RosClient, native: Client) -> None:
+    """Issue 46: StepSimulation waited silently behind a running step; SetSimulationState
+    (PAUSED) answered "already paused" and the goal stepped on."""
+    goal = bytes(range(51, 67))
+    _start_long_goal(ros, native, goal)
+    asked = time.monotonic()
+    step = call(ros, "step_simulation", bytes(Cdr.writer().put("Q", 1).data))
+    assert step.get_result()[0] == 3  # RESULT_INCORRECT_STATE
+    assert time.monotonic() - asked < 2.0
+    paused = call(ros, "set_simulation_state", bytes(Cdr.writer().put("B", 2).data))
+    assert paused.get_result() == (OK, "")
+    assert _result_of(ros, goal) == 6  # ABORTED: the pause ended it
+    assert not native.status().stepping
+    assert call(ros, "step_simulation", bytes(Cdr.writer().put("Q", 1).data)
+                ).get_result() == (OK, "")
+
+
 def spawn_request(cdr: Cdr, name: str, uri: str, text: str, z: float) -> None:
     cdr.put_string(name).put("B", 0).put_string(uri).put_string(text).put_string("")
     put_pose_stamped(cdr, "world", (0.0, 0.0, z))
@@ -319,3 +379,102 @@ def test_domain_namespace_and_node_name_reach_the_keys() -> None:
             assert reply.get("B") == 0  # STOPPED: a fresh daemon
         finally:
             client.close()
+
+
+EXTREME_QUATERNIONS = ((0.0, 1e308, 0.0, 1.0), (1e155, 0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 0.0))
+
+
+@pytest.fixture(scope="module")
+def ode_ros2() -> Iterator[EmbeddedDaemon]:
+    with EmbeddedDaemon("ode", instance="rosext", extra_args=["--ros2"]) as running:
+        yield running
+
+
+def test_the_ready_line_names_the_node_domain_and_services_and_idle_is_quiet(
+        ode_ros2: EmbeddedDaemon) -> None:
+    """Issue 47: the ready line says the ROS 2 front is up; an idle --ros2 daemon no longer
+    asks its own status 200 times a second (about 9 % of a core; a plain one uses < 1 %)."""
+    ready = next(line for line in ode_ros2.output.splitlines() if "ready:" in line)
+    assert f"ros2_node=/rosext ros2_domain=0 ros2_services={len(SERVICES)}" in ready
+    assert ode_ros2.process is not None
+    process = psutil.Process(ode_ros2.process.pid)
+    wait_until_idle = time.monotonic() + 1.0  # STILL_AFTER_S after its last request
+    while time.monotonic() < wait_until_idle:
+        time.sleep(0.1)
+    before, started = sum(process.cpu_times()[:2]), time.monotonic()
+    while time.monotonic() - started < 2.0:
+        time.sleep(0.1)
+    used = 100 * (sum(process.cpu_times()[:2]) - before) / (time.monotonic() - started)
+    assert used < 3.0, f"an idle --ros2 daemon used {used:.1f} % of a core"
+
+
+def test_extreme_numbers_through_ros2_are_refused_on_ode(ode_ros2: EmbeddedDaemon) -> None:
+    """Issue 46: SpawnEntity's initial_pose and SetEntityState's pose and twist at the ends
+    of float64 reach the same bounds as a native request: each refused with its standard
+    code, nothing applied, and the ODE daemon (which aborted on them) still stepping."""
+    running = ode_ros2
+    ros = RosClient(running.endpoint)
+    node = "/rosext"
+    try:
+        def rcall(service: str, request: bytes) -> Cdr:
+            name = "".join(part.title() for part in service.split("_"))
+            return ros.call(f"{node}/{service}", name, request)[0]
+
+        ok = Cdr.writer().put_string("b").put("B", 0).put_string(
+            "galton://sphere?size=0.05").put_string("").put_string("")
+        put_pose_stamped(ok, "", (0.0, 0.0, 1.0))
+        assert rcall("spawn_entity", bytes(ok.data)).get_result() == (OK, "")
+        for n, quaternion in enumerate(EXTREME_QUATERNIONS):
+            bad = Cdr.writer().put_string(f"x{n}").put("B", 0).put_string(
+                "galton://sphere?size=0.05").put_string("").put_string("")
+            put_pose_stamped(bad, "", (0.0, 0.0, 1.0), quaternion)
+            assert rcall("spawn_entity", bytes(bad.data)).get_result()[0] == 109
+            moved = Cdr.writer().put_string("b").put("iI", 0, 0).put_string("")
+            moved.put("3d", 0.0, 0.0, 2.0).put("4d", *quaternion)
+            moved.put("6d", *[0.0] * 6).put("6d", *[0.0] * 6).put("B", 1).put("B", 0)
+            moved.put("B", 0)
+            assert rcall("set_entity_state", bytes(moved.data)).get_result()[0] == 101
+        fast = Cdr.writer().put_string("b").put("iI", 0, 0).put_string("")
+        fast.put("3d", 0.0, 0.0, 1.0).put("4d", 0.0, 0.0, 0.0, 1.0)
+        fast.put("6d", 1e308, *[0.0] * 5).put("6d", *[0.0] * 6).put("B", 0).put("B", 1)
+        fast.put("B", 0)
+        assert rcall("set_entity_state", bytes(fast.data)).get_result()[0] != OK
+        step = rcall("step_simulation", bytes(Cdr.writer().put("Q", 10).data))
+        assert step.get_result() == (OK, "")
+        reply = rcall("get_entity_state", bytes(Cdr.writer().put_string("b").data))
+        assert reply.get_result() == (OK, "")
+        reply.get("iI")
+        reply.get_string()
+        assert reply.get("3d")[2] < 1.0  # it fell from where it was put, untouched
+        assert running.process is not None and running.process.poll() is None
+    finally:
+        ros.close()
+
+
+def test_trailing_bytes_and_oversized_requests_are_refused(ros: RosClient) -> None:
+    """Issue 46: a GetSimulationState with 50 MB of trailing bytes was answered OK. A few
+    stay allowed (rclpy leaves 8)."""
+    padded = call(ros, "get_simulation_state", EMPTY + b"\0" * 8)
+    padded.get("B")  # the state, then the result
+    assert padded.get_result() == (OK, "")
+    with pytest.raises(RuntimeError, match="bytes past the end"):
+        call(ros, "get_simulation_state", EMPTY + b"\0" * 1_000_000)
+    with pytest.raises(RuntimeError, match="max_request_bytes"):
+        call(ros, "get_simulation_state", EMPTY + b"\0" * 20_000_000)
+
+
+def test_a_50_mb_request_does_not_leave_the_daemon_bigger(ros: RosClient,
+                                                          daemon: EmbeddedDaemon) -> None:
+    """Issue 46: one 50 MB payload left the daemon's RSS about 45 MiB up for good (Zenoh's
+    buffers freed into glibc's heap, which kept them); now the pages go back after it."""
+    assert daemon.process is not None
+    process = psutil.Process(daemon.process.pid)
+    before = process.memory_info().rss
+    with pytest.raises(RuntimeError):
+        call(ros, "get_simulation_state", EMPTY + b"\0" * 50_000_000)
+    deadline = time.monotonic() + 10.0
+    grown = process.memory_info().rss - before
+    while grown > 20 * 2**20 and time.monotonic() < deadline:
+        time.sleep(0.1)  # polling the process's RSS until the trim (0.5 s after) lands
+        grown = process.memory_info().rss - before
+    assert grown <= 20 * 2**20, f"RSS grew {grown / 2**20:.0f} MiB"

@@ -146,6 +146,16 @@ def test_bad_ros2_options_are_refused_before_anything_starts(args: list[str],
     assert says in result.output
 
 
+def test_ros2_with_users_refuses_to_start_saying_why(tmp_path: Path) -> None:
+    """Issue 46: it started silently, and then no ROS 2 caller could reach any service."""
+    from support.users import users_file
+    result = CliRunner().invoke(daemon_app, ["--ros2", "--users", str(users_file(tmp_path))],
+                                env={"COLUMNS": "250"})
+    assert result.exit_code == 2
+    assert "--ros2 cannot be used with --users" in result.output
+    assert "no user name" in result.output
+
+
 def test_the_fast_tf_writer_equals_the_general_one() -> None:
     rng = np.random.default_rng(40)
     names = ["a", "ball_10", "arm/lbr_iiwa_link_3", "xyz", "é"]
@@ -158,3 +168,13 @@ def test_the_fast_tf_writer_equals_the_general_one() -> None:
                              z=pose[5], w=pose[6])))
         for name, pose in zip(names, poses, strict=True)])
     assert tf_cdr(names, poses, 12.345678901) == encode(general, interfaces.TF_MESSAGE)
+
+
+def test_daemon_help_keeps_the_ros2_extras_brackets() -> None:
+    """Issue 47: rich read "[ros2]" as markup and printed "needs the  extra"."""
+    from typer.testing import CliRunner
+
+    from galton.daemon.cli import app
+    result = CliRunner().invoke(app, ["--help"], env={"COLUMNS": "250", "TERM": "dumb"})
+    assert result.exit_code == 0
+    assert "needs the [ros2] extra" in result.output

@@ -333,3 +333,4 @@ def test_galton_client_daemons_shows_the_zmq_endpoints(zmq_daemon: EmbeddedDaemo
         run(["--connect", zmq_daemon.endpoint, "daemons", "--json"]).stdout)}
     assert found[zmq_daemon.instance]["zmq"] == [
         zmq_daemon.zmq_endpoint.removeprefix("zmq+")]  # type: ignore[union-attr]
+
