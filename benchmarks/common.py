@@ -20,11 +20,12 @@ ENGINES = ("mujoco", "pybullet")
 
 @contextmanager
 def daemon_client(engine: str, telemetry_rate: float = 10.0, timeout: float = 60.0,
-                  zmq: bool = False) -> Iterator[tuple[EmbeddedDaemon, Client]]:
+                  zmq: bool = False, extra_args: list[str] | None = None
+                  ) -> Iterator[tuple[EmbeddedDaemon, Client]]:
     """A fresh daemon of that engine on a free loopback port (and a ZeroMQ ipc socket with
     ``zmq``), and a Zenoh client to it."""
     with EmbeddedDaemon(engine, instance=f"bench-{engine}", telemetry_rate=telemetry_rate,
-                        zmq=zmq) as daemon, \
+                        zmq=zmq, extra_args=extra_args) as daemon, \
             Client(daemon.instance, daemon.endpoint, timeout=timeout) as client:
         wait_for_daemon(client.session, daemon.instance, 30)
         yield daemon, client

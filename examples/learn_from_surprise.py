@@ -4,11 +4,14 @@ anomaly score stays high), recalibrates from what it saw, and agrees with realit
 Two worlds in one daemon: the live world is the robot's internal model; a fork of it,
 "reality", plays the real world. Each episode a hand pushes a box across a table at
 1.5 m/s in both; every 50 ms a camera sees reality's box (seeded noise of 1 mm a side) and
-the model compares it with its own box (a SurpriseWatch on the scores). In episode 1 both
-agree. Before episode 2 reality's table is polished: the box's friction falls from 0.8 to
-0.3 and it slides further than the model expects. The score stays above 3 for 4 cycles in
-a row: the model calibrates the box's friction on the episode it saw (``calibrate`` with
-``apply``) and in episode 3 its scores are low again.
+the model compares it with its own box (compare's ``trigger``: the daemon counts the
+surprising comparisons in a row; a SurpriseWatch keeps the episode's observations, what a
+calibration fits to). In episode 1 both agree. Before episode 2 reality's table is
+polished: the box's friction falls from 0.8 to 0.3 and it slides further than the model
+expects. The score stays above 3 for 4 cycles in a row: the daemon suggests a calibration
+(the reply's ``suggested``, and a ``calibration_suggested`` event for any other listener),
+the model calibrates the box's friction on the episode it saw (``calibrate`` with
+``apply``), and in episode 3 its scores are low again.
 
 Starts its own daemon unless --connect is given:
 python examples/learn_from_surprise.py [--engine mujoco|pybullet] [--seed N]
@@ -72,9 +75,11 @@ def episode(sim: Client, reality: Client, start: np.ndarray, watch: SurpriseWatc
         reality.step(steps)
         seen = reality.get_states(["box"]).poses.copy()
         seen[:, :2] += rng.normal(0.0, NOISE_M, (1, 2))
-        score = sim.compare(["box"], seen, sigma_position=SIGMA_M).score
-        peak = max(peak, score)
-        surprised = watch.observe(sim.status().sim_time, seen, score) or surprised
+        found = sim.compare(["box"], seen, sigma_position=SIGMA_M,
+                            trigger=(THRESHOLD, WINDOW))
+        peak = max(peak, found.score)
+        watch.observe(found.sim_time, seen, found.score)
+        surprised = found.suggested or surprised
     return peak, surprised
 
 

@@ -173,6 +173,7 @@ class CalibrateReply(rp.Reply, kw_only=True):
     steps: int
     converged: bool
     applied: bool
+    batches: int  # batches of futures the predictions ran in (a generation each)
 
 
 # It mutates as compare does: with ``apply`` it sets the fitted values (the lease applies).

@@ -219,6 +219,8 @@ class CompareReply(Reply, kw_only=True):
     speed_errors: Numbers | None = None
     score: float
     corrected: bool
+    streak: int | None = None  # with a trigger: surprising comparisons in a row, this one's
+    suggested: bool | None = None  # with a trigger: this one made the streak its window
 
 
 class RenderReply(Reply, kw_only=True):

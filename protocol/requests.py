@@ -349,6 +349,17 @@ class Predict(Args, kw_only=True, forbid_unknown_fields=True):
     score: Annotated[Score, _kind("map")] | None = None
 
 
+MAX_TRIGGER_WINDOW = 100_000  # comparisons
+
+
+class Trigger(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
+    """compare's surprise trigger: ``window`` comparisons of a world in a row scoring above
+    ``threshold`` suggest a calibration (a ``calibration_suggested`` event)."""
+
+    threshold: Positive
+    window: Annotated[int, _kind("count"), msgspec.Meta(ge=1, le=MAX_TRIGGER_WINDOW)]
+
+
 class Compare(Args, kw_only=True, forbid_unknown_fields=True):
     names: Names
     poses: Poses
@@ -358,6 +369,7 @@ class Compare(Args, kw_only=True, forbid_unknown_fields=True):
     sigma_speed: Positive = DEFAULT_SIGMA_SPEED
     correct: Flag = False
     spread: Spreads | None = None  # m per body (or one for all): a prediction's spread
+    trigger: Annotated[Trigger, _kind("map")] | None = None  # counts toward a surprise streak
 
 
 class Render(Args, kw_only=True, forbid_unknown_fields=True):

@@ -252,6 +252,9 @@ def render_comparison(found: Comparison) -> None:
     console.print(table)
     if found.corrected:
         console.print("the bodies were set to the observation")
+    if found.streak is not None:
+        console.print(f"surprising comparisons in a row: {found.streak}"
+                      + ("; a calibration is suggested" if found.suggested else ""))
 
 
 @commands.command(rich_help_panel=PANEL)
@@ -268,16 +271,34 @@ def compare(
     sigma_speed: Annotated[float | None, typer.Option(help="m/s (default 0.1).")] = None,
     correct: Annotated[bool, typer.Option(
         "--correct", help="Set the bodies to the observation.")] = False,
+    trigger: Annotated[str | None, typer.Option(
+        help="THRESHOLD:WINDOW: count this comparison toward the world's surprise streak; "
+             "WINDOW in a row above THRESHOLD suggest a calibration.")] = None,
     world: WorldOpt = None, as_json: JsonOpt = False,
 ) -> None:
     """Compare observed poses with a world's: per-body errors and one anomaly score (about 1
     at the sigmas' noise; above 3, a surprise)."""
     pose_rows = pose_values(poses, len(names), "--poses")
     twist_rows = None if twists is None else rows(twists, len(names), TWIST_WIDTH, "--twists")
+    watch = None if trigger is None else trigger_value(trigger)
     found = with_client(ctx, lambda c: on_world(c, world).compare(
-        names, pose_rows, twist_rows, sigma_position, sigma_angle, sigma_speed, correct))
+        names, pose_rows, twist_rows, sigma_position, sigma_angle, sigma_speed, correct,
+        trigger=watch))
     emit({"names": found.names, "position_errors": found.position_errors.tolist(),
           "angle_errors": found.angle_errors.tolist(),
           "speed_errors": None if found.speed_errors is None else found.speed_errors.tolist(),
           "score": found.score, "corrected": found.corrected, "step": found.step,
-          "sim_time": found.sim_time}, as_json, lambda: render_comparison(found))
+          "sim_time": found.sim_time, "streak": found.streak, "suggested": found.suggested},
+         as_json, lambda: render_comparison(found))
+
+
+def trigger_value(text: str) -> tuple[float, int]:
+    """``--trigger THRESHOLD:WINDOW`` as numbers (the daemon checks their ranges)."""
+    threshold, sep, window = text.partition(":")
+    try:
+        if not sep:
+            raise ValueError(text)
+        return float(threshold), int(window)
+    except ValueError as exc:
+        raise typer.BadParameter(f"{text!r}: give THRESHOLD:WINDOW, e.g. 3:4",
+                                 param_hint="--trigger") from exc

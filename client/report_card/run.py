@@ -20,10 +20,11 @@ from galton.analysis.records import TrialRecord
 from galton.analysis.report_card import CardResults
 from galton.client.bench.experiment import ExperimentConfig
 from galton.client.laws import choose, run_engine
-from galton.client.report_card import measure
+from galton.client.report_card import calibrated, measure
 from galton.client.report_card.pooled import TrialRunner, local_trials
 from galton.client.sdk.client import Client
 from galton.client.sdk.embedded import EmbeddedDaemon
+from galton.protocol import RemoteError
 
 Say = Callable[[str], None]
 
@@ -45,19 +46,25 @@ class CardPlan:
     # settled board): DART's 1,000-ball crowd runs at RTF ~0.0003.
     curve_sim_time: float = 10.0
     curve_wall_time: float = 60.0
+    # Fidelity after calibration (client/report_card/calibrated.py): fits, each of at most
+    # this many predictions; the interval is over the fits' seeds.
+    calibration_seeds: int = 5
+    calibration_predictions: int = 150
 
     @classmethod
     def quick(cls) -> CardPlan:
         return cls(repetitions=4, curve=(1, 10, 300), footprint_s=3.0, round_trips=100,
                    world_ops=6, mesh_balls=25, mesh_repetitions=2, curve_sim_time=2.0,
-                   curve_wall_time=15.0)
+                   curve_wall_time=15.0, calibration_seeds=2, calibration_predictions=40)
 
     def describe(self) -> str:
         return (f"paper, {self.fidelity_balls} balls × {self.repetitions}, all at once; "
                 f"paper-mesh, {self.mesh_balls} balls × {self.mesh_repetitions}; "
                 f"RTF curve at {', '.join(map(str, sorted({*self.curve, self.fidelity_balls})))} "
                 f"balls (curve trials at most {self.curve_sim_time:g} s of sim time and "
-                f"{self.curve_wall_time:g} s of wall time)")
+                f"{self.curve_wall_time:g} s of wall time); fidelity after calibration: "
+                f"{self.calibration_seeds} fits of {self.calibration_predictions} "
+                "predictions")
 
 
 @contextmanager
@@ -67,6 +74,19 @@ def engine_daemon(engine: str, timeout: float) -> Iterator[tuple[Client, Client]
             Client(daemon.instance, daemon.endpoint, timeout=timeout) as zenoh_client, \
             Client(daemon.instance, daemon.zmq_endpoint, timeout=timeout) as zmq_client:
         yield zenoh_client, zmq_client
+
+
+def calibrated_measures(sim: Client, engine: str, plan: CardPlan, card: CardResults
+                        ) -> dict[str, Measure | None]:
+    """The sliding box's and bouncing ball's error against their analytic reference, with
+    the reference's values and once fitted; a failed fit is a note, the card goes on."""
+    try:
+        return calibrated.calibrated_fidelity(sim, engine, plan.calibration_seeds,
+                                              plan.calibration_predictions)
+    except RemoteError as error:
+        card.config.setdefault("notes", []).append(
+            f"{engine}: fidelity after calibration did not run: {error}")
+        return dict.fromkeys(calibrated.MEASURES)
 
 
 def board_trial(trial: TrialRecord) -> BoardTrial:
@@ -148,6 +168,8 @@ def measure_engine(zenoh_client: Client, zmq_client: Client, engine: str, plan: 
     laws = run_engine(zmq_client, engine, choose(plan.laws), seed)
     card.laws[engine] = list(laws.checks)
     measures["laws_passed"] = card_intervals.laws_measure(laws.checks)
+    tell(f"{engine}: fidelity after calibration")
+    measures |= calibrated_measures(zmq_client, engine, plan, card)
     tell(f"{engine}: the Galton board")
     run = board_measures(zmq_client, engine, plan, seed, trials_of)
     measures |= run.measures

@@ -35,13 +35,14 @@ class CalibrationResult:
     steps: int
     converged: bool
     applied: bool
+    batches: int = 0  # batches of futures the predictions ran in
 
     @classmethod
     def from_reply(cls, reply: Reply) -> CalibrationResult:
         r = decode_result(CalibrateReply, reply.result)
         return cls(dict(r.fitted), {k: (v[0], v[1]) for k, v in r.intervals.items()},
                    r.error_before, r.error_after, r.predictions, r.generations, r.steps,
-                   r.converged, r.applied)
+                   r.converged, r.applied, r.batches)
 
     def to_json(self) -> dict[str, Any]:
         """What ``galton-client calibrate --json`` prints."""

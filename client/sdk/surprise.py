@@ -1,7 +1,10 @@
 """The paper's trigger, closed into a loop: "prediction failures will serve as triggers to
 improve the models". A ``SurpriseWatch`` sits on the compare (mirroring) path: it keeps
 what was observed, and when the anomaly score stays above ``threshold`` for ``window``
-comparisons in a row it says so, with the observation to calibrate on.
+comparisons in a row it says so, with the observation to calibrate on. The daemon keeps
+the same streak itself with compare's ``trigger`` (``sim.compare(..., trigger=(3.0, 4))``:
+the reply's ``suggested`` and a ``calibration_suggested`` event for every listener); the
+watch then only keeps the episode (examples/learn_from_surprise.py).
 
 >>> watch = SurpriseWatch(threshold=3.0, window=4)
 >>> watch.start(sim.status().sim_time, ["box"], seen_poses)  # a new episode: its start

@@ -250,6 +250,8 @@ class Comparison:
     corrected: bool
     step: int
     sim_time: float
+    streak: int | None = None  # with a trigger: surprising comparisons in a row
+    suggested: bool = False  # with a trigger: this one made the streak its window
 
     @classmethod
     def from_reply(cls, reply: Reply, names: list[str]) -> Comparison:
@@ -258,7 +260,8 @@ class Comparison:
         return cls(names, _column(result.position_errors, "position_errors"),
                    _column(result.angle_errors, "angle_errors"),
                    None if speeds is None else _column(speeds, "speed_errors"),
-                   result.score, result.corrected, reply.step, reply.sim_time)
+                   result.score, result.corrected, reply.step, reply.sim_time,
+                   result.streak, bool(result.suggested))
 
 
 # -- perception (issue 26) ----------------------------------------------------------------

@@ -160,14 +160,17 @@ class WorldMethods:
     def compare(self, names: Sequence[str], poses: ArrayLike, twists: ArrayLike | None = None,
                 sigma_position: float | None = None, sigma_angle: float | None = None,
                 sigma_speed: float | None = None, correct: bool = False,
-                spread: ArrayLike | float | None = None) -> Comparison:
+                spread: ArrayLike | float | None = None,
+                trigger: tuple[float, int] | None = None) -> Comparison:
         """Observed poses (rows of 7, and optionally twists) of these bodies against the
         world's at its present time: per-body errors and one anomaly score (about 1 at the
         sigmas' noise, 3 a surprise). ``correct`` sets the bodies to the observation.
         ``spread`` (m, per body or one for all): the spread of position an ensemble
         prediction expected (``Prediction.spread_of(names)``), combined with
         ``sigma_position`` as independent noise: the score then says how surprising the
-        observation is given what was imagined."""
+        observation is given what was imagined. ``trigger`` (threshold, window): count this
+        comparison toward the world's surprise streak; the one that makes it ``window``
+        long is ``suggested`` and publishes a ``calibration_suggested`` event."""
         count = len(names)
         args: dict[str, Any] = {
             "names": list(names), "correct": correct,
@@ -178,6 +181,8 @@ class WorldMethods:
                                      sigma_speed=sigma_speed))
         if spread is not None:
             args["spread"] = spread_arg(spread, count)
+        if trigger is not None:
+            args["trigger"] = {"threshold": float(trigger[0]), "window": int(trigger[1])}
         return Comparison.from_reply(self._ok("compare", args), list(names))
 
     def calibrate(self, fit: Mapping[str, Sequence[float]], names: Sequence[str],

@@ -1,9 +1,10 @@
 """calibrate: fit parameters (friction, restitution, mass, gravity) so that a prediction
 from the observation's start matches what was observed, and with ``apply`` set them in the
 world. A population search (daemon/core/cmaes.py) asks for candidates; each is evaluated
-through the one seam, daemon/core/candidates.evaluate_candidates, as a side job between the
-live world's steps: one prediction per chunk, a progress event per generation, ended by
-``pause`` as a prediction is. The live world is changed only by ``apply``, at the end."""
+through the one seam, daemon/core/candidates.py, as a batch of futures (one per candidate,
+a generation at a time) run as a side job between the live world's steps, in chunks of
+about a prediction's chunk of work; a progress event per generation, ended by ``pause`` as
+a prediction is. The live world is changed only by ``apply``, at the end."""
 
 from __future__ import annotations
 
@@ -13,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from galton.daemon.core.calls import Call, StepJob
-from galton.daemon.core.candidates import Observation, evaluate_candidates
+from galton.daemon.core.candidates import CandidateBatch, Observation
 from galton.daemon.core.cmaes import CmaEs, default_population
 from galton.daemon.core.context import PredictContext
 from galton.daemon.core.fit_params import Parameter, apply_values, current_values, parameters
@@ -65,47 +66,73 @@ class Calibration:
                                        zip(params, mean, strict=True)}
         self.best_error = float("inf")
         self.pending: list[np.ndarray] = []
-        self.generation: list[tuple[np.ndarray, float]] = []
+        self.generation: list[np.ndarray] = []  # the search's candidates being evaluated
+        self.batch: CandidateBatch | None = None
+        self.batches = 0  # batches of futures run
+        self.step_cost = 1e-5  # seconds per future's step, sizing the chunks
         self.emit: Callable[[dict[str, Any]], None] = lambda event: None
         self.on_result: Callable[[dict[str, float]], bool] = lambda values: False
 
     def values(self, unit: np.ndarray) -> dict[str, float]:
         return {p.name: p.from_unit(float(u)) for p, u in zip(self.params, unit, strict=True)}
 
-    def _evaluate(self, values: dict[str, float]) -> float:
-        """One prediction's error; the best so far kept (a value outside its bounds, as
-        the world's own may be, is never the fit)."""
-        error = float(evaluate_candidates(self.start, self.params, [values], self.seen,
-                                          self.limits)[0])
-        self.predictions += 1
-        inside = all(p.low <= values[p.name] <= p.high for p in self.params)
-        if error < self.best_error and inside:
-            self.best, self.best_error = dict(values), error
-        return error
-
     def advance(self) -> int:
-        """One prediction (the first: the world's own values, the error before); returns
-        the steps it took."""
-        if self.predictions == 0:
-            self.error_before = self._evaluate(self.before)
-            return self.seen.horizon
-        if self.design:
-            self._evaluate(self.values(self.design.pop()))
+        """One chunk of the current batch of candidates (a new batch when none is running:
+        the world's own values with the design, then each generation of the search);
+        returns the steps it took, all futures together."""
+        if self.batch is None:
+            self.batch = self._next_batch()
+        steps = self.batch.advance()
+        if self.batch.finished:
+            batch, self.batch = self.batch, None
+            batch.close()
+            self.step_cost = batch.step_cost
+            self._told(batch)
+        return steps
+
+    def close(self) -> None:
+        """Close the running batch's futures (the job ended before it did)."""
+        if self.batch is not None:
+            self.batch.close()
+            self.batch = None
+
+    def _next_batch(self) -> CandidateBatch:
+        """The next candidates, as many as the budget of predictions still allows."""
+        room = self.max_predictions - self.predictions
+        if self.predictions == 0:  # the world's own values (the error before), the design
+            units = self.design[::-1][:room - 1]
+            self.design = self.design[:len(self.design) - len(units)]
+            candidates = [self.before, *(self.values(u) for u in units)]
+        else:  # (a design cut short by the budget ended the search)
+            if not self.pending:
+                self.pending = list(self.search.ask())
+            taken, self.pending = self.pending[:room], self.pending[room:]
+            self.generation = taken
+            candidates = [self.values(u) for u in taken]
+        self.batches += 1
+        return CandidateBatch(self.start, self.params, candidates, self.seen, self.limits,
+                              self.step_cost)
+
+    def _told(self, batch: CandidateBatch) -> None:
+        """A batch's errors: the best so far kept (a value outside its bounds, as the
+        world's own may be, is never the fit); a whole generation told to the search."""
+        first = self.predictions == 0
+        for values, error in zip(batch.candidates, batch.errors, strict=True):
+            inside = all(p.low <= values[p.name] <= p.high for p in self.params)
+            if error < self.best_error and inside:
+                self.best, self.best_error = dict(values), float(error)
+        self.predictions += len(batch)
+        if first:
+            self.error_before = float(batch.errors[0])
             if not self.design:
                 self._start_search()
-            return self.seen.horizon
-        if not self.pending:
-            self.pending = list(self.search.ask())
-        point = self.pending.pop(0)
-        self.generation.append((point, self._evaluate(self.values(point))))
-        if not self.pending:
-            points = np.array([p for p, _ in self.generation])
-            self.search.tell(points, np.array([e for _, e in self.generation]))
+            return
+        if not self.pending and len(self.generation) == self.population:
+            self.search.tell(np.array(self.generation), np.asarray(batch.errors))
             self.generation = []
             self.emit({"kind": "calibration", "generation": self.search.generation,
                        "predictions": self.predictions, "best_error": self.best_error,
                        "spread": self.search.spread})
-        return self.seen.horizon
 
     def _start_search(self) -> None:
         """After the design: CMA-ES from its best point, a few design cells wide."""
@@ -138,7 +165,7 @@ class Calibration:
                 "predictions": self.predictions, "generations": self.search.generation,
                 "steps": self.predictions * self.seen.horizon,
                 "converged": self.search.converged or self.best_error <= PERFECT,
-                "applied": applied}
+                "applied": applied, "batches": self.batches}
 
 
 def latin_hypercube(count: int, dimensions: int, rng: np.random.Generator) -> np.ndarray:

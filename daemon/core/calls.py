@@ -32,6 +32,8 @@ class Driver(Protocol):
 
     def result(self) -> dict[str, Any]: ...
 
+    def close(self) -> None: ...  # release what a chunk left open (the job ended early)
+
 
 @dataclass
 class Call:
@@ -89,6 +91,8 @@ class StepJob:
 
     def release(self) -> None:
         """Close a prediction's copy of its world once the job is answered or ended."""
+        if self.driver is not None:
+            self.driver.close()
         if self.futures is not None:
             self.futures.close()
         elif self.scratch and self.world is not None:

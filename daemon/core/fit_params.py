@@ -139,10 +139,11 @@ def apply_values(world: World, params: Sequence[Parameter], values: Mapping[str,
             direction = now / norm if norm > 0 else np.array([0.0, 0.0, -1.0])
             world.engine.set_params({GRAVITY: [float(v) for v in direction * value]})
         else:
-            world.update(list(p.bodies), _properties(p.prop, value))
+            world.update(list(p.bodies), body_properties(p.prop, value))
 
 
-def _properties(prop: str, value: float) -> BodyProperties:
+def body_properties(prop: str, value: float) -> BodyProperties:
+    """One body property (``mass``, ``friction`` or ``restitution``) as an update sets it."""
     if prop == "mass":
         return BodyProperties(mass=value)
     if prop == "friction":

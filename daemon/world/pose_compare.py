@@ -65,4 +65,9 @@ def compare(world: World, request: rq.Compare) -> dict[str, Any]:
     if correct:
         world.set_states(names, observed, twists)
     result["corrected"] = correct
+    trigger = request.trigger
+    if trigger is not None:  # counted after the comparison, which a bad argument refuses
+        result["suggested"] = world.surprise.observe(result["score"], trigger.threshold,
+                                                     trigger.window, world.sim_time)
+        result["streak"] = world.surprise.count
     return result

@@ -22,6 +22,7 @@ from galton.daemon.core.limits import DEFAULT_LIMITS, Limits
 from galton.daemon.engines.base import Engine
 from galton.daemon.world.joints import JointTable
 from galton.daemon.world.model_files import resolve_model
+from galton.daemon.world.surprise import SurpriseStreak
 from galton.daemon.world.wrenches import WrenchSchedule
 from galton.protocol import (
     POSE_WIDTH,
@@ -102,6 +103,8 @@ class World:
         # every change of it, shared with a clone until either changes. A state kept with
         # ``save_state`` loads again without a rebuild while this stays the same.
         self.structure: object = object()
+        # compare's surprise trigger: its comparisons in a row above the threshold
+        self.surprise = SurpriseStreak()
 
     # -- lookup -------------------------------------------------------------------------
     def require_known(self, names: Sequence[str]) -> None:
@@ -359,6 +362,7 @@ class World:
 
     def reset(self, scope: str) -> None:
         check_scope(scope)
+        self.surprise.clear()  # what surprised the world before is no streak of the next
         with contextlib.suppress(PhysicsError):
             self.verify()  # a divergence in unchecked steps must not be forgotten
         if scope in ("time", "all"):

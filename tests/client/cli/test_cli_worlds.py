@@ -93,6 +93,18 @@ def test_compare_prints_errors_and_score(target: list[str]) -> None:
     assert again.exit_code == 0 and "anomaly score 0" in flat(again.output)
 
 
+def test_compare_with_a_trigger_counts_the_streak(target: list[str]) -> None:
+    """--trigger THRESHOLD:WINDOW: the daemon's streak, suggested once it is WINDOW long."""
+    args = [*target, "compare", "ball", "--poses", "0.03,0.04,0.5", "--trigger", "3:2"]
+    first, second = invoke([*args, "--json"]), invoke([*args, "--json"])
+    assert (first["streak"], first["suggested"]) == (1, False)
+    assert (second["streak"], second["suggested"]) == (2, True)
+    human = run(args)
+    assert human.exit_code == 0 and "in a row: 3" in flat(human.output)
+    bad = run([*args[:-1], "3"])
+    assert bad.exit_code != 0 and "THRESHOLD:WINDOW" in flat(bad.output)
+
+
 def test_compare_takes_positions_as_set_states_does(target: list[str]) -> None:
     """x,y,z alone is an unrotated pose, in compare as in set-states (issue 33)."""
     short = invoke([*target, "compare", "ball", "--poses", "0.03,0.04,0.5", "--json"])

@@ -19,7 +19,8 @@ from galton.client.report_card.pooled import local_trials, pooled_trials
 from galton.client.sdk.embedded import EmbeddedDaemon, free_loopback_port
 
 TINY = CardPlan(fidelity_balls=20, repetitions=1, curve=(1,), footprint_s=0.5, round_trips=5,
-                world_ops=1, laws=("free-fall",), mesh_balls=10, mesh_repetitions=1)
+                world_ops=1, laws=("free-fall",), mesh_balls=10, mesh_repetitions=1,
+                calibration_seeds=2, calibration_predictions=4)
 
 
 def test_a_tiny_card_measures_every_criterion(tmp_path: Path) -> None:
@@ -38,6 +39,9 @@ def test_a_tiny_card_measures_every_criterion(tmp_path: Path) -> None:
     assert rss is not None and 0 < rss.low <= rss.value <= rss.high < 2000 and rss.n > 1
     assert step is not None and step.low <= step.value <= step.high and step.n == 5
     assert set(card.curves["pybullet"]) == {1, 20}
+    fitted, nominal = measures["calibrated_error_mm"], measures["reference_values_error_mm"]
+    assert fitted is not None and nominal is not None and fitted.n == 2
+    assert 0 <= fitted.low <= fitted.value <= nominal.value < 50  # mm: the fit can only gain
     assert [c.law for c in laws.engines[0].checks] == ["free-fall"]
     files = write_report_card(card, laws, tmp_path, rules)
     assert files["laws/results_json"].exists() and files["card_html"].exists()
