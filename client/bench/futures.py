@@ -36,12 +36,15 @@ WORLD_PREFIX = "ensemble-"
 
 @dataclass(frozen=True)
 class Start:
-    """What every future forks from: a snapshot's blob, its engine, and its digest (by
-    which a daemon that already restored it knows it)."""
+    """What every future forks from: a snapshot's blob, its engine, its digest (by which a
+    daemon that already restored it knows it), and the present of the world it was taken
+    from (the ensemble is stamped with it, as a prediction is with its world's present)."""
 
     blob: bytes
     engine: str
     digest: str = field(default="")
+    step: int | None = None
+    sim_time: float | None = None
 
     def __post_init__(self) -> None:
         if not self.digest:
@@ -55,8 +58,10 @@ def digest_of(blob: bytes) -> str:
 def start_of(sim: Client, slot: str | None = None) -> Start:
     """The start of an ensemble: ``sim``'s world now, or its snapshot ``slot`` (restored
     into a side world of its own for the time of taking its blob)."""
+    present = sim.status()
     if slot is None:
         taken = sim.snapshot(blob=True)
+        present = replace(present, step=taken.step, sim_time=taken.sim_time)
     else:
         name = f"{WORLD_PREFIX}slot-{secrets.token_hex(4)}"
         engines = {kept.slot: kept.engine for kept in sim.snapshots()}
@@ -68,7 +73,7 @@ def start_of(sim: Client, slot: str | None = None) -> Start:
         finally:
             sim.delete_world(name)
     assert taken.blob is not None
-    return Start(taken.blob, taken.engine)
+    return Start(taken.blob, taken.engine, step=present.step, sim_time=present.sim_time)
 
 
 class SnapshotWorlds:
@@ -160,8 +165,10 @@ def predict_ensemble(runner: FutureRunner, start: Start, horizon: float, futures
     if perturb is not None and seed is None:
         seed = secrets.randbits(63)
     args = {"horizon": horizon, "perturb": perturb, "seed": seed, **predict_args}
-    found = runner.map(start, batches(futures, runner.width(), args))
-    return merge(found)
+    found = merge(runner.map(start, batches(futures, runner.width(), args)))
+    if start.step is None or start.sim_time is None:
+        return found
+    return replace(found, step=start.step, sim_time=start.sim_time)
 
 
 def merge(parts: Sequence[Prediction]) -> Prediction:

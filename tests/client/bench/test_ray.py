@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 import pytest
 import ray
-from support.cli import run
+from support.cli import invoke, run, target_of
 from support.daemons import start_daemon
 from support.worlds import clean, contact_scene
 
@@ -217,3 +217,23 @@ def test_an_actor_killed_mid_ensemble_is_restarted_and_its_batch_rerun(
     assert [(r.worker, r.first_future, r.futures) for r in runner.retried] == [
         ("ray-2", 3, 3)]
     assert executor.incarnations["ray-2"] != victim.incarnation
+
+
+def test_the_cli_spreads_a_slots_futures_over_actors_of_its_own(
+        executor: RayExecutor, scene: tuple[Client, list[str]],
+        daemons: dict[str, EmbeddedDaemon]) -> None:
+    """``predict --futures 5 --ray local --slot S`` (on this process's Ray instance, two
+    actors of its own, stopped after) gives the one-daemon ensemble of the slot."""
+    source, names = scene
+    source.snapshot(slot="before")
+    source.step(3)  # the slot is not the present
+    target = target_of(start_daemon(daemons, "mujoco"))
+    ask = ["predict", "0.02", "--every", "0.01", "--read", ",".join(names[:2]),
+           "--futures", "5", "--perturb", "position=0.001", "--seed", "3",
+           "--slot", "before"]
+    want = invoke([*target, *ask, "--json"])
+    found = invoke([*target, *ask, "--ray", "local", "--ray-actors", "2", "--json"])
+    assert found.pop("executor") == {"kind": "ray", "address": "local", "nodes": 1,
+                                     "actors": 2, "cpus_per_actor": 1.0, "retried": []}
+    assert found == want and found["futures"] == 5
+    assert len(source.list_worlds()) == 1  # the slot's side world was deleted
