@@ -26,7 +26,7 @@ import numpy as np
 
 from galton.client.sdk.client import Client
 from galton.client.sdk.values import Prediction
-from galton.protocol import InvalidArgumentError
+from galton.protocol import GaltonError, InvalidArgumentError
 from galton.protocol.requests import MAX_FIRST_FUTURE, MAX_FUTURES
 
 # Snapshots a daemon keeps restored (each in a side world of its own), the oldest dropped.
@@ -93,8 +93,12 @@ class SnapshotWorlds:
                 self.sim.delete_world(self.held.popitem(last=False)[1])
             name = f"{WORLD_PREFIX}{digest}"
             self.sim.create_world(name, engine=engine)
+            try:
+                self.sim.world(name).restore(blob=blob())
+            except GaltonError:
+                self.sim.delete_world(name)  # a blob refused: nothing held, nothing left
+                raise
             self.held[digest] = name
-            self.sim.world(name).restore(blob=blob())
         self.held.move_to_end(digest)
         return self.sim.world(name)
 
