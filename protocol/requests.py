@@ -286,11 +286,15 @@ class Named(Args, kw_only=True, forbid_unknown_fields=True):
 
 
 MAX_FUTURES = 64  # futures one predict runs
+# The index of a prediction's first future in a larger ensemble (its noise is drawn after
+# that of the futures before it, each skipped draw costing a few normals per noisy body).
+MAX_FIRST_FUTURE = 65_536
 MAX_PLAN_STEPS = 1000  # timed actions in one future's plan
 MAX_SIGMA_POSITION = 10.0  # m
 MAX_SIGMA_VELOCITY = 100.0  # m/s
 FutureCount = Annotated[int, _kind("count"), msgspec.Meta(ge=1, le=MAX_FUTURES)]
 Seed = Annotated[int, _kind("count"), msgspec.Meta(ge=0, le=2**63 - 1)]
+FirstFuture = Annotated[int, _kind("count"), msgspec.Meta(ge=0, le=MAX_FIRST_FUTURE)]
 
 
 class Sigmas(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
@@ -345,6 +349,7 @@ class Predict(Args, kw_only=True, forbid_unknown_fields=True):
     futures: FutureCount | None = None  # None: one per plan, or 1
     perturb: Annotated[Perturb, _kind("map")] | None = None
     seed: Seed | None = None  # None: a fresh one, sent back
+    first_future: FirstFuture = 0  # these are futures first_future.. of seed's ensemble
     plans: Plans | None = None
     score: Annotated[Score, _kind("map")] | None = None
 

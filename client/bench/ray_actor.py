@@ -19,10 +19,12 @@ from typing import Any
 import ray
 
 from galton.analysis.records import TrialRecord
+from galton.client.bench.futures import SnapshotWorlds
 from galton.client.bench.picture import Animation, take_pictures
 from galton.client.bench.trial import TrialConfig, run_trial
 from galton.client.sdk.client import Client
 from galton.client.sdk.embedded import EmbeddedDaemon
+from galton.client.sdk.values import Prediction
 from galton.protocol import DaemonUnreachableError, RequestTimeoutError
 
 # The exit status of an actor whose daemon died (any non-zero status: Ray restarts it).
@@ -55,6 +57,14 @@ class ActorResult:
     taken: dict[str, str] = field(default_factory=dict)
 
 
+@dataclass
+class FutureBatch:
+    """A batch of an ensemble's futures, and the incarnation that imagined it."""
+
+    prediction: Prediction
+    incarnation: str
+
+
 class DaemonActor:
     """A Ray actor hosting one daemon on its node's loopback (see the module's docstring)."""
 
@@ -64,6 +74,7 @@ class DaemonActor:
         self.closing = False
         self.daemon = EmbeddedDaemon(engine, instance=name).start()
         self.client = Client(name, self.daemon.endpoint, timeout=timeout)
+        self.snapshots = SnapshotWorlds(self.client)
         threading.Thread(target=self._exit_with_daemon, name="daemon-watch",
                          daemon=True).start()
 
@@ -97,6 +108,17 @@ class DaemonActor:
             files = {p.relative_to(here).as_posix(): p.read_bytes()
                      for p in here.rglob("*") if p.is_file()}
         return ActorResult(record, self.incarnation, files, taken)
+
+    def predict(self, digest: str, blob: list[Any], engine: str, args: dict[str, Any]
+                ) -> FutureBatch:
+        """A batch of futures (``args``: ``Client.predict``'s) from the snapshot ``digest``,
+        restored here once: ``blob`` holds its object reference, fetched only then."""
+        try:
+            world = self.snapshots.world(digest, engine, lambda: bytes(ray.get(blob[0])))
+            return FutureBatch(world.predict(**args), self.incarnation)
+        except (DaemonUnreachableError, RequestTimeoutError):
+            self.daemon.process.kill()  # type: ignore[union-attr]
+            os._exit(DAEMON_LOST_EXIT)  # gone or silent: Ray restarts us, reruns it
 
     def close(self) -> None:
         self.closing = True

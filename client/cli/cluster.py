@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from contextlib import contextmanager
-from typing import TYPE_CHECKING, Annotated
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
@@ -16,6 +16,8 @@ from galton.protocol import InvalidArgumentError
 
 if TYPE_CHECKING:
     from galton.client.bench.ray_executor import RayExecutor
+    from galton.client.sdk.client import Client
+    from galton.client.sdk.values import Prediction
 
 RayOpt = Annotated[str | None, typer.Option(
     "--ray", metavar="ADDRESS",
@@ -59,3 +61,22 @@ def ray_run(address: str, cpus_per_daemon: float, actors: int | None, engine: st
     settings = RaySettings(address, cpus_per_daemon, actors)
     with ray_executor(settings, engine, timeout, most) as executor:
         yield executor
+
+
+def ray_predict(sim: Client, slot: str | None, address: str, cpus_per_daemon: float,
+                actors: int | None, timeout: float, horizon: float, futures: int,
+                **predict_args: Any) -> tuple[Prediction, dict[str, Any]]:
+    """``predict``'s futures over Ray actors, each restoring the world's snapshot (or slot
+    ``slot``'s) once: the ensemble, and where it ran (``executor``, with the retried
+    batches)."""
+    require_ray()
+    from galton.client.bench.futures import predict_ensemble, start_of
+    from galton.client.bench.ray_executor import RaySettings
+    from galton.client.bench.ray_futures import ray_futures
+    start = start_of(sim, slot)
+    settings = RaySettings(address, cpus_per_daemon, actors)
+    with ray_futures(settings, start.engine, timeout, futures) as runner:
+        found = predict_ensemble(runner, start, horizon, futures, **predict_args)
+        where = runner.executor.describe()
+        where["retried"] = [r.to_dict() for r in runner.retried]
+    return found, where

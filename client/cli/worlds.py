@@ -14,6 +14,7 @@ import typer
 from rich.table import Table
 
 from galton.client.cli.choices import LIST_HELP, Engine, assignments, rows, split_list
+from galton.client.cli.cluster import RayActorsOpt, RayCpusOpt, ray_predict
 from galton.client.cli.common import JsonOpt, console, emit, with_client
 from galton.client.cli.states import NamesArg, pose_values
 from galton.protocol import TWIST_WIDTH
@@ -225,21 +226,43 @@ def predict(
     slot: Annotated[str | None, typer.Option(
         help="Start from this snapshot slot instead of the present.")] = None,
     futures: Annotated[int | None, typer.Option(
-        help="Futures to run at once (1-64).")] = None,
+        help="Futures to run at once (1-64; with --ray, up to 65,600).")] = None,
     perturb: Annotated[str | None, typer.Option(
         help="Noise on each future's start: position=M,orientation=RAD,velocity=M/S "
              "(standard deviations).")] = None,
     seed: Annotated[int | None, typer.Option(help="The perturbation's seed.")] = None,
     world: WorldOpt = None, as_json: JsonOpt = False,
+    ray: Annotated[str | None, typer.Option(
+        "--ray", metavar="ADDRESS",
+        help="Spread the futures over Ray actors, each restoring the world's snapshot into "
+             "a daemon of its own ('local', 'auto', ray://HOST:PORT; the [cluster] "
+             "extra): the same futures as one daemon's, bit for bit.")] = None,
+    ray_cpus_per_daemon: RayCpusOpt = 1.0,
+    ray_actors: RayActorsOpt = None,
 ) -> None:
     """Run a copy of a world ahead (or many, --futures) and print the sampled trajectories
     (with futures: each body's spread across them); the world is never changed."""
     bodies = None if read is None else split_list(read, "--read")
     joints = None if read_joints is None else split_list(read_joints, "--read-joints")
     noise = None if perturb is None else perturb_values(perturb)
+    if ray is not None:
+        found, where = with_client(ctx, lambda c: ray_predict(
+            on_world(c, world), slot, ray, ray_cpus_per_daemon, ray_actors,
+            max(ctx.obj.timeout, 30.0), horizon, futures or 1, perturb=noise, seed=seed,
+            every=every, read=bodies, read_joints=joints))
+        emit({**prediction_dict(found), "executor": where}, as_json,
+             lambda: render_on_ray(found, where))
+        return
     found = with_client(ctx, lambda c: on_world(c, world).predict(
         horizon, every, bodies, joints, slot, futures=futures, perturb=noise, seed=seed))
     emit(prediction_dict(found), as_json, lambda: render_prediction(found))
+
+
+def render_on_ray(found: Prediction, where: dict[str, Any]) -> None:
+    render_prediction(found)
+    console.print(f"Ran on Ray ({where['address']}): {where['actors']} actor(s) on "
+                  f"{where['nodes']} node(s); {len(where['retried'])} batch(es) retried",
+                  markup=False)
 
 
 def render_comparison(found: Comparison) -> None:

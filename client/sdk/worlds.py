@@ -127,7 +127,8 @@ class WorldMethods:
                 futures: int | None = None, perturb: Mapping[str, Any] | None = None,
                 seed: int | None = None, plans: Sequence[Sequence[Mapping[str, Any]]] | None
                 = None, score: Mapping[str, Any] | None = None,
-                timeout: float | None = None) -> Prediction:
+                timeout: float | None = None, first_future: int | None = None
+                ) -> Prediction:
         """Run a copy of the world (or of snapshot ``slot``) ``horizon`` seconds ahead,
         sampling ``read`` bodies and ``read_joints`` joints every ``every`` seconds, and
         discard it: the world is never changed. The copy may first be changed, each as its
@@ -139,9 +140,11 @@ class WorldMethods:
         ({"position": m, "orientation": rad, "velocity": m/s, "bodies": {name: {...}}}),
         and/or ``plans``, one per future, each a list of {"at": s, "joint_targets":
         {...}, "wrenches": {...}}; ``score`` {"body": name, "target": [x, y, z]} gives
-        each future's distance to the target at the horizon (docs/protocol.md)."""
+        each future's distance to the target at the horizon (docs/protocol.md).
+        ``first_future`` K: these are futures K.. of ``seed``'s ensemble (a batch of a
+        larger one, as ``galton.client.bench.futures`` spreads over daemons)."""
         args = predict_args(horizon, every, read, read_joints, slot)
-        args.update(sdk_joints.given(futures=futures, seed=seed))
+        args.update(sdk_joints.given(futures=futures, seed=seed, first_future=first_future))
         if perturb is not None:
             args["perturb"] = dict(perturb)
         if plans is not None:

@@ -41,9 +41,22 @@ def specs(world: World, request: rq.Predict, count: int, steps: int, dt: float
     rng = np.random.default_rng(seed)
     names = list(noise)
     sigmas = np.array([noise[n] for n in names])  # (bodies, 3)
+    _skip(rng, request.first_future * _DRAWS_PER_BODY * len(names))
     starts = [_perturbed(names, sigmas, rng) for _ in range(count)]
     return [FutureSpec(start=start, events=plan) for start, plan in
             zip(starts, plans, strict=True)], seed
+
+
+_DRAWS_PER_BODY = 9  # a future's normals per noisy body: shift, turn, push (3 axes each)
+_SKIP_CHUNK = 1 << 20
+
+
+def _skip(rng: np.random.Generator, draws: int) -> None:
+    """Pass over the normals of the futures before ``first_future`` (drawn and dropped, in
+    chunks): a future's noise is then the same whichever batch of the ensemble it is in."""
+    while draws > 0:
+        rng.standard_normal(min(draws, _SKIP_CHUNK))
+        draws -= _SKIP_CHUNK
 
 
 def _noisy_bodies(world: World, perturb: rq.Perturb | None) -> dict[str, tuple[float, ...]]:

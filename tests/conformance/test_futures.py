@@ -48,6 +48,22 @@ def test_perturbed_futures_differ_spread_and_repeat_for_their_seed(world: Client
     np.testing.assert_array_equal(found.twists, again.twists)
 
 
+def test_a_batch_from_first_future_is_those_futures_of_the_whole_ensemble(
+        world: Client) -> None:
+    """Futures 2..4 of seed 7, asked as a batch, are futures 2..4 of the five at once."""
+    names = contact_scene(world)
+    dt = world.status().timestep
+    ask = {"read": names, "perturb": {"position": 0.001, "velocity": 0.01}, "seed": 7,
+           "every": EVERY * dt}
+    whole = world.predict(STEPS * dt, futures=5, **ask)
+    batch = world.predict(STEPS * dt, futures=3, first_future=2, **ask)
+    assert batch.futures == 3 and batch.seed == 7
+    np.testing.assert_array_equal(batch.poses, whole.poses[2:])
+    np.testing.assert_array_equal(batch.twists, whole.twists[2:])
+    with pytest.raises(InvalidArgumentError, match="first_future"):
+        world.predict(STEPS * dt, futures=2, first_future=-1, **ask)
+
+
 def test_unperturbed_futures_are_copies_of_the_single_prediction(world: Client) -> None:
     names = contact_scene(world)
     world.step(5)

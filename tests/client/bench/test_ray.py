@@ -14,10 +14,12 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 import ray
-from support.cli import run
+from support.cli import invoke, run, target_of
 from support.daemons import start_daemon
+from support.worlds import clean, contact_scene
 
 from galton.analysis.board import BoardSpec
 from galton.analysis.records import ExperimentResults, TrialRecord
@@ -25,7 +27,9 @@ from galton.analysis.sweep import SweepAxis
 from galton.client import Client, EmbeddedDaemon
 from galton.client.bench.executor import Retry, TrialHooks
 from galton.client.bench.experiment import ExperimentConfig, run_experiment, run_plan
+from galton.client.bench.futures import LocalFutures, predict_ensemble, start_of
 from galton.client.bench.ray_executor import RayExecutor, RaySettings, ray_executor
+from galton.client.bench.ray_futures import RayFutures
 from galton.client.bench.sweep import run_sweep
 from galton.client.cli.bench import executor_lines
 from galton.client.report_card.pooled import executor_trials
@@ -144,3 +148,92 @@ def test_the_output_says_which_trials_were_retried() -> None:
     assert said == ["Ran on Ray (auto): 4 actor(s) on 2 node(s); 1 trial(s) retried",
                     "  retried: trial 2 (mujoco 10 balls rep 2) on ray-2: its actor died"]
     assert executor_lines({"kind": "local"}) == []
+
+
+ENSEMBLE = {"perturb": {"position": 0.002, "velocity": 0.02}, "seed": 11}
+
+
+@pytest.fixture
+def scene(daemons: dict[str, EmbeddedDaemon]) -> Iterator[tuple[Client, list[str]]]:
+    """A contact scene on the session's MuJoCo daemon, a few steps in, and its bodies."""
+    daemon = start_daemon(daemons, "mujoco")
+    with Client(daemon.instance, daemon.endpoint, timeout=TIMEOUT_S) as sim, clean(sim):
+        sim.load_world("mujoco")  # a fresh, empty world
+        names = contact_scene(sim)
+        sim.step(5)
+        yield sim, names
+
+
+def same_prediction(found: Any, want: Any) -> None:
+    assert (found.futures, found.seed, found.steps) == (want.futures, want.seed, want.steps)
+    for key in ("times", "poses", "twists", "spread", "scores"):
+        np.testing.assert_array_equal(getattr(found, key), getattr(want, key), err_msg=key)
+
+
+def test_futures_over_two_actors_are_one_daemons_ensemble_bit_for_bit(
+        executor: RayExecutor, scene: tuple[Client, list[str]]) -> None:
+    """Seven futures cut into batches (4 + 3) on two actors, and on this daemon (one batch
+    in a side world restored from the snapshot), against one call on the world itself: the
+    same futures, spread and scores, bit for bit."""
+    source, names = scene
+    dt = source.status().timestep
+    ask = {"read": names, "every": 10 * dt, "score": {"body": names[0],
+                                                      "target": [0.0, 0.0, 0.0]}}
+    want = source.predict(30 * dt, futures=7, **ENSEMBLE, **ask)
+    start = start_of(source)
+    runner = RayFutures(executor)
+    found = predict_ensemble(runner, start, 30 * dt, 7, **ENSEMBLE, **ask)
+    same_prediction(found, want)
+    assert {a.name for a in ray.get([a.facts.remote() for a in executor.actors.values()])
+            } == {"ray-1", "ray-2"} and runner.retried == []
+    local = LocalFutures(source)
+    try:
+        same_prediction(predict_ensemble(local, start, 30 * dt, 7, **ENSEMBLE, **ask), want)
+    finally:
+        local.close()
+    assert len(source.list_worlds()) == 1  # nothing left behind
+
+
+def test_an_actor_killed_mid_ensemble_is_restarted_and_its_batch_rerun(
+        executor: RayExecutor, scene: tuple[Client, list[str]]) -> None:
+    source, names = scene
+    source.step(2)  # a start the actors have not restored yet
+    dt = source.status().timestep
+    want = source.predict(20 * dt, futures=6, read=names, **ENSEMBLE)
+    victim = ray.get(executor.actors["ray-2"].facts.remote())
+    killed = threading.Event()
+
+    def kill_at_restore(event: dict[str, Any]) -> None:
+        """The actor made the snapshot's world: its batch is under way; SIGKILL its daemon."""
+        if event.get("kind") == "world" and not killed.is_set():
+            os.kill(victim.daemon_pid, signal.SIGKILL)
+            killed.set()
+    runner = RayFutures(executor)
+    with Client(victim.name, victim.endpoint) as watcher, watcher.on_event(kill_at_restore):
+        found = predict_ensemble(runner, start_of(source), 20 * dt, 6, read=names,
+                                 **ENSEMBLE)
+    assert killed.is_set()
+    same_prediction(found, want)
+    assert [(r.worker, r.first_future, r.futures) for r in runner.retried] == [
+        ("ray-2", 3, 3)]
+    assert executor.incarnations["ray-2"] != victim.incarnation
+
+
+def test_the_cli_spreads_a_slots_futures_over_actors_of_its_own(
+        executor: RayExecutor, scene: tuple[Client, list[str]],
+        daemons: dict[str, EmbeddedDaemon]) -> None:
+    """``predict --futures 5 --ray local --slot S`` (on this process's Ray instance, two
+    actors of its own, stopped after) gives the one-daemon ensemble of the slot."""
+    source, names = scene
+    source.snapshot(slot="before")
+    source.step(3)  # the slot is not the present
+    target = target_of(start_daemon(daemons, "mujoco"))
+    ask = ["predict", "0.02", "--every", "0.01", "--read", ",".join(names[:2]),
+           "--futures", "5", "--perturb", "position=0.001", "--seed", "3",
+           "--slot", "before"]
+    want = invoke([*target, *ask, "--json"])
+    found = invoke([*target, *ask, "--ray", "local", "--ray-actors", "2", "--json"])
+    assert found.pop("executor") == {"kind": "ray", "address": "local", "nodes": 1,
+                                     "actors": 2, "cpus_per_actor": 1.0, "retried": []}
+    assert found == want and found["futures"] == 5
+    assert len(source.list_worlds()) == 1  # the slot's side world was deleted
