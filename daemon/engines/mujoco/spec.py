@@ -89,25 +89,25 @@ PARAMS: dict[str, ParamSpec] = {p.name: p for p in (
     shared("timestep", 0.002, "physics step"),
     shared("gravity", (0.0, 0.0, -9.81), "gravity vector, world frame"),
     shared("solver_iterations", 50, "constraint solver iterations (option iterations)"),
-    shared("default_friction", 0.5,
+    shared("default_friction", 1.0,
            "sliding friction of moving bodies spawned without one, also when changed "
            "later; between two moving bodies a contact uses the larger value"),
-    shared("default_restitution", 0.3,
+    shared("default_restitution", 0.0,
            "restitution of moving bodies spawned without one, also when changed later; 0 "
            "means MuJoCo's own contact (mujoco.solref as given)"),
-    shared("default_static_friction", 0.5,
+    shared("default_static_friction", 1.0,
            "sliding friction of static bodies (the scenery) spawned without one, also when "
            "changed later; a contact with a static body uses the static body's surface"),
-    shared("default_static_restitution", 0.61,
+    shared("default_static_restitution", 0.0,
            "restitution of static bodies spawned without one, also when changed later; a "
            "contact with a static body uses the static body's surface"),
     ParamSpec("mujoco.solref", (0.02, 1.0), "s, 1",
               "[timeconst, dampratio] of spawned bodies' contacts; a restitution e > 0 "
               "replaces the dampratio (see mujoco/spec.py, damping_ratio)", _solref),
-    ParamSpec("mujoco.solimp", (0.8, 0.95, 0.001, 0.5, 2.0), "",
+    ParamSpec("mujoco.solimp", (0.9, 0.95, 0.001, 0.5, 2.0), "",
               "[dmin, dmax, width, midpoint, power] impedance of spawned bodies' contacts",
               _solimp),
-    ParamSpec("mujoco.condim", 4, "",
+    ParamSpec("mujoco.condim", 3, "",
               "contact dimensions of spawned bodies: 1 frictionless, 3 sliding, 4 + spin "
               "(torsional), 6 + rolling friction; a contact takes the larger of its geoms'",
               _condim),
@@ -118,7 +118,7 @@ PARAMS: dict[str, ParamSpec] = {p.name: p for p in (
               "rolling friction of spawned bodies: torque = value x normal force (condim 6); "
               "value / radius is the rolling-resistance coefficient", number(0.0, 1.0)),
     ParamSpec("mujoco.solver", "cg", "", "constraint solver", choice(*SOLVERS)),
-    ParamSpec("mujoco.cone", "elliptic", "", "friction cone", choice(*CONES)),
+    ParamSpec("mujoco.cone", "pyramidal", "", "friction cone", choice(*CONES)),
     ParamSpec("mujoco.tolerance", 1e-4, "",
               "solver stops early once its relative improvement is below this (option "
               "tolerance)", number(0.0, 1.0)),
