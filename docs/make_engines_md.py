@@ -12,7 +12,8 @@ from typing import Any
 from galton.daemon.engines import ENGINE_CLASSES, create_engine
 
 PAGE = Path(__file__).with_name("ENGINES.md")
-HEADER = "| parameter | default | unit | meaning |\n| --- | --- | --- | --- |\n"
+HEADER = ("| parameter | default | unit | meaning | where the default comes from |\n"
+          "| --- | --- | --- | --- | --- |\n")
 
 
 def shown(value: Any) -> str:
@@ -30,7 +31,7 @@ def table(engine_name: str) -> str:
     finally:
         engine.close()
     return "\n".join(f"| `{name}` | `{shown(spec['default'])}` | {spec.get('unit') or '–'} | "
-                     f"{spec['doc']} |" for name, spec in params.items())
+                     f"{spec['doc']} | {spec['source']} |" for name, spec in params.items())
 
 
 def main() -> None:

@@ -15,7 +15,16 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from galton.daemon.engines.params import ParamSpec, choice, flag, integer, number, shared, vector
+from galton.daemon.engines.params import (
+    ParamSpec,
+    choice,
+    flag,
+    integer,
+    number,
+    shared,
+    vector,
+    with_sources,
+)
 from galton.protocol import BodyGroup, InvalidArgumentError
 from galton.protocol.errors import brief
 
@@ -85,7 +94,37 @@ def _condim(value: Any, where: str) -> int:
 
 
 CONDIMS = (1, 3, 4, 6)
-PARAMS: dict[str, ParamSpec] = {p.name: p for p in (
+# Where each default comes from (docs/PHYSICS.md tables them): MuJoCo's own unless it says
+# "the daemon's", with why.
+SOURCES = {
+    "timestep": "MuJoCo's default (option timestep)",
+    "gravity": "MuJoCo's default (option gravity)",
+    "solver_iterations": "the daemon's (MuJoCo: 100): with cg and the early stop, the "
+                         "Galton board's piles cost 8 times less per step at the same fidelity",
+    "default_friction": "MuJoCo's default (geom friction 1)",
+    "default_restitution": "MuJoCo's own contact, no restitution (geom solref as given)",
+    "default_static_friction": "MuJoCo's default (geom friction 1)",
+    "default_static_restitution": "MuJoCo's own contact, no restitution (geom solref as "
+                                  "given)",
+    "mujoco.solref": "MuJoCo's default (geom solref)",
+    "mujoco.solimp": "MuJoCo's default (geom solimp)",
+    "mujoco.condim": "MuJoCo's default (geom condim)",
+    "mujoco.torsional_friction": "MuJoCo's default (geom friction[1])",
+    "mujoco.rolling_friction": "MuJoCo's default (geom friction[2])",
+    "mujoco.solver": "the daemon's (MuJoCo: newton): cheaper on piles, same fidelity",
+    "mujoco.cone": "MuJoCo's default (option cone)",
+    "mujoco.tolerance": "the daemon's (MuJoCo: 1e-8): the solver's early stop",
+    "mujoco.ls_iterations": "the daemon's (MuJoCo: 50): with the early stop",
+    "mujoco.noslip_iterations": "MuJoCo's default (option noslip_iterations)",
+    "mujoco.integrator": "MuJoCo's default (option integrator)",
+    "mujoco.threads": "the daemon's (MuJoCo: none): bit-identical results, faster crowds",
+    "mujoco.sleep_tolerance": "the daemon's (MuJoCo: sleeping off): bodies at rest in "
+                              "contact sleep, so settled crowds cost nothing",
+    "mujoco.max_free_bodies": "the daemon's: a spawn's compile is quadratic in bodies",
+    "mujoco.wake_balanced": "the daemon's (not in MuJoCo): a side effect of sleeping undone",
+}
+
+PARAMS: dict[str, ParamSpec] = with_sources({p.name: p for p in (
     shared("timestep", 0.002, "physics step"),
     shared("gravity", (0.0, 0.0, -9.81), "gravity vector, world frame"),
     shared("solver_iterations", 50, "constraint solver iterations (option iterations)"),
@@ -147,7 +186,7 @@ PARAMS: dict[str, ParamSpec] = {p.name: p for p in (
               "pin's apex or shoulder, within 30 degrees) and keep it awake until it leaves, "
               "for at most 5 s: a real ball cannot rest there alone, and one pinned by a "
               "neighbour creeps (mujoco/balance.py)", flag),
-)}
+)}, SOURCES)
 CONTACT_PARAMS = frozenset({"timestep", "default_friction", "default_restitution",
                             "default_static_friction", "default_static_restitution",
                             "mujoco.solref", "mujoco.solimp", "mujoco.condim",

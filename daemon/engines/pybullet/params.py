@@ -13,7 +13,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
-from galton.daemon.engines.params import ParamSpec, flag, number, shared
+from galton.daemon.engines.params import ParamSpec, flag, number, shared, with_sources
 from galton.daemon.engines.pybullet.shapes import margin_for
 
 if TYPE_CHECKING:
@@ -21,7 +21,31 @@ if TYPE_CHECKING:
 
     from galton.daemon.engines.pybullet.rebuild import Body
 
-SPECS: dict[str, ParamSpec] = {spec.name: spec for spec in (
+# Where each default comes from (docs/PHYSICS.md tables them): PyBullet's own (3.2.7,
+# examples/SharedMemory/PhysicsServerCommandProcessor.cpp and Bullet's btContactSolverInfo)
+# unless it says "the daemon's", with why.
+SOURCES = {
+    "timestep": "PyBullet's default (fixedTimeStep 1/240 s)",
+    "gravity": "the daemon's (PyBullet: none): Earth's, as every engine here",
+    "solver_iterations": "the daemon's (PyBullet: 50): 40 % faster on the Galton board "
+                         "at the same fidelity",
+    "default_friction": "PyBullet's default (lateralFriction 0.5)",
+    "default_restitution": "PyBullet's default (restitution 0)",
+    "default_static_friction": "PyBullet's default (lateralFriction 0.5)",
+    "default_static_restitution": "PyBullet's default (restitution 0)",
+    "pybullet.restitution_velocity_threshold": "Bullet's default "
+                                               "(m_restitutionVelocityThreshold 0.2)",
+    "pybullet.contact_breaking_threshold": "Bullet's default (gContactBreakingThreshold)",
+    "pybullet.ccd_swept_sphere_radius": "PyBullet's default (no CCD)",
+    "pybullet.collision_margin": "PyBullet's default (m_defaultCollisionMargin 0.001)",
+    "pybullet.enable_cone_friction": "PyBullet's default (enableConeFriction 1)",
+    "pybullet.erp": "Bullet's default (m_erp 0.2)",
+    "pybullet.contact_erp": "PyBullet's default (m_erp2 0.08)",
+    "pybullet.deterministic_overlapping_pairs": "the daemon's (Bullet: off): identical "
+                                                "runs give identical results",
+}
+
+SPECS: dict[str, ParamSpec] = with_sources({spec.name: spec for spec in (
     shared("timestep", 1 / 240, "Simulated time per step."),
     shared("gravity", (0.0, 0.0, -9.81), "Gravity vector, world frame."),
     shared("solver_iterations", 10, "Constraint solver iterations per step "
@@ -59,7 +83,7 @@ SPECS: dict[str, ParamSpec] = {spec.name: spec for spec in (
               "penetration corrected per step.", number(0, 1)),
     ParamSpec("pybullet.deterministic_overlapping_pairs", True, "", "Sort overlapping pairs, "
               "so that identical runs give identical results.", flag),
-)}
+)}, SOURCES)
 
 # Parameters that are setPhysicsEngineParameter keywords (booleans go as 0/1).
 WORLD_PARAMS = {
