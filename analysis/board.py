@@ -26,7 +26,7 @@ from pathlib import Path
 from types import UnionType
 from typing import Any
 
-from galton.analysis.board_layout import ENGINES, did_you_mean, spec_problems
+from galton.analysis.board_layout import did_you_mean, spec_problems
 from galton.analysis.errors import AnalysisError
 
 PAPER_PINS_PER_ROW = (1, 8, 9, 10, 11, 10, 11, 10, 11, 10, 11)
@@ -166,7 +166,10 @@ class EngineContacts:
 
 
 def _default_contacts() -> dict[str, EngineContacts]:
-    return {engine: EngineContacts() for engine in ENGINES}
+    return paper_materials()
+
+
+MATERIALS = ("board", "engine")
 
 
 @dataclass(frozen=True)
@@ -186,15 +189,33 @@ class BoardSpec:
     ball: BallSpec = field(default_factory=BallSpec)
     release: ReleaseSpec = field(default_factory=ReleaseSpec)
     perturbation: PerturbationSpec = field(default_factory=PerturbationSpec)
+    # Each engine's contact settings and per-role surfaces: the board's materials, which
+    # travel with it. An engine named takes exactly what is given (nothing: the engine's
+    # own defaults); an engine not named keeps the paper's (``paper_materials``).
     contacts: dict[str, EngineContacts] = field(default_factory=_default_contacts)
+    # "board": the trials use ``contacts``; "engine": they ignore them, and the board runs
+    # on each engine's own defaults (``galton-client bench --materials engine``).
+    materials: str = "board"
     # How the board's solids are spawned: "primitives" (boxes and cylinders) or "mesh"
     # (each part a triangle mesh: a pin a prism of PIN_SIDES sides, a box a box).
     parts: str = "primitives"
 
     def __post_init__(self) -> None:
         problem = next(spec_problems(self), None)
+        if problem is None and self.materials not in MATERIALS:
+            problem = ("materials", f"must be one of {', '.join(MATERIALS)}, got "
+                                    f"{self.materials!r}")
         if problem is not None:
             raise BoardSpecError(*problem)
+        # An engine the contacts do not name keeps the paper's materials.
+        object.__setattr__(self, "contacts", {**paper_materials(), **self.contacts})
+
+    def engine_contacts(self, engine: str) -> EngineContacts:
+        """What a trial on this engine sets: the board's materials there, or nothing (the
+        engine's own defaults) when the board runs with ``materials = "engine"``."""
+        if self.materials == "engine":
+            return EngineContacts()
+        return self.contacts.get(engine, EngineContacts())
 
     def to_dict(self) -> dict[str, Any]:
         """Plain data (dicts, lists, numbers, strings, None), ready for JSON."""
@@ -267,6 +288,54 @@ def paper_board() -> BoardSpec:
     return BoardSpec()
 
 
+# --- the board's materials -------------------------------------------------------------------
+# The paper board's contacts, calibrated per engine on it (docs/PHYSICS.md, "The board's
+# materials"): a hard ball on hard wood. Each engine's world starts with that engine's own
+# defaults; the board brings these, on every body it spawns.
+SCENERY_ROLES = ("pin", "funnel", "divider", "wall", "glass", "floor")
+# MuJoCo: the scenery's bounce 0.61 (measured e 0.70) and the balls' 0.3 (two balls meet at
+# e 0.37), friction 0.5 on both; a stiffer impedance floor (dmin 0.8), torsional friction
+# (condim 4) and the elliptic cone, with which piles sleep.
+MUJOCO_SCENERY = SurfaceSpec(friction=0.5, restitution=0.61)
+MUJOCO_BALL = SurfaceSpec(friction=0.5, restitution=0.3)
+MUJOCO_SETTINGS: dict[str, Any] = {"mujoco.solimp": [0.8, 0.95, 0.001, 0.5, 2.0],
+                                   "mujoco.condim": 4, "mujoco.cone": "elliptic"}
+# PyBullet multiplies two bodies' values: 0.8275 on every body is e 0.685 (measured 0.70-0.72)
+# and friction 0.5 is mu 0.25; contacts from 0.01 m keep a slow ball's bounce; pyramid
+# friction is cheaper and changes nothing on the board.
+PYBULLET_SURFACE = SurfaceSpec(friction=0.5, restitution=0.8275)
+PYBULLET_SETTINGS: dict[str, Any] = {"pybullet.contact_breaking_threshold": 0.01,
+                                     "pybullet.enable_cone_friction": False}
+# ODE and DART run the board as Webots and Gazebo would: their own contact (Webots' friction 1
+# and bounce 0.5; SDF's friction 1 and restitution 0), stated on the board all the same.
+ODE_SURFACE = SurfaceSpec(friction=1.0, restitution=0.5)
+DART_SURFACE = SurfaceSpec(friction=1.0, restitution=0.0)
+
+
+def surfaces(scenery: SurfaceSpec, ball: SurfaceSpec) -> dict[str, SurfaceSpec]:
+    """Every body role's surface: the scenery's on each static part, the ball's on balls."""
+    return {"ball": ball, **{role: scenery for role in SCENERY_ROLES}}
+
+
+def paper_materials() -> dict[str, EngineContacts]:
+    """The paper board's materials on every engine."""
+    return {
+        "mujoco": EngineContacts(dict(MUJOCO_SETTINGS), surfaces(MUJOCO_SCENERY, MUJOCO_BALL)),
+        "pybullet": EngineContacts(dict(PYBULLET_SETTINGS),
+                                   surfaces(PYBULLET_SURFACE, PYBULLET_SURFACE)),
+        "ode": EngineContacts({}, surfaces(ODE_SURFACE, ODE_SURFACE)),
+        "dart": EngineContacts({}, surfaces(DART_SURFACE, DART_SURFACE)),
+    }
+
+
+def material_of(engine: str, surface: SurfaceSpec,
+                params: Mapping[str, Any] | None = None) -> EngineContacts:
+    """The paper's contact settings on this engine with one surface on every body (and
+    these parameters added): a board whose balls and scenery share one material."""
+    settings = paper_materials()[engine].params
+    return EngineContacts({**settings, **(params or {})}, surfaces(surface, surface))
+
+
 def small_board() -> BoardSpec:
     """A quick board for tests: 5 rows, 6 bins, 1-m dividers, 30 balls, same pins and balls.
 
@@ -297,10 +366,10 @@ def paper_webots_board() -> BoardSpec:
     asks of it.
     """
     return BoardSpec(name="paper-webots", contacts={
-        "mujoco": EngineContacts(params=webots_params(0.5)),
-        "pybullet": EngineContacts(params=webots_params(0.707)),
-        "ode": EngineContacts(params={**webots_params(0.5), "timestep": WEBOTS_TIMESTEP}),
-        "dart": EngineContacts(params=webots_params(0.707)),
+        "mujoco": material_of("mujoco", webots_surface(0.5)),
+        "pybullet": material_of("pybullet", webots_surface(0.707)),
+        "ode": material_of("ode", webots_surface(0.5), {"timestep": WEBOTS_TIMESTEP}),
+        "dart": material_of("dart", webots_surface(0.707)),
     })
 
 
@@ -316,23 +385,22 @@ def paper_gazebo_board() -> BoardSpec:
     inertia 0.1 kg m² (a copy error: a solid ball has 0.00081) is an option, ``[ball]
     inertia = 0.1`` in a board file (every engine sets it).
     """
-    params = {**webots_params(0.0), "timestep": 0.001}
     return BoardSpec(name="paper-gazebo", ball=BallSpec(mass=1.0), contacts={
-        engine: EngineContacts(params=dict(params)) for engine in ("mujoco", "pybullet",
-                                                                    "dart")})
+        engine: material_of(engine, webots_surface(0.0), {"timestep": 0.001})
+        for engine in ("mujoco", "pybullet", "dart")})
 
 
 def paper_mesh_board() -> BoardSpec:
     """The paper board with every part a static triangle mesh, as the paper imported its
     board into each simulator: what mesh collisions cost each engine in lost balls and χ²
-    beside the primitives of ``paper``. Engines without meshes (DART, ODE) refuse it."""
+    beside the primitives of ``paper``, with the same materials."""
     return BoardSpec(name="paper-mesh", parts="mesh")
 
 
-def webots_params(restitution: float) -> dict[str, float]:
-    """Webots' default contact (bounce 0.5, friction 1) on moving and static bodies alike."""
-    return {"default_restitution": restitution, "default_friction": 1.0,
-            "default_static_restitution": restitution, "default_static_friction": 1.0}
+def webots_surface(restitution: float) -> SurfaceSpec:
+    """Webots' default contact (friction 1; bounce 0.5 as this engine's raw value), on moving
+    and static bodies alike."""
+    return SurfaceSpec(friction=1.0, restitution=restitution)
 
 
 PRESETS: dict[str, Callable[[], BoardSpec]] = {

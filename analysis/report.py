@@ -10,6 +10,7 @@ import csv
 import json
 from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import Any
 
 from galton.analysis import stats
 from galton.analysis.formatting import MISSING, balls_text, fmt, fmt_p, p_equals
@@ -44,8 +45,32 @@ def _configuration(results: ExperimentResults, summaries: Sequence[EngineSummary
                   f"repetitions {', '.join(map(str, reps))}."
                   + (" Engine settings differ between trials; the first trial's:"
                      if s.settings_vary else " Engine settings:"),
-                  "", "```json", json.dumps(s.settings, indent=2, sort_keys=True), "```"]
+                  "", "```json", json.dumps(s.settings, indent=2, sort_keys=True), "```",
+                  "", materials_line(results, s)]
     return lines
+
+
+def materials_line(results: ExperimentResults, s: EngineSummary) -> str:
+    """Which materials the configuration's first trial ran with: the board's (each role's
+    friction and restitution, and the engine settings the board sets), or the engine's."""
+    first = next(t for t in results.trials
+                 if (t.engine, t.board, t.release) == (s.engine, s.board, s.release))
+    board = first.config.get("board", {})
+    if board.get("materials", "board") == "engine":
+        return ("Materials: the engine's own defaults (`--materials engine`): no body "
+                "carries the board's surfaces.")
+    contacts = board.get("contacts", {}).get(s.engine, {})
+    roles = contacts.get("bodies", {})
+    if not roles and not contacts.get("params"):
+        return "Materials: the board names none on this engine: the engine's own defaults."
+    surfaces = "; ".join(f"{role} {_surface(surface)}" for role, surface in roles.items())
+    return (f"Materials: the board's (friction, restitution per body role): {surfaces or '–'}"
+            f"; board settings {json.dumps(contacts.get('params', {}), sort_keys=True)}.")
+
+
+def _surface(surface: dict[str, Any]) -> str:
+    return "/".join("default" if surface.get(k) is None else f"{surface[k]:g}"
+                    for k in ("friction", "restitution"))
 
 
 def _board_config(results: ExperimentResults) -> list[str]:

@@ -59,6 +59,7 @@ TELEMETRY_HZ = 10.0
 def galton_world(sim: Client, engine: str) -> int:
     board = BoardSpec.load("paper")
     board = board.replace(ball=BallSpec(board.ball.radius, board.ball.mass, BALLS))
+    sim.load_world(engine, board.engine_contacts(engine).params or None)  # its settings
     sim.spawn(*board_groups(board, engine))
     sim.spawn(ball_group(board, engine, ball_names(BALLS),
                          release_schedule(board, 0, BALLS).positions))
@@ -88,10 +89,11 @@ def snapshots(sim: Client, engine: str, repeat: int) -> dict[str, Any]:
 
 def _board_bytes(sim: Client, engine: str) -> int:
     """The blob of the board alone (no ball), in a side world."""
-    sim.create_world("board")
+    paper = BoardSpec.load("paper")
+    sim.create_world("board", params=paper.engine_contacts(engine).params or None)
     try:
         board = sim.world("board")
-        board.spawn(*board_groups(BoardSpec.load("paper"), engine))
+        board.spawn(*board_groups(paper, engine))
         return board.snapshot(blob=True).nbytes
     finally:
         sim.delete_world("board")

@@ -27,12 +27,14 @@ from galton.client.bench.trial import TrialConfig, run_trial
 
 
 def trial_config(engine: str, balls: int, params: dict[str, Any] | None = None) -> TrialConfig:
-    """Repetition 0 of the paper board with this many balls, on the daemon defaults plus
+    """Repetition 0 of the paper board with this many balls, with its materials plus
     ``params``."""
     board = BoardSpec.load("paper")
     board = board.replace(ball=BallSpec(board.ball.radius, board.ball.mass, balls))
     if params:
-        board = board.replace(contacts={**board.contacts, engine: EngineContacts(params=params)})
+        own = board.contacts[engine]
+        board = board.replace(contacts={**board.contacts, engine: EngineContacts(
+            params={**own.params, **params}, bodies=dict(own.bodies))})
     return TrialConfig(engine, board, repetition=0, seed=0)
 
 

@@ -53,6 +53,7 @@ def balls_rss(sim: Client, daemon: object, count: int) -> float:
 def measure(engine: str, idle_seconds: float) -> dict:
     board = BoardSpec.load("paper")
     with daemon_client(engine) as (daemon, sim):
+        sim.load_world(engine, board.engine_contacts(engine).params or None)  # its settings
         sim.spawn(*board_groups(board, engine))
         sim.step(10)
         idle_rss = rss_mb(daemon)

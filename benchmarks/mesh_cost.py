@@ -31,6 +31,8 @@ def build(engine_name: str, board: str, balls: int) -> Engine:
     """An engine holding the board and its balls at their nominal release positions."""
     spec = BoardSpec.load(board)
     engine = create_engine(engine_name)
+    if spec.engine_contacts(engine_name).params:  # the board's settings, as the bench sets
+        engine.set_params(spec.engine_contacts(engine_name).params)
     engine.spawn(board_groups(spec, engine_name))
     positions = nominal_positions(spec, balls)
     engine.spawn([ball_group(spec, engine_name, ball_names(balls), positions)])

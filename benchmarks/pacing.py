@@ -27,6 +27,7 @@ def measure(engine: str, seconds: float, rtf: float, balls: int) -> dict:
     board = BoardSpec.load("paper")
     board = board.replace(ball=BallSpec(board.ball.radius, board.ball.mass, balls))
     with daemon_client(engine, telemetry_rate=TELEMETRY_HZ) as (_, sim):
+        sim.load_world(engine, board.engine_contacts(engine).params or None)  # its settings
         sim.spawn(*board_groups(board, engine))
         sim.spawn(ball_group(board, engine, ball_names(balls),
                              release_schedule(board, 0, balls).positions))

@@ -78,6 +78,8 @@ def in_process(engine: str, renders: int, count: int, repeats: int) -> dict[str,
     board, groups = scene(engine)
     world = World(create_engine(engine))
     try:
+        if board.engine_contacts(engine).params:  # the board's settings, as the bench sets
+            world.engine.set_params(board.engine_contacts(engine).params)
         world.spawn(groups)
         world.step(round(SETTLE_S / world.engine.timestep))
         view = view_of(world, parse_camera(camera_map(board), "camera"))
@@ -96,6 +98,8 @@ def in_process(engine: str, renders: int, count: int, repeats: int) -> dict[str,
 # -- (a) and (b) through the daemon, (c) the stream -------------------------------------
 def settled_scene(sim: Client, engine: str) -> BoardSpec:
     board, groups = scene(engine)
+    if board.engine_contacts(engine).params:  # the board's settings, as the bench sets
+        sim.set_params(board.engine_contacts(engine).params)
     sim.spawn(*groups)
     sim.run_until(SETTLE_S)
     return board

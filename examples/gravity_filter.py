@@ -8,7 +8,7 @@ tilt of about 0.06 rad. The live world takes the perceived poses (``compare`` wi
 still: boxes perceived floating fall, boxes perceived inside each other are pushed apart,
 tilted ones lie flat. Gravity and contacts know heights and tilts, not where a box stands
 across: the settled heights and tilts are far closer to the truth than the perceived ones
-(the tests hold the height errors 100x smaller, the tilts 5x), positions as a whole closer
+(the tests hold the height errors 50x smaller, the tilts 5x), positions as a whole closer
 (what is left is the noise across, and the few mm a tilted box shifts as it lies down).
 
 Starts its own daemon unless --connect is given:

@@ -4,18 +4,18 @@ Usage: python research/fidelity_inprocess.py ENGINE BALLS REPS MODE
            [--params JSON] [--surfaces JSON] [--seed N]
 
 e.g. python research/fidelity_inprocess.py mujoco 500 10 all-at-once \\
-         --params '{"default_static_friction": 0.12}' \\
+         --params '{"mujoco.condim": 6}' \\
          --surfaces '{"ball": {"friction": 0.5, "restitution": 0.1}}'
 
 The calibration runs in docs/physics/mujoco.md came from this loop. No Zenoh is involved,
 and a trial here is bit-identical to the same trial through a daemon
 (benchmarks/bridge_overhead.py checks that; ``LocalSim`` is benchmarks/local_sim.py).
-``--params`` sets daemon parameters;
-``--surfaces`` sets per-role surfaces (roles: ball, pin, funnel, divider, wall, glass,
-floor). The script prints one JSON line: the pooled width (standard deviation of the bin
-index; the binomial's is 1.658), the Monte Carlo p, the median per-trial chi-squared, lost
-and unsettled balls, the median RTF and sim time of a trial, each trial's width, and the
-pooled counts.
+``--params`` sets daemon parameters over the board's (``default_*`` reach no board body:
+each carries the board's material); ``--surfaces`` sets per-role surfaces over the board's
+(roles: ball, pin, funnel, divider, wall, glass, floor). The script prints one JSON line:
+the pooled width (standard deviation of the bin index; the binomial's is 1.658), the Monte
+Carlo p, the median per-trial chi-squared, lost and unsettled balls, the median RTF and sim
+time of a trial, each trial's width, and the pooled counts.
 """
 
 from __future__ import annotations
@@ -37,8 +37,9 @@ def board_for(engine: str, balls: int, mode: str, params: dict, surfaces: dict) 
     board = BoardSpec.load("paper")
     board = board.replace(ball=BallSpec(board.ball.radius, board.ball.mass, balls),
                           release=dataclasses.replace(board.release, mode=mode))
-    contacts = EngineContacts(params=params,
-                              bodies={k: SurfaceSpec(**v) for k, v in surfaces.items()})
+    own = board.contacts[engine]  # the board's materials, changed by these
+    contacts = EngineContacts(params={**own.params, **params}, bodies={
+        **own.bodies, **{k: SurfaceSpec(**v) for k, v in surfaces.items()}})
     return board.replace(contacts={**board.contacts, engine: contacts})
 
 

@@ -36,7 +36,9 @@ def test_normality_the_score_stays_low_then_spikes(target: list[str]) -> None:
 def test_gravity_filter_settles_closer_to_the_truth(target: list[str]) -> None:
     run = load_example("gravity_filter").main([*target, "--seed", "5"])
     assert run.perceived.height > 0.005 and run.perceived.angle > 0.01
-    assert run.factor("height") >= 100
+    # MuJoCo's sleep (the daemon's, 5 mm/s) freezes a box within about 0.2 mm of its rest
+    # with MuJoCo's own impedance: 58x on seed 5 (831x with sleeping off)
+    assert run.factor("height") >= 50
     assert run.factor("angle") >= 5
     assert run.factor("position") > 1
 

@@ -17,11 +17,9 @@ BOARD_TAG = "board"
 
 
 def surface(spec: BoardSpec, engine: str, role: str) -> SurfaceSpec:
-    """The friction and restitution a role gets on this engine (None: engine default)."""
-    contacts = spec.contacts.get(engine)
-    if contacts is None:
-        return SurfaceSpec()
-    return contacts.bodies.get(role, SurfaceSpec())
+    """The friction and restitution a role gets on this engine: the board's material (None:
+    the engine's default, as every role gets with ``materials = "engine"``)."""
+    return spec.engine_contacts(engine).bodies.get(role, SurfaceSpec())
 
 
 def board_groups(spec: BoardSpec, engine: str, offset_x: float = 0.0) -> list[BodyGroup]:

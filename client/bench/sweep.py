@@ -8,7 +8,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import replace
 from typing import Any
 
-from galton.analysis.board import BoardSpec, EngineContacts
+from galton.analysis.board import SCENERY_ROLES, BoardSpec, EngineContacts
 from galton.analysis.records import ExperimentResults, TrialRecord
 from galton.analysis.sweep import SweepAxis
 from galton.client.bench.executor import Executor, LocalExecutor, TrialHooks
@@ -34,13 +34,30 @@ def parse_axis(text: str) -> SweepAxis:
     return SweepAxis(name.strip(), tuple(values))
 
 
+# A ``default_*`` parameter reaches only bodies that set no surface of their own, and a
+# board's bodies carry its materials: so a sweep of one also sets its value on the roles
+# it stands for (the balls, or the scenery) wherever the board names a surface for them.
+DEFAULT_SURFACES: dict[str, tuple[tuple[str, ...], str]] = {
+    "default_friction": (("ball",), "friction"),
+    "default_restitution": (("ball",), "restitution"),
+    "default_static_friction": (SCENERY_ROLES, "friction"),
+    "default_static_restitution": (SCENERY_ROLES, "restitution"),
+}
+
+
 def with_params(board: BoardSpec, engine: str, params: dict[str, Any]) -> BoardSpec:
-    """The board with these engine parameters added to its contact settings."""
+    """The board with these engine parameters added to its contact settings (a
+    ``default_*`` one also on the board's surfaces it stands for: DEFAULT_SURFACES)."""
     contacts = dict(board.contacts)
     current = contacts.get(engine, EngineContacts())
     merged = {**current.params, **{k: list(v) if isinstance(v, tuple) else v
                                    for k, v in params.items()}}
-    contacts[engine] = EngineContacts(merged, dict(current.bodies))
+    bodies = dict(current.bodies)
+    for name, value in params.items():
+        roles, field = DEFAULT_SURFACES.get(name, ((), ""))
+        for role in (r for r in roles if r in bodies):
+            bodies[role] = replace(bodies[role], **{field: value})
+    contacts[engine] = EngineContacts(merged, bodies)
     return board.replace(contacts=contacts)
 
 

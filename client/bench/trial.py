@@ -143,9 +143,9 @@ def settling_wait(span: float, wall: float, simulated: float) -> float:
 
 
 def prepare_world(sim: Client, config: TrialConfig) -> tuple[Perturbation, list[str]]:
-    """A fresh world on the engine with the board's settings, the board built, no balls yet."""
-    params = config.board.contacts[config.engine].params if (
-        config.engine in config.board.contacts) else {}
+    """A fresh world on the engine with the board's settings, the board built, no balls yet
+    (its bodies carry the board's materials: build.py)."""
+    params = config.board.engine_contacts(config.engine).params
     sim.load_world(config.engine, dict(params) or None)
     shake = perturbation(config.board, config.repetition, config.seed, config.balls)
     sim.spawn(*board_groups(config.board, config.engine, shake.board_offset_x))

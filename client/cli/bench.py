@@ -74,12 +74,23 @@ def checked(make: Callable[[], ExperimentConfig]) -> ExperimentConfig:
         raise typer.BadParameter(str(error)) from error
 
 
-def load_board(source: str) -> BoardSpec:
-    from galton.analysis.board import BoardSpec
+MaterialsOpt = Annotated[str | None, typer.Option(
+    help="board: the board's materials (its per-engine contacts: each body's friction and "
+         "restitution, the engine settings they were calibrated with); engine: none of "
+         "them, each engine's own defaults (default: the board's `materials`, board).")]
+
+
+def load_board(source: str, materials: str | None = None) -> BoardSpec:
+    """The board, with the materials asked for (None: as the board says)."""
+    from galton.analysis.board import MATERIALS, BoardSpec
+    if materials is not None and materials not in MATERIALS:
+        raise typer.BadParameter(f"--materials must be one of {', '.join(MATERIALS)}, got "
+                                 f"{materials!r}")
     try:
-        return BoardSpec.load(source)
+        spec = BoardSpec.load(source)
     except (AnalysisError, OSError) as error:
         raise typer.BadParameter(f"--board {source!r}: {error}") from error
+    return spec if materials is None else spec.replace(materials=materials)
 
 
 @commands.command()
@@ -101,6 +112,7 @@ def bench(
     board: Annotated[str, typer.Option(
         help="Preset (paper, paper-mesh, paper-webots, paper-gazebo, small) or a TOML/JSON file.")
                      ] = "paper",
+    materials: MaterialsOpt = None,
     balls: Annotated[str, typer.Option(help="Ball count(s), e.g. 1,25,100.")] = ",".join(
         map(str, DEFAULT_BALLS)),
     repetitions: Annotated[int, typer.Option(min=1)] = DEFAULT_REPETITIONS,
@@ -138,7 +150,7 @@ def bench(
     refuse_with_ray(ray, **{"--pool": pool, "--connect": connect, "--instances": instances,
                             "--use-running": use_running})
     config = checked(lambda: ExperimentConfig(
-        board=load_board(board), engines=tuple(_csv(engines, "--engines")),
+        board=load_board(board, materials), engines=tuple(_csv(engines, "--engines")),
         balls=_ints(balls, "--balls"), repetitions=repetitions, release=release, seed=seed,
         max_sim_time=max_sim_time, recordings=out / "recordings" if record else None))
     endpoints = connect.split(",") if connect else ctx.obj.connect
@@ -357,7 +369,9 @@ def sweep(
     ctx: typer.Context,
     param: Annotated[list[str], typer.Option(
         help="NAME=V1,V2,... engine parameter values (one or two --param); e.g. "
-             "default_restitution=0.3,0.5,0.7 or 'mujoco.solref=[0.02,0.3];[0.02,0.5]'.")],
+             "default_restitution=0.3,0.5,0.7 or 'mujoco.solref=[0.02,0.3];[0.02,0.5]'. A "
+             "default_* value is also set on the board's surfaces it stands for (the balls' "
+             "or the scenery's), which carry the board's materials.")],
     engines: Annotated[str, typer.Option(help="Comma-separated engines.")] = ",".join(
         DEFAULT_ENGINES),
     connect: Annotated[str | None, typer.Option(help="Endpoint(s) of remote daemons.")] = None,
@@ -366,6 +380,7 @@ def sweep(
         help="Run on the daemons already answering on the default endpoint (their worlds "
              "are replaced); else the sweep starts its own.")] = False,
     board: Annotated[str, typer.Option(help="Preset or TOML/JSON file.")] = "paper",
+    materials: MaterialsOpt = None,
     balls: Annotated[int, typer.Option(min=1)] = 100,
     repetitions: Annotated[int, typer.Option(min=1)] = 3,
     release: Annotated[str | None, typer.Option(help="all-at-once or stream.")] = None,
@@ -386,7 +401,8 @@ def sweep(
                             "--use-running": use_running})
     axes = run_guarded(lambda: [parse_axis(p) for p in param])
     config = checked(lambda: ExperimentConfig(
-        board=load_board(board), engines=tuple(_csv(engines, "--engines")), balls=(balls,),
+        board=load_board(board, materials), engines=tuple(_csv(engines, "--engines")),
+        balls=(balls,),
         repetitions=repetitions, release=release, seed=seed, max_sim_time=max_sim_time))
     endpoints = connect.split(",") if connect else ctx.obj.connect
     names = _csv(instances, "--instances") if instances else None

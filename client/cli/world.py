@@ -21,6 +21,7 @@ from galton.client.cli.common import (
 )
 
 if TYPE_CHECKING:
+    from galton.client.sdk.client import Client
     from galton.protocol import Capabilities
 
 if TYPE_CHECKING:
@@ -109,14 +110,21 @@ def load_world(ctx: typer.Context,
 
 @commands.command(rich_help_panel=PANEL)
 def params(ctx: typer.Context, assign: Assignments = None, as_json: JsonOpt = False) -> None:
-    """Show engine parameters, or set some (all or none) and show them after."""
+    """Show engine parameters with each default and where it comes from (the simulator's
+    own set-up, or the daemon's and why), or set some (all or none) and show them after."""
     updates = assignments(assign)
-    values: dict[str, Any] = with_client(
-        ctx, lambda c: c.set_params(updates) if updates else c.get_params())
+
+    def read(c: Client) -> tuple[dict[str, Any], Capabilities]:
+        return (c.set_params(updates) if updates else c.get_params()), c.capabilities()
+    values, found = with_client(ctx, read)
 
     def render() -> None:
-        table = Table("parameter", "value")
+        table = Table("parameter", "value", "default: where it comes from",
+                      title=f"{found.engine} {found.engine_version} (* : not the default)")
         for key, value in sorted(values.items()):
-            table.add_row(key, json.dumps(value))
+            spec = found.params.get(key, {})
+            changed = "" if value == spec.get("default") else " *"
+            table.add_row(key, json.dumps(value) + changed,
+                          f"{json.dumps(spec.get('default'))}: {spec.get('source', '?')}")
         console.print(table)
     emit(values, as_json, render)

@@ -9,7 +9,7 @@ parameter is FEATURE_UNSUPPORTED, not a silent no-op.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 from galton.protocol.errors import (
@@ -26,17 +26,31 @@ KNOWN_ENGINES = ENGINE_NAMES
 
 @dataclass(frozen=True)
 class ParamSpec:
-    """One parameter: its default, unit, meaning, and a checker returning the clean value."""
+    """One parameter: its default, unit, meaning, a checker returning the clean value, and
+    where the default comes from (``source``: the simulator's own, or the daemon's and why;
+    set by ``with_sources``)."""
 
     name: str
     default: Any
     unit: str
     doc: str
     check: Callable[[Any, str], Any]
+    source: str = ""
 
     def describe(self) -> dict[str, Any]:
         default = list(self.default) if isinstance(self.default, tuple) else self.default
-        return {"default": default, "unit": self.unit, "doc": self.doc}
+        return {"default": default, "unit": self.unit, "doc": self.doc, "source": self.source}
+
+
+def with_sources(specs: Mapping[str, ParamSpec],
+                 sources: Mapping[str, str]) -> dict[str, ParamSpec]:
+    """The specs, each with where its default comes from; every parameter must have one
+    (a world starts as its simulator sets it up, and says where it does not)."""
+    missing = sorted(set(specs) - set(sources))
+    unknown = sorted(set(sources) - set(specs))
+    if missing or unknown:
+        raise ValueError(f"parameter sources: missing {missing}, unknown {unknown}")
+    return {name: replace(spec, source=sources[name]) for name, spec in specs.items()}
 
 
 def number(low: float, high: float, *, low_open: bool = False) -> Callable[[Any, str], float]:

@@ -71,12 +71,14 @@ def test_load_world_with_bad_params_keeps_the_old_world(sim: Client, engine: str
     assert [e.name for e in sim.list()] == ["ball_0"]
 
 
-def test_params_have_defaults_units_and_docs(sim: Client) -> None:
+def test_params_have_defaults_units_docs_and_sources(sim: Client) -> None:
     caps = sim.capabilities()
     current = sim.get_params()
     assert set(current) == set(caps.params)
     for name, spec in caps.params.items():
-        assert {"default", "unit", "doc"} <= set(spec) and spec["doc"], name
+        assert {"default", "unit", "doc", "source"} <= set(spec) and spec["doc"], name
+        assert spec["source"], name
+        assert current[name] == spec["default"], name  # a fresh world starts at them
     for shared in ("timestep", "gravity", "solver_iterations", "default_friction",
                    "default_restitution"):
         assert shared in caps.params

@@ -10,11 +10,25 @@ under SDF's gravity (0, 0, -9.8).
 
 from __future__ import annotations
 
-from galton.daemon.engines.params import ParamSpec, choice, flag, shared
+from galton.daemon.engines.params import ParamSpec, choice, flag, shared, with_sources
 
 DETECTORS = ("ode", "fcl", "bullet", "dart")
 
-SPECS: dict[str, ParamSpec] = {spec.name: spec for spec in (
+# Where each default comes from (docs/ENGINES.md names the gz-physics file of each):
+# Gazebo Harmonic's set-up of DART (SDF's defaults, gz-physics' dartsim plugin).
+SOURCES = {
+    "timestep": "Gazebo's default (SDF max_step_size 1 ms)",
+    "gravity": "Gazebo's default (SDF gravity 9.8)",
+    "solver_iterations": "DART's default (PGS fallback 30)",
+    "default_friction": "Gazebo's default (SDF <ode><mu> 1)",
+    "default_restitution": "Gazebo's default (SDF restitution_coefficient 0)",
+    "default_static_friction": "Gazebo's default (SDF <ode><mu> 1)",
+    "default_static_restitution": "Gazebo's default (SDF restitution_coefficient 0)",
+    "dart.collision_detector": "Gazebo's (gz-physics sets ODE's detector in every world)",
+    "dart.sleep": "Gazebo's (DART 6.13 has no sleeping)",
+}
+
+SPECS: dict[str, ParamSpec] = with_sources({spec.name: spec for spec in (
     shared("timestep", 0.001, "Simulated time per step (SDF max_step_size, "
            "Gazebo's default)."),
     shared("gravity", (0.0, 0.0, -9.8), "Gravity vector, world frame (SDF's "
@@ -37,4 +51,4 @@ SPECS: dict[str, ParamSpec] = {spec.name: spec for spec in (
     ParamSpec("dart.sleep", False, "", "Put bodies at rest to sleep (DART 6.20's "
               "deactivation, on in DART by default). Off, as in Gazebo Harmonic's DART 6.13, "
               "which has none; a sleeping body's rest timer is not in snapshots.", flag),
-)}
+)}, SOURCES)

@@ -15,7 +15,16 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from galton.daemon.engines.params import ParamSpec, choice, flag, integer, number, shared, vector
+from galton.daemon.engines.params import (
+    ParamSpec,
+    choice,
+    flag,
+    integer,
+    number,
+    shared,
+    vector,
+    with_sources,
+)
 from galton.protocol import BodyGroup, InvalidArgumentError
 from galton.protocol.errors import brief
 
@@ -85,29 +94,59 @@ def _condim(value: Any, where: str) -> int:
 
 
 CONDIMS = (1, 3, 4, 6)
-PARAMS: dict[str, ParamSpec] = {p.name: p for p in (
+# Where each default comes from (docs/PHYSICS.md tables them): MuJoCo's own unless it says
+# "the daemon's", with why.
+SOURCES = {
+    "timestep": "MuJoCo's default (option timestep)",
+    "gravity": "MuJoCo's default (option gravity)",
+    "solver_iterations": "the daemon's (MuJoCo: 100): with cg and the early stop, the "
+                         "Galton board's piles cost 8 times less per step at the same fidelity",
+    "default_friction": "MuJoCo's default (geom friction 1)",
+    "default_restitution": "MuJoCo's own contact, no restitution (geom solref as given)",
+    "default_static_friction": "MuJoCo's default (geom friction 1)",
+    "default_static_restitution": "MuJoCo's own contact, no restitution (geom solref as "
+                                  "given)",
+    "mujoco.solref": "MuJoCo's default (geom solref)",
+    "mujoco.solimp": "MuJoCo's default (geom solimp)",
+    "mujoco.condim": "MuJoCo's default (geom condim)",
+    "mujoco.torsional_friction": "MuJoCo's default (geom friction[1])",
+    "mujoco.rolling_friction": "MuJoCo's default (geom friction[2])",
+    "mujoco.solver": "the daemon's (MuJoCo: newton): cheaper on piles, same fidelity",
+    "mujoco.cone": "MuJoCo's default (option cone)",
+    "mujoco.tolerance": "the daemon's (MuJoCo: 1e-8): the solver's early stop",
+    "mujoco.ls_iterations": "the daemon's (MuJoCo: 50): with the early stop",
+    "mujoco.noslip_iterations": "MuJoCo's default (option noslip_iterations)",
+    "mujoco.integrator": "MuJoCo's default (option integrator)",
+    "mujoco.threads": "the daemon's (MuJoCo: none): bit-identical results, faster crowds",
+    "mujoco.sleep_tolerance": "the daemon's (MuJoCo: sleeping off): bodies at rest in "
+                              "contact sleep, so settled crowds cost nothing",
+    "mujoco.max_free_bodies": "the daemon's: a spawn's compile is quadratic in bodies",
+    "mujoco.wake_balanced": "the daemon's (not in MuJoCo): a side effect of sleeping undone",
+}
+
+PARAMS: dict[str, ParamSpec] = with_sources({p.name: p for p in (
     shared("timestep", 0.002, "physics step"),
     shared("gravity", (0.0, 0.0, -9.81), "gravity vector, world frame"),
     shared("solver_iterations", 50, "constraint solver iterations (option iterations)"),
-    shared("default_friction", 0.5,
+    shared("default_friction", 1.0,
            "sliding friction of moving bodies spawned without one, also when changed "
            "later; between two moving bodies a contact uses the larger value"),
-    shared("default_restitution", 0.3,
+    shared("default_restitution", 0.0,
            "restitution of moving bodies spawned without one, also when changed later; 0 "
            "means MuJoCo's own contact (mujoco.solref as given)"),
-    shared("default_static_friction", 0.5,
+    shared("default_static_friction", 1.0,
            "sliding friction of static bodies (the scenery) spawned without one, also when "
            "changed later; a contact with a static body uses the static body's surface"),
-    shared("default_static_restitution", 0.61,
+    shared("default_static_restitution", 0.0,
            "restitution of static bodies spawned without one, also when changed later; a "
            "contact with a static body uses the static body's surface"),
     ParamSpec("mujoco.solref", (0.02, 1.0), "s, 1",
               "[timeconst, dampratio] of spawned bodies' contacts; a restitution e > 0 "
               "replaces the dampratio (see mujoco/spec.py, damping_ratio)", _solref),
-    ParamSpec("mujoco.solimp", (0.8, 0.95, 0.001, 0.5, 2.0), "",
+    ParamSpec("mujoco.solimp", (0.9, 0.95, 0.001, 0.5, 2.0), "",
               "[dmin, dmax, width, midpoint, power] impedance of spawned bodies' contacts",
               _solimp),
-    ParamSpec("mujoco.condim", 4, "",
+    ParamSpec("mujoco.condim", 3, "",
               "contact dimensions of spawned bodies: 1 frictionless, 3 sliding, 4 + spin "
               "(torsional), 6 + rolling friction; a contact takes the larger of its geoms'",
               _condim),
@@ -118,7 +157,7 @@ PARAMS: dict[str, ParamSpec] = {p.name: p for p in (
               "rolling friction of spawned bodies: torque = value x normal force (condim 6); "
               "value / radius is the rolling-resistance coefficient", number(0.0, 1.0)),
     ParamSpec("mujoco.solver", "cg", "", "constraint solver", choice(*SOLVERS)),
-    ParamSpec("mujoco.cone", "elliptic", "", "friction cone", choice(*CONES)),
+    ParamSpec("mujoco.cone", "pyramidal", "", "friction cone", choice(*CONES)),
     ParamSpec("mujoco.tolerance", 1e-4, "",
               "solver stops early once its relative improvement is below this (option "
               "tolerance)", number(0.0, 1.0)),
@@ -147,7 +186,7 @@ PARAMS: dict[str, ParamSpec] = {p.name: p for p in (
               "pin's apex or shoulder, within 30 degrees) and keep it awake until it leaves, "
               "for at most 5 s: a real ball cannot rest there alone, and one pinned by a "
               "neighbour creeps (mujoco/balance.py)", flag),
-)}
+)}, SOURCES)
 CONTACT_PARAMS = frozenset({"timestep", "default_friction", "default_restitution",
                             "default_static_friction", "default_static_restitution",
                             "mujoco.solref", "mujoco.solimp", "mujoco.condim",

@@ -9,7 +9,15 @@ uses it), and how two bodies' surfaces combine (Webots has one material pair for
 
 from __future__ import annotations
 
-from galton.daemon.engines.params import ParamSpec, choice, flag, integer, number, shared
+from galton.daemon.engines.params import (
+    ParamSpec,
+    choice,
+    flag,
+    integer,
+    number,
+    shared,
+    with_sources,
+)
 
 WEBOTS_TIMESTEP = 0.032  # s: WorldInfo.basicTimeStep's default, 32 ms
 # s: the paper board lost no ball at 2, 4 or 8 ms (43 of 100 at 32 ms); 2 ms keeps the
@@ -17,7 +25,34 @@ WEBOTS_TIMESTEP = 0.032  # s: WorldInfo.basicTimeStep's default, 32 ms
 DEFAULT_TIMESTEP = 0.002
 STEPPERS = ("world", "quick")
 
-SPECS: dict[str, ParamSpec] = {spec.name: spec for spec in (
+# Where each default comes from (docs/ENGINES.md names the Webots file of each): Webots'
+# set-up of ODE unless it says "the daemon's", with why.
+SOURCES = {
+    "timestep": "the daemon's (Webots: 32 ms, WorldInfo.basicTimeStep): the board loses "
+                "balls at 32 ms, and robot gains need 2 ms",
+    "gravity": "Webots' default (WorldInfo.gravity 9.81)",
+    "solver_iterations": "ODE's QuickStep default 20 (unused by dWorldStep, Webots' stepper)",
+    "default_friction": "Webots' contact default (ContactProperties.coulombFriction 1)",
+    "default_restitution": "Webots' contact default (ContactProperties.bounce 0.5)",
+    "default_static_friction": "Webots' contact default (coulombFriction 1)",
+    "default_static_restitution": "Webots' contact default (bounce 0.5)",
+    "ode.stepper": "Webots' (dWorldStep, WbSimulationCluster.cpp)",
+    "ode.cfm": "Webots' default (WorldInfo.CFM)",
+    "ode.erp": "Webots' default (WorldInfo.ERP)",
+    "ode.contact_soft_cfm": "Webots' contact default (ContactProperties.softCFM)",
+    "ode.soft_cfm_step": "the daemon's: Webots' soft CFM at every step as at Webots' 32 ms",
+    "ode.contact_soft_erp": "Webots' contact default (ContactProperties.softERP)",
+    "ode.bounce_velocity": "Webots' contact default (ContactProperties.bounceVelocity)",
+    "ode.max_contacts": "Webots' MAX_CONTACT_JOINTS (WbSimulationCluster.cpp)",
+    "ode.auto_disable": "Webots' (bodies at rest sleep, WbOdeContext.cpp)",
+    "ode.disable_time": "Webots' default (WorldInfo.physicsDisableTime)",
+    "ode.disable_linear_threshold": "Webots' default "
+                                    "(WorldInfo.physicsDisableLinearThreshold)",
+    "ode.disable_angular_threshold": "Webots' default "
+                                     "(WorldInfo.physicsDisableAngularThreshold)",
+}
+
+SPECS: dict[str, ParamSpec] = with_sources({spec.name: spec for spec in (
     shared("timestep", DEFAULT_TIMESTEP, "Simulated time per step (Webots' default "
            f"basicTimeStep is {WEBOTS_TIMESTEP} s: the paper-webots board sets it)."),
     shared("gravity", (0.0, 0.0, -9.81), "Gravity vector, world frame."),
@@ -63,7 +98,7 @@ SPECS: dict[str, ParamSpec] = {spec.name: spec for spec in (
               "(WorldInfo.physicsDisableLinearThreshold).", number(0, 1000)),
     ParamSpec("ode.disable_angular_threshold", 0.01, "rad/s", "Idle below this spin "
               "(WorldInfo.physicsDisableAngularThreshold).", number(0, 1000)),
-)}
+)}, SOURCES)
 
 SURFACE_DEFAULTS = frozenset({"default_friction", "default_restitution",
                               "default_static_friction", "default_static_restitution"})

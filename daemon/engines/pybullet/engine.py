@@ -9,11 +9,10 @@ faster. Loaded models are multibodies (their joints need it), with damping set t
 Contacts: PyBullet multiplies the two bodies' values at a contact, for friction and for
 restitution alike, so a body with restitution 0.9 bounces off a body with restitution 0
 hardly at all. Restitution is also zero below ``pybullet.restitution_velocity_threshold``.
-The defaults (restitution 0.8275, friction 0.5 on every body: e = 0.685, mu = 0.25 for
-any pair; early contacts from 0.01 m instead of Bullet's 0.02, so that slow balls keep
-their bounce) are calibrated on the Galton board in both release modes; the solver
-settings (10 iterations, pyramid friction) are the cheapest that keep it.
-docs/physics/pybullet.md has the measurements. ``contactBreakingThreshold`` is a global of
+The contact defaults are PyBullet's own (restitution 0, friction 0.5, contacts from 0.02 m,
+cone friction); the Galton board brings its calibrated materials (restitution 0.8275 on
+every body, contacts from 0.01 m, pyramid friction: docs/physics/pybullet.md). The solver's
+10 iterations are the daemon's (PyBullet: 50). ``contactBreakingThreshold`` is a global of
 the PyBullet module: every engine sets its own value when it starts, and the last
 ``set_params`` wins for all engines of the process.
 

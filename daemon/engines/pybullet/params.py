@@ -3,9 +3,9 @@ setPhysicsEngineParameter keyword of those that are world settings.
 
 ``Parameters``, a part of the engine, hands values to PyBullet and to the bodies they reach.
 
-The contact defaults are calibrated on the Galton board (docs/physics/pybullet.md): restitution
-0.8275 and friction 0.5 on every body (PyBullet multiplies both bodies' values: e = 0.685,
-mu = 0.25), contacts made from 0.01 m, 10 solver iterations and pyramid friction.
+The contact defaults are PyBullet's own (restitution 0, friction 0.5, contacts made from
+Bullet's 0.02 m, cone friction): a world starts as PyBullet sets it up. The Galton board
+carries its own calibrated materials (docs/physics/pybullet.md, client/boards).
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
-from galton.daemon.engines.params import ParamSpec, flag, number, shared
+from galton.daemon.engines.params import ParamSpec, flag, number, shared, with_sources
 from galton.daemon.engines.pybullet.shapes import margin_for
 
 if TYPE_CHECKING:
@@ -21,7 +21,31 @@ if TYPE_CHECKING:
 
     from galton.daemon.engines.pybullet.rebuild import Body
 
-SPECS: dict[str, ParamSpec] = {spec.name: spec for spec in (
+# Where each default comes from (docs/PHYSICS.md tables them): PyBullet's own (3.2.7,
+# examples/SharedMemory/PhysicsServerCommandProcessor.cpp and Bullet's btContactSolverInfo)
+# unless it says "the daemon's", with why.
+SOURCES = {
+    "timestep": "PyBullet's default (fixedTimeStep 1/240 s)",
+    "gravity": "the daemon's (PyBullet: none): Earth's, as every engine here",
+    "solver_iterations": "the daemon's (PyBullet: 50): 40 % faster on the Galton board "
+                         "at the same fidelity",
+    "default_friction": "PyBullet's default (lateralFriction 0.5)",
+    "default_restitution": "PyBullet's default (restitution 0)",
+    "default_static_friction": "PyBullet's default (lateralFriction 0.5)",
+    "default_static_restitution": "PyBullet's default (restitution 0)",
+    "pybullet.restitution_velocity_threshold": "Bullet's default "
+                                               "(m_restitutionVelocityThreshold 0.2)",
+    "pybullet.contact_breaking_threshold": "Bullet's default (gContactBreakingThreshold)",
+    "pybullet.ccd_swept_sphere_radius": "PyBullet's default (no CCD)",
+    "pybullet.collision_margin": "PyBullet's default (m_defaultCollisionMargin 0.001)",
+    "pybullet.enable_cone_friction": "PyBullet's default (enableConeFriction 1)",
+    "pybullet.erp": "Bullet's default (m_erp 0.2)",
+    "pybullet.contact_erp": "PyBullet's default (m_erp2 0.08)",
+    "pybullet.deterministic_overlapping_pairs": "the daemon's (Bullet: off): identical "
+                                                "runs give identical results",
+}
+
+SPECS: dict[str, ParamSpec] = with_sources({spec.name: spec for spec in (
     shared("timestep", 1 / 240, "Simulated time per step."),
     shared("gravity", (0.0, 0.0, -9.81), "Gravity vector, world frame."),
     shared("solver_iterations", 10, "Constraint solver iterations per step "
@@ -29,17 +53,17 @@ SPECS: dict[str, ParamSpec] = {spec.name: spec for spec in (
     shared("default_friction", 0.5, "Lateral friction of moving bodies that set "
            "none, now and after a change. PyBullet multiplies both bodies' values at a "
            "contact: 0.5 on both is mu = 0.25."),
-    shared("default_restitution", 0.8275, "Restitution of moving bodies that set "
+    shared("default_restitution", 0.0, "Restitution of moving bodies that set "
            "none, now and after a change. PyBullet multiplies both bodies' values at a "
            "contact: 0.8275 on both is e = 0.685."),
     shared("default_static_friction", 0.5, "Lateral friction of static bodies (the "
            "scenery) that set none, now and after a change; combined with the other body's "
            "value as a product, like every PyBullet contact."),
-    shared("default_static_restitution", 0.8275, "Restitution of static bodies that "
+    shared("default_static_restitution", 0.0, "Restitution of static bodies that "
            "set none, now and after a change; combined as a product."),
     ParamSpec("pybullet.restitution_velocity_threshold", 0.2, "m/s", "Contacts approaching "
               "slower than this do not bounce.", number(0, 1000)),
-    ParamSpec("pybullet.contact_breaking_threshold", 0.01, "m", "Gap at which Bullet makes a "
+    ParamSpec("pybullet.contact_breaking_threshold", 0.02, "m", "Gap at which Bullet makes a "
               "contact before two solids touch. Such early contacts lose their bounce once a "
               "few steps old, so a slow ball bounces less off a plane, box or cylinder, the "
               "more so at small timesteps; 0.001 gives the same bounce at every speed and step.",
@@ -51,15 +75,15 @@ SPECS: dict[str, ParamSpec] = {spec.name: spec for spec in (
     ParamSpec("pybullet.collision_margin", 0.001, "m", "Margin of spawned boxes, cylinders "
               "and planes: rounds box edges, capped at half the smallest half size. Spheres "
               "and capsules keep their radius as margin; models keep theirs.", number(0, 1)),
-    ParamSpec("pybullet.enable_cone_friction", False, "", "Implicit cone friction; false "
-              "(the default here, not PyBullet's) uses the cheaper pyramid approximation.", flag),
+    ParamSpec("pybullet.enable_cone_friction", True, "", "Implicit cone friction; false "
+              "uses the cheaper pyramid approximation.", flag),
     ParamSpec("pybullet.erp", 0.2, "", "Error reduction of non-contact constraints (the "
               "joints of loaded models).", number(0, 1)),
     ParamSpec("pybullet.contact_erp", 0.08, "", "Error reduction of contacts: the share of a "
               "penetration corrected per step.", number(0, 1)),
     ParamSpec("pybullet.deterministic_overlapping_pairs", True, "", "Sort overlapping pairs, "
               "so that identical runs give identical results.", flag),
-)}
+)}, SOURCES)
 
 # Parameters that are setPhysicsEngineParameter keywords (booleans go as 0/1).
 WORLD_PARAMS = {

@@ -6,12 +6,14 @@ import dataclasses
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 from typer.testing import CliRunner
 
 from galton.analysis.board import BoardSpec
 from galton.analysis.records import ExperimentResults
 from galton.client import Client, EmbeddedDaemon
+from galton.client.bench.build import ball_group, board_groups
 from galton.client.bench.trial import (
     MIN_CHUNK_S,
     PROBE_S,
@@ -180,3 +182,44 @@ def test_a_failed_bench_keeps_the_trials_it_finished(daemons: dict[str, Embedded
     assert [(t.engine, t.balls) for t in kept.trials] == [("mujoco", 5), ("mujoco", 5)]
     assert kept.executor == {"kind": "local"}
     assert "2 trial(s) finished before the failure are kept" in result.output
+
+
+@pytest.mark.parametrize("engine", ["mujoco", "pybullet", "ode", "dart"])
+def test_the_board_brings_its_materials_to_every_body(engine: str) -> None:
+    board = BoardSpec.load("paper")
+    own = board.contacts[engine].bodies
+    groups = [*board_groups(board, engine), ball_group(board, engine, ["b"], np.zeros((1, 3)))]
+    for group in groups:
+        role = group.tags[-1]
+        assert (group.friction, group.restitution) == (own[role].friction,
+                                                      own[role].restitution), role
+    bare = board.replace(materials="engine")
+    assert bare.engine_contacts(engine).params == {}
+    for group in [*board_groups(bare, engine), ball_group(bare, engine, ["b"], np.zeros((1, 3)))]:
+        assert group.friction is None and group.restitution is None
+
+
+def test_bench_with_engine_materials_says_so(daemons: dict[str, EmbeddedDaemon],
+                                             tmp_path: Path) -> None:
+    from support.daemons import start_daemon
+
+    daemon = start_daemon(daemons, "mujoco")
+    result = runner.invoke(app, [
+        "bench", "--connect", daemon.endpoint, "--instances", daemon.instance, "--engines",
+        "mujoco", "--board", "small", "--materials", "engine", "--balls", "5",
+        "--repetitions", "1", "--out", str(tmp_path), "--json"])
+    assert result.exit_code == 0, result.output
+    trial = ExperimentResults.from_json(tmp_path / "results.json").trials[0]
+    assert trial.config["board"]["materials"] == "engine"
+    assert trial.settings["mujoco.solimp"] == [0.9, 0.95, 0.001, 0.5, 2.0]
+    assert "Materials: the engine's own defaults" in (tmp_path / "report.md").read_text()
+    bad = runner.invoke(app, ["bench", "--board", "small", "--materials", "wood"])
+    assert bad.exit_code == 2 and "--materials must be one of board, engine" in bad.output
+
+
+def test_a_trial_loads_the_board_settings(mujoco_sim: Client) -> None:
+    board = BoardSpec.load("small")
+    board = board.replace(ball=dataclasses.replace(board.ball, count=3))
+    record = run_trial(mujoco_sim, TrialConfig("mujoco", board))
+    assert record.config["board"]["materials"] == "board"
+    assert record.settings["mujoco.solimp"] == [0.8, 0.95, 0.001, 0.5, 2.0]

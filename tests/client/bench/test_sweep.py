@@ -8,11 +8,12 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
+from galton.analysis.board import SCENERY_ROLES, BoardSpec
 from galton.analysis.errors import AnalysisError
 from galton.analysis.records import ExperimentResults, TrialRecord
 from galton.analysis.sweep import SweepAxis, sweep_cells
 from galton.client import EmbeddedDaemon
-from galton.client.bench.sweep import parse_axis
+from galton.client.bench.sweep import parse_axis, with_params
 from galton.client.cli.app import app
 from galton.protocol import InvalidArgumentError
 
@@ -23,6 +24,18 @@ def test_parse_axis_reads_json_values() -> None:
                                                                        (0.02, 0.5))
     with pytest.raises(InvalidArgumentError):
         parse_axis("no-values")
+
+
+def test_a_default_surface_axis_reaches_the_board_bodies_it_stands_for() -> None:
+    board = BoardSpec.load("paper")
+    swept = with_params(board, "mujoco", {"default_restitution": 0.4,
+                                          "default_static_friction": 0.2})
+    bodies = swept.contacts["mujoco"].bodies
+    assert swept.contacts["mujoco"].params["default_restitution"] == 0.4
+    assert bodies["ball"].restitution == 0.4 and bodies["ball"].friction == 0.5
+    assert all(bodies[role].friction == 0.2 and bodies[role].restitution == 0.61
+               for role in SCENERY_ROLES)
+    assert swept.contacts["pybullet"] == board.contacts["pybullet"]
 
 
 def _trial(restitution: float, counts: list[int], lost: int = 0) -> TrialRecord:

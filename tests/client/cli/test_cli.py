@@ -61,6 +61,10 @@ def test_params_show_and_set(target: list[str]) -> None:
     assert invoke([*target, "params", "--json"])["timestep"] == 0.001
     gravity = invoke([*target, "params", "gravity=[0,0,-3]", "--json"])["gravity"]
     assert gravity == [0, 0, -3]
+    shown = run([*target, "params"])
+    assert shown.exit_code == 0, shown.output
+    assert "(* : not the default)" in flat(shown.output)
+    assert "0.001 *" in flat(shown.output) and "MuJoCo's default" in flat(shown.output)
 
 
 def test_capabilities(target: list[str]) -> None:

@@ -1,4 +1,5 @@
-"""docs/ENGINES.md lists every engine parameter with its current default."""
+"""docs/ENGINES.md lists every engine parameter with its current default, and
+docs/PHYSICS.md each engine's defaults with where they come from."""
 
 from __future__ import annotations
 
@@ -18,8 +19,12 @@ def test_engines_page_tables_match_the_engines_specs() -> None:
     generator = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(generator)
     page = generator.PAGE.read_text()
+    physics = generator.PHYSICS.read_text()
     for name in ENGINE_CLASSES:
         assert generator.table(name) in page, f"run python docs/make_engines_md.py ({name})"
+        opening, closing = generator.marked(name)
+        assert opening + generator.defaults_table(name) + closing in physics, (
+            f"run python docs/make_engines_md.py ({name})")
 
 
 def test_every_engine_declares_the_shared_parameters_from_the_base() -> None:

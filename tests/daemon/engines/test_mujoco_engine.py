@@ -16,6 +16,7 @@ import mujoco
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
+from support.materials import board_defaults
 
 from galton.daemon.engines.base import FEATURE_LOAD_MODEL, FEATURE_STATIC_POSE
 from galton.daemon.engines.mujoco import engine as mujoco_engine
@@ -395,11 +396,11 @@ def test_properties_tell_defaults_given_values_and_updates(engine: MujocoEngine)
                                                restitution=0.1)])
     names = ["ground", "plain", "given"]
     np.testing.assert_allclose(engine.properties(names), [
-        [math.nan, 0.5, 0.61], [SPHERE_MASS, 0.5, 0.3], [2.0, 0.9, 0.1]])
+        [math.nan, 1.0, 0.0], [SPHERE_MASS, 1.0, 0.0], [2.0, 0.9, 0.1]])
     engine.set_params({"default_friction": 0.7, "default_restitution": 0.5,
                        "default_static_friction": 0.3})
     np.testing.assert_allclose(engine.properties(names), [
-        [math.nan, 0.3, 0.61], [SPHERE_MASS, 0.7, 0.5], [2.0, 0.9, 0.1]])
+        [math.nan, 0.3, 0.0], [SPHERE_MASS, 0.7, 0.5], [2.0, 0.9, 0.1]])
     engine.update(["plain", "ground"], BodyProperties(mass=1.5, friction=0.2, restitution=0.4))
     engine.set_params({"default_friction": 0.6})
     np.testing.assert_allclose(engine.properties(names), [
@@ -561,9 +562,10 @@ def slide_friction(engine: MujocoEngine, crate: str) -> float:
     return float((1.0 - engine.get_states([crate])[1][0, 0]) / 0.1 / GRAVITY)
 
 
-def test_defaults_bounce_like_a_hard_ball_and_slide_with_low_friction(
+def test_board_materials_bounce_like_a_hard_ball_and_slide_with_low_friction(
         engine: MujocoEngine) -> None:
     """The drop test behind docs/physics/mujoco.md: e ≈ 0.68 from 1 m, μ ≈ 0.5 sliding."""
+    engine.set_params(board_defaults("mujoco"))
     floor = group("box", ["floor"], [[0, 0, -0.05]], size=(2, 2, 0.05), static=True)
     engine.spawn([floor, group("sphere", ["ball"], [[0, 0, 1.045]], size=(0.045,), mass=0.38)])
     speeds = []
@@ -581,6 +583,7 @@ def test_defaults_bounce_like_a_hard_ball_and_slide_with_low_friction(
 def test_a_contact_with_a_static_body_takes_the_static_surface(engine: MujocoEngine) -> None:
     """Scenery outranks moving bodies (geom priority): the crate's own friction is ignored
     on the floor, while the floor's friction, default or updated, decides."""
+    engine.set_params(board_defaults("mujoco"))
     engine.spawn([group("box", ["floor"], [[0, 0, -0.05]], size=(2, 2, 0.05), static=True),
                   group("box", ["crate"], [[0, 0, 0.05]], size=(0.05, 0.05, 0.05), mass=1.0,
                         friction=1.0)])
@@ -599,6 +602,7 @@ def test_a_contact_with_a_static_body_takes_the_static_surface(engine: MujocoEng
 def test_moving_bodies_collide_with_their_own_surface(engine: MujocoEngine) -> None:
     """Two balls meeting head-on bounce with the moving bodies' default restitution (0.3:
     measured e ≈ 0.38), whatever the scenery's; lowering it to 0.1 deadens them (e ≈ 0.2)."""
+    engine.set_params(board_defaults("mujoco"))
     engine.set_params({"gravity": (0.0, 0.0, 0.0), "default_static_restitution": 0.0})
     bounces = []
     for restitution in (None, 0.1):

@@ -196,7 +196,11 @@ def test_a_box_resting_on_the_plane_pushes_with_its_weight(
     up = np.where(np.array(a) == "ground", 1.0, -1.0)  # from the first to the second
     np.testing.assert_allclose(normals, up[:, None] * [0, 0, 1], atol=1e-9)
     np.testing.assert_allclose(np.abs(positions[:, :2]), 0.1, atol=1e-6)
-    assert forces.sum() == pytest.approx(2.0 * GRAVITY, rel=0.01)
+    # A body asleep keeps the forces of the step it fell asleep at: MuJoCo sleeps a tree
+    # slower than the tolerance for 10 steps, with its own impedance (dmin 0.9) while the
+    # contact still slows it by 1.6 % of g (docs/PHYSICS.md, known limits).
+    assert forces.sum() == pytest.approx(2.0 * GRAVITY, rel=0.01 if sleep_tolerance == 0 else
+                                         0.02)
     assert (depths >= 0).all() and depths.max() < 1e-3
     assert engine.contacts(["far"])[0] == []  # a ball hung in the air touches nothing
     with pytest.raises(NotFoundError):

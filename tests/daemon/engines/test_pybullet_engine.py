@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 import pytest
+from support.materials import board_defaults
 from support.urdf import ARM_URDF
 
 from galton.daemon.engines.pybullet.engine import PybulletEngine
@@ -239,16 +240,18 @@ def mean_bounce(engine: PybulletEngine, height: float) -> float:
 
 
 @pytest.mark.parametrize("height", [0.05, 0.5, 2.5])
-def test_default_bounce_is_a_hard_ball_on_a_hard_floor(engine: PybulletEngine,
-                                                       height: float) -> None:
-    """default_restitution 0.8275 on both bodies (0.8275² = 0.685): e about 0.70-0.72 at 1,
-    3 and 7 m/s (docs/physics/pybullet.md)."""
+def test_board_bounce_is_a_hard_ball_on_a_hard_floor(engine: PybulletEngine,
+                                                     height: float) -> None:
+    """The board's restitution 0.8275 on both bodies (0.8275² = 0.685): e about 0.70-0.72 at
+    1, 3 and 7 m/s (docs/physics/pybullet.md)."""
+    engine.set_params(board_defaults("pybullet"))
     assert mean_bounce(engine, height) == pytest.approx(0.71, abs=0.04)
 
 
 def test_early_contacts_take_the_bounce_of_slow_balls(engine: PybulletEngine) -> None:
     """At a small step, a slow ball loses its bounce in contacts made before it touches
-    (Bullet's 0.02 m); the default 0.01 m keeps most of it, 0.001 m all of it."""
+    (Bullet's 0.02 m); the board's 0.01 m keeps most of it, 0.001 m all of it."""
+    engine.set_params(board_defaults("pybullet"))
     bounces = {}
     for gap in (0.02, 0.01, 0.001):
         engine.set_params({"timestep": 1 / 480, "pybullet.contact_breaking_threshold": gap})
@@ -288,8 +291,8 @@ def test_properties_are_what_pybullet_simulates(engine: PybulletEngine) -> None:
     names = ["ground", "plain", "own", "box", arm.name]
     ball_mass = 1000 * 4 / 3 * math.pi * RADIUS**3
     np.testing.assert_allclose(engine.properties(names), [
-        [math.nan, 0.7, 0.8275], [ball_mass, 0.5, 0.8275], [3.0, 0.9, 0.3],
-        [1000 * 0.2 * 0.4 * 0.6, 0.5, 0.8275], [2.5, 0.5, 0.0]])
+        [math.nan, 0.7, 0.0], [ball_mass, 0.5, 0.0], [3.0, 0.9, 0.3],
+        [1000 * 0.2 * 0.4 * 0.6, 0.5, 0.0], [2.5, 0.5, 0.0]])
     engine.update(["plain"], BodyProperties(mass=2.0, restitution=0.5))
     engine.set_params({"default_friction": 0.2, "default_restitution": 0.6,
                        "default_static_restitution": 0.1})
