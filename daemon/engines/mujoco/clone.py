@@ -23,6 +23,7 @@ on exactly as the source).
 from __future__ import annotations
 
 import copy
+import threading
 from typing import TYPE_CHECKING, Any
 
 import mujoco
@@ -39,12 +40,20 @@ if TYPE_CHECKING:
 
 
 class Sharing:
-    """The engines holding one spec and model (a source and its forks) until they edit it."""
+    """The engines holding one spec and model (a source and its forks) until they edit it;
+    futures stepped on several threads may each take their copy at once (a lock)."""
 
-    __slots__ = ("holders",)
+    __slots__ = ("holders", "lock")
 
     def __init__(self) -> None:
         self.holders = 1
+        self.lock = threading.Lock()
+
+    def let_go(self) -> bool:
+        """One holder fewer; whether others still hold it."""
+        with self.lock:
+            self.holders -= 1
+            return self.holders > 0
 
 
 def clone(source: MujocoEngine) -> MujocoEngine:
@@ -67,8 +76,7 @@ def own(engine: MujocoEngine) -> None:
     if sharing is None:
         return
     engine.sharing = None
-    sharing.holders -= 1
-    if sharing.holders == 0:
+    if not sharing.let_go():
         return  # the others own theirs already: these are its own
     spec = engine.spec.copy()
     spec.copy_during_attach = True  # (not carried by MjSpec.copy)
@@ -84,14 +92,15 @@ def leave(engine: MujocoEngine) -> None:
     sharing = engine.sharing
     if sharing is not None:
         engine.sharing = None
-        sharing.holders -= 1
+        sharing.let_go()
 
 
 def _share_compiled(source: MujocoEngine, engine: MujocoEngine) -> None:
     """The spec and compiled model shared, the data copied, and what is kept beside them."""
     if source.sharing is None:
         source.sharing = Sharing()
-    source.sharing.holders += 1
+    with source.sharing.lock:
+        source.sharing.holders += 1
     engine.sharing = source.sharing
     engine.values = dict(source.values)
     engine.spec = source.spec
