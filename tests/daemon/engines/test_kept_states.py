@@ -1,4 +1,4 @@
-"""States kept in memory (``Engine.save_state``/``load_state``) on ODE: set back into the
+"""States kept in memory (``Engine.save_state``/``load_state``) on ODE and DART: set back into the
 same world, they go on bit for bit as the world went on from the moment they were kept, and
 as the portable path (a snapshot restored into a fresh engine) goes on: a pile in contact
 with sleepers, a KUKA under targets and a wrench. A world whose bodies changed refuses it.
@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 from support.mujoco_worlds import KUKA, SEED, bodies, floor
 
+from galton.daemon.engines.dart.engine import DartEngine
 from galton.daemon.engines.ode.engine import OdeEngine
 from galton.daemon.world.model_files import resolve_model
 from galton.protocol import BodyGroup
@@ -19,7 +20,10 @@ from galton.protocol import BodyGroup
 STEPS = 400
 
 
-def state(engine: OdeEngine) -> np.ndarray:
+Kept = OdeEngine | DartEngine
+
+
+def state(engine: Kept) -> np.ndarray:
     """Every entity's pose and twist, and every driven joint's state and effort."""
     names = sorted(engine._bodies)
     joints = [j.name for j in engine.joints() if j.type in ("revolute", "prismatic")]
@@ -29,11 +33,11 @@ def state(engine: OdeEngine) -> np.ndarray:
     return np.concatenate(parts, axis=None)
 
 
-@pytest.fixture(scope="module")
-def world() -> Iterator[OdeEngine]:
+@pytest.fixture(scope="module", params=[OdeEngine, DartEngine], ids=["ode", "dart"])
+def world(request: pytest.FixtureRequest) -> Iterator[Kept]:
     """A pile on a floor, part of it asleep, beside a KUKA holding targets under a wrench
     (one for the module: each test starts from a state it keeps; the last one spawns)."""
-    engine = OdeEngine()
+    engine: Kept = request.param()
     rng = np.random.default_rng(SEED)
     engine.spawn([floor(), bodies("sphere", [f"s{i}" for i in range(30)], (0.04,), rng),
                   bodies("box", [f"b{i}" for i in range(8)], (0.05, 0.04, 0.03), rng)])
@@ -50,13 +54,14 @@ def world() -> Iterator[OdeEngine]:
 
 
 def test_a_kept_state_goes_on_bit_for_bit_as_the_world_and_the_portable_path(
-        world: OdeEngine) -> None:
-    assert any(not b.awake for b in world._moving)  # sleepers in the pile
+        world: Kept) -> None:
+    if isinstance(world, OdeEngine):
+        assert any(not b.awake for b in world._moving)  # sleepers in the pile
     kept = world.save_state()
     blob = world.snapshot()  # the portable path, at the same moment
     world.step(STEPS)
     expected = state(world)
-    portable = OdeEngine()
+    portable = type(world)()
     try:
         portable.restore(blob)
         portable.step(STEPS)
@@ -69,7 +74,7 @@ def test_a_kept_state_goes_on_bit_for_bit_as_the_world_and_the_portable_path(
         np.testing.assert_array_equal(state(world), expected)
 
 
-def test_targets_and_wrenches_changed_after_keeping_are_put_back(world: OdeEngine) -> None:
+def test_targets_and_wrenches_changed_after_keeping_are_put_back(world: Kept) -> None:
     kept = world.save_state()
     world.step(STEPS)
     expected = state(world)
@@ -85,7 +90,7 @@ def test_targets_and_wrenches_changed_after_keeping_are_put_back(world: OdeEngin
     np.testing.assert_array_equal(state(world), expected)
 
 
-def test_a_world_whose_bodies_changed_refuses_it(world: OdeEngine) -> None:
+def test_a_world_whose_bodies_changed_refuses_it(world: Kept) -> None:
     kept = world.save_state()
     world.spawn([BodyGroup("sphere", (0.03,), ["new"],
                            np.array([[0, 0, 2.0, 0, 0, 0, 1]]))])
