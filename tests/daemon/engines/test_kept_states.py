@@ -90,6 +90,18 @@ def test_targets_and_wrenches_changed_after_keeping_are_put_back(world: Kept) ->
     np.testing.assert_array_equal(state(world), expected)
 
 
+def test_a_clone_takes_the_kept_state_as_a_slots_twin_does(world: Kept) -> None:
+    kept = world.save_state()
+    twin = world.clone()
+    try:
+        world.step(STEPS)
+        assert twin.load_state(kept)
+        twin.step(STEPS)
+        np.testing.assert_array_equal(state(twin), state(world))
+    finally:
+        twin.close()
+
+
 def test_a_world_whose_bodies_changed_refuses_it(world: Kept) -> None:
     kept = world.save_state()
     world.spawn([BodyGroup("sphere", (0.03,), ["new"],
