@@ -49,7 +49,7 @@ from galton.daemon.engines.base import (
     ShapeMesh,
 )
 from galton.daemon.engines.dart import contacts as contact_points
-from galton.daemon.engines.dart import frames, meshes, state
+from galton.daemon.engines.dart import fast_state, frames, meshes, state
 from galton.daemon.engines.dart import spawn as books
 from galton.daemon.engines.dart.joints import Robots, Target
 from galton.daemon.engines.dart.mesh_files import MeshFiles
@@ -282,6 +282,13 @@ class DartEngine(Scene, Snapshots, Engine):
             return
         for name in names:
             self._robots.wrenches.pop(name, None)
+
+    def save_state(self) -> object | None:
+        """Skeletons' positions and velocities, the time and the held books (fast_state)."""
+        return fast_state.save(self)
+
+    def load_state(self, state: object) -> bool:
+        return fast_state.load(self, state)
 
     def restore_joints(self) -> None:
         for joint in self._robots.joints.values():

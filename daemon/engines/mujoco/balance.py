@@ -33,7 +33,7 @@ has woken.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from typing import Any
 
 import mujoco
@@ -85,8 +85,12 @@ class BalanceGuard:
         """Trees kept awake now (for tests and diagnostics)."""
         return sorted(self._held)
 
-    def check(self, m: mujoco.MjModel, d: mujoco.MjData) -> None:
-        """Wake balls that fell asleep on a crown; free those that have rolled off one."""
+    def check(self, m: mujoco.MjModel, d: mujoco.MjData,
+              writable: Callable[[], mujoco.MjModel] | None = None) -> None:
+        """Wake balls that fell asleep on a crown; free those that have rolled off one.
+        ``writable``: the model to write sleep policies into (a model shared with a fork is
+        copied first, clone.own), called only when one changes."""
+        own = writable if writable is not None else (lambda: m)
         if not len(self._trees) or not m.opt.enableflags & mujoco.mjtEnableBit.mjENBL_SLEEP:
             return
         up = _up(m)
@@ -98,15 +102,16 @@ class BalanceGuard:
             tree, geom = int(self._trees[i]), int(self._geoms[i])
             if tree not in self._held and tree not in self._let_go and \
                     on_a_crown(m, d, geom, up):
+                m = own()
                 self._held[tree] = (geom, int(m.tree_sleep_policy[tree]), float(d.time))
                 m.tree_sleep_policy[tree] = _NEVER  # MuJoCo wakes it at the next step
         self._was_asleep = asleep
         for tree, (geom, _, since) in list(self._held.items()):
             if not 0.0 <= d.time - since < HOLD_LIMIT_S:  # (time may have been reset)
-                self._release(m, tree)
+                self._release(own(), tree)
                 self._let_go[tree] = False
             elif not on_a_crown(m, d, geom, up):
-                self._release(m, tree)
+                self._release(own(), tree)
 
     def _forget_woken(self, d: mujoco.MjData) -> None:
         """A ball let go becomes a candidate again once it has slept and woken up."""

@@ -124,6 +124,8 @@ class MujocoEngine(Engine):
     # a clone is made without __init__).
     observed: observing.Observed | None = None
     closed = False  # its MjData was given back (fast_state.give_back): never twice
+    # The spec and model it shares with its forks or source, read-only until ``own`` (clone).
+    sharing: cloning.Sharing | None = None
 
     def __init__(self) -> None:
         ms.route_warnings()
@@ -161,11 +163,23 @@ class MujocoEngine(Engine):
         self.start_workers()
         self.reindex()
 
+    def own(self) -> None:
+        """Before changing the spec, the model or the books naming spec elements: its own
+        copy of them if it shares them with a fork or a source (clone.own)."""
+        if self.sharing is not None:
+            cloning.own(self)
+
+    def writable_model(self) -> mujoco.MjModel:
+        """The model, its own (for an edit of its arrays)."""
+        self.own()
+        return self.model
+
     def recompile(self, nbody: int | None = None, nv: int | None = None) -> None:
         self.compile(nbody, nv)
         self.reindex()
 
     def compile(self, nbody: int | None = None, nv: int | None = None) -> None:
+        self.own()
         compiling.compile_in_place(self, nbody, nv)
 
     def start_workers(self) -> None:
@@ -234,6 +248,7 @@ class MujocoEngine(Engine):
 
     def set_params(self, params: dict[str, Any]) -> None:
         clean = check_updates(self.name, ms.PARAMS, params)
+        self.own()
         observing.freeze(self)
         self.xml = None
         self.values.update(clean)
@@ -263,18 +278,22 @@ class MujocoEngine(Engine):
     # -- Engine: create & delete ---------------------------------------------------------
     def spawn(self, groups: Sequence[BodyGroup]) -> None:
         observing.freeze(self)
+        self.own()
         adding.spawn(self, groups)
 
     def load_model(self, fmt: str, text: str | None, path: str | None,
                    prefix: str, *, fixed_base: bool = True) -> list[EntityInfo]:
         observing.freeze(self)
+        self.own()
         return models.load_model(self, fmt, text, path, prefix, fixed_base)
 
     def delete(self, names: Sequence[str]) -> None:
         observing.freeze(self)
+        self.own()
         removal.delete(self, names)
 
     def clear(self) -> None:
+        self.own()
         removal.clear(self)
 
     # -- Engine: state --------------------------------------------------------------------
@@ -287,10 +306,12 @@ class MujocoEngine(Engine):
     def set_states(self, names: Sequence[str], poses: np.ndarray | None,
                    twists: np.ndarray | None) -> None:
         observing.freeze(self)
+        self.own()
         teleport.set_states(self, names, poses, twists)
 
     def update(self, names: Sequence[str], props: BodyProperties) -> None:
         observing.freeze(self)
+        self.own()
         self.xml = None
         mpr.update(self, names, props)
 
@@ -305,9 +326,11 @@ class MujocoEngine(Engine):
         return timing.state_within(self, max_position, max_speed)
 
     def reset_dynamics(self) -> None:
+        self.own()  # the balance guard gives back its sleep policies
         timing.reset_dynamics(self)
 
     def restart_looks(self) -> None:
+        self.own()
         timing.restart_looks(self)
 
     # -- Engine: joints and wrenches (joints, wrench) ------------------------
@@ -328,6 +351,7 @@ class MujocoEngine(Engine):
 
     def set_joint_targets(self, names: Sequence[str], mode: str, targets: np.ndarray,
                           kp: np.ndarray, kd: np.ndarray, max_effort: np.ndarray) -> None:
+        self.own()  # the actuators' gains are model arrays
         self.joint_book.hold(self.model, self.data, names, mode, targets, kp, kd, max_effort)
 
     def set_wrenches(self, names: Sequence[str], wrenches: np.ndarray,
@@ -338,6 +362,7 @@ class MujocoEngine(Engine):
         wrench.clear_wrenches(self, names)
 
     def restore_joints(self) -> None:
+        self.own()
         wrench.restore_joints(self)
 
     # -- Engine: snapshots (snapshot) -----------------------------------------------
@@ -352,9 +377,11 @@ class MujocoEngine(Engine):
         over exactly), so A goes on as B does, which may differ in the last bits from how
         it would have gone on without the snapshot. Mesh files named by the loaded models
         must still exist at restore."""
+        self.own()  # an edited pool is recompiled first
         return snapshots.snapshot(self)
 
     def restore(self, data: dict[str, Any]) -> None:
+        self.own()
         snapshots.restore(self, data)
 
     def entity_names(self) -> list[str]:
@@ -414,7 +441,8 @@ class MujocoEngine(Engine):
         return colliders.body_meshes(self.model, self.body_ids(names).tolist())
 
     def close(self) -> None:
-        self.entities.clear()
+        cloning.leave(self)
+        self.entities = {}
         if self.workers == 0 and not self.broken and not self.closed:
             fast_state.give_back(self.model, self.data)  # to serve a fork or a snapshot
         self.closed = True

@@ -41,14 +41,23 @@ _SPARES: dict[tuple[int, ...], list[mujoco.MjData]] = {}
 
 def layout(m: mujoco.MjModel) -> tuple[int, ...]:
     """Every size of a model (its integer fields n...): what an MjData's layout is made
-    from."""
+    from. Reading them costs a quarter of a millisecond, so the last few models' are kept
+    (by identity: forks share their source's model)."""
+    for known, sizes in _LAYOUTS:
+        if known is m:
+            return sizes
     if not _SIZE_NAMES:
         _SIZE_NAMES.extend(name for name in dir(mujoco.MjModel) if name.startswith("n")
                            and isinstance(getattr(m, name), int))
-    return tuple(getattr(m, name) for name in _SIZE_NAMES)
+    sizes = tuple(getattr(m, name) for name in _SIZE_NAMES)
+    _LAYOUTS.insert(0, (m, sizes))
+    del _LAYOUTS[KNOWN_LAYOUTS:]
+    return sizes
 
 
 _SIZE_NAMES: list[str] = []
+KNOWN_LAYOUTS = 4  # models whose layout is kept (held alive: a few MB at most)
+_LAYOUTS: list[tuple[mujoco.MjModel, tuple[int, ...]]] = []
 
 
 def data_for(m: mujoco.MjModel) -> mujoco.MjData:
@@ -102,9 +111,13 @@ def load(engine: MujocoEngine, state: Any) -> bool:
     """Set the engine to ``state``; False (nothing changed) when it does not fit."""
     if not isinstance(state, MujocoState) or state.sizes != _sizes(engine.model):
         return False
+    if engine.sharing is not None and not all(
+            np.array_equal(getattr(engine.model, n), v) for n, v in state.model_arrays.items()):
+        engine.own()  # its edited arrays differ from the state's: write into its own model
     m = engine.model
-    for name, values in state.model_arrays.items():
-        getattr(m, name)[...] = values
+    if engine.sharing is None:  # (a shared model holds these values already)
+        for name, values in state.model_arrays.items():
+            getattr(m, name)[...] = values
     mujoco.mj_copyData(engine.data, m, state.data)
     books = state.books
     engine.joint_book = _copy_joints(books["joints"])

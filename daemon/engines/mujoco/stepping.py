@@ -77,7 +77,7 @@ def look(engine: MujocoEngine) -> None:
     engine.steps_since_look = 0
     engine.track_crowding()
     if engine.balance is not None:
-        engine.balance.check(engine.model, engine.data)
+        engine.balance.check(engine.model, engine.data, engine.writable_model)
 
 
 def state_within(engine: MujocoEngine, max_position: float, max_speed: float) -> bool:

@@ -47,6 +47,7 @@ from galton.daemon.engines.base import (
     RayHits,
     Shape,
 )
+from galton.daemon.engines.ode import fast_state
 from galton.daemon.engines.ode import spawn as spawning
 from galton.daemon.engines.ode import state as states
 from galton.daemon.engines.ode.contacts import Collider, sync_sleep
@@ -382,6 +383,13 @@ class OdeEngine(Snapshots, Engine):
     def set_joint_targets(self, names: Sequence[str], mode: str, targets: np.ndarray,
                           kp: np.ndarray, kd: np.ndarray, max_effort: np.ndarray) -> None:
         self._robots.hold(names, mode, targets, kp, kd, max_effort, self._bodies)
+
+    def save_state(self) -> object | None:
+        """The bodies' own doubles, wake flags, wrenches and joint targets (fast_state)."""
+        return fast_state.save(self)
+
+    def load_state(self, state: object) -> bool:
+        return fast_state.load(self, state)
 
     def restore_joints(self) -> None:
         self._robots.rewind(self._bodies)
