@@ -80,8 +80,12 @@ def test_a_batch_scores_each_candidate_as_a_lone_copy_would(start: World) -> Non
 
 
 def test_a_diverging_candidate_costs_only_itself(start: World) -> None:
+    """At g = 1000 the ball passes max_speed (20 m/s) before it lands: sampled in flight
+    (0.032 s, 32 m/s, 0.5 m down), that future has diverged; the others go on."""
     params = parameters(start, {"gravity": [1.0, 1000.0]})
-    seen = Observation(NAMES, STEPS * 4, np.zeros((len(STEPS), 2, 3)))
+    in_flight = round(0.032 / start.engine.timestep)
+    steps = np.array([in_flight, *(in_flight + STEPS[1:] * 4)])
+    seen = Observation(NAMES, steps, np.zeros((len(steps), 2, 3)))
     errors = CandidateBatch(start, params, [{"gravity": 9.81}, {"gravity": 1000.0},
                                             {"gravity": 5.0}], seen, LIMITS).run()
     assert np.isinf(errors[1])  # the ball fell faster than max_speed: diverged
