@@ -44,8 +44,8 @@ def report_card(
         help="Comma-separated engines (default: every engine installed).")] = None,
     quick: Annotated[bool, typer.Option(
         help="Fewer repetitions, a shorter RTF curve (1-300 balls) and shorter timings. "
-             "Measured on a quiet 2-core machine (docs/PERFORMANCE.md): MuJoCo 29 s, "
-             "PyBullet 24 s, ODE 74 s, DART 358 s; 8 min 9 s for the four.")] = False,
+             "Measured on a quiet 2-core machine (docs/PERFORMANCE.md): MuJoCo 22 s, "
+             "PyBullet 19 s, ODE 56 s, DART 245 s; 5 min 45 s for the four.")] = False,
     seed: Annotated[int, typer.Option(min=0)] = 0,
     note: Annotated[str, typer.Option(
         help="A line about the machine for the report (e.g. 'shared, loaded by other "
