@@ -17,6 +17,17 @@ log = logging.getLogger("galton.daemon")
 
 # Short chunks: a live control call waits at most about this long behind a prediction.
 CHUNK_WALL_S = 0.002
+# A prediction of several futures steps them all in one chunk (on the engine's threads
+# where it has them): at 2 ms a chunk of 8 MuJoCo futures of a 100-ball world is one step,
+# and its hand-offs cost a third of the work (docs/PERFORMANCE.md, "Imagination"). Its
+# chunks are longer, so a control call may wait up to this long behind an ensemble.
+FUTURES_CHUNK_WALL_S = 0.010
+
+
+def chunk_wall(job: StepJob) -> float:
+    """The work one chunk of ``job`` may hold the physics thread for."""
+    several = job.futures is not None and len(job.futures) > 1
+    return FUTURES_CHUNK_WALL_S if several else CHUNK_WALL_S
 
 
 def run_chunk(loop: JobEnd, job: StepJob) -> None:
@@ -26,7 +37,7 @@ def run_chunk(loop: JobEnd, job: StepJob) -> None:
         return
     world = job.world
     assert world is not None
-    count = min(job.steps_to_next_check(), max(1, int(CHUNK_WALL_S / job.step_cost)))
+    count = min(job.steps_to_next_check(), max(1, int(chunk_wall(job) / job.step_cost)))
     started = time.perf_counter()
     try:
         if job.futures is not None:
