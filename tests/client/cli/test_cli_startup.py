@@ -67,3 +67,47 @@ def test_a_command_that_asks_a_daemon_loads_neither_numpy_nor_the_sdk(
     assert code in (0, None) and loaded == [], done.stdout  # None: the command returned
     shown = "\n".join(lines[1:])
     assert mujoco_sim.instance in shown and shows in shown, shown
+
+
+def test_the_lean_commands_are_the_clock_groups_and_the_flags_the_roots() -> None:
+    """console.py runs LEAN_COMMANDS on a CLI of the world and time groups alone, and finds
+    the command past the global options knowing which of them take no value."""
+    import typer.main
+
+    from galton.client.cli import console, time, world
+    from galton.client.cli.root import make_app
+
+    lean = typer.main.get_command(make_app((world.commands, time.commands), ""))
+    assert isinstance(lean, typer.main.TyperGroup)
+    assert set(lean.commands) >= console.LEAN_COMMANDS
+    flags = {name for param in lean.params if getattr(param, "is_flag", False)
+             for name in param.opts}
+    assert flags | {"--help"} == console.GLOBAL_FLAGS
+    assert console.command_word(["--connect", "tcp/x:1", "--instance=a", "status"]) == "status"
+    assert console.command_word(["--help", "status"]) is None
+    assert console.command_word(["spawn", "sphere", "b"]) == "spawn"
+
+
+def test_status_on_the_lean_cli_says_what_the_whole_cli_says(
+        mujoco_sim: Client, daemons: dict[str, EmbeddedDaemon]) -> None:
+    """The same status, through console.main's lean path and through the whole CLI; the
+    lean path imports no other group."""
+    args = ["--connect", daemons["mujoco"].endpoint, "--instance", mujoco_sim.instance,
+            "status", "--json"]
+    probe = (f"import json, sys\nsys.argv = ['galton-client', *{args!r}]\n"
+             "from galton.client.cli.console import main\n"
+             "try:\n    main()\nexcept SystemExit:\n    pass\n"
+             "print(json.dumps(['galton.client.cli.bench' in sys.modules, "
+             "'galton.client.cli.app' in sys.modules]))\n")
+    done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                          timeout=60, check=True)
+    *shown, loaded = done.stdout.splitlines()
+    assert json.loads(loaded) == [False, False]
+    whole = subprocess.run([sys.executable, "-c", PROBE.replace(
+        "contextlib.redirect_stdout(io.StringIO())",
+        "contextlib.redirect_stdout(out := io.StringIO())").format(args=args, heavy=())
+        + "print(out.getvalue())\n"], capture_output=True, text=True, timeout=60, check=True)
+    lean_status, whole_status = json.loads("\n".join(shown)), json.loads(
+        "\n".join(whole.stdout.splitlines()[1:]))
+    assert lean_status.keys() == whole_status.keys()
+    assert lean_status["instance"] == whole_status["instance"] == mujoco_sim.instance
