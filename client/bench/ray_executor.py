@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import logging
 from collections import deque
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
@@ -190,19 +190,8 @@ class _RayRun:
         """The trial's result; None if its actor was lost under it (a node lost: Ray
         gives such a task up at once, though it restarts the actor); the trial's own error
         if it failed, or why Ray gave it up."""
-        try:
-            result: ActorResult = ray.get(ref)
-        except RayTaskError as error:
-            if isinstance(error.cause, GaltonError):
-                raise error.cause from None
-            raise
-        except ActorUnavailableError as error:
-            self.unavailable[index] = self.unavailable.get(index, 0) + 1
-            if self.unavailable[index] <= MAX_TASK_RETRIES:
-                return None
-            raise self.not_run(name, index, error) from error
-        except RayActorError as error:
-            raise self.not_run(name, index, error) from error
+        result: ActorResult | None = fetched(ref, index, self.unavailable,
+                                             lambda error: self.not_run(name, index, error))
         return result
 
     def not_run(self, name: str, index: int, error: RayActorError) -> DaemonUnreachableError:
@@ -239,6 +228,27 @@ class _RayRun:
             target.write_bytes(data)
         self.taken |= result.taken
 
+
+
+def fetched(ref: Any, index: int, unavailable: dict[int, int],
+            lost: Callable[[RayActorError], DaemonUnreachableError]) -> Any:
+    """A task's result; None if its actor was lost under it and task ``index`` may go again
+    (Ray gives such a task up at once, though it restarts the actor; counted in
+    ``unavailable``); the task's own GaltonError if it failed; ``lost(error)`` when Ray
+    gave it up for good."""
+    try:
+        return ray.get(ref)
+    except RayTaskError as error:
+        if isinstance(error.cause, GaltonError):
+            raise error.cause from None
+        raise
+    except ActorUnavailableError as error:
+        unavailable[index] = unavailable.get(index, 0) + 1
+        if unavailable[index] <= MAX_TASK_RETRIES:
+            return None
+        raise lost(error) from error
+    except RayActorError as error:
+        raise lost(error) from error
 
 def connect(address: str) -> bool:
     """Join the cluster at ``address`` (``local``: start one on this machine); False if

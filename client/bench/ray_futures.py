@@ -19,18 +19,18 @@ from dataclasses import asdict, dataclass
 from typing import Any
 
 import ray
-from ray.exceptions import ActorUnavailableError, RayActorError, RayTaskError
+from ray.exceptions import RayActorError
 
 from galton.client.bench.futures import Start
 from galton.client.bench.ray_actor import FutureBatch
 from galton.client.bench.ray_executor import (
-    MAX_TASK_RETRIES,
     RayExecutor,
     RaySettings,
+    fetched,
     ray_executor,
 )
 from galton.client.sdk.values import Prediction
-from galton.protocol import DaemonUnreachableError, GaltonError
+from galton.protocol import DaemonUnreachableError
 
 
 @dataclass(frozen=True)
@@ -100,19 +100,8 @@ class _Spread:
     def result(self, ref: Any, name: str, index: int) -> FutureBatch | None:
         """The batch; None if its actor was lost under it (Ray gives such a task up at
         once, though it restarts the actor); the batch's own error if it failed."""
-        try:
-            result: FutureBatch = ray.get(ref)
-        except RayTaskError as error:
-            if isinstance(error.cause, GaltonError):
-                raise error.cause from None
-            raise
-        except ActorUnavailableError as error:
-            self.unavailable[index] = self.unavailable.get(index, 0) + 1
-            if self.unavailable[index] <= MAX_TASK_RETRIES:
-                return None
-            raise self.not_run(name, index, error) from error
-        except RayActorError as error:
-            raise self.not_run(name, index, error) from error
+        result: FutureBatch | None = fetched(ref, index, self.unavailable,
+                                             lambda error: self.not_run(name, index, error))
         return result
 
     def not_run(self, name: str, index: int, error: RayActorError) -> DaemonUnreachableError:

@@ -31,7 +31,6 @@ import mujoco
 from galton.daemon.engines.mujoco import fast_state
 from galton.daemon.engines.mujoco import pool as mp
 from galton.daemon.engines.mujoco.entities import Assets, Entity
-from galton.daemon.engines.mujoco.joints import Joints
 from galton.daemon.engines.mujoco.wrench import Wrenches
 from galton.protocol import OperationFailedError
 
@@ -136,7 +135,7 @@ def _copy_books(source: MujocoEngine, engine: MujocoEngine) -> None:
     engine.models = source.models
     engine.litter = source.litter
     engine.pool = source.pool
-    engine.joint_book = _joints(source.joint_book)
+    engine.joint_book = source.joint_book.copy()
     engine.wrenches = Wrenches()
     engine.wrenches.held = {n: w.copy() for n, w in source.wrenches.held.items()}
 
@@ -166,14 +165,3 @@ def _entity(e: Entity, twins: dict[int, Any], loads: dict[int, Assets]) -> Entit
         twin.assets = loads.setdefault(id(e.assets), Assets(set(e.assets.names),
                                                             e.assets.roots))
     return twin
-
-
-def _joints(source: Joints) -> Joints:
-    joints = Joints()
-    joints.infos = {root: list(infos) for root, infos in source.infos.items()}
-    joints.targets = dict(source.targets)  # Target is frozen
-    joints.slot = dict(source.slot)
-    joints.qadr, joints.vadr = source.qadr.copy(), source.vadr.copy()
-    joints.own, joints.own_damping = dict(source.own), source.own_damping.copy()
-    joints.target_damping = source.target_damping.copy()
-    return joints

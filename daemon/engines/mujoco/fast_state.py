@@ -18,8 +18,6 @@ from typing import TYPE_CHECKING, Any
 import mujoco
 import numpy as np
 
-from galton.daemon.engines.mujoco.joints import Joints
-
 if TYPE_CHECKING:
     from galton.daemon.engines.mujoco.engine import MujocoEngine
 
@@ -98,7 +96,7 @@ def save(engine: MujocoEngine) -> MujocoState | None:
     data = data_for(m)
     mujoco.mj_copyData(data, m, engine.data)
     arrays = {name: getattr(m, name).copy() for name in EDITED_MODEL_ARRAYS}
-    books = {"joints": _copy_joints(engine.joint_book),
+    books = {"joints": engine.joint_book.copy(),
              "held": {n: w.copy() for n, w in engine.wrenches.held.items()},
              "balance": None if engine.balance is None else engine.balance.copy(),
              "looks": (engine.diverged, engine.crowded, engine.steps_since_look)}
@@ -120,7 +118,7 @@ def load(engine: MujocoEngine, state: Any) -> bool:
             getattr(m, name)[...] = values
     mujoco.mj_copyData(engine.data, m, state.data)
     books = state.books
-    engine.joint_book = _copy_joints(books["joints"])
+    engine.joint_book = books["joints"].copy()
     engine.wrenches.held = {n: w.copy() for n, w in books["held"].items()}
     engine.balance = None if books["balance"] is None else books["balance"].copy()
     engine.diverged, engine.crowded, engine.steps_since_look = books["looks"]
@@ -136,14 +134,3 @@ def recycle(state: Any) -> None:
         spares = _SPARES.setdefault(state.layout, [])
         if len(spares) < SPARES:
             spares.append(state.data)
-
-
-def _copy_joints(source: Joints) -> Joints:
-    joints = Joints()
-    joints.infos = {root: list(infos) for root, infos in source.infos.items()}
-    joints.targets = dict(source.targets)  # Target is frozen
-    joints.slot = dict(source.slot)
-    joints.qadr, joints.vadr = source.qadr.copy(), source.vadr.copy()
-    joints.own, joints.own_damping = dict(source.own), source.own_damping.copy()
-    joints.target_damping = source.target_damping.copy()
-    return joints

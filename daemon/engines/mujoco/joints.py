@@ -63,6 +63,17 @@ class Joints:
         self.own_damping = np.zeros(0)  # by actuator id: the same
         self.target_damping = np.zeros(0)  # by actuator id: what a held target adds
 
+    def copy(self) -> Joints:
+        """An independent copy of the books (a fork's, a kept state's)."""
+        joints = Joints()
+        joints.infos = {root: list(infos) for root, infos in self.infos.items()}
+        joints.targets = dict(self.targets)  # Target is frozen
+        joints.slot = dict(self.slot)
+        joints.qadr, joints.vadr = self.qadr.copy(), self.vadr.copy()
+        joints.own, joints.own_damping = dict(self.own), self.own_damping.copy()
+        joints.target_damping = self.target_damping.copy()
+        return joints
+
     # -- books -----------------------------------------------------------------------------
     def reindex(self, m: mujoco.MjModel) -> None:
         """Where the joints live after a compile (actuators are ours alone, one per joint)."""
