@@ -13,25 +13,29 @@ import queue
 import sys
 import time
 from collections.abc import Callable
-from contextlib import AbstractContextManager, nullcontext
+from contextlib import nullcontext
 from typing import Any
+
+import msgpack
 
 from galton.daemon.access import lease
 from galton.daemon.access.zmq_auth import refuse_by_role
 from galton.daemon.core import job_results, loop_status, side_jobs, time_control
 from galton.daemon.core.calls import (
+    EVENTS,
     Call,
     Inbox,
-    PolledSource,
     StepJob,
     Task,
     smoothed_step_cost,
 )
+from galton.daemon.core.clock import STOPPED_AT_ZERO, WorldClock
 from galton.daemon.core.inbox import PolledInbox
-from galton.daemon.core.limits import DEFAULT_LIMITS, Limits
+from galton.daemon.core.limits import Limits
 from galton.daemon.core.monitor import Pacer, ProcessMonitor, RtfWindow
 from galton.daemon.core.reply_limit import too_big
 from galton.daemon.core.step_queue import StepBusyError, StepQueue
+from galton.daemon.core.wiring import LoopWiring
 from galton.daemon.ops.handlers import HANDLERS
 from galton.daemon.world.scene import World
 from galton.daemon.world.slots import SnapshotSlots
@@ -46,7 +50,6 @@ from galton.protocol import (
     ResultCode,
     SimState,
     SimStatus,
-    Telemetry,
     decode_request,
     encode_reply,
     error_reply,
@@ -79,28 +82,18 @@ CATCH_UP_S = 0.05
 class SimLoop:
     """Owns the World and the simulation state machine (stopped / playing / paused)."""
 
-    def __init__(self, world: World, instance: str,
-                 publish_telemetry: Callable[[Telemetry], None],
-                 publish_event: Callable[[dict[str, Any]], None],
-                 telemetry_rate_hz: float = 10.0,
-                 engine_factory: Callable[[str], Any] | None = None,
-                 limits: Limits = DEFAULT_LIMITS,
-                 polled: PolledSource | None = None) -> None:
+    def __init__(self, world: World, wiring: LoopWiring) -> None:
         self.world = world
-        self.instance = instance
-        self.limits = limits
+        self.wiring = wiring  # frozen: nothing rewires a loop once it is built
+        limits = wiring.limits
         self.decode_limits = DecodeLimits(
             max_bytes=limits.max_request_bytes, max_depth=limits.max_depth,
             max_string=limits.max_string_bytes,
             long_text_keys=frozenset(a.name for op in OPERATIONS.values() for a in op.args
                                      if a.long_text))
         # A polled front (galton-daemon --zmq) is read on this thread: the core's PolledInbox.
-        self.inbox: Inbox = (PolledInbox(polled, self._gone_task) if polled is not None
-                             else queue.SimpleQueue())
-        self.advertised: dict[str, Any] = {}  # what capabilities adds (ZeroMQ endpoints)
-        # Whether a Zenoh client's liveliness token is there (the daemon asks Zenoh; None
-        # when embedded without a session): take_control ties the lease to that token.
-        self.client_alive: Callable[[str], bool] | None = None
+        self.inbox: Inbox = (PolledInbox(wiring.polled, self._gone_task)
+                             if wiring.polled is not None else queue.SimpleQueue())
         self.state = SimState.STOPPED
         self.target_rtf = 1.0
         self.job: StepJob | None = None
@@ -109,18 +102,14 @@ class SimLoop:
         self.pacer = Pacer()
         self.rtf_window = RtfWindow()
         self.monitor = ProcessMonitor()
-        self.publish_telemetry = publish_telemetry
-        self.publish_event = publish_event
-        self.streams = StateStreams()  # stream_states (daemon/world/state_streams.py)
-        self.telemetry_period = 1.0 / telemetry_rate_hz if telemetry_rate_hz > 0 else math.inf
-        self.engine_factory = engine_factory
+        # stream_states (daemon/world/state_streams.py): samples go to every front.
+        self.streams = StateStreams(wiring.publish)
+        rate = wiring.telemetry_rate_hz
+        self.telemetry_period = 1.0 / rate if rate > 0 else math.inf
         self.side: dict[str, World] = {}  # side worlds by name (daemon/ops/worlds.py)
-        # galton-daemon --state-dir: saves the live world every checkpoint_period seconds.
-        self.checkpoint: Callable[[], None] | None = None
-        self.checkpoint_period = 10.0
-        self._next_checkpoint = time.monotonic() + self.checkpoint_period
+        self._next_checkpoint = (time.monotonic() + wiring.checkpoints.period_s
+                                 if wiring.checkpoints is not None else math.inf)
         self.slots = SnapshotSlots(limits)
-        self.snapshot_key: bytes | None = None  # galton-daemon --snapshot-key: blobs' seal
         self._step_cost = 1e-4
         self._last_verify = 0.0
         self.telemetry_seq = 0
@@ -129,17 +118,35 @@ class SimLoop:
         self.rtf = 0.0
         # The last status reply with the request and snapshot it answered (loop_status.py).
         self.status_reply: tuple[bytes, tuple[Any, ...], bytes] | None = None
-        # Wraps each scene-changing request (spawn, delete, load_model...): galton-daemon
-        # makes SIGTERM end the process at once inside it (server.sigterm_ends_at_once).
-        self.work_guard: Callable[[], AbstractContextManager[None]] = nullcontext
-        self.clock: tuple[int, float, float, int, bool] = (0, 0.0, 0.0, 0, False)
+        self.clock = STOPPED_AT_ZERO
         self.refresh_clock()
         self.tune_switch_interval()
 
-    def schedule_checkpoints(self, save: Callable[[], None], period_s: float) -> None:
-        """Call ``save`` every ``period_s`` seconds between chunks of steps."""
-        self.checkpoint, self.checkpoint_period = save, period_s
-        self._next_checkpoint = time.monotonic() + period_s
+    # -- what the wiring gave (read-only: handlers see these through core/context.py) ----
+    @property
+    def instance(self) -> str:
+        return self.wiring.instance
+
+    @property
+    def limits(self) -> Limits:
+        return self.wiring.limits
+
+    @property
+    def engine_factory(self) -> Callable[[str], Any] | None:
+        return self.wiring.engine_factory
+
+    @property
+    def snapshot_key(self) -> bytes | None:
+        return self.wiring.snapshot_key
+
+    @property
+    def client_alive(self) -> Callable[[str], bool] | None:
+        return self.wiring.client_alive
+
+    @property
+    def advertised(self) -> dict[str, Any]:
+        """What capabilities adds from the fronts (ZeroMQ's endpoints)."""
+        return self.wiring.advertised()
 
     def tune_switch_interval(self) -> None:
         """Set the process's switch interval for this world's engine (see above)."""
@@ -196,9 +203,10 @@ class SimLoop:
             next_telemetry = max(next_telemetry + self.telemetry_period, now)
         if now >= self.streams.next_due:
             self.streams.publish_due(self, now)
-        if self.checkpoint is not None and now >= self._next_checkpoint:
-            self._next_checkpoint = now + self.checkpoint_period
-            self.checkpoint()
+        checkpoints = self.wiring.checkpoints
+        if checkpoints is not None and now >= self._next_checkpoint:
+            self._next_checkpoint = now + checkpoints.period_s
+            checkpoints.save()
         self._take_calls(self._idle_timeout(next_telemetry))
         return next_telemetry
 
@@ -296,7 +304,7 @@ class SimLoop:
             call.client = request.client
             call.world = typed.world if isinstance(typed.world, str) else None
             lease.check(self, call, op)  # while another client holds control: refused
-            with self.work_guard() if op.mutates and not op.steps else nullcontext():
+            with self.wiring.work_guard() if op.mutates and not op.steps else nullcontext():
                 result = HANDLERS[op.name](self, call, typed)
             self._keep_invariants()  # before the reply: what the client asks next sees it
             if result is not None:
@@ -349,7 +357,8 @@ class SimLoop:
         missed."""
         self._event_seq += 1
         try:
-            self.publish_event({"seq": self._event_seq, **event})
+            self.wiring.publish(EVENTS, msgpack.packb(
+                {"instance": self.instance, "seq": self._event_seq, **event}))
         except Exception:
             log.exception("could not publish an event")
 
@@ -502,10 +511,8 @@ class SimLoop:
 
     # -- status & telemetry -------------------------------------------------------------
     def refresh_clock(self) -> None:
-        """Publish the world's clock to other threads as one tuple, swapped atomically."""
-        world = self.world
-        self.clock = (world.step_index, world.sim_time, world.engine.timestep,
-                      len(world.entities), world.faulted)
+        """Publish the world's clock to other threads as one value, swapped atomically."""
+        self.clock = WorldClock.of(self.world)
 
     def status(self) -> SimStatus:
         """Safe to call from any thread: reads only values swapped atomically."""

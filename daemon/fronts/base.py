@@ -13,10 +13,9 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any, Protocol
 
-from galton.daemon.core.calls import CallPort
+from galton.daemon.core.calls import EVENTS, TELEMETRY, CallPort
 
-TELEMETRY = "telemetry"
-EVENTS = "events"
+__all__ = ["EVENTS", "TELEMETRY", "Front", "Fronts"]
 
 
 class Front(Protocol):

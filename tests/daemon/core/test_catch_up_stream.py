@@ -12,6 +12,7 @@ import pytest
 
 from galton.daemon.core.calls import Call
 from galton.daemon.core.loop import SimLoop
+from galton.daemon.core.wiring import LoopWiring
 from galton.daemon.engines import create_engine
 from galton.daemon.world.scene import World
 from galton.protocol import BodyGroup, ResultCode, decode_reply, encode_request
@@ -27,8 +28,7 @@ def loop() -> Iterator[SimLoop]:
     poses[:, 0], poses[:, 2], poses[:, 6] = np.arange(BALLS) * 0.2, 1.0, 1.0
     world.spawn([BodyGroup(shape="sphere", size=(0.05,), names=[f"b{i}" for i in range(BALLS)],
                            poses=poses)])
-    sim = SimLoop(world, "test", lambda sample: None, lambda event: None,
-                  engine_factory=create_engine)
+    sim = SimLoop(world, LoopWiring("test", engine_factory=create_engine))
     yield sim
     sim.world.engine.close()
     sys.setswitchinterval(before)
