@@ -98,7 +98,7 @@ def publish_telemetry(loop: SimLoop, now: float) -> None:
     """Publish one telemetry sample per world, the live one first (after checking it is
     still finite); a side world's sample reads as its ``status`` does (never playing)."""
     if not loop.world.faulted:
-        loop.verify_physics()
+        loop.stepping.verify()
     cpu, rss, peak = loop.monitor.sample()
     rtf = loop.rtf = loop.rtf_window.add(now, loop.world.sim_time)
     wall = time.time()

@@ -44,22 +44,22 @@ def behind_its_clock(loop: SimLoop) -> int:
     """Play at RTF 1,000 and let 30 ms pass: far more steps are due than one chunk holds.
     Returns the chunk size the loop has learnt for this world."""
     loop.world.step(20)  # the loop learns the step's cost from its own chunks first
-    loop._run_steps(20)
+    loop.stepping.run_steps(20)
     handle(loop, "play", {"rtf": 1000.0})
     threading.Event().wait(0.03)  # a lag to make, not a synchronisation
-    return loop._chunk_size()
+    return loop.stepping.chunk_size()
 
 
 def test_a_due_sample_ends_the_catch_up_after_one_chunk(loop: SimLoop) -> None:
     handle(loop, "stream_states", {"rate": 60.0})  # its first sample is due at once
     chunk = behind_its_clock(loop)
     before = loop.world.step_index
-    loop._play_due()
+    loop.stepping.play_due()
     assert loop.world.step_index - before == chunk
 
 
 def test_without_a_stream_the_catch_up_runs_several_chunks(loop: SimLoop) -> None:
     chunk = behind_its_clock(loop)
     before = loop.world.step_index
-    loop._play_due()
+    loop.stepping.play_due()
     assert loop.world.step_index - before > chunk

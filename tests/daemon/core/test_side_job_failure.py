@@ -45,7 +45,7 @@ def test_a_failing_side_engine_fails_its_job_and_not_the_live_world(loop: SimLoo
     side.engine.step = fail  # type: ignore[method-assign]
     answers = handle(loop, "step", {"count": 100, "world": "side"})
     assert answers == [] and loop.job is not None
-    loop._advance()
+    loop.stepping.advance()
     assert len(answers) == 1
     reply = decode_reply(answers[0])
     assert reply.code == ResultCode.OPERATION_FAILED
