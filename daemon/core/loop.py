@@ -112,7 +112,7 @@ class SimLoop:
         self.rtf = 0.0
         # The last status reply with the request and snapshot it answered (loop_status.py).
         self.status_reply: tuple[bytes, tuple[Any, ...], bytes] | None = None
-        self.clock = STOPPED_AT_ZERO
+        self.clock: WorldClock = STOPPED_AT_ZERO  # read by status on any thread
         self.refresh_clock()
         self.tune_switch_interval()
 
