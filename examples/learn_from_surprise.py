@@ -15,9 +15,10 @@ the model calibrates the box's friction on the episode it saw (``calibrate`` wit
 
 With --auto the daemon closes the loop itself: the trigger carries the fit
 (``trigger``'s ``calibrate``: the box's friction, its bounds, ``apply``), so the comparison
-that makes the streak 4 long starts the calibration in the daemon, over the streak's own
-observations (no SurpriseWatch; a streak of 8, to see enough of the slide); the example waits for its ``calibration_finished`` event
-(the fitted friction, already applied) before stepping on. Fitted on 8 samples of the
+that makes the streak 8 long (enough of the slide to fit) starts the calibration in the
+daemon, over the streak's own observations (no SurpriseWatch), with the tracker's
+velocities given to compare (the start's twists); the example waits for its
+``calibration_finished`` event (the fitted friction, already applied) before stepping on. Fitted on 8 samples of the
 slide rather than the whole episode, the friction comes within a few per cent, and episode
 3's peak score falls from about 55 to about the threshold (3.1 with seed 3).
 

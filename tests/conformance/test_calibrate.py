@@ -13,7 +13,6 @@ from support.calibration import slide_and_bounce
 
 from galton.client import Client, spheres
 from galton.protocol import (
-    FeatureUnsupportedError,
     InvalidArgumentError,
     NotFoundError,
     OperationFailedError,
