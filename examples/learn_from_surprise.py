@@ -18,9 +18,10 @@ With --auto the daemon closes the loop itself: the trigger carries the fit
 that makes the streak 8 long (enough of the slide to fit) starts the calibration in the
 daemon, over the streak's own observations (no SurpriseWatch), with the tracker's
 velocities given to compare (the start's twists); the example waits for its
-``calibration_finished`` event (the fitted friction, already applied) before stepping on. Fitted on 8 samples of the
-slide rather than the whole episode, the friction comes within a few per cent, and episode
-3's peak score falls from about 55 to about the threshold (3.1 with seed 3).
+``calibration_finished`` event (the fitted friction, already applied) before stepping on.
+Fitted on 8 samples of the slide rather than the whole episode, the friction comes within a
+few per cent, and episode 3's peak score falls from about 55 to about the threshold (3.1
+with seed 3).
 
 Starts its own daemon unless --connect is given:
 python examples/learn_from_surprise.py [--engine mujoco|pybullet] [--seed N] [--auto]
