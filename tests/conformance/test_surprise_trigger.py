@@ -86,7 +86,7 @@ def test_a_trigger_that_calibrates_starts_the_job_and_pause_ends_it(sim: Client)
 
     def compare() -> Any:
         sim.step(10)
-        seen = sim.get_states(["ball"]).poses + [0.1, 0, 0, 0, 0, 0, 0]
+        seen = sim.get_states(["ball"]).poses + np.array([0.1, 0, 0, 0, 0, 0, 0])
         return sim.compare(["ball"], seen, sigma_position=0.01, trigger=TRIGGER,
                            calibrate=CALIBRATE)
 
