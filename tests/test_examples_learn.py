@@ -33,16 +33,15 @@ def test_the_daemon_calibrates_on_surprise_by_itself(sim: Client,
                                                       daemon: EmbeddedDaemon) -> None:
     """--auto: the trigger's calibrate starts the fit in the daemon (no client calibrate),
     over the streak's 8 observations: it recovers reality's friction within 10 % and
-    applies it, and the next episode's peak score falls at least 10 times (to about the
-    threshold: 8 samples of the slide pin the friction less than the whole episode does)."""
+    applies it, and the next episode's scores are low again."""
     example = load_example("learn_from_surprise")
     with clean(sim):
         run = example.main([*connect(daemon), "--seed", "3", "--auto"])
     first, changed, after = run.peaks
-    assert first < example.THRESHOLD and changed > 3 * example.THRESHOLD
-    assert after < changed / 10
+    assert first < example.THRESHOLD and after < example.THRESHOLD
+    assert changed > 3 * example.THRESHOLD
     assert run.fitted == pytest.approx(example.REAL_FRICTION, rel=0.1)
-    assert 0 < run.predictions <= example.MAX_PREDICTIONS
+    assert 0 < run.predictions <= example.AUTO_PREDICTIONS
 
 
 @pytest.mark.slow
