@@ -1,6 +1,7 @@
 """calibrate fits a joint's damping on every engine: a pendulum let go in a "reality" side
 world whose hinge is damped (0.4 N·m·s/rad) is recorded; the live world's own pendulum,
-undamped, is calibrated from a snapshot of the same start, and ``apply`` sets the fit."""
+undamped, is calibrated from a snapshot of the same start, and ``apply`` sets the fit,
+which a fork keeps and a restore of the earlier snapshot undoes."""
 
 from __future__ import annotations
 
@@ -45,5 +46,16 @@ def test_a_joint_damping_is_fitted_to_what_was_seen(sim: Client) -> None:
                            slot="start", max_predictions=40, population=6, apply=True)
     assert result.fitted["hinge.damping"] == pytest.approx(TRUE_DAMPING, rel=0.1), result
     assert result.error_after < result.error_before / 10
-    hinge = next(j for j in joints(sim) if j.name == "hinge")
-    assert hinge.damping == pytest.approx(result.fitted["hinge.damping"])  # applied
+    fitted = result.fitted["hinge.damping"]
+    assert damping_of(sim) == pytest.approx(fitted)  # applied
+    sim.fork_world("copy")
+    try:
+        assert damping_of(sim.world("copy")) == pytest.approx(fitted)  # a fork keeps it
+    finally:
+        sim.delete_world("copy")
+    sim.restore(slot="start")  # the slot was taken before: undamped again
+    assert damping_of(sim) == 0.0
+
+
+def damping_of(sim: Client) -> float:
+    return next(j.damping for j in joints(sim) if j.name == "hinge")
