@@ -22,7 +22,11 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from galton.client.sdk import joints as sdk_joints
-from galton.client.sdk.calibration import CalibrationResult, calibrate_args
+from galton.client.sdk.calibration import (
+    CalibrationResult,
+    calibrate_args,
+    trigger_calibration,
+)
 from galton.client.sdk.values import Comparison, Prediction, SnapshotInfo, Stamp, WorldInfo
 from galton.protocol import POSE_WIDTH, TWIST_WIDTH, InvalidArgumentError, Reply, pack_f64
 from galton.protocol.replies import SnapshotsReply, WorldsReply, decode_result
@@ -164,7 +168,8 @@ class WorldMethods:
                 sigma_position: float | None = None, sigma_angle: float | None = None,
                 sigma_speed: float | None = None, correct: bool = False,
                 spread: ArrayLike | float | None = None,
-                trigger: tuple[float, int] | None = None) -> Comparison:
+                trigger: tuple[float, int] | None = None,
+                calibrate: Mapping[str, Any] | None = None) -> Comparison:
         """Observed poses (rows of 7, and optionally twists) of these bodies against the
         world's at its present time: per-body errors and one anomaly score (about 1 at the
         sigmas' noise, 3 a surprise). ``correct`` sets the bodies to the observation.
@@ -173,7 +178,11 @@ class WorldMethods:
         ``sigma_position`` as independent noise: the score then says how surprising the
         observation is given what was imagined. ``trigger`` (threshold, window): count this
         comparison toward the world's surprise streak; the one that makes it ``window``
-        long is ``suggested`` and publishes a ``calibration_suggested`` event."""
+        long is ``suggested`` and publishes a ``calibration_suggested`` event.
+        ``calibrate`` (with ``trigger``: ``{"fit": {...}, "apply": ..., "max_predictions":
+        ..., "population": ..., "seed": ...}``, calibrate's own fields): that comparison
+        also starts the calibration itself, over the streak's observations (``calibrating``;
+        ``calibration_started`` and ``calibration_finished`` events)."""
         count = len(names)
         args: dict[str, Any] = {
             "names": list(names), "correct": correct,
@@ -186,6 +195,11 @@ class WorldMethods:
             args["spread"] = spread_arg(spread, count)
         if trigger is not None:
             args["trigger"] = {"threshold": float(trigger[0]), "window": int(trigger[1])}
+            if calibrate is not None:
+                args["trigger"]["calibrate"] = trigger_calibration(calibrate)
+        elif calibrate is not None:
+            raise InvalidArgumentError("compare: calibrate is started by a trigger; give "
+                                       "trigger=(threshold, window) with it")
         return Comparison.from_reply(self._ok("compare", args), list(names))
 
     def calibrate(self, fit: Mapping[str, Sequence[float]], names: Sequence[str],
