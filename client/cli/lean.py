@@ -240,6 +240,9 @@ def run(argv: Sequence[str]) -> int | None:
     except GaltonError as error:
         print(f"galton-client: {error_line(error)}", file=sys.stderr)
         return 1
+    except KeyboardInterrupt:  # as root.run says it (click's Abort)
+        print("\ngalton-client: aborted", file=sys.stderr)
+        return 1
     show(status, line.as_json)
     return 0
 
