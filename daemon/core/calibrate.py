@@ -25,8 +25,8 @@ from galton.daemon.core.observations import (
     sample_times,
     start_twists,
 )
-from galton.daemon.world.scene import World
 from galton.daemon.world.snapshot import clone_of, decode, world_from
+from galton.daemon.world.world import World
 from galton.protocol import (
     IncorrectStateError,
     InvalidArgumentError,

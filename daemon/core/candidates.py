@@ -23,7 +23,7 @@ from galton.daemon.core.calls import smoothed_step_cost
 from galton.daemon.core.fit_params import GRAVITY, Parameter, apply_values, body_properties
 from galton.daemon.core.limits import Limits
 from galton.daemon.world.futures import FutureSet, FutureSpec
-from galton.daemon.world.scene import World
+from galton.daemon.world.world import World
 from galton.protocol import PhysicsError
 
 CHUNK_WALL_S = 0.002  # as a prediction's chunk (daemon/core/side_jobs.py)

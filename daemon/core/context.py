@@ -21,9 +21,9 @@ if TYPE_CHECKING:
     from galton.daemon.core.limits import Limits
     from galton.daemon.core.monitor import Pacer, RtfWindow
     from galton.daemon.core.step_queue import StepQueue
-    from galton.daemon.world.scene import World
     from galton.daemon.world.slots import SnapshotSlots
     from galton.daemon.world.state_streams import StateStreams
+    from galton.daemon.world.world import World
     from galton.protocol import RemoteError, SimState, SimStatus
     from galton.protocol.requests import Args
 

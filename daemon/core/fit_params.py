@@ -16,7 +16,7 @@ from galton.daemon.engines.base import (
     FEATURE_UPDATE_MASS,
     FEATURE_UPDATE_RESTITUTION,
 )
-from galton.daemon.world.scene import World
+from galton.daemon.world.world import World
 from galton.protocol import (
     BodyProperties,
     FeatureUnsupportedError,

@@ -10,7 +10,7 @@ import numpy as np
 from galton.daemon.core.calls import StepJob
 from galton.daemon.core.context import JobEnd
 from galton.daemon.ops.joints import joint_states
-from galton.daemon.world.scene import World
+from galton.daemon.world.world import World
 from galton.protocol import NotFoundError, RemoteError, pack_f64
 from galton.protocol.errors import brief
 

@@ -33,9 +33,9 @@ from galton.daemon.core.monitor import Pacer, ProcessMonitor, RtfWindow
 from galton.daemon.core.reply_limit import too_big
 from galton.daemon.core.step_queue import StepBusyError, StepQueue
 from galton.daemon.ops.handlers import HANDLERS
-from galton.daemon.world.scene import World
 from galton.daemon.world.slots import SnapshotSlots
 from galton.daemon.world.state_streams import StateStreams
+from galton.daemon.world.world import World
 from galton.protocol import (
     DecodeLimits,
     NotFoundError,

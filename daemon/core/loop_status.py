@@ -33,7 +33,7 @@ from galton.protocol.operations import operation
 
 if TYPE_CHECKING:
     from galton.daemon.core.loop import SimLoop
-    from galton.daemon.world.scene import World
+    from galton.daemon.world.world import World
 
 log = logging.getLogger("galton.daemon")
 

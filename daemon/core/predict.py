@@ -14,12 +14,12 @@ from galton.daemon.core import imagining
 from galton.daemon.core.calls import Call, StepJob
 from galton.daemon.core.context import PredictContext
 from galton.daemon.core.reply_limit import VALUE_BYTES, reads_size, require_room
+from galton.daemon.ops import entities as ops
 from galton.daemon.ops import joints as ops_joints
-from galton.daemon.ops import scene as ops
 from galton.daemon.world import futures as fs
 from galton.daemon.world.futures import FutureSet
-from galton.daemon.world.scene import World
 from galton.daemon.world.snapshot import clone_of, decode, world_from
+from galton.daemon.world.world import World
 from galton.protocol import (
     IncorrectStateError,
     InvalidArgumentError,

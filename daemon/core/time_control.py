@@ -18,7 +18,7 @@ from galton.daemon.core.calls import Call, RestCheck, StepJob
 from galton.daemon.core.context import JobEnd, Jobs, OpContext, TimeContext
 from galton.daemon.core.reply_limit import reads_size, require_room
 from galton.daemon.core.step_queue import StepBusyError
-from galton.daemon.world.scene import World
+from galton.daemon.world.world import World
 from galton.protocol import (
     IncorrectStateError,
     InvalidArgumentError,

@@ -9,7 +9,7 @@ access/, the state streams and pose comparison of world/), an ops/ module holds 
 adapter that names the operation.
 
 Time-control operations (daemon/ops/time_control.py) act on the loop; scene operations
-(daemon/ops/scene.py) act on its World and, when they change it, publish a ``scene`` event. The
+(daemon/ops/entities.py) act on its World and, when they change it, publish a ``scene`` event. The
 one ``fast`` operation, status, is answered on the transport's thread from the loop's
 atomic snapshot (``SimLoop.handle_readonly``) and never reaches this table's callers; it is
 bound here too, so that a status that does reach the physics thread is answered the same.
@@ -24,11 +24,11 @@ from typing import Any
 from galton.daemon.core.calls import Call
 from galton.daemon.core.context import OpContext, SceneContext
 from galton.daemon.ops import control, look_ahead, streams, time_control, worlds
+from galton.daemon.ops import entities as ops
 from galton.daemon.ops import joints as ops_joints
 from galton.daemon.ops import perception as ops_perception
-from galton.daemon.ops import scene as ops
 from galton.daemon.ops.binding import binding_of
-from galton.daemon.world.scene import World
+from galton.daemon.world.world import World
 from galton.protocol.operations import OPERATIONS
 from galton.protocol.requests import Args
 

@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from galton.daemon.world.scene import World
+from galton.daemon.world.world import World
 from galton.protocol import InvalidArgumentError, pack_f64
 from galton.protocol import requests as rq
 from galton.protocol.model import (

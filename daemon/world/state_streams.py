@@ -27,8 +27,8 @@ import numpy as np
 
 from galton.daemon.core.calls import Call
 from galton.daemon.core.context import StreamContext
-from galton.daemon.world.scene import World, canonical_quaternions
 from galton.daemon.world.stream_sender import Publish, SampleSender
+from galton.daemon.world.world import World, canonical_quaternions
 from galton.protocol import InvalidArgumentError, Keys, NotFoundError, ResourceLimitError
 from galton.protocol import requests as rq
 from galton.protocol.arrays import pack_f64

@@ -11,7 +11,7 @@ import pytest
 from galton.daemon.core.calls import Call
 from galton.daemon.core.loop import SimLoop
 from galton.daemon.engines import create_engine
-from galton.daemon.world.scene import World
+from galton.daemon.world.world import World
 from galton.protocol import ResultCode, decode_reply, encode_request
 
 
