@@ -70,7 +70,7 @@ class Clock(Protocol):
         """The status reply's values now."""
 
     def refresh_clock(self) -> None:
-        """Take the world's clock into the atomic status snapshot."""
+        """Take the world's clock into the status values (read at once by status)."""
 
     def tune_switch_interval(self) -> None:
         """Set Python's switch interval for the live world's engine."""

@@ -127,7 +127,7 @@ class SimLoop:
         self._event_seq = 0
         self._stopping = False
         self.rtf = 0.0
-        # The last status reply with the request and snapshot it answered (loop_status.py).
+        # The last status reply with the request and status reading it answered (loop_status.py).
         self.status_reply: tuple[bytes, tuple[Any, ...], bytes] | None = None
         # Wraps each scene-changing request (spawn, delete, load_model...): galton-daemon
         # makes SIGTERM end the process at once inside it (server.sigterm_ends_at_once).
@@ -509,7 +509,7 @@ class SimLoop:
 
     def status(self) -> SimStatus:
         """Safe to call from any thread: reads only values swapped atomically."""
-        return loop_status.status_from(self, loop_status.snapshot(self))
+        return loop_status.status_from(self, loop_status.read_status(self))
 
     def handle_readonly(self, call: Call) -> None:
         """Answer a status request on the caller's thread (daemon/core/loop_status.py)."""
