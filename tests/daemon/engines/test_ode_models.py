@@ -97,14 +97,18 @@ def test_a_position_target_holds_the_lever_against_gravity(engine: Engine) -> No
     assert effort[0] == pytest.approx(-9.81 * 0.2 * np.cos(0.3), rel=0.02)
 
 
-@pytest.mark.xfail(strict=True, reason="ODE's hinge breaks through its stop under a target "
-                   "past the limit and wraps to the other side (reported to the lead)")
-def test_a_target_past_the_limit_leaves_the_hinge_at_its_stop(engine: Engine) -> None:
-    """Webots clamps a motor's target to the joint's range; DART holds it at its stop."""
+@pytest.mark.xfail(strict=True, reason="ODE diverges when a link whose centre of mass is off "
+                   "its frame is driven onto a stop (reported to the lead)")
+def test_a_target_at_the_limit_leaves_the_hinge_at_its_stop(engine: Engine) -> None:
+    """A target at the joint's limit is one the World accepts; DART holds the arm there.
+    Today ODE's arm, its weight pressing it into the upper stop, reaches 1.0 and at the
+    next steps flies off (link speed 1e24, hinge at -2.14): the World faults. The lower stop,
+    and the same lever with its mass on the hinge, hold."""
     engine.load_model("urdf", LEVER, None, "l_", fixed_base=True)
-    hold(engine, 1.2)
+    hold(engine, 1.0)
     seconds(engine, 1.0)
     assert engine.get_joint_states(["l_hinge"])[0][0] == pytest.approx(1.0, abs=0.02)
+    assert engine.state_within(1e4, 1e3)
 
 
 def test_a_ball_rests_on_a_trimesh_and_rays_find_its_top(engine: Engine) -> None:
