@@ -31,7 +31,7 @@ from galton.daemon.fronts.zenoh import ZenohFront, merged_config
 from galton.daemon.fronts.zenoh_config import listen_endpoints
 from galton.daemon.fronts.zmq import ZmqFront, parse_endpoint
 from galton.daemon.world import checkpoint
-from galton.daemon.world.scene import World
+from galton.daemon.world.world import World
 from galton.protocol import InvalidArgumentError, OperationFailedError
 
 if TYPE_CHECKING:

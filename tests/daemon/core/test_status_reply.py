@@ -1,5 +1,6 @@
-"""Status replies are answered from the loop's snapshot, and a repeated poll of an unchanged
-snapshot reuses the last reply's bytes; any change of what status says is seen at once."""
+"""Status replies are answered from one reading of the loop's status values, and a repeated
+poll of unchanged values reuses the last reply's bytes; any change of what status says is
+seen at once."""
 
 from __future__ import annotations
 
@@ -12,7 +13,7 @@ from galton.daemon.core.calls import Call
 from galton.daemon.core.loop import SimLoop
 from galton.daemon.core.wiring import LoopWiring
 from galton.daemon.engines import create_engine
-from galton.daemon.world.scene import World
+from galton.daemon.world.world import World
 from galton.protocol import ResultCode, decode_reply, encode_request
 
 
@@ -39,7 +40,7 @@ def handle(loop: SimLoop, op: str, args: dict | None = None) -> None:
     assert answers and decode_reply(answers[0]).code == ResultCode.OK
 
 
-def test_an_unchanged_snapshot_is_answered_with_the_same_bytes(loop: SimLoop) -> None:
+def test_an_unchanged_status_is_answered_with_the_same_bytes(loop: SimLoop) -> None:
     first = poll(loop)
     assert poll(loop) is first
     assert decode_reply(first).result["state"] == "stopped"
