@@ -112,7 +112,7 @@ class Daemon:
         # stream's own), the ZeroMQ front's send on it (its sockets are that thread's).
         self.loop.streams.sender = SampleSender(self.zenoh.publish)
         self.loop.streams.publish = self.zmq.publish if self.zmq is not None else None
-        self.loop.client_alive = self.zenoh.client_alive
+        self.loop.client_alive = self.fronts.client_alive
         self._thread: threading.Thread | None = None
         self.finished = threading.Event()
         self.ros2_summary = ""  # the ready line's words on the ROS 2 front, once it serves
@@ -201,7 +201,7 @@ def _zmq_front(options: DaemonOptions) -> ZmqFront | None:
     security = (ZmqSecurity.load(options.zmq_key, options.users)
                 if options.zmq_key is not None else None)
     return ZmqFront([parse_endpoint(endpoint) for endpoint in options.zmq], options.instance,
-                    security)
+                    security, silence_s=options.limits.zmq_silence_s)
 
 
 def signal_wakeup_pipe() -> int:

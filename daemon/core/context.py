@@ -123,7 +123,7 @@ class AccessContext(Events, Protocol):
     """Who controls the daemon (daemon/access/lease.py)."""
 
     lease: Lease
-    client_alive: Callable[[str], bool] | None
+    client_alive: Callable[[str], bool | None] | None
 
 
 class StreamContext(WorldChoice, Protocol):
@@ -136,7 +136,8 @@ class StreamContext(WorldChoice, Protocol):
     rtf: float
     instance: str
     streams: StateStreams
-    client_alive: Callable[[str], bool] | None
+    client_alive: Callable[[str], bool | None] | None
+    limits: Limits
 
 
 class PredictContext(Worlds, Jobs, Protocol):

@@ -98,9 +98,9 @@ class SimLoop:
         self.inbox: Inbox = (PolledInbox(polled, self._gone_task) if polled is not None
                              else queue.SimpleQueue())
         self.advertised: dict[str, Any] = {}  # what capabilities adds (ZeroMQ endpoints)
-        # Whether a Zenoh client's liveliness token is there (the daemon asks Zenoh; None
-        # when embedded without a session): take_control ties the lease to that token.
-        self.client_alive: Callable[[str], bool] | None = None
+        # Whether a client is there, as the fronts know it (server.py: Fronts.client_alive;
+        # None when embedded): the lease and the state streams are tied to it.
+        self.client_alive: Callable[[str], bool | None] | None = None
         self.state = SimState.STOPPED
         self.target_rtf = 1.0
         self.job: StepJob | None = None

@@ -20,6 +20,7 @@ from galton.daemon.fronts.base import EVENTS, TELEMETRY
 from galton.daemon.fronts.memory import after_request_of
 from galton.daemon.fronts.zenoh_config import file_says, merge
 from galton.protocol import Keys
+from galton.protocol.envelope import is_client_id
 from galton.protocol.keys import (
     CLIENTS_PATTERN,
     client_from_token_key,
@@ -68,12 +69,15 @@ class ZenohFront:
         self._queryable = self.session.declare_queryable(self.keys.control_all, self._on_query)
         self._token = self.session.liveliness().declare_token(self.keys.alive)
 
-    def client_alive(self, client: str) -> bool:
+    def client_alive(self, client: str) -> bool | None:
         """Whether the client's liveliness token is there: seen by the subscriber (no wait),
         else asked once (a token declared a moment ago may not have reached us yet; the get
-        holds the physics thread, under a millisecond on loopback)."""
+        holds the physics thread, under a millisecond on loopback). None for a name that is
+        no client id (another front's client, e.g. a ZeroMQ connection): not asked."""
         if client in self._live_clients:
             return True
+        if not is_client_id(client):
+            return None
         replies = self.session.liveliness().get(client_token_key(client),
                                                 timeout=CLIENT_TOKEN_TIMEOUT_S)
         return any(reply.ok is not None for reply in replies)
