@@ -282,8 +282,8 @@ class ZmqFront:
             frame = _recv(router, 0, False)
             frames.append(frame.bytes)
         routing, payload = frames[:-1], frames[-1]
-        if routing[0] in self.known[index]:
-            self.heard[index][routing[0]] = now  # any message counts, a malformed one too
+        if frames[0] in self.known[index]:
+            self.heard[index][frames[0]] = now  # any message counts, a malformed one too
         if len(frames) < 2 or len(frames) - 1 > MAX_FRAMES or any(
                 len(part) > MAX_ROUTING_FRAME_BYTES for part in routing[1:]):
             return None
