@@ -9,12 +9,13 @@ import time
 from collections.abc import Iterator
 
 import msgpack
+import numpy as np
 import pytest
 import zmq
 
 from galton.client import Client, EmbeddedDaemon
 from galton.daemon.fronts.zmq import telemetry_endpoint
-from galton.protocol import ResourceLimitError
+from galton.protocol import ResourceLimitError, pack_f64
 from galton.protocol.keys import STREAMS_CHUNK
 
 SILENCE_S = 1.5  # the test daemon's zmq_silence_s: a tenth of the default
@@ -128,3 +129,28 @@ def test_an_sdk_client_keeps_its_stream_past_the_silence(daemon: EmbeddedDaemon)
             assert kept.stream_id not in watcher.ended
     finally:
         context.destroy(linger=0)
+
+
+@pytest.mark.slow
+def test_a_long_request_holding_the_daemon_ends_no_stream(daemon: EmbeddedDaemon) -> None:
+    """Silence is counted while the daemon reads: a spawn that holds the physics thread
+    past ``silence_s`` leaves the SDK's pings unread meanwhile, and its stream goes on."""
+    count = 5000  # MuJoCo's compile is quadratic in free bodies: seconds
+    poses = np.zeros((count, 7))
+    poses[:, 0], poses[:, 2], poses[:, 6] = np.arange(count) * 0.3, 1.0, 1.0
+    with Client(connect=daemon.zmq_endpoint, timeout=120.0) as sim, \
+            sim.stream_states(rate=20, timeout=DEADLINE_S) as kept:
+        kept.next()
+        with Client(connect=daemon.zmq_endpoint, timeout=120.0) as other:
+            started = time.monotonic()
+            other.call("spawn", {"groups": [{
+                "shape": "sphere", "size": [0.1], "names": [f"held{i}" for i in range(count)],
+                "poses": pack_f64(poses)}]})
+            held = time.monotonic() - started
+            if held < 1.5 * SILENCE_S:
+                pytest.skip(f"the spawn held the daemon {held:.1f} s only: nothing to test")
+            until = time.monotonic() + SILENCE_S
+            while (sample := kept.next()).ended is None and time.monotonic() < until:
+                pass
+            assert sample.ended is None, f"held {held:.1f} s: {sample.ended}"
+            other.call("reset", {"scope": "all"})
