@@ -74,18 +74,18 @@ class ZenohFront:
         else asked once (a token declared a moment ago may not have reached us yet; the get
         holds the physics thread, under a millisecond on loopback). None for a name that is
         no client id (another front's client, e.g. a ZeroMQ connection): not asked."""
+        if not is_client_id(client):  # another front's client, whatever tokens say
+            return None
         if client in self._live_clients:
             return True
-        if not is_client_id(client):
-            return None
         replies = self.session.liveliness().get(client_token_key(client),
                                                 timeout=CLIENT_TOKEN_TIMEOUT_S)
         return any(reply.ok is not None for reply in replies)
 
     def _on_client_token(self, sample: zenoh.Sample) -> None:
         client = client_from_token_key(str(sample.key_expr))
-        if client is None:
-            return
+        if client is None or not is_client_id(client):  # no ZeroMQ connection's name: its
+            return  # going is its own front's to say
         if sample.kind == zenoh.SampleKind.PUT:
             self._live_clients.add(client)
         else:
