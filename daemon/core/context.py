@@ -133,7 +133,7 @@ class AccessContext(Events, Protocol):
     lease: Lease
 
     @property
-    def client_alive(self) -> Callable[[str], bool] | None: ...
+    def client_alive(self) -> Callable[[str], bool | None] | None: ...
 
 
 class StreamContext(WorldChoice, Protocol):
@@ -150,7 +150,10 @@ class StreamContext(WorldChoice, Protocol):
     def instance(self) -> str: ...
 
     @property
-    def client_alive(self) -> Callable[[str], bool] | None: ...
+    def client_alive(self) -> Callable[[str], bool | None] | None: ...
+
+    @property
+    def limits(self) -> Limits: ...
 
 
 class PredictContext(Worlds, Jobs, Protocol):

@@ -134,7 +134,7 @@ class SimLoop:
         return self.wiring.snapshot_key
 
     @property
-    def client_alive(self) -> Callable[[str], bool] | None:
+    def client_alive(self) -> Callable[[str], bool | None] | None:
         return self.wiring.client_alive
 
     @property

@@ -3,9 +3,13 @@ a client asked (``stream_states``), beside telemetry, on every front that carrie
 
 A stream belongs to the client that opened it (its liveliness token over Zenoh, its
 connection over ZeroMQ) and ends when that client goes, on ``close_stream``, or when the
-side world it watches is deleted. Samples are built on the physics thread between chunks of
-steps and handed to publishers that drop rather than wait (Zenoh's ``DROP`` congestion
-control, a non-blocking ZeroMQ send): a slow subscriber never slows the world.
+side world it watches is deleted. Besides the fronts' word that a client went, the owners
+are asked of the fronts every LIVENESS_PERIOD_S (``client_alive``): a ZeroMQ connection
+silent for ``zmq_silence_s`` counts as gone, though a stopped process keeps it open.
+
+Samples are built on the physics thread between chunks of steps and handed to publishers
+that drop rather than wait (Zenoh's ``DROP`` congestion control, a non-blocking ZeroMQ
+send): a slow subscriber never slows the world.
 
 A sample is cheap for the physics thread (docs/PERFORMANCE.md, "State streams"): while its
 world holds the same entities a stream reuses its names, packed once, and the engine's pose
@@ -16,6 +20,7 @@ share one read; the Zenoh front puts samples on a thread of its own
 
 from __future__ import annotations
 
+import logging
 import math
 import secrets
 import time
@@ -42,6 +47,9 @@ MAX_STREAMS_PER_CLIENT = 8
 NO_OWNER = ("a state stream belongs to a client, and ends when it goes: the request needs "
             "a 'client' id in its envelope (the SDK sends one)")
 CLIENT_GONE = "its client went"  # the ``ended`` of a stream whose client went
+LIVENESS_PERIOD_S = 0.25  # how often the streams' owners are asked of the fronts
+
+log = logging.getLogger("galton.daemon")
 
 
 @dataclass
@@ -83,6 +91,7 @@ class StateStreams:
         self.publish = publish
         self.streams: dict[str, StateStream] = {}
         self.next_due = math.inf
+        self.next_liveness = 0.0
 
     def open(self, ctx: StreamContext, call: Call, request: rq.StreamStates) -> dict[str, Any]:
         """Open a stream for the request's client; its first sample is due at once."""
@@ -102,7 +111,8 @@ class StateStreams:
         self.streams[stream.stream_id] = stream
         self.next_due = min(self.next_due, stream.next_due)
         return {"stream": stream.stream_id, "key": f"{Keys(ctx.instance).prefix}/{stream.topic}",
-                "topic": stream.topic, "rate": rate, "world": world.name}
+                "topic": stream.topic, "rate": rate, "world": world.name,
+                "silence_s": ctx.limits.zmq_silence_s if call.peer is not None else None}
 
     def _require_room(self, owner: str) -> None:
         """RESOURCE_LIMIT past the pool, or past this client's share of it (docs/protocol.md,
@@ -136,8 +146,24 @@ class StateStreams:
         for stream in [s for s in self.streams.values() if s.owner == owner]:
             self._end(stream, CLIENT_GONE)
 
+    def end_gone_owners(self, ctx: StreamContext) -> None:
+        """End the streams of every owner a front knows to be gone (not those no front can
+        tell of): the fronts' word comes as a task, but a silent ZeroMQ connection is found
+        only by asking."""
+        if ctx.client_alive is None:
+            return
+        for owner in {stream.owner for stream in self.streams.values()}:
+            if ctx.client_alive(owner) is False:
+                log.warning("the state streams of %s end: its client has gone (or, over "
+                            "ZeroMQ, sent nothing for %g s)", owner, ctx.limits.zmq_silence_s)
+                self.owner_gone(owner)
+
     def publish_due(self, ctx: StreamContext, now: float) -> None:
-        """Publish a sample of every stream that is due, and schedule each one's next."""
+        """Publish a sample of every stream that is due, and schedule each one's next;
+        first, now and then, end those of owners gone (streams are due at least 1 Hz)."""
+        if now >= self.next_liveness:
+            self.next_liveness = now + LIVENESS_PERIOD_S
+            self.end_gone_owners(ctx)
         shared: dict[tuple[int, int, tuple[str, ...] | None], bytes] = {}
         for stream in list(self.streams.values()):
             if now < stream.next_due:

@@ -4,7 +4,9 @@ seen at once."""
 
 from __future__ import annotations
 
+import gc
 import sys
+import weakref
 from collections.abc import Iterator
 
 import pytest
@@ -75,3 +77,22 @@ def test_a_bad_request_is_refused_after_a_cached_answer(loop: SimLoop) -> None:
     assert refused.code == ResultCode.NOT_FOUND
     assert "elsewhere" in refused.message
     assert poll(loop) is good
+
+
+def test_a_refused_status_leaves_nothing_for_the_collector(loop: SimLoop) -> None:
+    """Issue 46: a refused status kept its request in a reference cycle (the error, its
+    traceback, the frame that held the error), so each 50 MB one stayed in memory until
+    a full collection; now the call is freed as soon as it is answered."""
+    answers: list[bytes] = []
+    call = Call("status", b"\xc1" * 1000, answers.append)  # 0xc1: never valid msgpack
+    collecting = gc.isenabled()
+    gc.disable()
+    try:
+        loop.handle_readonly(call)
+        freed = weakref.ref(call)
+        del call
+        assert freed() is None
+    finally:
+        if collecting:
+            gc.enable()
+    assert decode_reply(answers[0]).code == ResultCode.MALFORMED_REQUEST
