@@ -24,25 +24,6 @@ from typing import Any
 import numpy as np
 
 from galton.daemon.engines.base import (
-    FEATURE_CONTACTS,
-    FEATURE_DELETE,
-    FEATURE_JOINT_TARGETS,
-    FEATURE_JOINTS,
-    FEATURE_LOAD_MODEL,
-    FEATURE_MODEL_SHAPES,
-    FEATURE_SET_STATE,
-    FEATURE_SNAPSHOT,
-    FEATURE_SPAWN,
-    FEATURE_SPAWN_INERTIA,
-    FEATURE_STATIC_POSE,
-    FEATURE_TARGET_EFFORT,
-    FEATURE_TARGET_POSITION,
-    FEATURE_TARGET_VELOCITY,
-    FEATURE_UPDATE_FRICTION,
-    FEATURE_UPDATE_MASS,
-    FEATURE_UPDATE_RESTITUTION,
-    FEATURE_UPDATE_RGBA,
-    FEATURE_WRENCH,
     ContactPoints,
     Engine,
     Shape,
@@ -54,37 +35,28 @@ from galton.daemon.engines.dart import spawn as books
 from galton.daemon.engines.dart.joints import Robots, Target
 from galton.daemon.engines.dart.mesh_files import MeshFiles
 from galton.daemon.engines.dart.models import MODEL_FORMATS
-from galton.daemon.engines.dart.params import SPECS
+from galton.daemon.engines.dart.params import PARAMS
 from galton.daemon.engines.dart.scene import Scene
 from galton.daemon.engines.dart.shapes import node_meshes, node_shapes
 from galton.daemon.engines.dart.snapshot import Snapshots
 from galton.daemon.engines.params import check_updates
 from galton.protocol import (
-    PROTOCOL_VERSION,
     BodyGroup,
     BodyProperties,
-    Capabilities,
     EntityInfo,
     InvalidArgumentError,
     JointInfo,
 )
-from galton.protocol.vocabulary import BODY_SHAPES, POSE_WIDTH, TWIST_WIDTH
-
-FEATURES = (FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDATE_MASS,
-            FEATURE_UPDATE_FRICTION, FEATURE_UPDATE_RESTITUTION, FEATURE_UPDATE_RGBA,
-            FEATURE_LOAD_MODEL, FEATURE_STATIC_POSE, FEATURE_JOINTS, FEATURE_JOINT_TARGETS,
-            FEATURE_TARGET_POSITION, FEATURE_TARGET_VELOCITY, FEATURE_TARGET_EFFORT,
-            FEATURE_WRENCH, FEATURE_SNAPSHOT, FEATURE_CONTACTS, FEATURE_SPAWN_INERTIA,
-            FEATURE_MODEL_SHAPES)
-
-
-SHAPES = BODY_SHAPES  # a mesh: a DART MeshShape (meshes.py, docs/ENGINES.md "Meshes")
+from galton.protocol.vocabulary import POSE_WIDTH, TWIST_WIDTH
 
 
 class DartEngine(Scene, Snapshots, Engine):
     """Named rigid bodies and models in a DART world."""
 
     name = "dart"
+    param_specs = PARAMS
+    model_formats = MODEL_FORMATS
+    spawn_inertia = True
 
     def __init__(self) -> None:
         self._values: dict[str, Any] = books.defaults()
@@ -97,12 +69,9 @@ class DartEngine(Scene, Snapshots, Engine):
         self._diverged = False
 
     # -- description ----------------------------------------------------------------------
-    def capabilities(self) -> Capabilities:
-        return Capabilities(
-            engine=self.name, engine_version=importlib.metadata.version("dartpy"),
-            protocol_version=PROTOCOL_VERSION, body_shapes=SHAPES,
-            model_formats=MODEL_FORMATS, features=FEATURES,
-            params={name: spec.describe() for name, spec in SPECS.items()})
+    @classmethod
+    def engine_version(cls) -> str:
+        return importlib.metadata.version("dartpy")
 
     @property
     def timestep(self) -> float:
@@ -112,7 +81,7 @@ class DartEngine(Scene, Snapshots, Engine):
         return {k: list(v) if isinstance(v, tuple) else v for k, v in self._values.items()}
 
     def set_params(self, params: dict[str, Any]) -> None:
-        clean = check_updates(self.name, SPECS, params)
+        clean = check_updates(self.name, PARAMS, params)
         self._values.update(clean)
         books.configure(self._world, self._values)
         self._follow_defaults(clean)

@@ -20,7 +20,7 @@ import numpy as np
 from galton.daemon.engines.dart import meshes, models
 from galton.daemon.engines.dart import spawn as books
 from galton.daemon.engines.dart.joints import Robots, Target
-from galton.daemon.engines.dart.params import SPECS
+from galton.daemon.engines.dart.params import PARAMS
 from galton.daemon.engines.params import check_updates
 from galton.protocol import BodyProperties, InvalidArgumentError
 from galton.protocol import mesh as mesh_wire
@@ -91,7 +91,7 @@ class Snapshots:
     def _restore(self, data: dict[str, Any]) -> None:
         # Bodies of one mesh share its shape, as a spawn group's do: each load takes ms.
         self._loaded_meshes = {}
-        self.set_params(check_updates("dart", SPECS, data["params"]))  # type: ignore[attr-defined]
+        self.set_params(check_updates("dart", PARAMS, data["params"]))  # type: ignore[attr-defined]
         for item in data["items"]:
             if item["kind"] == "body":
                 self._restore_body(item)

@@ -15,7 +15,7 @@ from typing import Any
 import dartpy as dart
 import numpy as np
 
-from galton.daemon.engines.dart.params import SPECS
+from galton.daemon.engines.dart.params import PARAMS
 from galton.protocol import BodyGroup, InvalidArgumentError
 from galton.protocol import mesh as mesh_wire
 from galton.protocol.vocabulary import BODY_SHAPES
@@ -167,4 +167,4 @@ def configure(world: Any, values: dict[str, Any]) -> None:
 
 
 def defaults() -> dict[str, Any]:
-    return {name: spec.default for name, spec in SPECS.items()}
+    return {name: spec.default for name, spec in PARAMS.items()}

@@ -45,27 +45,6 @@ import mujoco
 import numpy as np
 
 from galton.daemon.engines.base import (
-    FEATURE_CONTACTS,
-    FEATURE_DELETE,
-    FEATURE_JOINT_TARGETS,
-    FEATURE_JOINTS,
-    FEATURE_LOAD_MODEL,
-    FEATURE_MODEL_SHAPES,
-    FEATURE_RAYCAST,
-    FEATURE_RENDER,
-    FEATURE_SET_STATE,
-    FEATURE_SNAPSHOT,
-    FEATURE_SPAWN,
-    FEATURE_SPAWN_INERTIA,
-    FEATURE_STATIC_POSE,
-    FEATURE_TARGET_EFFORT,
-    FEATURE_TARGET_POSITION,
-    FEATURE_TARGET_VELOCITY,
-    FEATURE_UPDATE_FRICTION,
-    FEATURE_UPDATE_MASS,
-    FEATURE_UPDATE_RESTITUTION,
-    FEATURE_UPDATE_RGBA,
-    FEATURE_WRENCH,
     CameraView,
     ContactPoints,
     Engine,
@@ -94,22 +73,13 @@ from galton.daemon.engines.mujoco.poses import PoseReader
 from galton.daemon.engines.mujoco.wrench import Wrenches
 from galton.daemon.engines.params import check_updates
 from galton.protocol import (
-    BODY_SHAPES,
-    PROTOCOL_VERSION,
     BodyGroup,
     BodyProperties,
-    Capabilities,
     EntityInfo,
     JointInfo,
     NotFoundError,
 )
 
-FEATURES = (FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDATE_MASS,
-            FEATURE_UPDATE_FRICTION, FEATURE_UPDATE_RESTITUTION, FEATURE_UPDATE_RGBA,
-            FEATURE_LOAD_MODEL, FEATURE_STATIC_POSE, FEATURE_JOINTS, FEATURE_JOINT_TARGETS,
-            FEATURE_TARGET_POSITION, FEATURE_TARGET_VELOCITY, FEATURE_TARGET_EFFORT,
-            FEATURE_WRENCH, FEATURE_SNAPSHOT, FEATURE_RENDER, FEATURE_RAYCAST,
-            FEATURE_CONTACTS, FEATURE_SPAWN_INERTIA, FEATURE_MODEL_SHAPES)
 # Contacts at which MuJoCo's worker threads start helping, and below which they stop.
 WORKERS_ON_CONTACTS = 400
 WORKERS_OFF_CONTACTS = 200
@@ -120,6 +90,9 @@ class MujocoEngine(Engine):
 
     name: ClassVar[str] = "mujoco"
     releases_gil_while_stepping: ClassVar[bool] = True  # mj_step runs without the GIL
+    param_specs = ms.PARAMS
+    model_formats = models.FORMATS
+    spawn_inertia = True
     # What the last step left, frozen before an edit until the next step (a class default:
     # a clone is made without __init__).
     observed: observing.Observed | None = None
@@ -231,13 +204,12 @@ class MujocoEngine(Engine):
         return self.watch
 
     # -- Engine: description & parameters ------------------------------------------------
-    def capabilities(self) -> Capabilities:
-        return Capabilities(
-            engine=self.name, engine_version=mujoco.__version__,
-            protocol_version=PROTOCOL_VERSION, body_shapes=tuple(BODY_SHAPES),
-            model_formats=models.FORMATS, features=FEATURES,
-            params={n: p.describe() for n, p in ms.PARAMS.items()},
-            render_backend=rendering.backend_name())
+    @classmethod
+    def engine_version(cls) -> str:
+        return str(mujoco.__version__)
+
+    def render_backend(self) -> str:
+        return rendering.backend_name()
 
     @property
     def timestep(self) -> float:

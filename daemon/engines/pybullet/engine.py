@@ -47,27 +47,6 @@ import pybullet
 from pybullet_utils.bullet_client import BulletClient
 
 from galton.daemon.engines.base import (
-    FEATURE_CONTACTS,
-    FEATURE_DELETE,
-    FEATURE_JOINT_TARGETS,
-    FEATURE_JOINTS,
-    FEATURE_LOAD_MODEL,
-    FEATURE_MODEL_SHAPES,
-    FEATURE_RAYCAST,
-    FEATURE_RENDER,
-    FEATURE_SET_STATE,
-    FEATURE_SNAPSHOT,
-    FEATURE_SPAWN,
-    FEATURE_SPAWN_INERTIA,
-    FEATURE_STATIC_POSE,
-    FEATURE_TARGET_EFFORT,
-    FEATURE_TARGET_POSITION,
-    FEATURE_TARGET_VELOCITY,
-    FEATURE_UPDATE_FRICTION,
-    FEATURE_UPDATE_MASS,
-    FEATURE_UPDATE_RESTITUTION,
-    FEATURE_UPDATE_RGBA,
-    FEATURE_WRENCH,
     Engine,
     Shape,
     ShapeMesh,
@@ -83,7 +62,7 @@ from galton.daemon.engines.pybullet.calls import engine_call
 from galton.daemon.engines.pybullet.frames import Offset
 from galton.daemon.engines.pybullet.mesh_files import HullCache
 from galton.daemon.engines.pybullet.models import MODEL_FORMATS
-from galton.daemon.engines.pybullet.params import SPECS, Parameters
+from galton.daemon.engines.pybullet.params import PARAMS, Parameters
 from galton.daemon.engines.pybullet.perception import Perception
 from galton.daemon.engines.pybullet.rebuild import Body as _Body
 from galton.daemon.engines.pybullet.rebuild import Rebuilding
@@ -92,22 +71,23 @@ from galton.daemon.engines.pybullet.robots import Robots
 from galton.daemon.engines.pybullet.shapes import BodyMaker, ShapeCache
 from galton.daemon.engines.pybullet.snapshot import Snapshots
 from galton.protocol import (
-    PROTOCOL_VERSION,
     BodyGroup,
     BodyProperties,
-    Capabilities,
     EntityInfo,
     InvalidArgumentError,
     NameNotUniqueError,
     NotFoundError,
 )
-from galton.protocol.vocabulary import BODY_SHAPES, POSE_WIDTH, TWIST_WIDTH
+from galton.protocol.vocabulary import POSE_WIDTH, TWIST_WIDTH
 
 
 class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception, Engine):
     """Named rigid bodies in a headless PyBullet world."""
 
     name = "pybullet"
+    param_specs = PARAMS
+    model_formats = MODEL_FORMATS
+    spawn_inertia = True
 
     def __init__(self) -> None:
         with native_output_silenced():  # "argv[0]=" when it connects
@@ -125,7 +105,7 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
         self._hulls = HullCache()  # model mesh files' hulls, for get_shapes
         self.bodies: dict[str, _Body] = {}
         self._maker = BodyMaker(bc)
-        self._values: dict[str, Any] = {name: spec.default for name, spec in SPECS.items()}
+        self._values: dict[str, Any] = {name: spec.default for name, spec in PARAMS.items()}
         self._removed = 0  # bodies removed since resetSimulation last ran
         self.held: dict[str, rebuild.Held] = {}  # states a rebuild could not set bit for bit
         # Poses given to PyBullet (spawn, set_states) since the last step: a rebuild sets
@@ -138,23 +118,12 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
         self._configure_world()
 
     # -- description ----------------------------------------------------------------------
-    def capabilities(self) -> Capabilities:
-        return Capabilities(
-            engine=self.name,
-            engine_version=importlib.metadata.version("pybullet"),
-            protocol_version=PROTOCOL_VERSION,
-            body_shapes=BODY_SHAPES,
-            model_formats=MODEL_FORMATS,
-            features=(FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDATE_MASS,
-                      FEATURE_UPDATE_FRICTION, FEATURE_UPDATE_RESTITUTION, FEATURE_UPDATE_RGBA,
-                      FEATURE_LOAD_MODEL, FEATURE_STATIC_POSE, FEATURE_JOINTS,
-                      FEATURE_JOINT_TARGETS, FEATURE_TARGET_POSITION, FEATURE_TARGET_VELOCITY,
-                      FEATURE_TARGET_EFFORT, FEATURE_WRENCH, FEATURE_SNAPSHOT, FEATURE_RENDER,
-                      FEATURE_RAYCAST, FEATURE_CONTACTS, FEATURE_SPAWN_INERTIA,
-                      FEATURE_MODEL_SHAPES),
-            params={name: spec.describe() for name, spec in SPECS.items()},
-            render_backend=RENDER_BACKEND,
-        )
+    @classmethod
+    def engine_version(cls) -> str:
+        return importlib.metadata.version("pybullet")
+
+    def render_backend(self) -> str:
+        return RENDER_BACKEND
 
     @property
     def timestep(self) -> float:
@@ -166,7 +135,7 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
 
     @engine_call
     def set_params(self, params: dict[str, Any]) -> None:
-        clean = check_updates(self.name, SPECS, params)
+        clean = check_updates(self.name, PARAMS, params)
         self._values.update(clean)
         self._apply(clean)
 

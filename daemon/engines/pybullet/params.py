@@ -45,7 +45,7 @@ SOURCES = {
                                                 "runs give identical results",
 }
 
-SPECS: dict[str, ParamSpec] = with_sources({spec.name: spec for spec in (
+PARAMS: dict[str, ParamSpec] = with_sources({spec.name: spec for spec in (
     shared("timestep", 1 / 240, "Simulated time per step."),
     shared("gravity", (0.0, 0.0, -9.81), "Gravity vector, world frame."),
     shared("solver_iterations", 10, "Constraint solver iterations per step "

@@ -27,7 +27,7 @@ from galton.daemon.engines.params import check_updates
 from galton.daemon.engines.pybullet import snapshot_data as sd
 from galton.daemon.engines.pybullet.joints import Articulation
 from galton.daemon.engines.pybullet.models import MODEL_FORMATS
-from galton.daemon.engines.pybullet.params import SPECS
+from galton.daemon.engines.pybullet.params import PARAMS
 from galton.daemon.engines.pybullet.rebuild import Body, Model, Plan, batches, own_inertia
 from galton.daemon.engines.pybullet.robots import JointStates, Robots
 from galton.daemon.engines.pybullet.shapes import unit_inertia
@@ -170,8 +170,8 @@ def decode(data: Any) -> Restored:
 
 
 def read_params(value: Any) -> dict[str, Any]:
-    record = sd.fields(value, tuple(SPECS), "snapshot.params")
-    return check_updates(ENGINE, SPECS, record)
+    record = sd.fields(value, tuple(PARAMS), "snapshot.params")
+    return check_updates(ENGINE, PARAMS, record)
 
 
 def read_runs(value: Any, next_batch: int) -> dict[str, Body]:

@@ -34,6 +34,6 @@ def test_every_engine_declares_the_shared_parameters_from_the_base() -> None:
     assert set(modules) == set(ENGINE_CLASSES)
     for engine, module in modules.items():
         loaded = importlib.import_module(f"galton.daemon.engines.{module}")
-        specs = getattr(loaded, "PARAMS", None) or loaded.SPECS
+        specs = loaded.PARAMS
         for name, (unit, check) in SHARED.items():
             assert (specs[name].unit, specs[name].check) == (unit, check), (engine, name)
