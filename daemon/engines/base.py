@@ -101,6 +101,18 @@ class CameraView:
     outputs: tuple[str, ...]  # among IMAGE_OUTPUTS
 
 
+@dataclass(frozen=True)
+class Target:
+    """A target held on one joint (``set_joint_targets``; mode "none" is never held: it is
+    the absence of one)."""
+
+    mode: str
+    target: float
+    kp: float
+    kd: float
+    max_effort: float
+
+
 class RayHits(NamedTuple):
     """What ``Engine.raycast`` finds, per ray (a plain 5-tuple before; it unpacks the same)."""
 

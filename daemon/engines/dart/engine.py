@@ -28,11 +28,12 @@ from galton.daemon.engines.base import (
     Engine,
     Shape,
     ShapeMesh,
+    Target,
 )
 from galton.daemon.engines.dart import contacts as contact_points
 from galton.daemon.engines.dart import fast_state, frames, meshes, state
 from galton.daemon.engines.dart import spawn as books
-from galton.daemon.engines.dart.joints import Robots, Target
+from galton.daemon.engines.dart.joints import Robots
 from galton.daemon.engines.dart.mesh_files import MeshFiles
 from galton.daemon.engines.dart.models import MODEL_FORMATS
 from galton.daemon.engines.dart.params import PARAMS

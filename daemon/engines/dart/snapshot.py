@@ -17,9 +17,10 @@ from typing import Any
 
 import numpy as np
 
+from galton.daemon.engines.base import Target
 from galton.daemon.engines.dart import meshes, models
 from galton.daemon.engines.dart import spawn as books
-from galton.daemon.engines.dart.joints import Robots, Target
+from galton.daemon.engines.dart.joints import Robots
 from galton.daemon.engines.dart.params import PARAMS
 from galton.daemon.engines.params import check_updates
 from galton.protocol import BodyProperties, InvalidArgumentError

@@ -16,12 +16,11 @@ import dartpy as dart
 import numpy as np
 
 from galton.daemon.engines.dart.params import PARAMS
+from galton.daemon.engines.geometry import default_mass
 from galton.protocol import BodyGroup, InvalidArgumentError
-from galton.protocol import mesh as mesh_wire
 from galton.protocol.vocabulary import BODY_SHAPES
 
 SPAWNED, MODEL = "b:", "m:"  # skeleton name prefixes: unique, whatever entities are named
-DENSITY = 1000.0  # kg/m³: the interface's mass for a body spawned with mass None
 
 
 @dataclass
@@ -63,15 +62,6 @@ def make_shape(shape: str, size: tuple[float, ...]) -> Any:
     return dart.dynamics.PlaneShape(np.array([0.0, 0.0, 1.0]), 0.0)
 
 
-def volume(shape: str, size: tuple[float, ...]) -> float:
-    """Volume (m³) of a solid shape from its half sizes."""
-    ball = 4.0 / 3.0 * math.pi * size[0] ** 3
-    if shape == "sphere":
-        return ball
-    if shape == "box":
-        return 8.0 * size[0] * size[1] * size[2]
-    cylinder = math.pi * size[0] ** 2 * 2.0 * size[1]
-    return cylinder + (ball if shape == "capsule" else 0.0)
 
 
 def check_group(group: BodyGroup) -> None:
@@ -84,11 +74,7 @@ def check_group(group: BodyGroup) -> None:
 
 def group_values(group: BodyGroup, values: dict[str, Any]) -> tuple[float, float, float]:
     """Each body's mass (NaN when static), friction and restitution."""
-    size = tuple(float(s) for s in group.size)
-    solid = volume(group.shape, size) if group.vertices is None or group.faces is None \
-        else mesh_wire.volume(group.vertices, group.faces)
-    mass = math.nan if group.static else (
-        float(group.mass) if group.mass is not None else DENSITY * solid)
+    mass = math.nan if group.static else default_mass(group)
     kind = "default_static_" if group.static else "default_"
     friction = group.friction if group.friction is not None else values[kind + "friction"]
     restitution = group.restitution if group.restitution is not None else (

@@ -24,11 +24,12 @@ through index arrays, one numpy operation per call.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import mujoco
 import numpy as np
 
+from galton.daemon.engines.base import Target
 from galton.daemon.engines.mujoco.rig import Facts, entity_name, fixed_joint_name
 from galton.protocol import InvalidArgumentError, JointInfo, NotFoundError
 
@@ -36,17 +37,6 @@ JOINT_TYPES = {mujoco.mjtJoint.mjJNT_FREE: "free", mujoco.mjtJoint.mjJNT_BALL: "
                mujoco.mjtJoint.mjJNT_SLIDE: "prismatic", mujoco.mjtJoint.mjJNT_HINGE: "revolute"}
 _WIDTHS = {mujoco.mjtJoint.mjJNT_BALL: (4, 3)}  # qpos, qvel rows; 1-DOF joints: (1, 1)
 _FREE = mujoco.mjtJoint.mjJNT_FREE
-
-
-@dataclass(frozen=True)
-class Target:
-    """A target held on one joint (mode "none" is never held: it is the absence of one)."""
-
-    mode: str
-    target: float
-    kp: float
-    kd: float
-    max_effort: float
 
 
 class Joints:

@@ -37,6 +37,7 @@ from typing import Any, NamedTuple
 import mujoco
 import numpy as np
 
+from galton.daemon.engines.geometry import DENSITY
 from galton.daemon.engines.mujoco import shapes
 from galton.daemon.engines.mujoco import spec as ms
 from galton.daemon.engines.mujoco import state as mst
@@ -315,7 +316,7 @@ def _geom(group: BodyGroup, material: ms.Material, mesh: str | None = None
     if material.mass is not None and not group.static:
         geom["mass"] = material.mass
     else:
-        geom["density"] = ms.DENSITY
+        geom["density"] = DENSITY
     return geom
 
 

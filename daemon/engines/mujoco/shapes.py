@@ -9,9 +9,8 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from galton.daemon.engines.mujoco import spec as ms
+from galton.daemon.engines.geometry import DENSITY, group_volume
 from galton.protocol import BodyGroup
-from galton.protocol import mesh as mesh_wire
 
 
 def add_mesh(spec: mujoco.MjSpec, group: BodyGroup) -> str | None:
@@ -36,20 +35,8 @@ def inertial(group: BodyGroup, mass: float | None) -> dict[str, Any]:
     if group.inertia is None:
         return {}
     if mass is None:
-        mass = ms.DENSITY * shape_volume(group)
+        mass = DENSITY * group_volume(group)
     return {"explicitinertial": True, "mass": mass, "inertia": list(group.inertia),
             "ipos": [0.0, 0.0, 0.0]}
 
 
-def shape_volume(group: BodyGroup) -> float:
-    """A spawned shape's volume (m³), from its half sizes or its mesh."""
-    size = group.size
-    if group.vertices is not None and group.faces is not None:
-        return mesh_wire.volume(group.vertices, group.faces)
-    if group.shape == "sphere":
-        return 4 / 3 * np.pi * size[0] ** 3
-    if group.shape == "cylinder":
-        return 2 * np.pi * size[0] ** 2 * size[1]
-    if group.shape == "capsule":
-        return np.pi * size[0] ** 2 * (2 * size[1] + 4 / 3 * size[0])
-    return 8 * size[0] * size[1] * size[2]

@@ -12,10 +12,10 @@ from typing import TYPE_CHECKING, Any
 import mujoco
 import numpy as np
 
+from galton.daemon.engines.base import Target
 from galton.daemon.engines.mujoco import snapshot_arrays as arrays
 from galton.daemon.engines.mujoco import spec as ms
 from galton.daemon.engines.mujoco.entities import ASSET_KINDS, Assets, Entity
-from galton.daemon.engines.mujoco.joints import Target
 from galton.daemon.engines.mujoco.rig import body_name
 from galton.protocol import TARGET_MODES, GaltonError, InvalidArgumentError, JointInfo
 from galton.protocol.errors import brief

@@ -47,7 +47,6 @@ INTEGRATORS = {"euler": mujoco.mjtIntegrator.mjINT_EULER,
                "rk4": mujoco.mjtIntegrator.mjINT_RK4}
 
 # Bodies given no mass get MuJoCo's default density, water's.
-DENSITY = 1000.0
 # A contact between geoms of different priority takes the higher one's friction, solref and
 # solimp (MuJoCo's rule); static bodies outrank moving ones, so a ball on a pin feels the
 # pin's surface and two balls their own (see docs/PHYSICS.md).

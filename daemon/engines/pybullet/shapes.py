@@ -11,7 +11,6 @@ MuJoCo, and PyBullet's capsule ``height`` is that part's full length.
 from __future__ import annotations
 
 import itertools
-import math
 import os
 import tempfile
 import xml.etree.ElementTree as ElementTree
@@ -39,7 +38,6 @@ MARGIN_CAP = 0.5
 MODEL_ROOTS = {"urdf": "robot", "mjcf": "mujoco"}  # root element of each model format
 # Inertia from the file, and true cylinders rather than their convex hulls.
 URDF_FLAGS = pybullet.URDF_USE_INERTIA_FROM_FILE | pybullet.URDF_USE_IMPLICIT_CYLINDER
-DENSITY = 1000.0  # kg/m³, the protocol's default when a dynamic body has no mass
 WHITE = (1.0, 1.0, 1.0, 1.0)
 LONG_LINE = 4096  # characters: a model's longer lines are broken between elements
 
@@ -65,47 +63,8 @@ def collision_args(shape: str, size: tuple[float, ...]) -> dict[str, Any]:
     raise ValueError(f"unknown shape {shape!r}")
 
 
-def volume(shape: str, size: tuple[float, ...]) -> float:
-    """Volume in m³, for the default mass of a dynamic body."""
-    if shape == "sphere":
-        return 4 / 3 * math.pi * size[0] ** 3
-    if shape == "box":
-        return 8 * size[0] * size[1] * size[2]
-    radius, half = size
-    cylinder = math.pi * radius**2 * 2 * half
-    if shape == "cylinder":
-        return cylinder
-    if shape == "capsule":
-        return cylinder + 4 / 3 * math.pi * radius**3
-    raise ValueError(f"a {shape} has no volume: only static bodies may be {shape}s")
 
 
-def unit_inertia(shape: str, size: tuple[float, ...]) -> tuple[float, float, float]:
-    """Principal moments of inertia per kilogram (uniform density), about the body axes.
-
-    Set explicitly because Bullet approximates a capsule's inertia by its bounding box, and
-    because changing only the mass makes PyBullet recompute the inertia from the shape.
-    """
-    if shape == "sphere":
-        moment = 0.4 * size[0] ** 2
-        return (moment, moment, moment)
-    if shape == "box":
-        x2, y2, z2 = (h * h for h in size)
-        return ((y2 + z2) / 3, (x2 + z2) / 3, (x2 + y2) / 3)
-    radius, half = size
-    r2, length = radius * radius, 2 * half
-    if shape == "cylinder":
-        side = r2 / 4 + length * length / 12
-        return (side, side, r2 / 2)
-    if shape == "capsule":
-        # Cylinder plus two hemispheres, weighted by volume (the standard capsule formula).
-        cyl, caps = math.pi * r2 * length, 4 / 3 * math.pi * r2 * radius
-        side = (cyl * (length * length / 12 + r2 / 4)
-                + caps * (0.4 * r2 + length * length / 4 + 3 * length * radius / 8))
-        axial = cyl * r2 / 2 + caps * 0.4 * r2
-        total = cyl + caps
-        return (side / total, side / total, axial / total)
-    raise ValueError(f"a {shape} has no inertia: only static bodies may be {shape}s")
 
 
 def margin_for(shape: str, size: tuple[float, ...], margin: float) -> float | None:

@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from galton.daemon.engines.geometry import unit_inertia
 from galton.daemon.engines.params import check_updates
 from galton.daemon.engines.pybullet import snapshot_data as sd
 from galton.daemon.engines.pybullet.joints import Articulation
@@ -30,7 +31,6 @@ from galton.daemon.engines.pybullet.models import MODEL_FORMATS
 from galton.daemon.engines.pybullet.params import PARAMS
 from galton.daemon.engines.pybullet.rebuild import Body, Model, Plan, batches, own_inertia
 from galton.daemon.engines.pybullet.robots import JointStates, Robots
-from galton.daemon.engines.pybullet.shapes import unit_inertia
 from galton.protocol import BodyProperties, InvalidArgumentError, JointInfo
 from galton.protocol import mesh as mesh_wire
 from galton.protocol.errors import brief

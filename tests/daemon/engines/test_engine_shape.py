@@ -8,8 +8,10 @@ import importlib
 
 import pytest
 
-from galton.daemon.engines import ENGINE_CLASSES
+from galton.daemon.engines import ENGINE_CLASSES, create_engine
 from galton.daemon.engines.base import KNOWN_FEATURES, Engine
+from galton.daemon.engines.geometry import DENSITY, volume
+from galton.protocol import BodyGroup
 
 ALL_FEATURES = ("spawn", "delete", "set_state", "update_mass", "update_friction",
                 "update_restitution", "update_rgba", "load_model", "set_static_pose", "joints",
@@ -50,3 +52,17 @@ def test_features_follow_what_an_engine_overrides() -> None:
     features = without_render.features()
     assert "render" not in features and "raycast" in features
     assert "target_position" in features and "target_velocity" not in features
+
+
+@pytest.mark.parametrize("name", sorted(ENGINE_CLASSES))
+def test_every_engine_gives_a_massless_body_the_shared_density_times_its_volume(name: str
+                                                                                ) -> None:
+    """One formula (engines/geometry.py) for all four: a capsule's mass is the same."""
+    engine = create_engine(name)
+    try:
+        engine.spawn([BodyGroup(shape="capsule", size=(0.1, 0.2), names=["c"],
+                                poses=[[0, 0, 1, 0, 0, 0, 1]])])
+        mass = engine.properties(["c"])[0, 0]
+    finally:
+        engine.close()
+    assert mass == pytest.approx(DENSITY * volume("capsule", (0.1, 0.2)), rel=1e-12)
