@@ -8,7 +8,7 @@ the constraint solver's collision option, so this engine runs DART's own limit (
 contacts a step, shared between colliding pairs) and no per-pair cap. Past 1,000
 touching pairs the pairs found last get no contact (DART warns once).
 
-The engine's parts: spawn.py (books, spawned skeletons, the world's set-up), state.py
+The engine's parts: spawn.py (records, spawned skeletons, the world's set-up), state.py
 (states and divergence), models.py (URDF and MJCF), joints.py (joints, targets, wrenches),
 snapshot.py (snapshots, rebuilds), meshes.py (mesh shapes) and contacts.py. dartpy has no
 ray casts and no headless renderer: ``raycast`` and ``render`` are FEATURE_UNSUPPORTED.
@@ -32,7 +32,7 @@ from galton.daemon.engines.base import (
 )
 from galton.daemon.engines.dart import contacts as contact_points
 from galton.daemon.engines.dart import fast_state, frames, meshes, state
-from galton.daemon.engines.dart import spawn as books
+from galton.daemon.engines.dart import spawn as spawning
 from galton.daemon.engines.dart.joints import Robots
 from galton.daemon.engines.dart.mesh_files import MeshFiles
 from galton.daemon.engines.dart.models import MODEL_FORMATS
@@ -60,9 +60,9 @@ class DartEngine(Scene, Snapshots, Engine):
     spawn_inertia = True
 
     def __init__(self) -> None:
-        self._values: dict[str, Any] = books.defaults()
-        self._world = books.new_world(self._values)
-        self._bodies: dict[str, books.Body] = {}
+        self._values: dict[str, Any] = spawning.defaults()
+        self._world = spawning.new_world(self._values)
+        self._bodies: dict[str, spawning.Body] = {}
         self._robots = Robots()
         self._mesh_files = MeshFiles()  # model mesh files' triangles, for get_shapes
         self._init_scene()
@@ -84,20 +84,20 @@ class DartEngine(Scene, Snapshots, Engine):
     def set_params(self, params: dict[str, Any]) -> None:
         clean = check_updates(self.name, PARAMS, params)
         self._values.update(clean)
-        books.configure(self._world, self._values)
+        spawning.configure(self._world, self._values)
         self._follow_defaults(clean)
 
     # -- bodies ---------------------------------------------------------------------------
     def spawn(self, groups: Sequence[BodyGroup]) -> None:
         self._check_new([n for g in groups for n in g.names])
         for group in groups:
-            books.check_group(group)
+            spawning.check_group(group)
         for group in groups:
             if group.names:
                 self._spawn_group(group)
 
     def _spawn_group(self, group: BodyGroup) -> None:
-        mass, friction, restitution = books.group_values(group, self._values)
+        mass, friction, restitution = spawning.group_values(group, self._values)
         size = tuple(float(s) for s in group.size)
         poses = np.asarray(group.poses, dtype=float).reshape(-1, POSE_WIDTH)
         twists = np.zeros((len(poses), TWIST_WIDTH)) if group.twists is None else (
@@ -110,12 +110,12 @@ class DartEngine(Scene, Snapshots, Engine):
             group.vertices, group.faces)
         shared = None if mesh is None else meshes.mesh_shape(*mesh)
         for k, name in enumerate(group.names):
-            body = books.Body(name, group.shape, size, group.static, mass, friction,
+            body = spawning.Body(name, group.shape, size, group.static, mass, friction,
                               restitution, group.friction is None, group.restitution is None,
                               None, None, group.rgba, unit_inertia=None if group.inertia is None
                               else tuple(i / mass for i in group.inertia),
                               mesh=mesh, mesh_shape=shared)
-            books.build(body, positions[k], velocities[k])
+            spawning.build(body, positions[k], velocities[k])
             self._add(body)
 
     def delete(self, names: Sequence[str]) -> None:
@@ -124,7 +124,7 @@ class DartEngine(Scene, Snapshots, Engine):
             self._remove(body)
 
     def clear(self) -> None:
-        self._world = books.new_world(self._values)
+        self._world = spawning.new_world(self._values)
         self._bodies.clear()
         self._robots = Robots()
         self._init_scene()
@@ -254,7 +254,7 @@ class DartEngine(Scene, Snapshots, Engine):
             self._robots.wrenches.pop(name, None)
 
     def save_state(self) -> object | None:
-        """Skeletons' positions and velocities, the time and the held books (fast_state)."""
+        """Skeletons' positions and velocities, the time and the held records (fast_state)."""
         return fast_state.save(self)
 
     def load_state(self, state: object) -> bool:

@@ -19,7 +19,7 @@ import numpy as np
 
 from galton.daemon.engines.base import Target
 from galton.daemon.engines.dart import meshes, models
-from galton.daemon.engines.dart import spawn as books
+from galton.daemon.engines.dart import spawn as spawning
 from galton.daemon.engines.dart.joints import Robots
 from galton.daemon.engines.dart.params import PARAMS
 from galton.daemon.engines.params import check_updates
@@ -34,7 +34,7 @@ class Snapshots:
 
     _world: Any
     _values: dict[str, Any]
-    _bodies: dict[str, books.Body]
+    _bodies: dict[str, spawning.Body]
     _robots: Robots
     _owners: list[str]
     _models: dict[str, models.Model]
@@ -116,7 +116,7 @@ class Snapshots:
         mass = math.nan if static else float(item["mass"])
         follows = item["follows"]
         rgba = None if item["rgba"] is None else tuple(float(c) for c in item["rgba"])
-        body = books.Body(str(item["name"]), shape, size, static, mass,
+        body = spawning.Body(str(item["name"]), shape, size, static, mass,
                           float(item["friction"]), float(item["restitution"]),
                           bool(follows[0]), bool(follows[1]), None, None, rgba,
                           unit_inertia=_unit_inertia(item.get("unit_inertia"), static))
@@ -134,7 +134,7 @@ class Snapshots:
             body.mesh, body.mesh_shape = (vertices, faces), self._loaded_meshes[key]
         elif item.get("vertices") is not None or item.get("faces") is not None:
             raise ValueError(f"a {shape} has no vertices or faces")
-        books.build(body, _vector(item["positions"], 6), _vector(item["velocities"], 6))
+        spawning.build(body, _vector(item["positions"], 6), _vector(item["velocities"], 6))
         self._add(body)  # type: ignore[attr-defined]
 
     def _restore_model(self, item: dict[str, Any]) -> None:

@@ -1,4 +1,4 @@
-"""A DART world's bodies: what the engine keeps of each (its books), how a spawned body
+"""A DART world's bodies: what the engine keeps of each (its records), how a spawned body
 becomes a one-link skeleton, and how a world is set up as gz-physics sets one up.
 
 Every spawned body is its own skeleton: a free joint holding one body node with one shape
@@ -83,7 +83,7 @@ def group_values(group: BodyGroup, values: dict[str, Any]) -> tuple[float, float
 
 
 def build(body: Body, positions: np.ndarray, velocities: np.ndarray) -> None:
-    """Make a spawned body's skeleton (its books already filled) at this free-joint state."""
+    """Make a spawned body's skeleton (its records already filled) at this free-joint state."""
     skeleton = dart.dynamics.Skeleton(SPAWNED + body.name)
     _, node = skeleton.createFreeJointAndBodyNodePair()
     node.setName(body.name)

@@ -1,5 +1,5 @@
 """The PyBullet engine's part that loads models and drives their joints: a model's root and
-links as entities, its joints, targets and held wrenches (books in robots.py,
+links as entities, its joints, targets and held wrenches (records in robots.py,
 the actuator law in joints.py, link frames in frames.py).
 
 A URDF model is one multibody: its base is the root entity, every other link a link

@@ -30,7 +30,7 @@ The engine's parts: this module (bodies, models), ``Parameters``
 (params.py), ``Rebuilding`` (rebuild.py), ``Articulated`` (joints,
 articulated.py), ``Snapshots`` (snapshot.py) and ``Perception``
 (render, raycast, contacts: perception.py). Plain functions do the rest:
-states and the divergence check (state.py), a spawn group's values and books
+states and the divergence check (state.py), a spawn group's values and records
 (spawn.py), a body's updates and properties
 (props.py), a model load's checks and names (models.py).
 """
@@ -183,7 +183,7 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
                 self.reset_velocity(uid, twists[k][:3], twists[k][3:])
             self._change(uid, -1, **dynamics)
         self._set_margin(ids[0], group.shape, size)
-        return spawning.books(group, ids, size, mass, (friction, restitution), batch, redo)
+        return spawning.records(group, ids, size, mass, (friction, restitution), batch, redo)
 
     def _group_shapes(self, group: BodyGroup, size: tuple[float, ...]) -> tuple[int, int]:
         """A group's collision and visual shapes (shared through the cache)."""
@@ -358,7 +358,7 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
     # -- snapshots (snapshot.py) ------------------------------------------------
     @engine_call
     def snapshot(self, *, canonical: bool = True) -> dict[str, Any]:
-        """The world as plain data: every body's books, model texts, articulations, targets,
+        """The world as plain data: every body's records, model texts, articulations, targets,
         wrenches, parameters and states. Bullet's contact points and warm starts cannot be
         read out, so a restore starts without them, as ``reset_dynamics`` leaves a world.
         The promise (on the same PyBullet build): a fresh engine restored from the

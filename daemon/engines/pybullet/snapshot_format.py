@@ -112,7 +112,7 @@ def spawn_run(names: list[str], bodies: dict[str, Body]) -> dict[str, Any]:
 
 
 def model_run(names: list[str], bodies: dict[str, Body]) -> dict[str, Any]:
-    """One model load's remaining bodies: its text once, each body's books."""
+    """One model load's remaining bodies: its text once, each body's records."""
     models = [body.model for name in names if (body := bodies[name]).model is not None]
     first = models[0]
     return {
@@ -175,7 +175,7 @@ def read_params(value: Any) -> dict[str, Any]:
 
 
 def read_runs(value: Any, next_batch: int) -> dict[str, Body]:
-    """Every body's books, run by run, in the order made (batches strictly increasing)."""
+    """Every body's records, run by run, in the order made (batches strictly increasing)."""
     check_type(value, list, "snapshot.runs")
     bodies: dict[str, Body] = {}
     last = -1

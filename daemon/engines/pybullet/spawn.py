@@ -1,8 +1,8 @@
-"""The pure parts of spawning into PyBullet: a group's checks, mass, dynamics and books.
+"""The pure parts of spawning into PyBullet: a group's checks, mass, dynamics and records.
 
 The engine's ``_spawn_group`` makes the bodies (one createMultiBody call for a group, all
 turned like its first body) and hands them these values; a rebuild makes them again from
-the books, through the same calls (rebuild).
+the records, through the same calls (rebuild).
 """
 
 from __future__ import annotations
@@ -76,9 +76,9 @@ def dynamics(group: BodyGroup, size: tuple[float, ...], mass: float,
     return friction, restitution, changes
 
 
-def books(group: BodyGroup, ids: list[int], size: tuple[float, ...], mass: float,
+def records(group: BodyGroup, ids: list[int], size: tuple[float, ...], mass: float,
           surface: tuple[float, float], batch: int, redo: rebuild.Redo) -> dict[str, Body]:
-    """The engine's books of a group's new bodies: everything needed to make them again."""
+    """The engine's records of a group's new bodies: everything needed to make them again."""
     friction, restitution = surface
     rgba = None if group.rgba is None else as_rgba(group.rgba)
     inertia = group_unit_inertia(group, size, mass)

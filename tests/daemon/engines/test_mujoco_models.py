@@ -188,7 +188,7 @@ def test_deleting_a_model_takes_its_links_joints_targets_and_wrenches(
         engine.delete(["c/pole"])
     engine.delete(["c/slideBar"])
     assert {j.model for j in engine.joints()} == {"d/slideBar"}
-    assert not engine.wrenches.held and not engine.joint_book.targets
+    assert not engine.wrenches.held and not engine.loaded_joints.targets
     assert not engine.data.xfrc_applied.any()
     with pytest.raises(NotFoundError):
         engine.get_states(["c/pole"])

@@ -1,7 +1,7 @@
 """Forks of the MuJoCo engine share their source's spec and compiled model, read-only, and
 copy only the data (clone.py): the first change to what they share, on either side, takes
 its own copy first. A structure change or an edited model array (joint targets' gains, the
-balance guard's sleep policies) never leaks from a fork into its source or the other way
+sleep guard's sleep policies) never leaks from a fork into its source or the other way
 round, and the fork still goes on bit for bit as its source.
 """
 
@@ -116,7 +116,7 @@ def test_a_sources_edit_never_reaches_its_fork(world: tuple[MujocoEngine, list[s
     assert_same_runs(fork, witness, [steps(100), edits(joints)[edit], steps(100)])
 
 
-def test_the_balance_guards_sleep_policies_stay_in_the_fork(world: tuple[MujocoEngine, list[str]]
+def test_the_sleep_guards_sleep_policies_stay_in_the_fork(world: tuple[MujocoEngine, list[str]]
                                                             ) -> None:
     engine = MujocoEngine()
     pin = BodyGroup(shape="cylinder", size=(0.1, 0.3), names=["pin"],
@@ -127,7 +127,7 @@ def test_the_balance_guards_sleep_policies_stay_in_the_fork(world: tuple[MujocoE
     fork = engine.clone()
     before = engine.model.tree_sleep_policy.copy()
     fork.step(500)
-    assert fork.balance is not None and fork.balance.held  # it wrote a sleep policy
+    assert fork.sleep_guard is not None and fork.sleep_guard.held  # it wrote a sleep policy
     assert fork.model is not engine.model
     np.testing.assert_array_equal(engine.model.tree_sleep_policy, before)
     engine.step(500)

@@ -38,8 +38,9 @@ import mujoco
 import numpy as np
 
 from galton.daemon.engines.geometry import DENSITY
-from galton.daemon.engines.mujoco import shapes
-from galton.daemon.engines.mujoco import spec as ms
+from galton.daemon.engines.mujoco import body_extras
+from galton.daemon.engines.mujoco import mj_spec as ms
+from galton.daemon.engines.mujoco import params as mparams
 from galton.daemon.engines.mujoco import state as mst
 from galton.protocol import BodyGroup, ResourceLimitError
 
@@ -76,7 +77,7 @@ class Planned(NamedTuple):
     spares: int
 
 
-class Pool:
+class ParkedBodies:
     """Parked spec bodies by kind; see the module docstring."""
 
     def __init__(self) -> None:
@@ -115,12 +116,12 @@ class Pool:
             else:
                 nbody += len(group)
                 compiled.append(Planned(group, material, key, 0))
-        if nbody > ms.MAX_BODIES:
+        if nbody > mparams.MAX_BODIES:
             raise ResourceLimitError(
-                f"MuJoCo holds at most {ms.MAX_BODIES} bodies in one world (its broadphase "
+                f"MuJoCo holds at most {mparams.MAX_BODIES} bodies in one world (its broadphase "
                 f"numbers them with 16 bits); this spawn would make {nbody} (the world has "
                 f"{entities} entities and {len(self)} parked bodies)",
-                {"limit": "mujoco_bodies", "max": ms.MAX_BODIES, "count": nbody})
+                {"limit": "mujoco_bodies", "max": mparams.MAX_BODIES, "count": nbody})
         free_room = values["mujoco.max_free_bodies"] - nfree
         if compiled:
             free_room -= sum(len(p.group) for p in compiled if not p.group.static)
@@ -130,7 +131,8 @@ class Pool:
         for i, planned in enumerate(compiled):
             if planned.key is None:
                 continue  # never parked: no spare twins
-            count = min(self.spares(len(planned.group), spares), ms.MAX_BODIES - nbody - spares)
+            count = min(self.spares(len(planned.group), spares),
+                        mparams.MAX_BODIES - nbody - spares)
             if not planned.group.static:  # spare twins of moving bodies are free bodies too
                 count = min(count, free_room)
                 free_room -= count
@@ -229,7 +231,7 @@ class Additions:
         body still moves without a compile: its pose lives in the model (body_pos, body_quat).
         """
         if len(group) < ATTACH_MIN or group.vertices is not None:
-            mesh = shapes.add_mesh(self.spec, group)
+            mesh = body_extras.add_mesh(self.spec, group)
             if mesh is not None:
                 self._meshes.append(mesh)
             bodies = _add_bodies(self.spec.worldbody, group, material, range(len(group)),
@@ -264,7 +266,7 @@ class Additions:
     def bodies(self) -> list[list[Any]]:
         """Once compiled: each added group's bodies, named, each attached group gathered in
         a frame of its own. All are found before any is renamed: a rename may drop MuJoCo's
-        index of names. The frames they leave empty are ``litter``: a delete costs a walk of
+        index of names. The frames they leave empty are ``empty_frames``: a delete costs a walk of
         the spec (0.6 s at 60,000 bodies, 1.8 s right after a compile), so they go with the
         next bodies deleted. (The groups' frames were made before the compile: adding any
         element to a spec drops the ids of its compiled bodies.)
@@ -287,7 +289,7 @@ class Additions:
         return out
 
     @property
-    def litter(self) -> list[Any]:
+    def empty_frames(self) -> list[Any]:
         return self._frames
 
 
@@ -323,7 +325,7 @@ def _geom(group: BodyGroup, material: ms.Material, mesh: str | None = None
 def _add_bodies(parent: Any, group: BodyGroup, material: ms.Material, rows: range,
                 parked: bool, names: Sequence[str], mesh: str | None = None) -> list[Any]:
     geom = _geom(group, material, mesh)
-    inertial = shapes.inertial(group, material.mass)
+    inertial = body_extras.inertial(group, material.mass)
     poses = np.asarray(group.poses, dtype=float)[rows.start:rows.stop]
     quats = mst.to_wxyz(poses[:, 3:7])
     bodies = []
@@ -351,10 +353,10 @@ def _delete(spec: mujoco.MjSpec, bodies: Sequence[Any], frames: Sequence[Any]) -
 
 
 def remove_bodies(spec: mujoco.MjSpec, bodies: Sequence[Any],
-                  litter: Sequence[Any] = ()) -> None:
+                  empty_frames: Sequence[Any] = ()) -> None:
     """Delete these top-level bodies (and their subtrees) from the spec in one go, with
-    these empty frames (``Additions.litter``)."""
-    _delete(spec, bodies, litter)
+    these empty frames (``Additions.empty_frames``)."""
+    _delete(spec, bodies, empty_frames)
 
 
 def remove_frame(spec: mujoco.MjSpec, frame: Any) -> None:
