@@ -53,11 +53,12 @@ from galton.daemon.engines.base import (
     native_output_silenced,
 )
 from galton.daemon.engines.params import check_updates
-from galton.daemon.engines.pybullet import collisions, rebuild
 from galton.daemon.engines.pybullet import props as bodyprops
+from galton.daemon.engines.pybullet import rebuild, shapes
 from galton.daemon.engines.pybullet import spawn as spawning
 from galton.daemon.engines.pybullet import state as states
 from galton.daemon.engines.pybullet.articulated import Articulated
+from galton.daemon.engines.pybullet.bodies import BodyMaker, ShapeCache
 from galton.daemon.engines.pybullet.calls import engine_call
 from galton.daemon.engines.pybullet.frames import Offset
 from galton.daemon.engines.pybullet.mesh_files import HullCache
@@ -68,7 +69,6 @@ from galton.daemon.engines.pybullet.rebuild import Body as _Body
 from galton.daemon.engines.pybullet.rebuild import Rebuilding
 from galton.daemon.engines.pybullet.render import RENDER_BACKEND
 from galton.daemon.engines.pybullet.robots import Robots
-from galton.daemon.engines.pybullet.shapes import BodyMaker, ShapeCache
 from galton.daemon.engines.pybullet.snapshot import Snapshots
 from galton.protocol import (
     BodyGroup,
@@ -295,7 +295,7 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
         found = []
         for name in names:
             uid, link = self._link_of(name)
-            found.append(collisions.link_shapes_and_meshes(self._bc, uid, link, self._hulls))
+            found.append(shapes.link_shapes_and_meshes(self._bc, uid, link, self._hulls))
         return found
 
     def _link_of(self, name: str) -> tuple[int, int]:

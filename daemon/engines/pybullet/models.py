@@ -13,9 +13,9 @@ from typing import Any
 from pybullet_utils.bullet_client import BulletClient
 
 from galton.daemon.engines.pybullet import props
+from galton.daemon.engines.pybullet.bodies import read_text, unique_name
 from galton.daemon.engines.pybullet.files import FileFacts
 from galton.daemon.engines.pybullet.rebuild import Body, Model
-from galton.daemon.engines.pybullet.shapes import read_text, unique_name
 from galton.protocol import (
     EntityInfo,
     FeatureUnsupportedError,

@@ -14,7 +14,7 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from galton.daemon.engines.params import ParamSpec, flag, number, shared, with_sources
-from galton.daemon.engines.pybullet.shapes import margin_for
+from galton.daemon.engines.pybullet.bodies import margin_for
 
 if TYPE_CHECKING:
     from pybullet_utils.bullet_client import BulletClient

@@ -12,8 +12,8 @@ from typing import Any
 
 from pybullet_utils.bullet_client import BulletClient
 
+from galton.daemon.engines.pybullet.bodies import as_rgba, scale_masses
 from galton.daemon.engines.pybullet.rebuild import Body
-from galton.daemon.engines.pybullet.shapes import as_rgba, scale_masses
 from galton.protocol import BodyProperties
 
 

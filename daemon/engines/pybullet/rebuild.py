@@ -48,7 +48,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from pybullet_utils.bullet_client import BulletClient
 
-from galton.daemon.engines.pybullet.shapes import WHITE, Link, load_bodies
+from galton.daemon.engines.pybullet.bodies import WHITE, Link, load_bodies
 from galton.protocol import (
     BodyGroup,
     BodyProperties,
@@ -60,9 +60,9 @@ if TYPE_CHECKING:
     from collections.abc import Callable
     from typing import Any
 
+    from galton.daemon.engines.pybullet.bodies import BodyMaker
     from galton.daemon.engines.pybullet.frames import Offset
     from galton.daemon.engines.pybullet.robots import JointStates, Robots
-    from galton.daemon.engines.pybullet.shapes import BodyMaker
 
 REBUILD_AFTER = 5_000  # bodies removed since the last rebuild, at the least
 PLACE_TRIES = 4  # quaternion corrections before a pose is held instead

@@ -13,9 +13,9 @@ import numpy as np
 
 from galton.daemon.engines.geometry import DENSITY, unit_inertia, volume
 from galton.daemon.engines.pybullet import rebuild
+from galton.daemon.engines.pybullet.bodies import as_rgba
 from galton.daemon.engines.pybullet.params import default_keys
 from galton.daemon.engines.pybullet.rebuild import Body
-from galton.daemon.engines.pybullet.shapes import as_rgba
 from galton.protocol import BodyGroup, InvalidArgumentError
 from galton.protocol import mesh as mesh_wire
 from galton.protocol.vocabulary import BODY_SHAPES

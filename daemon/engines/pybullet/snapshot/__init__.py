@@ -1,4 +1,4 @@
-"""The PyBullet engine's snapshots: its world as plain data (snapshot_format.py), and a
+"""The PyBullet engine's snapshots: its world as plain data (snapshot/format.py), and a
 fresh engine made into that world.
 
 Bullet's contact points and their warm-start impulses cannot be read out, so a snapshot
@@ -27,10 +27,10 @@ from typing import TYPE_CHECKING, Any, TypeVar
 
 from pybullet_utils.bullet_client import BulletClient
 
-from galton.daemon.engines.pybullet import snapshot_format as snapformat
 from galton.daemon.engines.pybullet.frames import Offset, base_offset
 from galton.daemon.engines.pybullet.joints import SCALAR
 from galton.daemon.engines.pybullet.rebuild import Body, Plan
+from galton.daemon.engines.pybullet.snapshot import format as snapformat
 from galton.protocol import InvalidArgumentError, OperationFailedError
 
 if TYPE_CHECKING:

@@ -1,7 +1,7 @@
 """A PyBullet snapshot's format: a world as plain data and back. A snapshot holds the
 world's rebuild plan (rebuild.Plan), its parameters and its next batch number.
 
-Layout (format 1), every array packed as snapshot_data.pack makes it::
+Layout (format 1), every array packed as arrays.pack makes it::
 
     format, engine ("pybullet"), engine_version, params {name: value}, next_batch,
     runs [spawn or model run, in the order made], poses (n, 7), twists (n, 6),
@@ -25,12 +25,12 @@ import numpy as np
 
 from galton.daemon.engines.geometry import unit_inertia
 from galton.daemon.engines.params import check_updates
-from galton.daemon.engines.pybullet import snapshot_data as sd
 from galton.daemon.engines.pybullet.joints import Articulation
 from galton.daemon.engines.pybullet.models import MODEL_FORMATS
 from galton.daemon.engines.pybullet.params import PARAMS
 from galton.daemon.engines.pybullet.rebuild import Body, Model, Plan, batches, own_inertia
 from galton.daemon.engines.pybullet.robots import JointStates, Robots
+from galton.daemon.engines.pybullet.snapshot import arrays as sd
 from galton.protocol import BodyProperties, InvalidArgumentError, JointInfo
 from galton.protocol import mesh as mesh_wire
 from galton.protocol.errors import brief
