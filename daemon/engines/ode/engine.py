@@ -6,7 +6,7 @@ Webots sources in docs/ENGINES.md).
 One world, one sweep-and-prune space holding every geom, one group of contact joints emptied before
 each step's collision. Parts: bodies (spawn.py; meshes: trimesh.py), states (state.py),
 collision and contact reports (contacts.py), ray casts (rays.py), snapshots (snapshot.py,
-snapshot_format.py), robots (joints.py, urdf.py).
+snapshot/format.py), robots (joints.py, models.py).
 
 Determinism: ``dWorldStep`` draws no random numbers, ODE's space visits geoms in the order
 they were made, and a restore makes them again in that order, so the same steps give the
@@ -32,12 +32,13 @@ from galton.daemon.engines.ode import spawn as spawning
 from galton.daemon.engines.ode import state as states
 from galton.daemon.engines.ode.contacts import Collider, sync_sleep
 from galton.daemon.engines.ode.joints import Robots, place
+from galton.daemon.engines.ode.models import MODEL_FORMATS, load_urdf
 from galton.daemon.engines.ode.native import LIB, SAP_AXES_XZY, version
 from galton.daemon.engines.ode.params import PARAMS, SURFACE_DEFAULTS, default_keys
 from galton.daemon.engines.ode.rays import RayCaster
+from galton.daemon.engines.ode.shapes import model_shapes
 from galton.daemon.engines.ode.snapshot import Snapshots
 from galton.daemon.engines.ode.spawn import Body
-from galton.daemon.engines.ode.urdf import MODEL_FORMATS, load_urdf
 from galton.daemon.engines.params import check_updates
 from galton.protocol import (
     BodyGroup,
@@ -194,8 +195,8 @@ class OdeEngine(Snapshots, Engine):
             raise NotFoundError(f"no entity named {exc.args[0]!r} in the ODE world") from None
 
     def shapes(self, names: Sequence[str]) -> list[list[Shape]]:
-        """A link's collision shapes as loaded (urdf.py: a mesh is already its box)."""
-        return [list(body.link_shapes) for body in self._lookup(names)]
+        """A link's collision shapes as loaded (shapes.py: a mesh is already its box)."""
+        return model_shapes(self._lookup(names))
 
     def update(self, names: Sequence[str], props: BodyProperties) -> None:
         bodies = self._lookup(names)
@@ -327,7 +328,7 @@ class OdeEngine(Snapshots, Engine):
             self._lookup(list(wanted))
         return ContactPoints(*self._collider.report(wanted))
 
-    # -- models and joints (joints.py, urdf.py) -----------------------------------------------
+    # -- models and joints (joints.py, models.py) ----------------------------------------------
     def load_model(self, fmt: str, text: str | None, path: str | None,
                    prefix: str, *, fixed_base: bool = True) -> list[EntityInfo]:
         if fmt not in MODEL_FORMATS:
