@@ -10,8 +10,9 @@ touching pairs the pairs found last get no contact (DART warns once).
 
 The engine's parts: spawn.py (records, spawned skeletons, the world's set-up), state.py
 (states and divergence), models.py (URDF and MJCF), joints.py (joints, targets, wrenches),
-snapshot.py (snapshots, rebuilds), meshes.py (mesh shapes) and contacts.py. dartpy has no
-ray casts and no headless renderer: ``raycast`` and ``render`` are FEATURE_UNSUPPORTED.
+snapshot/ (snapshots), rebuild.py (records, rebuilds), meshes.py (mesh shapes), shapes.py
+and contacts.py. dartpy has no ray casts and no headless renderer: ``raycast`` and
+``render`` are FEATURE_UNSUPPORTED (rays.py and render.py say so).
 """
 
 from __future__ import annotations
@@ -37,7 +38,7 @@ from galton.daemon.engines.dart.joints import Robots
 from galton.daemon.engines.dart.mesh_files import MeshFiles
 from galton.daemon.engines.dart.models import MODEL_FORMATS
 from galton.daemon.engines.dart.params import PARAMS
-from galton.daemon.engines.dart.scene import Scene
+from galton.daemon.engines.dart.rebuild import Rebuilding
 from galton.daemon.engines.dart.shapes import node_meshes, node_shapes
 from galton.daemon.engines.dart.snapshot import Snapshots
 from galton.daemon.engines.params import check_updates
@@ -51,7 +52,7 @@ from galton.protocol import (
 from galton.protocol.vocabulary import POSE_WIDTH, TWIST_WIDTH
 
 
-class DartEngine(Scene, Snapshots, Engine):
+class DartEngine(Rebuilding, Snapshots, Engine):
     """Named rigid bodies and models in a DART world."""
 
     name = "dart"
@@ -65,7 +66,7 @@ class DartEngine(Scene, Snapshots, Engine):
         self._bodies: dict[str, spawning.Body] = {}
         self._robots = Robots()
         self._mesh_files = MeshFiles()  # model mesh files' triangles, for get_shapes
-        self._init_scene()
+        self._init_records()
         self._unchecked = False  # states were set from outside since the last step
         self._diverged = False
 
@@ -127,7 +128,7 @@ class DartEngine(Scene, Snapshots, Engine):
         self._world = spawning.new_world(self._values)
         self._bodies.clear()
         self._robots = Robots()
-        self._init_scene()
+        self._init_records()
         self._diverged = False
 
     def reset_dynamics(self) -> None:

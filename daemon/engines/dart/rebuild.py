@@ -1,5 +1,5 @@
-"""The engine's scene: its entities' records, the order skeletons were made in, models,
-edits, and the rebuild that makes a world afresh from the same skeletons."""
+"""Rebuilding a DART world afresh from the same skeletons, and what a rebuild needs: the
+entities' records, the order skeletons were made in, models and their edits."""
 
 from __future__ import annotations
 
@@ -25,7 +25,7 @@ SURFACE_DEFAULTS = ("default_friction", "default_restitution", "default_static_f
                     "default_static_restitution")
 
 
-class Scene:
+class Rebuilding:
     """The part of the engine that keeps records (DartEngine sets the attributes)."""
 
     _world: Any
@@ -36,7 +36,7 @@ class Scene:
     _models: dict[str, models.Model]
     _edits: dict[str, list[tuple[str, BodyProperties]]]  # per model root, in order
 
-    def _init_scene(self) -> None:
+    def _init_records(self) -> None:
         self._owners, self._models, self._edits = [], {}, {}
 
     def _check_new(self, names: Sequence[str]) -> None:
