@@ -143,3 +143,17 @@ def test_a_feature_module_says_absent_exactly_when_the_engine_lacks_the_feature(
         absent = getattr(module, "ABSENT", None)
         assert absent in (None, feature), (name, module_name)
         assert (absent is None) == (feature in features), (name, module_name)
+
+
+def test_the_engines_page_lists_each_engines_derived_features() -> None:
+    """docs/ENGINES.md's "Features:" line under each engine's heading is what it derives."""
+    page = (ENGINES_DIR.parents[1] / "docs" / "ENGINES.md").read_text()
+    listed: dict[str, str] = {}
+    engine = ""
+    for line in page.splitlines():
+        if line.startswith("## "):
+            engine = line.split()[1]
+        elif line.startswith("Features: "):
+            listed[engine] = line
+    assert listed == {name: f"Features: {', '.join(engine_class(name).features())}."
+                      for name in ENGINE_CLASSES}
