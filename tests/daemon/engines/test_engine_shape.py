@@ -157,3 +157,11 @@ def test_the_engines_page_lists_each_engines_derived_features() -> None:
             listed[engine] = line
     assert listed == {name: f"Features: {', '.join(engine_class(name).features())}."
                       for name in ENGINE_CLASSES}
+
+
+def test_every_engine_package_and_subpackage_is_installed() -> None:
+    """pyproject.toml lists packages by name: a subpackage left out is missing from a wheel."""
+    listed = (ENGINES_DIR.parents[1] / "pyproject.toml").read_text()
+    for package in ENGINES_DIR.glob("*/**/__init__.py"):
+        dotted = ".".join(("galton", *package.parent.relative_to(ENGINES_DIR.parents[1]).parts))
+        assert f'"{dotted}"' in listed, dotted
