@@ -77,10 +77,10 @@ def own(engine: MujocoEngine) -> None:
     engine.sharing = None
     if not sharing.let_go():
         return  # the others own theirs already: these are its own
-    spec = engine.spec.copy()
+    spec = engine.mj_spec.copy()
     spec.copy_during_attach = True  # (not carried by MjSpec.copy)
-    twins = _twins(engine.spec, spec)
-    engine.spec = spec
+    twins = _twins(engine.mj_spec, spec)
+    engine.mj_spec = spec
     engine.model = copy.copy(engine.model)
     engine.builders = mp.Builders()
     _copy_spec_records(engine, twins)
@@ -102,7 +102,7 @@ def _share_compiled(source: MujocoEngine, engine: MujocoEngine) -> None:
         source.sharing.holders += 1
     engine.sharing = source.sharing
     engine.values = dict(source.values)
-    engine.spec = source.spec
+    engine.mj_spec = source.mj_spec
     engine.builders = source.builders  # used only after own(), which makes new ones
     engine.model = source.model
     engine.data = fast_state.data_for(engine.model)

@@ -21,7 +21,7 @@ def compile_in_place(engine: MujocoEngine, nbody: int | None, nv: int | None) ->
     bodies and ``nv`` degrees of freedom (the model's own by default). On failure the
     model and data in use are untouched; raise with MuJoCo's words. (Reindex after.)"""
     engine.xml = None
-    m, spec = engine.model, engine.spec
+    m, spec = engine.model, engine.mj_spec
     memory = spec.memory
     spec.memory = ms.arena_bytes(m.nbody if nbody is None else nbody, m.nv if nv is None else nv)
     try:

@@ -115,12 +115,12 @@ class MujocoEngine(Engine):
     # -- compile & index ----------------------------------------------------------------
     def build_empty(self) -> None:
         self.parked = mp.ParkedBodies()
-        self.spec = mujoco.MjSpec()
-        self.spec.modelname = "galton"
-        self.spec.copy_during_attach = True  # see spec.add_group
+        self.mj_spec = mujoco.MjSpec()
+        self.mj_spec.modelname = "galton"
+        self.mj_spec.copy_during_attach = True  # see spec.add_group
         self.empty_frames: list[Any] = []  # empty frames, deleted with the next bodies removed
         self.builders = mp.Builders()
-        self.spec.memory = ms.arena_bytes(1, 0)
+        self.mj_spec.memory = ms.arena_bytes(1, 0)
         self.parts: set[str] = set()  # names of loaded models' links
         self.loaded_joints = Joints()
         self.wrenches = Wrenches()
@@ -130,8 +130,8 @@ class MujocoEngine(Engine):
         # model then differs from what its spec compiles to (see snapshot).
         self.parked_edited = False
         self.xml: str | None = None  # the spec as MJCF, kept until the spec changes
-        ms.write_options(self.spec.option, self.values)
-        self.model = self.spec.compile()
+        ms.write_options(self.mj_spec.option, self.values)
+        self.model = self.mj_spec.compile()
         self.data = mujoco.MjData(self.model)
         self.workers = 0  # a new MjData has no thread pool
         self.start_workers()
@@ -225,7 +225,7 @@ class MujocoEngine(Engine):
         observing.freeze(self)
         self.xml = None
         self.values.update(clean)
-        ms.write_options(self.spec.option, self.values)
+        ms.write_options(self.mj_spec.option, self.values)
         ms.write_options(self.model.opt, self.values)
         if "mujoco.threads" in clean:
             self.start_workers()

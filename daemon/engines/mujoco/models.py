@@ -84,7 +84,7 @@ def try_attaching(engine: MujocoEngine, child: mujoco.MjSpec, prefix: str, facts
     """The world compiled with the model on a copy of the spec (attaching cannot be
     undone); the compile's warnings go where MuJoCo's others go: to the log."""
     try:
-        trial = engine.spec.copy()
+        trial = engine.mj_spec.copy()
         with warnings.catch_warnings(record=True) as said:
             warnings.simplefilter("always")
             attach(trial, child.copy(), prefix, trial.worldbody.add_frame(), facts)
@@ -101,24 +101,24 @@ def enter(engine: MujocoEngine, child: mujoco.MjSpec, prefix: str, facts: Facts,
           tops: list[str], parts: list[tuple[str, ...]], size: mujoco.MjModel) -> None:
     """Attach the model to the world's spec, record its roots and links, recompile; on a
     failure take it all out again (its bodies and what uses them, its assets)."""
-    frame = engine.spec.worldbody.add_frame()
-    before = asset_names(engine.spec)
+    frame = engine.mj_spec.worldbody.add_frame()
+    before = asset_names(engine.mj_spec)
     try:
-        attach(engine.spec, child, prefix, frame, facts)
-        assets = Assets(asset_names(engine.spec) - before, len(tops))
+        attach(engine.mj_spec, child, prefix, frame, facts)
+        assets = Assets(asset_names(engine.mj_spec) - before, len(tops))
         for name, inner in zip(tops, parts, strict=True):
-            body = engine.spec.body(body_name(name))
+            body = engine.mj_spec.body(body_name(name))
             engine.entities[name] = Entity(body, static=bool(body.mocap), source="model",
                                             parts=inner, model=name, assets=assets)
             for link in inner:
-                engine.entities[link] = Entity(engine.spec.body(body_name(link)),
+                engine.entities[link] = Entity(engine.mj_spec.body(body_name(link)),
                                                 static=False, source="link", model=name)
         engine.recompile(size.nbody, size.nv)
     except (GaltonError, *MUJOCO_ERRORS) as exc:
         for name in [*tops, *(n for names in parts for n in names)]:
             engine.entities.pop(name, None)
-        mp.remove_frame(engine.spec, frame)
-        delete_assets(engine.spec, asset_names(engine.spec) - before)
+        mp.remove_frame(engine.mj_spec, frame)
+        delete_assets(engine.mj_spec, asset_names(engine.mj_spec) - before)
         if isinstance(exc, GaltonError):
             raise
         raise mujoco_error(exc, "the model does not fit this world") from exc

@@ -214,7 +214,7 @@ class Additions:
     (or ``undo`` if the compile failed)."""
 
     def __init__(self, spec: mujoco.MjSpec, builders: Builders) -> None:
-        self.spec, self.builders = spec, builders
+        self.mj_spec, self.builders = spec, builders
         self._groups: list[tuple[BodyGroup, list[Any] | None]] = []  # None: attached
         self._frames: list[Any] = []
         self._homes: list[Any] = []  # a frame per attached group, made before the compile
@@ -231,16 +231,16 @@ class Additions:
         body still moves without a compile: its pose lives in the model (body_pos, body_quat).
         """
         if len(group) < ATTACH_MIN or group.vertices is not None:
-            mesh = body_extras.add_mesh(self.spec, group)
+            mesh = body_extras.add_mesh(self.mj_spec, group)
             if mesh is not None:
                 self._meshes.append(mesh)
-            bodies = _add_bodies(self.spec.worldbody, group, material, range(len(group)),
+            bodies = _add_bodies(self.mj_spec.worldbody, group, material, range(len(group)),
                                  parked, group.names, mesh)
             self._direct += bodies
             self._groups.append((group, bodies))
             return
         block, chunks = self.builders.block, self.builders.chunks
-        self._homes.append(self.spec.worldbody.add_frame())
+        self._homes.append(self.mj_spec.worldbody.add_frame())
         try:
             for start in range(0, len(group), BLOCK):
                 for chunk, first in zip(chunks, range(start, min(start + BLOCK, len(group)),
@@ -250,8 +250,8 @@ class Additions:
                                 [str(self._attached + row - rows.start) for row in rows])
                     self._attached += len(rows)
                     _attach(block, chunk, block.worldbody.add_frame())
-                self._frames.append(self.spec.worldbody.add_frame())
-                _attach(self.spec, block, self._frames[-1])
+                self._frames.append(self.mj_spec.worldbody.add_frame())
+                _attach(self.mj_spec, block, self._frames[-1])
         except BaseException:
             self.builders.reset()
             raise
@@ -259,9 +259,9 @@ class Additions:
 
     def undo(self) -> None:
         """Take every added body (and mesh asset) out of the spec again."""
-        _delete(self.spec, self._direct, [*self._frames, *self._homes])
+        _delete(self.mj_spec, self._direct, [*self._frames, *self._homes])
         for name in self._meshes:
-            self.spec.delete(self.spec.mesh(name))
+            self.mj_spec.delete(self.mj_spec.mesh(name))
 
     def bodies(self) -> list[list[Any]]:
         """Once compiled: each added group's bodies, named, each attached group gathered in
@@ -275,7 +275,7 @@ class Additions:
         its first body is, while a compile keeps the bodies' order; a frame shared by groups
         spawned apart would make a snapshot's MJCF compile its bodies in another order than
         the world's (whose arrays the snapshot holds by position)."""
-        found = iter([self.spec.body(f"{_TEMPORARY * 2}{i}") for i in range(self._attached)])
+        found = iter([self.mj_spec.body(f"{_TEMPORARY * 2}{i}") for i in range(self._attached)])
         homes = iter(self._homes)
         out = []
         for group, bodies in self._groups:

@@ -38,7 +38,7 @@ def delete(engine: MujocoEngine, names: Sequence[str]) -> None:
                                        f"{entity.model!r}: delete the model")
     parked, removed = engine.parked.split(entities)
     if removed and engine.models:
-        try_removing(engine.spec, removed)
+        try_removing(engine.mj_spec, removed)
     for name, entity in zip(names, entities, strict=True):
         forget(engine, name, entity)
     if put_away(engine, parked, removed):
@@ -92,8 +92,8 @@ def put_away(engine: MujocoEngine, parked: Sequence[Entity],
     must follow."""
     engine.parked.park(parked)
     if removed:
-        mp.remove_bodies(engine.spec, [e.body for e in removed], sweep(engine))
-        drop_assets(engine.spec, list(removed))
+        mp.remove_bodies(engine.mj_spec, [e.body for e in removed], sweep(engine))
+        drop_assets(engine.mj_spec, list(removed))
     return bool(removed) or gravcomp_missing(engine.model, parked)
 
 

@@ -54,7 +54,7 @@ def check_new(engine: MujocoEngine, names: Sequence[str]) -> None:
 def compile_groups(engine: MujocoEngine, compiled: Sequence[mp.Planned]) -> None:
     """Add the groups' bodies and spares, recompile; on any failure take them out."""
     snapshot = engine.parked.snapshot()
-    additions = mp.Additions(engine.spec, engine.builders)
+    additions = mp.Additions(engine.mj_spec, engine.builders)
     nbody, nv = engine.model.nbody, engine.model.nv
     try:
         for group, material, _, spares in compiled:

@@ -430,7 +430,7 @@ def _records(engine: MujocoEngine) -> tuple[object, ...]:
     """Everything a failed call must leave as it was: the spec, model, data, the engine's
     entities, ids and pool."""
     pool = {key: list(bodies) for key, bodies in engine.parked._parked.items()}
-    return (engine.spec.to_xml(), engine.model, engine.data, dict(engine.ids),
+    return (engine.mj_spec.to_xml(), engine.model, engine.data, dict(engine.ids),
             list(engine.entities), pool)
 
 
@@ -968,7 +968,7 @@ def test_attached_and_added_bodies_simulate_alike(monkeypatch: pytest.MonkeyPatc
         engine.step(300)
         results.append(engine.get_states([f"b{i}" for i in range(100)]))
         assert not any(name.startswith("\x01") for name in engine.ids)
-        assert "<default" not in engine.spec.to_xml()  # no class left by the attaches
+        assert "<default" not in engine.mj_spec.to_xml()  # no class left by the attaches
     for got, want in zip(*results, strict=True):
         np.testing.assert_array_equal(got, want)
 
@@ -979,12 +979,12 @@ def test_a_compile_past_max_free_bodies_is_refused_up_front(engine: MujocoEngine
     used to keep the daemon busy for longer than 15 minutes)."""
     engine.set_params({"mujoco.max_free_bodies": 4})
     engine.spawn([ground(), group("sphere", ["a", "b"], [[0, 0, 1], [1, 0, 1]])])
-    before = engine.spec.to_xml()
+    before = engine.mj_spec.to_xml()
     with pytest.raises(ResourceLimitError, match="max_free_bodies") as caught:
         engine.spawn([group("box", ["c", "d", "e"], [[2, 0, 1], [3, 0, 1], [4, 0, 1]],
                             size=(0.05, 0.05, 0.05))])
     assert caught.value.details["count"] > 4
-    assert engine.spec.to_xml() == before
+    assert engine.mj_spec.to_xml() == before
     statics = group("sphere", [f"s{i}" for i in range(10)], [[i, 1, 0] for i in range(10)])
     statics.static = True
     engine.spawn([statics])  # static bodies cost the compile nothing of that kind

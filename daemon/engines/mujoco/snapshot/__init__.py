@@ -62,9 +62,10 @@ def snapshot(engine: MujocoEngine) -> dict[str, Any]:
     assets = {id(e.assets): e.assets for e in engine.entities.values() if e.assets}
     return {
         "format": FORMAT, "engine": ENGINE, "engine_version": mujoco.__version__,
-        "params": engine.get_params(), "spec": _xml(engine), "meshes": _mesh_vertices(engine.spec),
-        "memory": int(engine.spec.memory), "sizes": {s: int(getattr(m, s)) for s in SIZES},
-        "bodies": _body_order(engine.spec),
+        "params": engine.get_params(), "spec": _xml(engine),
+        "meshes": _mesh_vertices(engine.mj_spec),
+        "memory": int(engine.mj_spec.memory), "sizes": {s: int(getattr(m, s)) for s in SIZES},
+        "bodies": _body_order(engine.mj_spec),
         "model": arrays.model_numbers(m), "data": arrays.data_numbers(m, d),
         "entities": entities,
         "loads": [{"assets": sorted([k, n] for k, n in assets[i].names),
@@ -86,7 +87,7 @@ def _xml(engine: MujocoEngine) -> str:
     """The spec as MJCF: 50 ms for a 500-ball board, so kept until the spec changes (a
     compile, a parameter, an update, a static body moved; pool edits recompile first)."""
     if engine.xml is None:
-        engine.xml = engine.spec.to_xml()
+        engine.xml = engine.mj_spec.to_xml()
     return engine.xml
 
 
@@ -182,7 +183,7 @@ def restore(engine: MujocoEngine, data: Any) -> None:
     spec.stat.meaninertia = math.nan
     state = mujoco.MjData(model)
     arrays.write_data_numbers(model, state, data["data"])
-    engine.values, engine.spec = values, spec
+    engine.values, engine.mj_spec = values, spec
     engine.model, engine.data, engine.empty_frames = model, state, []
     engine.xml = data["spec"]  # compiles to this world as well as its own MJCF would
     read_records(engine, data)

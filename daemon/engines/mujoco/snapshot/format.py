@@ -32,7 +32,7 @@ def read_records(engine: MujocoEngine, data: dict[str, Any]) -> None:
     kinds = [_read_key(kind) for kind in _list(data["kinds"], "kinds")]
     engine.entities = {}
     for row in _list(data["entities"], "entities"):
-        name, entity = _read_entity(engine.spec, row, loads, kinds)
+        name, entity = _read_entity(engine.mj_spec, row, loads, kinds)
         engine.entities[name] = entity
     engine.parts = {n for n, e in engine.entities.items() if e.source == "link"}
     engine.models = sum(e.source == "model" for e in engine.entities.values())
@@ -178,7 +178,7 @@ def _pool(engine: MujocoEngine, value: Any, kinds: list[tuple[Any, ...]]) -> Non
     for pair in _list(row["parked"], "pool.parked"):
         if not isinstance(pair, list) or len(pair) != 2:
             raise InvalidArgumentError(f"snapshot.parked.parked holds {brief(pair)}")
-        bodies = [engine.spec.body(n) if isinstance(n, str) else None
+        bodies = [engine.mj_spec.body(n) if isinstance(n, str) else None
                   for n in _list(pair[1], "pool.parked[]")]
         if any(b is None for b in bodies):
             raise InvalidArgumentError("snapshot.parked.parked names a body the spec lacks")
