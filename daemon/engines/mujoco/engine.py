@@ -9,7 +9,7 @@ when they all fit in the pool).
 
 Dynamic bodies have a free joint; static ones are jointless children of the
 world whose pose is written into the compiled model (and the spec), so moving them needs no
-recompile, and balls resting on them can sleep (see ``spec.add_group``). States are
+recompile, and balls resting on them can sleep (see ``parked``). States are
 read and written in batches through numpy index arrays (``state``) rebuilt after each
 compile: nothing in Python runs per body per step.
 
@@ -28,8 +28,11 @@ Loaded models' joints, with one actuator each holding a target, are kept by
 ``joints``, wrenches by ``wrench``; both records are written again into the
 compiled model after every compile. The compile in place and the rows it indexes are in
 ``compiled``; stepping, its periodic looks and the rewind in ``stepping``.
-Cameras, rays and contacts (``render``, ``perception``) see entities only, never
-parked bodies.
+Cameras, rays and contacts (``render``, ``rays``, ``contacts``; what the last step left,
+kept until the next: ``observed``) see entities only, never parked bodies. The engine's
+parameters are ``params``; what it writes into the ``MjSpec`` is ``mj_spec``; a loaded
+model's colliding shapes ``shapes``; the guard against sleeping balanced on a pin
+``sleep_guard``; snapshots ``snapshot`` and states kept in memory ``fast_state``.
 
 Size: MuJoCo holds at most ``params.MAX_BODIES`` bodies, and its compile costs
 O(free bodies x degrees of freedom): about 1.6 s for 4,000 free spheres, four times that for
@@ -117,7 +120,7 @@ class MujocoEngine(Engine):
         self.parked = mp.ParkedBodies()
         self.mj_spec = mujoco.MjSpec()
         self.mj_spec.modelname = "galton"
-        self.mj_spec.copy_during_attach = True  # see spec.add_group
+        self.mj_spec.copy_during_attach = True  # see parked.Builders
         self.empty_frames: list[Any] = []  # empty frames, deleted with the next bodies removed
         self.builders = mp.Builders()
         self.mj_spec.memory = ms.arena_bytes(1, 0)
