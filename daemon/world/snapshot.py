@@ -167,7 +167,12 @@ def world_from(data: dict[str, Any], make_engine: Callable[[str], Engine], name:
     if not isinstance(kind, str) or (engine_name is not None and kind != engine_name):
         raise InvalidArgumentError(f"the snapshot is of engine {brief(kind)}; this world runs "
                                    f"{engine_name}: restore it into a world of its engine")
-    registry = _read_registry(data)  # checked before any engine sees the blob
+    try:
+        registry = _read_registry(data)  # checked before any engine sees the blob
+    except RemoteError:
+        raise
+    except Exception as exc:  # a re-sealed hostile body no check foresaw (issue 46)
+        raise _malformed(exc) from exc
     state = data.get("engine_state")
     if not isinstance(state, dict):
         raise InvalidArgumentError("the snapshot holds no engine state")
@@ -182,10 +187,13 @@ def world_from(data: dict[str, Any], make_engine: Callable[[str], Engine], name:
         raise
     except Exception as exc:  # a re-sealed hostile body no check above foresaw (issue 46)
         engine.close()
-        raise InvalidArgumentError(
-            f"the snapshot is malformed and was not restored: {type(exc).__name__}: "
-            f"{brief(str(exc))}") from exc
+        raise _malformed(exc) from exc
     return world
+
+
+def _malformed(exc: Exception) -> InvalidArgumentError:
+    return InvalidArgumentError(f"the snapshot is malformed and was not restored: "
+                                f"{type(exc).__name__}: {brief(str(exc))}")
 
 
 @dataclasses.dataclass(frozen=True)
