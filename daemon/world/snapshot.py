@@ -22,7 +22,6 @@ from galton.daemon.world import snapshot_checks as checks
 from galton.daemon.world.world import Entity, Mesh, World, frozen_mesh
 from galton.protocol import (
     POSE_WIDTH,
-    TARGET_MODES,
     TWIST_WIDTH,
     EntityInfo,
     InvalidArgumentError,
@@ -32,6 +31,12 @@ from galton.protocol import (
 )
 from galton.protocol import mesh as mesh_wire
 from galton.protocol.errors import brief
+from galton.protocol.model import (
+    POSE_BOUNDS,
+    TWIST_BOUNDS,
+    check_rows,
+    normalise_quaternions,
+)
 
 FORMAT = 1
 
@@ -162,53 +167,86 @@ def world_from(data: dict[str, Any], make_engine: Callable[[str], Engine], name:
     if not isinstance(kind, str) or (engine_name is not None and kind != engine_name):
         raise InvalidArgumentError(f"the snapshot is of engine {brief(kind)}; this world runs "
                                    f"{engine_name}: restore it into a world of its engine")
+    try:
+        registry = _read_registry(data)  # checked before any engine sees the blob
+    except RemoteError:
+        raise
+    except Exception as exc:  # a re-sealed hostile body no check foresaw (issue 46)
+        raise _malformed(exc) from exc
+    state = data.get("engine_state")
+    if not isinstance(state, dict):
+        raise InvalidArgumentError("the snapshot holds no engine state")
     engine = make_engine(kind)
     try:
-        state = data.get("engine_state")
-        if not isinstance(state, dict):
-            raise InvalidArgumentError("the snapshot holds no engine state")
         engine.restore(state)
         world = World(engine, name, limits)
-        _restore_registry(world, data)
+        _restore_registry(world, registry, data)
         checks.check_agrees(world)
     except RemoteError:
         engine.close()
         raise
     except Exception as exc:  # a re-sealed hostile body no check above foresaw (issue 46)
         engine.close()
-        raise InvalidArgumentError(
-            f"the snapshot is malformed and was not restored: {type(exc).__name__}: "
-            f"{brief(str(exc))}") from exc
+        raise _malformed(exc) from exc
     return world
 
 
-def _restore_registry(world: World, data: dict[str, Any]) -> None:
+def _malformed(exc: Exception) -> InvalidArgumentError:
+    return InvalidArgumentError(f"the snapshot is malformed and was not restored: "
+                                f"{type(exc).__name__}: {brief(str(exc))}")
+
+
+@dataclasses.dataclass(frozen=True)
+class Registry:
+    """A snapshot's World part, read and checked (``snapshot_checks``)."""
+
+    infos: list[EntityInfo]
+    poses: np.ndarray
+    twists: np.ndarray
+    step: int
+    base: tuple[int, float, float]
+    modes: dict[str, str]
+    ends: dict[str, int | None]
+
+
+def _read_registry(data: dict[str, Any]) -> Registry:
+    """The registry, its every number within the bounds a request's obeys (poses as
+    ``set_states`` takes them), else InvalidArgumentError: nothing is built yet."""
     try:
         infos = [EntityInfo.from_wire(body) for body in data["entities"]]
-        poses = unpack_f64(data["initial_poses"], POSE_WIDTH, "initial_poses")
-        twists = unpack_f64(data["initial_twists"], TWIST_WIDTH, "initial_twists")
-        clock = data["clock"]
-        step, base_step = int(clock["step"]), int(clock["base_step"])
-        base = (base_step, float(clock["base_time"]), float(clock["base_dt"]))
-        modes, ends = dict(data["joint_modes"]), dict(data["wrench_ends"])
+        clock, modes, ends = data["clock"], dict(data["joint_modes"]), dict(data["wrench_ends"])
+        raw_poses, raw_twists = data["initial_poses"], data["initial_twists"]
     except (KeyError, TypeError, ValueError, AttributeError) as exc:
         raise InvalidArgumentError(f"the snapshot's registry is malformed: {brief(exc)}"
                                    ) from exc
     checks.check_infos(infos)
-    if len(poses) != len(infos) or len(twists) != len(infos):
-        raise InvalidArgumentError("the snapshot's registry and initial states disagree")
-    world.entities = {info.name: Entity(info, poses[i].copy(), twists[i].copy())
-                      for i, info in enumerate(infos)}
+    where = "the snapshot's initial_poses"
+    poses = check_rows(unpack_f64(raw_poses, POSE_WIDTH, where), len(infos), POSE_WIDTH, where,
+                       POSE_BOUNDS)
+    normalise_quaternions(poses, where)  # refused outside the band; kept as they were taken
+    where = "the snapshot's initial_twists"
+    twists = check_rows(unpack_f64(raw_twists, TWIST_WIDTH, where), len(infos), TWIST_WIDTH,
+                        where, TWIST_BOUNDS)
+    step, base = checks.check_clock(clock)
+    checks.check_modes(modes)
+    checks.check_ends(ends)
+    return Registry(infos, poses, twists, step, base, modes, ends)
+
+
+def _restore_registry(world: World, registry: Registry, data: dict[str, Any]) -> None:
+    world.entities = {info.name: Entity(info, registry.poses[i].copy(),
+                                        registry.twists[i].copy())
+                      for i, info in enumerate(registry.infos)}
     _restore_meshes(world, data.get("meshes", []))
     world.layout += 1
-    world.step_index, world._time_base = step, base
-    world.verified_step = step
+    world.step_index, world._time_base = registry.step, registry.base
+    world.verified_step = registry.step
     world.joints.refresh()
-    for joint, mode in modes.items():
-        if joint in world.joints.by_name and mode in TARGET_MODES:
+    for joint, mode in registry.modes.items():
+        if joint in world.joints.by_name:
             world.joints.by_name[joint] = dataclasses.replace(world.joints.by_name[joint],
                                                               mode=mode)
-    world.wrenches.ends = {str(n): (None if e is None else int(e)) for n, e in ends.items()}
+    world.wrenches.ends = dict(registry.ends)
 
 
 def _restore_meshes(world: World, meshes: Any) -> None:

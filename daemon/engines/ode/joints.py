@@ -79,6 +79,33 @@ class Joint:
         set_param(self.handle, MOTOR_CFM, 1.0 / damping if on else 1e-5)
         set_param(self.handle, MOTOR_MAX_FORCE, min(max_force, 1e30) if on else 0.0)
 
+    def stop_side(self, q: float) -> int:
+        """ODE's own test before a step (``getInfo1``): 1 at or past the upper stop, -1 at
+        or past the lower one, 0 between them or with no stops in force."""
+        lower, upper = self.info.lower, self.info.upper
+        if lower is None or upper is None or lower > upper or (
+                self.info.type in HINGES and lower < -np.pi and upper > np.pi):
+            return 0
+        return 1 if q >= upper else -1 if q <= lower else 0
+
+    def brake_at_stop(self, q: float, rate: float, limit: float) -> None:
+        """At a stop ODE makes a powered motor a constant push of its whole FMax, toward
+        the motor's velocity (into the stop at velocity 0), no damper any more: an unbounded
+        damper's FMax (1e30) is then a push no step survives, the arm flies off (issue 46).
+        Webots gives the motor a finite maxTorque; here, at a stop, FMax is what the
+        target's damper asks at the velocity the step starts with, in the direction ODE
+        pushes, at most ``limit`` (0: the stop alone); between the stops, the motor as set."""
+        velocity = self.target if self.info.mode == "velocity" else 0.0
+        side = self.stop_side(q)
+        if side == 0:
+            fmax = self.max_effort if self.info.mode == "velocity" else np.inf
+        else:
+            direction = float(np.sign(velocity)) if velocity != 0 else float(side)
+            fmax = float(np.clip(self.kd * (velocity - rate) * direction, 0.0, limit))
+        set_param = LIB.dJointSetHingeParam if self.info.type in HINGES else \
+            LIB.dJointSetSliderParam
+        set_param(self.handle, MOTOR_MAX_FORCE, min(fmax, 1e30) if self.kd > 0 else 0.0)
+
     def push(self, tau: float) -> None:
         if self.info.type in HINGES:
             LIB.dJointAddHingeTorque(self.handle, tau)
@@ -122,6 +149,8 @@ class Robots:
             q, rate = joint.read()
             limit = min(joint.max_effort, MAX_EFFORT)  # no law pushes past the protocol's bound
             explicit = 0.0  # what is pushed now; the motor adds the damping with the step
+            if mode in ("position", "velocity"):
+                joint.brake_at_stop(q, rate, limit)
             if mode == "position":
                 explicit = float(np.clip(joint.kp * (joint.target - q), -limit, limit))
                 tau = joint.kp * (joint.target - q) - joint.kd * rate

@@ -97,17 +97,22 @@ def test_a_position_target_holds_the_lever_against_gravity(engine: Engine) -> No
     assert effort[0] == pytest.approx(-9.81 * 0.2 * np.cos(0.3), rel=0.02)
 
 
-@pytest.mark.xfail(strict=True, reason="ODE diverges when a link whose centre of mass is off "
-                   "its frame is driven onto a stop (reported to the lead)")
-def test_a_target_at_the_limit_leaves_the_hinge_at_its_stop(engine: Engine) -> None:
-    """A target at the joint's limit is one the World accepts; DART holds the arm there.
-    Today ODE's arm, its weight pressing it into the upper stop, reaches 1.0 and at the
-    next steps flies off (link speed 1e24, hinge at -2.14): the World faults. The lower stop,
-    and the same lever with its mass on the hinge, hold."""
+@pytest.mark.parametrize(("mode", "target", "stop"), [
+    ("position", 1.0, 1.0), ("position", -1.0, -1.0), ("velocity", 5.0, 1.0),
+    ("velocity", -5.0, -1.0)])
+def test_a_target_at_the_limit_leaves_the_hinge_at_its_stop(
+        engine: Engine, mode: str, target: float, stop: float) -> None:
+    """A target at (or driving past) the joint's limit is one the World accepts; DART holds
+    the arm there, and so does ODE: at a stop ODE makes a powered motor a constant push of
+    its whole FMax, and an unbounded damper's (1e30) once threw this arm, its centre of mass
+    0.2 m off the hinge, off at 1e24 m/s (issue 46)."""
     engine.load_model("urdf", LEVER, None, "l_", fixed_base=True)
-    hold(engine, 1.0)
+    engine.set_joint_targets(["l_hinge"], mode, np.array([target]), np.array([200.0]),
+                             np.array([20.0]), np.array([np.inf]))
     seconds(engine, 1.0)
-    assert engine.get_joint_states(["l_hinge"])[0][0] == pytest.approx(1.0, abs=0.02)
+    position, velocity, _ = engine.get_joint_states(["l_hinge"])
+    assert position[0] == pytest.approx(stop, abs=0.02)
+    assert abs(velocity[0]) < 1e-3
     assert engine.state_within(1e4, 1e3)
 
 

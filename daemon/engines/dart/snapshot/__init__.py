@@ -16,6 +16,8 @@ import importlib.metadata
 import math
 from typing import Any
 
+import numpy as np
+
 from galton.daemon.engines.base import Target
 from galton.daemon.engines.dart import meshes, models
 from galton.daemon.engines.dart import spawn as spawning
@@ -25,6 +27,18 @@ from galton.daemon.engines.dart.snapshot import format as snapformat
 from galton.daemon.engines.params import check_updates
 from galton.protocol import BodyProperties, InvalidArgumentError
 from galton.protocol import mesh as mesh_wire
+from galton.protocol.errors import brief
+from galton.protocol.model import WRENCH_BOUNDS, check_name, check_rows, decode_values
+from galton.protocol.vocabulary import (
+    MAX_EFFORT,
+    MAX_GAIN,
+    MAX_JOINT_POSITION,
+    MAX_JOINT_SPEED,
+)
+
+# A target's bound is its mode's quantity, as set_joint_targets bounds it.
+TARGET_BOUNDS = {"none": MAX_JOINT_POSITION, "position": MAX_JOINT_POSITION,
+                 "velocity": MAX_JOINT_SPEED, "effort": MAX_EFFORT}
 
 
 class Snapshots:
@@ -85,13 +99,14 @@ class Snapshots:
         self._world.setTime(float(data["time"]))
         for name, (mode, target, kp, kd, effort) in data["targets"].items():
             self._robots.scalar([name])
-            self._robots.targets[name] = Target(str(mode), float(target), float(kp),
-                                                float(kd), float(effort))
+            self._robots.targets[name] = _target(name, mode, target, kp, kd, effort)
         self._robots.efforts.update({str(k): float(v) for k, v in data["efforts"].items()})
         self._robots.put_back_damping(data.get("damping", {}))
         for name, (force, torque) in data["wrenches"].items():
-            self._robots.wrenches[name] = (self._bodies[name].node,
-                                           snapformat.vector(force), snapformat.vector(torque))
+            pair = np.concatenate([snapformat.vector(force), snapformat.vector(torque)])
+            wrench = check_rows(pair[None], 1, 6, f"the snapshot's wrench on {name!r}",
+                                WRENCH_BOUNDS)[0]
+            self._robots.wrenches[name] = (self._bodies[name].node, wrench[:3], wrench[3:])
 
     def _restore_body(self, item: dict[str, Any]) -> None:
         shape, size = str(item["shape"]), tuple(float(s) for s in item["size"])
@@ -99,7 +114,8 @@ class Snapshots:
         mass = math.nan if static else float(item["mass"])
         follows = item["follows"]
         rgba = None if item["rgba"] is None else tuple(float(c) for c in item["rgba"])
-        body = spawning.Body(str(item["name"]), shape, size, static, mass,
+        name = check_name(item["name"], "the snapshot's body name")
+        body = spawning.Body(name, shape, size, static, mass,
                           float(item["friction"]), float(item["restitution"]),
                           bool(follows[0]), bool(follows[1]), None, None, rgba,
                           unit_inertia=snapformat.unit_inertia(item.get("unit_inertia"), static))
@@ -135,3 +151,17 @@ class Snapshots:
         count = skeleton.getNumDofs()
         skeleton.setPositions(snapformat.vector(item["positions"], count))
         skeleton.setVelocities(snapformat.vector(item["velocities"], count))
+
+
+def _target(name: str, mode: Any, target: Any, kp: Any, kd: Any, effort: Any) -> Target:
+    """A held target, within the bounds ``set_joint_targets`` checks (issue 46): DART's
+    own format holds it, so its restore checks it, with the protocol's constants."""
+    where = f"the snapshot's target of joint {name!r}"
+    if mode not in TARGET_BOUNDS:
+        raise InvalidArgumentError(f"{where} has mode {brief(mode)}; one of "
+                                   f"{', '.join(TARGET_BOUNDS)} expected")
+    return Target(mode, *(float(decode_values(value, 1, f"{where}.{key}", bound=bound,
+                                              allow_inf=key == "max_effort")[0])
+                          for key, value, bound in (
+                              ("target", target, TARGET_BOUNDS[mode]), ("kp", kp, MAX_GAIN),
+                              ("kd", kd, MAX_GAIN), ("max_effort", effort, MAX_EFFORT))))
