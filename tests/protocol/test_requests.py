@@ -46,6 +46,17 @@ REFUSED = {
                              r"until_rest takes no field 'sped'.*did you mean 'speed'"),
     "no cameras": ("render", {"cameras": []},
                    r"render\.cameras must be a list of 1 to 16 items, got \[\]"),
+    # Through a map's values (msgspec names no key): the value when the map holds one.
+    "in a map": ("predict", {"horizon": 1, "perturb": {"bodies": {"a": {"velocity": "x"}}}},
+                 r"predict\.perturb\.bodies\[\.\.\.\]\.velocity must be float, got 'x'$"),
+    "in a map of several": ("predict", {"horizon": 1, "perturb": {"bodies": {
+        "a": {"position": 0.1}, "b": {"position": 11}}}},
+        r"perturb\.bodies\[\.\.\.\]\.position must be a finite number in \[0, 10\]$"),
+    "unknown field in a map": ("predict", {"horizon": 1, "perturb": {"bodies": {"a": {
+        "velo": 1}}}}, r"bodies\[\.\.\.\] takes no field 'velo'.*it takes: position, "),
+    "list in a map": ("calibrate", {"names": ["a"], "times": b"", "poses": b"",
+                                    "fit": {"a": [1, "x"]}},
+                      r"calibrate\.fit\[\.\.\.\]\[1\] must be float, got 'x'"),
 }
 
 
