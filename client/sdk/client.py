@@ -192,7 +192,8 @@ class Client(WorldMethods, PerceptionMethods, ControlMethods, StreamMethods):
         return reply
 
     def _status(self, op: str, request: rq.Args | None = None) -> SimStatus:
-        return SimStatus.from_wire(self._send(op, request or rq.NoArgs()).result)
+        sent = rq.NoArgs() if request is None else request
+        return SimStatus.from_wire(self._send(op, sent).result)
 
     # -- discovery & clock --------------------------------------------------------------
     def capabilities(self) -> Capabilities:
