@@ -23,6 +23,7 @@ from numpy.typing import ArrayLike
 
 from galton.client.sdk import joints as sdk_joints
 from galton.client.sdk.calibration import CalibrationResult, calibrate_args
+from galton.client.sdk.sending import wire_args
 from galton.client.sdk.values import Comparison, Prediction, SnapshotInfo, Stamp, WorldInfo
 from galton.protocol import POSE_WIDTH, TWIST_WIDTH, InvalidArgumentError, Reply, pack_f64
 from galton.protocol import requests as rq
@@ -152,9 +153,10 @@ class WorldMethods:
                                               for plan in plans],
             score=None if score is None else rq.Score(
                 body=score["body"], target=[float(v) for v in score["target"]]),
-            set_states=_as_map(sdk_joints.set_states_request, set_states),
-            joint_targets=_as_map(sdk_joints.set_joint_targets_request, joint_targets),
-            wrenches=_as_map(sdk_joints.apply_wrench_request, wrenches))
+            set_states=_as_map("set_states", sdk_joints.set_states_request, set_states),
+            joint_targets=_as_map("set_joint_targets", sdk_joints.set_joint_targets_request,
+                                  joint_targets),
+            wrenches=_as_map("apply_wrench", sdk_joints.apply_wrench_request, wrenches))
         return Prediction.from_reply(self._send("predict", request, timeout))
 
     def compare(self, names: Sequence[str], poses: ArrayLike, twists: ArrayLike | None = None,
@@ -217,16 +219,17 @@ def _plan_step(item: Mapping[str, Any]) -> rq.PlanStep:
     """A plan's timed action: its joint targets and wrenches as their requests' maps."""
     return rq.PlanStep(
         at=float(item["at"]),
-        joint_targets=_as_map(sdk_joints.set_joint_targets_request, item.get("joint_targets")),
-        wrenches=_as_map(sdk_joints.apply_wrench_request, item.get("wrenches")))
+        joint_targets=_as_map("set_joint_targets", sdk_joints.set_joint_targets_request,
+                              item.get("joint_targets")),
+        wrenches=_as_map("apply_wrench", sdk_joints.apply_wrench_request, item.get("wrenches")))
 
 
-def _as_map(build: Callable[..., rq.Args], kwargs: Mapping[str, Any] | None
+def _as_map(op: str, build: Callable[..., rq.Args], kwargs: Mapping[str, Any] | None
             ) -> dict[str, Any] | None:
     """A request predict carries inside it (its set_states, joint_targets, wrenches, each
-    as keyword arguments of that request's SDK method), built as its own declared type and
-    sent as its map."""
-    return None if kwargs is None else rq.encode_args(build(**kwargs))
+    as keyword arguments of that request's SDK method), built as ``op``'s declared type
+    and sent as its map, checked as the daemon checks it (``wire_args``)."""
+    return None if kwargs is None else wire_args(op, build(**kwargs))
 
 
 def _listed(names: Sequence[str] | None) -> list[str] | None:

@@ -440,6 +440,13 @@ BAD: dict[str, tuple[Callable[[Client], Any], str, dict[str, Any]]] = {
     "perturb-body": (lambda c: c.predict(1.0, perturb={"bodies": {"a": {"velocity": -1}}}),
                      "predict", {"horizon": 1.0, "perturb": {"bodies": {"a": {
                          "velocity": -1}}}}),
+    "inner-request": (lambda c: c.predict(1.0, joint_targets={"names": ["j"], "mode": "pos"}),
+                      "predict", {"horizon": 1.0, "joint_targets": {"names": ["j"],
+                                                                    "mode": "pos"}}),
+    "inner-plan": (lambda c: c.predict(1.0, plans=[[{"at": 0, "wrenches": {
+        "names": ["a"], "wrenches": WRENCH, "duration": -1}}]]), "predict",
+        {"horizon": 1.0, "plans": [[{"at": 0.0, "wrenches": {
+            "names": ["a"], "wrenches": rows(*WRENCH), "duration": -1.0}}]]}),
     "numpy-nan": (lambda c: c.set_rtf(np.float64("nan")), "set_rtf", {"rtf": math.nan}),
     "trigger": (lambda c: c.compare(["a"], POSE, trigger=(3.0, 0)), "compare",
                 {"names": ["a"], "poses": rows(*POSE), "trigger": {"threshold": 3.0,
