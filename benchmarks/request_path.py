@@ -28,7 +28,7 @@ from common import write_json
 
 from galton.client import Client, plane, spheres
 from galton.client.sdk.embedded import free_loopback_port
-from galton.daemon.core import loop
+from galton.daemon.core import loop, stepping
 from galton.daemon.engines import ENGINE_CLASSES
 from galton.daemon.fronts import zenoh as zenoh_front
 from galton.daemon.fronts.zenoh import ZenohFront
@@ -57,7 +57,7 @@ def timed(owner: Any, name: str, label: str) -> None:
 def instrument(engine: str) -> None:
     timed(ZenohFront, "_on_query", "callback")
     timed(loop.SimLoop, "handle", "handle")
-    timed(loop.SimLoop, "_run_steps", "run_steps")
+    timed(stepping.Stepping, "run_steps", "run_steps")
     timed(World, "step", "world_step")
     module, name = ENGINE_CLASSES[engine].split(":")
     timed(getattr(importlib.import_module(module), name), "step", "engine_step")

@@ -5,6 +5,8 @@ from __future__ import annotations
 import hashlib
 import json
 import logging
+import os
+import sys
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -192,5 +194,22 @@ def _snapshot_key(path: Path | None) -> bytes | None:
     return hashlib.blake2b(secret, digest_size=32).digest()
 
 
+HELP_PIPE_WIDTH = 160  # --help into a pipe: wide enough that no cell is cut to "…"
+
+
+def widen_help_when_piped(args: list[str]) -> None:
+    """--help into a pipe or a file at HELP_PIPE_WIDTH columns instead of rich's 80, which
+    cut the options' help to "…" (issue 47; COLUMNS or TERMINAL_WIDTH, when set, decide).
+    Only for --help: a serving daemon's environment is left as it was."""
+    if "--help" not in args or sys.stdout.isatty():
+        return
+    if not os.environ.get("COLUMNS") and not os.environ.get("TERMINAL_WIDTH"):
+        os.environ["TERMINAL_WIDTH"] = str(HELP_PIPE_WIDTH)
+        rich_utils = sys.modules.get("typer.rich_utils")
+        if rich_utils is not None:
+            rich_utils.MAX_WIDTH = HELP_PIPE_WIDTH  # type: ignore[attr-defined]
+
+
 def main() -> None:
+    widen_help_when_piped(sys.argv[1:])
     app()

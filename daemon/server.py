@@ -10,12 +10,11 @@ import select
 import signal
 import threading
 from collections.abc import Callable, Iterator, Mapping
-from contextlib import contextmanager
+from contextlib import contextmanager, nullcontext
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import msgpack
 import zenoh
 
 from galton.daemon.access.users import User
@@ -23,17 +22,20 @@ from galton.daemon.access.zenoh_security import TlsFiles, security_settings, tls
 from galton.daemon.access.zmq_auth import ZmqSecurity
 from galton.daemon.core.limits import DEFAULT_LIMITS, Limits
 from galton.daemon.core.loop import SimLoop
+from galton.daemon.core.wiring import Checkpoints, LoopWiring
 from galton.daemon.engines import ENGINE_CLASSES, create_engine
 from galton.daemon.engines.base import Engine
-from galton.daemon.fronts.base import EVENTS, TELEMETRY, Fronts
+from galton.daemon.fronts.base import Fronts
 from galton.daemon.fronts.ros2.options import Ros2Options
 from galton.daemon.fronts.zenoh import ZenohFront, merged_config
 from galton.daemon.fronts.zenoh_config import listen_endpoints
 from galton.daemon.fronts.zmq import ZmqFront, parse_endpoint
 from galton.daemon.world import checkpoint
 from galton.daemon.world.scene import World
-from galton.daemon.world.stream_sender import SampleSender
-from galton.protocol import InvalidArgumentError, OperationFailedError, Telemetry
+from galton.protocol import InvalidArgumentError, OperationFailedError
+
+if TYPE_CHECKING:
+    from galton.daemon.fronts.ros2.front import Ros2Front  # the [ros2] extra's
 
 log = logging.getLogger("galton.daemon")
 
@@ -87,35 +89,48 @@ def _merged_config(options: DaemonOptions, security: dict[str, Any]) -> zenoh.Co
 
 class Daemon:
     """One daemon instance: a SimLoop (the core) served by its fronts -- Zenoh always,
-    ZeroMQ with --zmq, ROS 2 with --ros2 -- published to as one list."""
+    ZeroMQ with --zmq, ROS 2 with --ros2 -- opened, published to and closed as one list.
 
-    def __init__(self, options: DaemonOptions) -> None:
+    ``signals``: the daemon is the process (``run_daemon``): SIGTERM ends a scene-changing
+    request at once, and --state-dir checkpoints the live world periodically."""
+
+    def __init__(self, options: DaemonOptions, signals: StopSignals | None = None) -> None:
         self.options = options
         engine = create_engine(options.engine)
         if options.params:
             engine.set_params(options.params)
         self.zmq = _zmq_front(options)
+        zenoh_front: ZenohFront | None = None
         try:
-            self.zenoh = ZenohFront(zenoh_config(options), options.instance)
+            self.zenoh = zenoh_front = ZenohFront(zenoh_config(options), options.instance)
+            self.ros2 = _ros2_front(options, zenoh_front)
         except BaseException:
-            if self.zmq is not None:
-                self.zmq.close()
+            for built in (zenoh_front, self.zmq):
+                if built is not None:
+                    built.close()
             raise
-        self.fronts = Fronts([self.zenoh] if self.zmq is None else [self.zenoh, self.zmq])
-        self.loop = SimLoop(self._first_world(engine), options.instance,
-                            self._publish_telemetry, self._publish_event,
-                            options.telemetry_rate_hz, create_engine, options.limits,
-                            polled=self.zmq)
-        self.loop.snapshot_key = options.snapshot_key
-        self.loop.advertised = self.fronts.advertised()
-        # A state stream's samples: Zenoh's put off the physics thread (a thread of the
-        # stream's own), the ZeroMQ front's send on it (its sockets are that thread's).
-        self.loop.streams.sender = SampleSender(self.zenoh.publish)
-        self.loop.streams.publish = self.zmq.publish if self.zmq is not None else None
-        self.loop.client_alive = self.zenoh.client_alive
+        self.fronts = Fronts([front for front in (self.zenoh, self.zmq, self.ros2)
+                              if front is not None])
+        self.loop = SimLoop(self._first_world(engine), self._wiring(signals))
         self._thread: threading.Thread | None = None
         self.finished = threading.Event()
-        self.ros2_summary = ""  # the ready line's words on the ROS 2 front, once it serves
+        # The ready line's words on the ROS 2 front.
+        self.ros2_summary = " " + self.ros2.summary() if self.ros2 is not None else ""
+
+    def _wiring(self, signals: StopSignals | None) -> LoopWiring:
+        """Everything the loop is given, once: publishing to every front, the front it
+        polls, what it advertises, and with ``signals`` the process's own hooks."""
+        options = self.options
+        checkpoints = (Checkpoints(self.save_checkpoint, options.checkpoint_period_s)
+                       if signals is not None and options.state_dir is not None else None)
+        return LoopWiring(
+            options.instance, publish=self.fronts.publish,
+            telemetry_rate_hz=options.telemetry_rate_hz, engine_factory=create_engine,
+            limits=options.limits, polled=self.zmq, snapshot_key=options.snapshot_key,
+            advertised=self.fronts.advertised, client_alive=self.zenoh.client_alive,
+            work_guard=((lambda: sigterm_ends_at_once(signals)) if signals is not None
+                        else nullcontext),
+            checkpoints=checkpoints)
 
     def _first_world(self, engine: Engine) -> World:
         """The checkpointed world when --state-dir holds one, else an empty world."""
@@ -142,20 +157,8 @@ class Daemon:
             log.exception("could not save a checkpoint to %s", path)
 
     def open(self) -> None:
-        """Open every front on the core's call interface: clients can reach us. The ROS 2
-        front (its extra imported only here) serves on the Zenoh front's session."""
-        for front in self.fronts.fronts:
-            front.open(self.loop)
-        if self.options.ros2 is not None:
-            from galton.daemon.fronts.ros2.front import (
-                Ros2Front,  # [ros2] extra: imported here only
-            )
-            ros2 = Ros2Front(self.zenoh.session, self.loop.dispatch, self.options.instance,
-                             dataclasses.replace(self.options.ros2, max_request_bytes=(
-                                 self.options.limits.max_request_bytes)))
-            ros2.open(self.loop)
-            self.fronts.fronts.append(ros2)
-            self.ros2_summary = " " + ros2.summary()
+        """Open every front on the core's call interface: clients can reach us."""
+        self.fronts.open(self.loop)
 
     def start(self) -> None:
         """Serve with the physics loop on a thread of its own (for embedding in a process
@@ -175,17 +178,9 @@ class Daemon:
         self.withdraw()
         if self._thread is not None:
             self._thread.join(timeout=10)
-        self.loop.streams.stop_sender()
         self.loop.world.engine.close()
         self.loop.slots.close()
         self.fronts.close()
-
-    def _publish_telemetry(self, sample: Telemetry) -> None:
-        self.fronts.publish(TELEMETRY, msgpack.packb(sample.to_wire()))
-
-    def _publish_event(self, event: dict[str, Any]) -> None:
-        self.fronts.publish(EVENTS, msgpack.packb({"instance": self.options.instance,
-                                                   **event}))
 
 
 def _zmq_front(options: DaemonOptions) -> ZmqFront | None:
@@ -202,6 +197,16 @@ def _zmq_front(options: DaemonOptions) -> ZmqFront | None:
                 if options.zmq_key is not None else None)
     return ZmqFront([parse_endpoint(endpoint) for endpoint in options.zmq], options.instance,
                     security)
+
+
+def _ros2_front(options: DaemonOptions, zenoh_front: ZenohFront) -> Ros2Front | None:
+    """With --ros2: the ROS 2 node, on the Zenoh front's session (its [ros2] extra is
+    imported only here), refusing requests over the daemon's max_request_bytes."""
+    if options.ros2 is None:
+        return None
+    from galton.daemon.fronts.ros2.front import Ros2Front  # [ros2] extra: imported here only
+    return Ros2Front(zenoh_front.session, options.instance, dataclasses.replace(
+        options.ros2, max_request_bytes=options.limits.max_request_bytes))
 
 
 def signal_wakeup_pipe() -> int:
@@ -262,11 +267,9 @@ def run_daemon(options: DaemonOptions, announce: Callable[[str], None] = print) 
     loop. No Python code runs inside a lock, so a second signal cannot deadlock shutdown.
     """
     signals = StopSignals()
-    daemon = Daemon(options)
-    daemon.loop.work_guard = lambda: sigterm_ends_at_once(signals)
     if options.state_dir is not None:
         options.state_dir.mkdir(parents=True, exist_ok=True)
-        daemon.loop.schedule_checkpoints(daemon.save_checkpoint, options.checkpoint_period_s)
+    daemon = Daemon(options, signals)
     daemon.open()
 
     def stop_on_signal() -> None:

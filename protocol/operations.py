@@ -137,12 +137,11 @@ GET_ENTITIES = Operation("get_entities", GetEntities, reply=rp.NamesReply)
 # calibrate's field types (declared with it, below GET_ENTITIES).
 CalibrationTimes = Annotated[bytes, msgspec.Meta(extra={
     "kind": "values", "description": "packed float64, one sample time (s) per sample"})]
-Bounds = Annotated[list[rq.Number], msgspec.Meta(min_length=2, max_length=2)]
-FitBounds = Annotated[dict[str, Bounds], msgspec.Meta(min_length=1, max_length=16,
-                                                       extra={"kind": "map"})]
-MaxPredictions = Annotated[int, msgspec.Meta(ge=2, le=100_000, extra={"kind": "count"})]
-Population = Annotated[int, msgspec.Meta(ge=2, le=1024, extra={"kind": "count"})]
-Seed = Annotated[int, msgspec.Meta(ge=0, le=2**32 - 1, extra={"kind": "count"})]
+Bounds = rq.FitBound
+FitBounds = rq.FitBounds  # shared with compare's trigger (its ``calibrate``)
+MaxPredictions = rq.MaxPredictions
+Population = rq.Population
+Seed = rq.FitSeed
 
 
 class Calibrate(rq.Args, kw_only=True, forbid_unknown_fields=True):

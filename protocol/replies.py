@@ -221,6 +221,7 @@ class CompareReply(Reply, kw_only=True):
     corrected: bool
     streak: int | None = None  # with a trigger: surprising comparisons in a row, this one's
     suggested: bool | None = None  # with a trigger: this one made the streak its window
+    calibrating: bool | None = None  # with a trigger's calibrate, when suggested: started
 
 
 class RenderReply(Reply, kw_only=True):

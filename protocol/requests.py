@@ -355,14 +355,34 @@ class Predict(Args, kw_only=True, forbid_unknown_fields=True):
 
 
 MAX_TRIGGER_WINDOW = 100_000  # comparisons
+# calibrate's fit and search (protocol/operations.py's Calibrate; a trigger's calibrate).
+FitBound = Annotated[list[Number], msgspec.Meta(min_length=2, max_length=2)]
+FitBounds = Annotated[dict[str, FitBound], msgspec.Meta(min_length=1, max_length=16,
+                                                        extra={"kind": "map"})]
+MaxPredictions = Annotated[int, msgspec.Meta(ge=2, le=100_000, extra={"kind": "count"})]
+Population = Annotated[int, msgspec.Meta(ge=2, le=1024, extra={"kind": "count"})]
+FitSeed = Annotated[int, msgspec.Meta(ge=0, le=2**32 - 1, extra={"kind": "count"})]
+
+
+class TriggerCalibration(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
+    """What a trigger's calibration fits, as ``calibrate``'s own fields: the daemon starts
+    it over the streak's observations when the streak reaches the window."""
+
+    fit: FitBounds
+    apply: Flag = False
+    max_predictions: MaxPredictions = 200
+    population: Population | None = None
+    seed: FitSeed = 0
 
 
 class Trigger(msgspec.Struct, kw_only=True, forbid_unknown_fields=True):
     """compare's surprise trigger: ``window`` comparisons of a world in a row scoring above
-    ``threshold`` suggest a calibration (a ``calibration_suggested`` event)."""
+    ``threshold`` suggest a calibration (a ``calibration_suggested`` event); with
+    ``calibrate``, the daemon starts that calibration itself."""
 
     threshold: Positive
     window: Annotated[int, _kind("count"), msgspec.Meta(ge=1, le=MAX_TRIGGER_WINDOW)]
+    calibrate: Annotated[TriggerCalibration, _kind("map")] | None = None
 
 
 class Compare(Args, kw_only=True, forbid_unknown_fields=True):

@@ -44,10 +44,12 @@ def calibrate(
     recording: Annotated[Path, typer.Argument(help="A recording (.npz) of galton-client "
                                               "record.", show_default=False)],
     fit: Annotated[str, typer.Option(help="Parameters to fit: BODY.PROPERTY (friction, "
-                                     "restitution, mass) or gravity, comma-separated.")],
+                                     "restitution, mass), JOINT.damping or gravity, "
+                                     "comma-separated.")],
     bounds: Annotated[str | None, typer.Option(help="NAME=LOW:HIGH,... (default per "
                                                "property: friction 0:2, restitution "
-                                               "0:0.95, mass 0.01:100, gravity 0:20).")]
+                                               "0:0.95, mass 0.01:100, damping 0:10, "
+                                               "gravity 0:20).")]
     = None,
     apply: Annotated[bool, typer.Option("--apply", help="Set the fitted values in the "
                                         "world.")] = False,

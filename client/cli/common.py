@@ -10,63 +10,27 @@ import re
 import sys
 from collections.abc import Callable
 from dataclasses import asdict
-from importlib.metadata import PackageNotFoundError, version
 from typing import TYPE_CHECKING, Annotated, Any, TypeVar
 
 import typer
-from rich import box
-from rich.console import Console, ConsoleDimensions
 from rich.markup import escape
-from rich.table import Table
 
+from galton.client.cli.plain import error_line
+from galton.client.cli.tables import KEY_WIDTH as KEY_WIDTH  # the commands import these
+from galton.client.cli.tables import PIPE_WIDTH as PIPE_WIDTH  # from here (issue 33)
+from galton.client.cli.tables import ReadableConsole as ReadableConsole
+from galton.client.cli.tables import console as console
+from galton.client.cli.tables import readable as readable
+from galton.client.cli.tables import status_table, unlimited_width
 from galton.client.transport.credentials import Credentials
-from galton.protocol import (
-    AccessDeniedError,
-    DaemonUnreachableError,
-    GaltonError,
-    RemoteError,
-    RequestTimeoutError,
-)
+from galton.protocol import GaltonError
 
 if TYPE_CHECKING:  # the SDK (numpy, Zenoh, ZeroMQ) is imported when a command needs it
     from galton.client.sdk.client import Client, Stamp
     from galton.client.transport.zmq_keys import ZmqKeys
     from galton.protocol import SimStatus
 
-class ReadableConsole(Console):
-    """A console whose tables keep every character: in a terminal, the first column (the
-    names a user types back: joints, links, parameters) as wide as its longest cell (up to
-    KEY_WIDTH), the others folded onto more lines instead of cut to "…", light borders;
-    into a pipe or a file (no terminal, no COLUMNS), as wide as they are: nothing folded,
-    nothing cut (rich would otherwise assume 80 columns)."""
-
-    @property
-    def size(self) -> ConsoleDimensions:
-        measured = Console.size.fget(self)  # type: ignore[attr-defined]
-        if self._width is None and unlimited_width(self.is_terminal):  # no width was set
-            return ConsoleDimensions(PIPE_WIDTH, measured.height)
-        return measured  # type: ignore[no-any-return]
-
-    @size.setter
-    def size(self, new_size: tuple[int, int]) -> None:
-        Console.size.fset(self, new_size)  # type: ignore[attr-defined]
-
-    def print(self, *objects: Any, **kwargs: Any) -> None:
-        for item in objects:
-            if isinstance(item, Table):
-                readable(item)
-        super().print(*objects, **kwargs)
-
-
-KEY_WIDTH = 40
-PIPE_WIDTH = 10_000  # "unlimited": a table or line is as wide as its text
 HELP_PIPE_WIDTH = 160  # --help into a pipe: wide enough that no cell is cut to "…"
-
-
-def unlimited_width(is_terminal: bool) -> bool:
-    """Whether output goes where nobody reads it at a terminal's width (a pipe, a file)
-    and no width was asked for (COLUMNS)."""
-    return not is_terminal and not os.environ.get("COLUMNS")
 
 
 def widen_help_when_piped() -> None:
@@ -79,16 +43,6 @@ def widen_help_when_piped() -> None:
             rich_utils.MAX_WIDTH = HELP_PIPE_WIDTH  # type: ignore[attr-defined]
 
 
-def readable(table: Table) -> None:
-    table.box = box.SIMPLE_HEAD
-    for index, column in enumerate(table.columns):
-        column.overflow = "fold"
-        if index == 0:
-            cells = [len(str(cell)) for cell in column.cells]
-            column.min_width = min(KEY_WIDTH, max([len(str(column.header)), *cells]))
-
-
-console = ReadableConsole()
 T = TypeVar("T")
 PACKAGE = "galton-bridge"
 
@@ -117,50 +71,24 @@ class Target:
                       zmq_keys=self.zmq_keys if over_zmq else None, client_id=client_id)
 
     def call(self, op: str, args: dict[str, Any] | None = None) -> dict[str, Any]:
-        """One request and its result map, through the transport alone: the SDK's Client
-        (numpy, and pyzmq unless the endpoint is a zmq+ one) is not imported, so a command
-        that only asks or sets the clock (status, play, pause ...) starts sooner. A refusal
-        raises its typed error, as the SDK's does."""
-        import uuid
-
-        from galton.client.transport.base import transport_for, zmq_endpoint
-        from galton.protocol import Keys
+        """One request and its result map, through the transport alone (lean.ask: neither
+        the SDK's Client nor numpy), so a command that only asks or sets the clock (status,
+        play, pause ...) starts sooner. A refusal raises its typed error, as the SDK's does."""
+        from galton.client.cli.lean import ask
         from galton.protocol.operations import OPERATIONS
 
-        over_zmq = zmq_endpoint(self.connect) is not None
-        client_id = uuid.uuid4().hex  # as the SDK's: a request names its client
-        transport = transport_for(Keys(self.instance), client_id, self.connect,
-                                  credentials=None if over_zmq else self.credentials,
-                                  zmq_keys=self.zmq_keys if over_zmq else None)
-        try:
-            reply = transport.request(op, args, OPERATIONS[op].client_timeout(self.timeout),
-                                      client_id)
-        finally:
-            transport.close()
-        reply.raise_for_code()
-        return dict(reply.result)
+        return ask(self.connect, self.instance, OPERATIONS[op].client_timeout(self.timeout),
+                   self.credentials, self.zmq_keys, op, args)
 
 
 def package_version() -> str:
     """The installed distribution's version (one source of truth: pyproject.toml)."""
+    from importlib.metadata import PackageNotFoundError, version
     try:
         return version(PACKAGE)
     except PackageNotFoundError:
         return "unknown (not installed)"
 
-
-
-def error_line(error: GaltonError) -> str:
-    """What went wrong in one line: the wire code for a daemon's refusal, else which side."""
-    if isinstance(error, RemoteError):
-        return f"{error.code.name} ({int(error.code)}): {error.message}"
-    if isinstance(error, DaemonUnreachableError):
-        return f"unreachable (client side): {error}"
-    if isinstance(error, RequestTimeoutError):
-        return f"timed out (client side): {error}"
-    if isinstance(error, AccessDeniedError):
-        return f"access denied (client side): {error}"
-    return f"{type(error).__name__}: {error}"
 
 
 def fail(error: GaltonError) -> typer.Exit:
@@ -205,10 +133,7 @@ def status_call(ctx: typer.Context, op: str, args: dict[str, Any] | None = None
 
 def show_status(status: SimStatus, as_json: bool) -> None:
     def render() -> None:
-        table = Table(title=f"daemon {status.instance}", show_header=False)
-        for key, value in asdict(status).items():
-            table.add_row(key, f"{value:.4g}" if isinstance(value, float) else str(value))
-        console.print(table)
+        console.print(status_table(status))
     emit(asdict(status), as_json, render)
 
 

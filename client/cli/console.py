@@ -1,14 +1,14 @@
 """The ``galton-client`` command's entry: ``--version`` answers before typer and the
 commands are imported; a command that only asks a daemon for its clock (``status``,
-``play``, ``pause`` ...) runs on a lean CLI of its own two groups (issue 47: ``status``
-took 6.8 x ``--version`` while every group was imported and built); anything else goes to
-the whole CLI (``galton.client.cli.app``)."""
+``play``, ``pause`` ...) runs on the lean front (``lean.py``: no typer, rich or pydantic),
+or, for what that front leaves to typer (help, a bad value), on a typer CLI of its own two
+groups (issue 47: ``status`` took 6.8 x ``--version`` while every group was imported and
+built); anything else goes to the whole CLI (``galton.client.cli.app``)."""
 
 from __future__ import annotations
 
 import sys
 from collections.abc import Sequence
-from importlib.metadata import PackageNotFoundError, version
 
 # The clock's commands (groups world and time); tests/client/cli/test_cli_startup.py holds
 # this to those groups' registrations and to the whole CLI's output.
@@ -33,12 +33,17 @@ def command_word(args: Sequence[str]) -> str | None:
 
 def main() -> None:
     if sys.argv[1:] == ["--version"]:
+        from importlib.metadata import PackageNotFoundError, version
         try:
             print(f"galton-client {version('galton-bridge')}")
         except PackageNotFoundError:
             print("galton-client unknown (not installed)")
         return
     if command_word(sys.argv[1:]) in LEAN_COMMANDS:
+        from galton.client.cli.lean import run as run_lean
+        code = run_lean(sys.argv[1:])
+        if code is not None:
+            sys.exit(code)
         from galton.client.cli import time, world
         from galton.client.cli.root import make_app, run
 

@@ -277,7 +277,8 @@ def render_comparison(found: Comparison) -> None:
         console.print("the bodies were set to the observation")
     if found.streak is not None:
         console.print(f"surprising comparisons in a row: {found.streak}"
-                      + ("; a calibration is suggested" if found.suggested else ""))
+                      + ("; a calibration is suggested" if found.suggested else "")
+                      + ("; the daemon started it" if found.calibrating else ""))
 
 
 @commands.command(rich_help_panel=PANEL)
@@ -297,6 +298,16 @@ def compare(
     trigger: Annotated[str | None, typer.Option(
         help="THRESHOLD:WINDOW: count this comparison toward the world's surprise streak; "
              "WINDOW in a row above THRESHOLD suggest a calibration.")] = None,
+    calibrate: Annotated[str | None, typer.Option(
+        help="With --trigger: the daemon starts the calibration itself when the streak "
+             "reaches WINDOW, fitting these parameters (as calibrate's --fit) to the "
+             "streak's observations.")] = None,
+    calibrate_bounds: Annotated[str | None, typer.Option(
+        help="NAME=LOW:HIGH,... for --calibrate (as calibrate's --bounds).")] = None,
+    calibrate_apply: Annotated[bool, typer.Option(
+        "--calibrate-apply", help="Set the fitted values in the world.")] = False,
+    calibrate_max_predictions: Annotated[int, typer.Option(
+        help="At most this many predictions for --calibrate.")] = 200,
     world: WorldOpt = None, as_json: JsonOpt = False,
 ) -> None:
     """Compare observed poses with a world's: per-body errors and one anomaly score (about 1
@@ -304,15 +315,34 @@ def compare(
     pose_rows = pose_values(poses, len(names), "--poses")
     twist_rows = None if twists is None else rows(twists, len(names), TWIST_WIDTH, "--twists")
     watch = None if trigger is None else trigger_value(trigger)
+    fit = None if calibrate is None else calibration_value(
+        calibrate, calibrate_bounds, calibrate_apply, calibrate_max_predictions)
+    if fit is not None and watch is None:
+        raise typer.BadParameter("--calibrate starts with a surprise streak: give --trigger",
+                                 param_hint="--calibrate")
     found = with_client(ctx, lambda c: on_world(c, world).compare(
         names, pose_rows, twist_rows, sigma_position, sigma_angle, sigma_speed, correct,
-        trigger=watch))
+        trigger=watch, calibrate=fit))
     emit({"names": found.names, "position_errors": found.position_errors.tolist(),
           "angle_errors": found.angle_errors.tolist(),
           "speed_errors": None if found.speed_errors is None else found.speed_errors.tolist(),
           "score": found.score, "corrected": found.corrected, "step": found.step,
-          "sim_time": found.sim_time, "streak": found.streak, "suggested": found.suggested},
+          "sim_time": found.sim_time, "streak": found.streak, "suggested": found.suggested,
+          "calibrating": found.calibrating},
          as_json, lambda: render_comparison(found))
+
+
+def calibration_value(fit: str, bounds: str | None, apply: bool,
+                      max_predictions: int) -> dict[str, Any]:
+    """--calibrate and its options as the trigger's ``calibrate`` (bounds as calibrate's)."""
+    from galton.client.cli.calibrate import parse_bounds
+    from galton.client.sdk.calibration import bounds_for
+
+    try:
+        chosen = bounds_for(split_list(fit, "--calibrate"), parse_bounds(bounds))
+    except Exception as error:
+        raise typer.BadParameter(str(error), param_hint="--calibrate") from error
+    return {"fit": chosen, "apply": apply, "max_predictions": max_predictions}
 
 
 def trigger_value(text: str) -> tuple[float, int]:

@@ -113,3 +113,16 @@ def bounds_for(fit: Sequence[str], given: Mapping[str, tuple[float, float]]
             raise InvalidArgumentError(f"{name!r}: no default bounds for {prop!r}; give them")
         chosen[name] = given.get(name) or DEFAULT_BOUNDS[prop]
     return chosen
+
+
+def trigger_calibration(spec: Mapping[str, Any]) -> dict[str, Any]:
+    """A compare trigger's ``calibrate`` on the wire: its ``fit`` bounds as [low, high]
+    lists, the other fields (apply, max_predictions, population, seed) as given (the
+    daemon checks them, as it checks calibrate's)."""
+    if "fit" not in spec:
+        raise InvalidArgumentError("compare: a trigger's calibrate needs its fit "
+                                   "({parameter: (low, high)})")
+    wire = dict(spec)
+    wire["fit"] = {name: [float(bound) for bound in bounds]
+                   for name, bounds in spec["fit"].items()}
+    return wire

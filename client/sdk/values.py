@@ -252,6 +252,7 @@ class Comparison:
     sim_time: float
     streak: int | None = None  # with a trigger: surprising comparisons in a row
     suggested: bool = False  # with a trigger: this one made the streak its window
+    calibrating: bool = False  # with a trigger's calibrate: this one started it
 
     @classmethod
     def from_reply(cls, reply: Reply, names: list[str]) -> Comparison:
@@ -261,7 +262,7 @@ class Comparison:
                    _column(result.angle_errors, "angle_errors"),
                    None if speeds is None else _column(speeds, "speed_errors"),
                    result.score, result.corrected, reply.step, reply.sim_time,
-                   result.streak, bool(result.suggested))
+                   result.streak, bool(result.suggested), bool(result.calibrating))
 
 
 # -- perception (issue 26) ----------------------------------------------------------------

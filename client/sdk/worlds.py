@@ -22,7 +22,11 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from galton.client.sdk import joints as sdk_joints
-from galton.client.sdk.calibration import CalibrationResult, calibrate_args
+from galton.client.sdk.calibration import (
+    CalibrationResult,
+    calibrate_args,
+    trigger_calibration,
+)
 from galton.client.sdk.sending import wire_args
 from galton.client.sdk.values import Comparison, Prediction, SnapshotInfo, Stamp, WorldInfo
 from galton.protocol import POSE_WIDTH, TWIST_WIDTH, InvalidArgumentError, Reply, pack_f64
@@ -163,7 +167,8 @@ class WorldMethods:
                 sigma_position: float | None = None, sigma_angle: float | None = None,
                 sigma_speed: float | None = None, correct: bool = False,
                 spread: ArrayLike | float | None = None,
-                trigger: tuple[float, int] | None = None) -> Comparison:
+                trigger: tuple[float, int] | None = None,
+                calibrate: Mapping[str, Any] | None = None) -> Comparison:
         """Observed poses (rows of 7, and optionally twists) of these bodies against the
         world's at its present time: per-body errors and one anomaly score (about 1 at the
         sigmas' noise, 3 a surprise). ``correct`` sets the bodies to the observation.
@@ -172,16 +177,22 @@ class WorldMethods:
         ``sigma_position`` as independent noise: the score then says how surprising the
         observation is given what was imagined. ``trigger`` (threshold, window): count this
         comparison toward the world's surprise streak; the one that makes it ``window``
-        long is ``suggested`` and publishes a ``calibration_suggested`` event."""
+        long is ``suggested`` and publishes a ``calibration_suggested`` event.
+        ``calibrate`` (with ``trigger``: ``{"fit": {...}, "apply": ..., "max_predictions":
+        ..., "population": ..., "seed": ...}``, calibrate's own fields): that comparison
+        also starts the calibration itself, over the streak's observations (``calibrating``;
+        ``calibration_started`` and ``calibration_finished`` events)."""
         count = len(names)
+        if trigger is None and calibrate is not None:
+            raise InvalidArgumentError("compare: calibrate is started by a trigger; give "
+                                       "trigger=(threshold, window) with it")
         request = rq.Compare(
             names=list(names), correct=correct,
             poses=sdk_joints.body_rows(poses, count, POSE_WIDTH, "compare.poses"),
             twists=None if twists is None else sdk_joints.body_rows(
                 twists, count, TWIST_WIDTH, "compare.twists"),
             spread=None if spread is None else spread_arg(spread, count),
-            trigger=None if trigger is None else rq.Trigger(threshold=float(trigger[0]),
-                                                            window=int(trigger[1])),
+            trigger=None if trigger is None else _trigger(trigger, calibrate),
             **sdk_joints.given(sigma_position=sigma_position, sigma_angle=sigma_angle,
                                sigma_speed=sigma_speed))
         return Comparison.from_reply(self._send("compare", request), list(names))
@@ -213,6 +224,16 @@ def spread_arg(spread: ArrayLike | float, count: int) -> float | bytes:
         raise InvalidArgumentError(f"compare.spread has {len(values)} values for {count} "
                                    "bodies: give one per body, or one for all")
     return pack_f64(values)
+
+
+def _trigger(trigger: tuple[float, int], calibrate: Mapping[str, Any] | None) -> rq.Trigger:
+    """compare's trigger, and the calibration it starts (as calibrate's own fields): typed
+    from the caller's map, refused as the daemon would refuse it."""
+    wire: dict[str, Any] = {"threshold": float(trigger[0]), "window": int(trigger[1])}
+    if calibrate is not None:
+        wire["calibrate"] = trigger_calibration(calibrate)
+    typed: rq.Trigger = rq.decode_field("compare", rq.Compare, "trigger", wire)
+    return typed
 
 
 def _plan_step(item: Mapping[str, Any]) -> rq.PlanStep:

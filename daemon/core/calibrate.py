@@ -220,10 +220,11 @@ def _start(loop: PredictContext, source: World, request: Calibrate, names: list[
     """The world every candidate starts from: a snapshot slot's, or a copy of ``source``
     with the observed bodies set to the first sample (and its twists)."""
     name = f"{source.name}:calibration"
-    if request.slot is not None:
-        data = decode(loop.slots.get(request.slot).blob, loop.limits, loop.snapshot_key)
-        assert loop.engine_factory is not None
-        return world_from(data, loop.engine_factory, name, loop.limits)
+    if request.slot is not None:  # a slot kept in memory has no blob: its twin's copy
+        factory = loop.engine_factory
+        assert factory is not None
+        return loop.slots.world_of(loop.slots.get(request.slot), name, lambda blob: world_from(
+            decode(blob, loop.limits, loop.snapshot_key), factory, name, loop.limits))
     source.require_known(names)
     twists = (start_twists(times, poses, source.engine.timestep) if request.twists is None
               else decode_twists(request.twists, len(names), "calibrate.twists"))

@@ -125,6 +125,13 @@ class Inbox(Protocol):
     def get_nowait(self) -> Call | Task | None: ...
 
 
+# What the core publishes goes out as (topic, msgpack bytes) to every front
+# (``Fronts.publish``), which puts it on ``galton/<instance>/<topic>`` or ignores it.
+Publish = Callable[[str, bytes], None]
+TELEMETRY = "telemetry"
+EVENTS = "events"  # a state stream's topic is ``states/<id>`` (protocol.keys.STREAMS_CHUNK)
+
+
 class CallPort(Protocol):
     """The core's call interface: all a front (daemon/fronts/) may reach of the core. Calls
     in (answered exactly once through ``Call.respond``), and word that a client has gone."""

@@ -20,13 +20,20 @@ from dataclasses import dataclass
 import numpy as np
 
 from galton.daemon.core.calls import smoothed_step_cost
-from galton.daemon.core.fit_params import GRAVITY, Parameter, apply_values, body_properties
+from galton.daemon.core.fit_params import (
+    DAMPING,
+    GRAVITY,
+    Parameter,
+    apply_values,
+    body_properties,
+)
 from galton.daemon.core.limits import Limits
 from galton.daemon.world.futures import FutureSet, FutureSpec
 from galton.daemon.world.scene import World
 from galton.protocol import PhysicsError
 
 CHUNK_WALL_S = 0.002  # as a prediction's chunk (daemon/core/side_jobs.py)
+WORLD_SET = (GRAVITY, DAMPING)  # set on each fork by its start, not as body overrides
 
 
 @dataclass(frozen=True)
@@ -44,10 +51,11 @@ class Observation:
 
 
 def future_spec(params: Sequence[Parameter], values: Mapping[str, float]) -> FutureSpec:
-    """A candidate as a future: its body values as overrides, gravity as its start."""
+    """A candidate as a future: its body values as overrides, gravity and joints' damping
+    as its start."""
     overrides = [(list(p.bodies), body_properties(p.prop, values[p.name]))
-                 for p in params if p.prop != GRAVITY]
-    world_params = [p for p in params if p.prop == GRAVITY]
+                 for p in params if p.prop not in WORLD_SET]
+    world_params = [p for p in params if p.prop in WORLD_SET]
     start = None
     if world_params:
         def start(world: World) -> None:

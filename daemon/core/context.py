@@ -6,8 +6,9 @@ context takes it (mypy --strict holds that a family reaches nothing else).
 
 ``SimLoop`` (daemon/core/loop.py) satisfies them structurally; handlers import this module,
 never the loop, so there is no import cycle (loop -> handlers -> time control -> loop).
-Everything here is used on the physics thread only. docs/ARCHITECTURE.md lists which family
-sees what.
+Everything here is used on the physics thread only. What the loop was given at
+construction (``core/wiring.py``: instance, limits, snapshot key, engine factory, advertised,
+client liveness) is read-only here. docs/ARCHITECTURE.md lists which family sees what.
 """
 
 from __future__ import annotations
@@ -49,9 +50,15 @@ class Worlds(WorldChoice, Events, Protocol):
     world: World
     side: dict[str, World]
     slots: SnapshotSlots
-    snapshot_key: bytes | None
-    engine_factory: Callable[[str], Any] | None
-    limits: Limits
+
+    @property
+    def snapshot_key(self) -> bytes | None: ...
+
+    @property
+    def engine_factory(self) -> Callable[[str], Any] | None: ...
+
+    @property
+    def limits(self) -> Limits: ...
 
 
 class Clock(Protocol):
@@ -116,14 +123,17 @@ class SceneContext(WorldChoice, Events, Protocol):
 class CapabilitiesContext(WorldChoice, Protocol):
     """``capabilities``: the world named and what the daemon advertises."""
 
-    advertised: dict[str, Any]
+    @property
+    def advertised(self) -> dict[str, Any]: ...
 
 
 class AccessContext(Events, Protocol):
     """Who controls the daemon (daemon/access/lease.py)."""
 
     lease: Lease
-    client_alive: Callable[[str], bool] | None
+
+    @property
+    def client_alive(self) -> Callable[[str], bool] | None: ...
 
 
 class StreamContext(WorldChoice, Protocol):
@@ -134,9 +144,13 @@ class StreamContext(WorldChoice, Protocol):
     side: dict[str, World]
     state: SimState
     rtf: float
-    instance: str
     streams: StateStreams
-    client_alive: Callable[[str], bool] | None
+
+    @property
+    def instance(self) -> str: ...
+
+    @property
+    def client_alive(self) -> Callable[[str], bool] | None: ...
 
 
 class PredictContext(Worlds, Jobs, Protocol):
@@ -153,7 +167,9 @@ class TimeContext(Worlds, Clock, Jobs, Protocol):
     reply's instance and controller."""
 
     lease: Lease
-    instance: str
+
+    @property
+    def instance(self) -> str: ...
 
 
 class OpContext(TimeContext, AccessContext, StreamContext, CapabilitiesContext, Protocol):

@@ -1,7 +1,8 @@
 """The parameters calibrate fits, named as the request names them: ``<body>.<property>``
 (a body's name, or a glob for a group set alike) with property ``friction``,
 ``restitution`` or ``mass``; ``gravity`` (its magnitude, along the world's gravity); and
-``<joint>.damping``, which no engine's contract sets yet (FEATURE_UNSUPPORTED)."""
+``<joint>.damping`` (a 1-DOF joint's own damping, or a glob of joints set alike) on the
+engines that set it (Engine.set_joint_damping)."""
 
 from __future__ import annotations
 
@@ -15,6 +16,7 @@ from galton.daemon.engines.base import (
     FEATURE_UPDATE_FRICTION,
     FEATURE_UPDATE_MASS,
     FEATURE_UPDATE_RESTITUTION,
+    Engine,
 )
 from galton.daemon.world.scene import World
 from galton.protocol import (
@@ -24,7 +26,7 @@ from galton.protocol import (
     NotFoundError,
 )
 from galton.protocol.errors import brief, did_you_mean
-from galton.protocol.vocabulary import MAX_FRICTION, MAX_MASS
+from galton.protocol.vocabulary import MAX_FRICTION, MAX_GAIN, MAX_MASS
 
 GRAVITY = "gravity"
 MAX_GRAVITY = 1000.0  # m/s², the gravity parameter's own bound (engines/params.py)
@@ -34,13 +36,14 @@ BODY_PROPERTIES: dict[str, tuple[int, str, float, float]] = {
     "friction": (1, FEATURE_UPDATE_FRICTION, 0.0, MAX_FRICTION),
     "restitution": (2, FEATURE_UPDATE_RESTITUTION, 0.0, 1.0),
 }
-UNFITTABLE = {"damping": "joint damping (no engine's contract sets it through the bridge "
-                         "yet: docs/PHYSICS.md, \"Calibration\")"}
+DAMPING = "damping"  # a joint's, N·m·s/rad or N·s/m
+MAX_DAMPING = MAX_GAIN  # as a target's kd
 
 
 @dataclass(frozen=True)
 class Parameter:
-    """One fitted parameter: its name, the bodies it sets (none: gravity), its bounds."""
+    """One fitted parameter: its name, the bodies it sets (joints for damping, none for
+    gravity), its bounds."""
 
     name: str
     prop: str
@@ -70,12 +73,11 @@ def _parameter(world: World, name: str, low: float, high: float) -> Parameter:
     if not dot or not target:
         raise InvalidArgumentError(f"calibrate.fit: {brief(name)} is neither "
                                    "'<body>.<property>' nor 'gravity'")
-    if prop in UNFITTABLE:
-        raise FeatureUnsupportedError(f"the {world.engine.name} engine cannot fit "
-                                      f"{brief(name)}: {UNFITTABLE[prop]}",
-                                      {"parameter": name})
+    if prop == DAMPING:
+        _check_bounds(name, low, high, 0.0, MAX_DAMPING)
+        return Parameter(name, DAMPING, _joints(world, name, target), low, high)
     if prop not in BODY_PROPERTIES:
-        known = [*BODY_PROPERTIES, *UNFITTABLE]
+        known = [*BODY_PROPERTIES, DAMPING]
         raise InvalidArgumentError(f"calibrate.fit: {brief(name)} names no property "
                                    f"{brief(prop)}{did_you_mean(prop[:64], known)}; it fits "
                                    f"{', '.join(BODY_PROPERTIES)}")
@@ -115,12 +117,32 @@ def _bodies(world: World, target: str, prop: str) -> tuple[str, ...]:
     return tuple(found)
 
 
+def _joints(world: World, name: str, target: str) -> tuple[str, ...]:
+    """The 1-DOF joints a damping parameter names (a joint, or a glob), on an engine that
+    sets a joint's damping (one that keeps the contract's refusal: FEATURE_UNSUPPORTED)."""
+    if type(world.engine).set_joint_damping is Engine.set_joint_damping:
+        raise FeatureUnsupportedError(f"the {world.engine.name} engine cannot fit "
+                                      f"{brief(name)}: it does not set a joint's damping",
+                                      {"parameter": name})
+    table = world.joints.by_name
+    found = [target] if target in table else [
+        n for n in table if fnmatch.fnmatchcase(n, target) and table[n].scalar]
+    if not found:
+        raise NotFoundError(f"calibrate.fit: no joint {brief(target)}"
+                            f"{did_you_mean(target[:64], list(table))}",
+                            {"missing": [target]})
+    world.joints.require_scalar(found, f"calibrate.fit[{brief(name)}]")
+    return tuple(found)
+
+
 def current_values(world: World, params: Sequence[Parameter]) -> dict[str, float]:
     """What each parameter is in this world now (a group: its first body's)."""
     values = {}
     for p in params:
         if p.prop == GRAVITY:
             values[p.name] = float(np.linalg.norm(world.engine.get_params()[GRAVITY]))
+        elif p.prop == DAMPING:
+            values[p.name] = world.joints.by_name[p.bodies[0]].damping
         else:
             column = BODY_PROPERTIES[p.prop][0]
             values[p.name] = float(world.engine.properties([p.bodies[0]])[0, column])
@@ -130,7 +152,7 @@ def current_values(world: World, params: Sequence[Parameter]) -> dict[str, float
 def apply_values(world: World, params: Sequence[Parameter], values: Mapping[str, float]
                  ) -> None:
     """Set each parameter to its value in this world (gravity keeps its direction; a world
-    without gravity gets it along -z)."""
+    without gravity gets it along -z; a joint's damping through the World)."""
     for p in params:
         value = values[p.name]
         if p.prop == GRAVITY:
@@ -138,6 +160,9 @@ def apply_values(world: World, params: Sequence[Parameter], values: Mapping[str,
             norm = float(np.linalg.norm(now))
             direction = now / norm if norm > 0 else np.array([0.0, 0.0, -1.0])
             world.engine.set_params({GRAVITY: [float(v) for v in direction * value]})
+        elif p.prop == DAMPING:
+            world.set_joint_damping(list(p.bodies), np.full(len(p.bodies), value),
+                                    "calibrate")
         else:
             world.update(list(p.bodies), body_properties(p.prop, value))
 

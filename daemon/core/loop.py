@@ -13,25 +13,29 @@ import queue
 import sys
 import time
 from collections.abc import Callable
-from contextlib import AbstractContextManager, nullcontext
+from contextlib import nullcontext
 from typing import Any
+
+import msgpack
 
 from galton.daemon.access import lease
 from galton.daemon.access.zmq_auth import refuse_by_role
-from galton.daemon.core import job_results, loop_status, side_jobs, time_control
+from galton.daemon.core import job_results, loop_status, time_control
 from galton.daemon.core.calls import (
+    EVENTS,
     Call,
     Inbox,
-    PolledSource,
     StepJob,
     Task,
-    smoothed_step_cost,
 )
+from galton.daemon.core.clock import STOPPED_AT_ZERO, WorldClock
 from galton.daemon.core.inbox import PolledInbox
-from galton.daemon.core.limits import DEFAULT_LIMITS, Limits
+from galton.daemon.core.limits import Limits
 from galton.daemon.core.monitor import Pacer, ProcessMonitor, RtfWindow
 from galton.daemon.core.reply_limit import too_big
 from galton.daemon.core.step_queue import StepBusyError, StepQueue
+from galton.daemon.core.stepping import Stepping
+from galton.daemon.core.wiring import LoopWiring
 from galton.daemon.ops.handlers import HANDLERS
 from galton.daemon.world.scene import World
 from galton.daemon.world.slots import SnapshotSlots
@@ -46,7 +50,6 @@ from galton.protocol import (
     ResultCode,
     SimState,
     SimStatus,
-    Telemetry,
     decode_request,
     encode_reply,
     error_reply,
@@ -57,7 +60,6 @@ from galton.protocol.requests import Args
 
 log = logging.getLogger("galton.daemon")
 
-CHUNK_WALL_S = 0.005  # physics work between two looks at the inbox
 # Python's switch interval while the engine holds the GIL as it steps (PyBullet): short, so
 # status requests on Zenoh's threads get in between steps. A waiting thread asks for the GIL
 # only after this long and then waits for the step to end: under load, status p50 is 9 ms
@@ -66,41 +68,27 @@ CHUNK_WALL_S = 0.005  # physics work between two looks at the inbox
 # trials 2-3 % faster (docs/PERFORMANCE.md).
 SHORT_SWITCH_INTERVAL_S = 0.00005
 DEFAULT_SWITCH_INTERVAL_S = 0.005
-VERIFY_PERIOD_S = 0.05  # the state is checked finite at least this often while stepping
 # Physics before requests: while steps are due now (a step job, RTF 0, a world behind its
 # clock), requests get at most this much of the physics thread between two chunks of steps
-# (a chunk is CHUNK_WALL_S), and always at least one request, so neither side starves.
+# (a chunk is stepping.CHUNK_WALL_S), and always at least one request, so neither side starves.
 REQUEST_SLICE_S = 0.001
-# A playing world behind its clock runs chunks of due steps back to back for up to this
-# long before the next request (see SimLoop._play_due).
-CATCH_UP_S = 0.05
 
 
 class SimLoop:
     """Owns the World and the simulation state machine (stopped / playing / paused)."""
 
-    def __init__(self, world: World, instance: str,
-                 publish_telemetry: Callable[[Telemetry], None],
-                 publish_event: Callable[[dict[str, Any]], None],
-                 telemetry_rate_hz: float = 10.0,
-                 engine_factory: Callable[[str], Any] | None = None,
-                 limits: Limits = DEFAULT_LIMITS,
-                 polled: PolledSource | None = None) -> None:
+    def __init__(self, world: World, wiring: LoopWiring) -> None:
         self.world = world
-        self.instance = instance
-        self.limits = limits
+        self.wiring = wiring  # frozen: nothing rewires a loop once it is built
+        limits = wiring.limits
         self.decode_limits = DecodeLimits(
             max_bytes=limits.max_request_bytes, max_depth=limits.max_depth,
             max_string=limits.max_string_bytes,
             long_text_keys=frozenset(a.name for op in OPERATIONS.values() for a in op.args
                                      if a.long_text))
         # A polled front (galton-daemon --zmq) is read on this thread: the core's PolledInbox.
-        self.inbox: Inbox = (PolledInbox(polled, self._gone_task) if polled is not None
-                             else queue.SimpleQueue())
-        self.advertised: dict[str, Any] = {}  # what capabilities adds (ZeroMQ endpoints)
-        # Whether a Zenoh client's liveliness token is there (the daemon asks Zenoh; None
-        # when embedded without a session): take_control ties the lease to that token.
-        self.client_alive: Callable[[str], bool] | None = None
+        self.inbox: Inbox = (PolledInbox(wiring.polled, self._gone_task)
+                             if wiring.polled is not None else queue.SimpleQueue())
         self.state = SimState.STOPPED
         self.target_rtf = 1.0
         self.job: StepJob | None = None
@@ -109,37 +97,50 @@ class SimLoop:
         self.pacer = Pacer()
         self.rtf_window = RtfWindow()
         self.monitor = ProcessMonitor()
-        self.publish_telemetry = publish_telemetry
-        self.publish_event = publish_event
-        self.streams = StateStreams()  # stream_states (daemon/world/state_streams.py)
-        self.telemetry_period = 1.0 / telemetry_rate_hz if telemetry_rate_hz > 0 else math.inf
-        self.engine_factory = engine_factory
+        # stream_states (daemon/world/state_streams.py): samples go to every front.
+        self.streams = StateStreams(wiring.publish)
+        rate = wiring.telemetry_rate_hz
+        self.telemetry_period = 1.0 / rate if rate > 0 else math.inf
         self.side: dict[str, World] = {}  # side worlds by name (daemon/ops/worlds.py)
-        # galton-daemon --state-dir: saves the live world every checkpoint_period seconds.
-        self.checkpoint: Callable[[], None] | None = None
-        self.checkpoint_period = 10.0
-        self._next_checkpoint = time.monotonic() + self.checkpoint_period
+        self._next_checkpoint = (time.monotonic() + wiring.checkpoints.period_s
+                                 if wiring.checkpoints is not None else math.inf)
         self.slots = SnapshotSlots(limits)
-        self.snapshot_key: bytes | None = None  # galton-daemon --snapshot-key: blobs' seal
-        self._step_cost = 1e-4
-        self._last_verify = 0.0
+        self.stepping = Stepping(self)  # the live world's steps (daemon/core/stepping.py)
         self.telemetry_seq = 0
         self._event_seq = 0
         self._stopping = False
         self.rtf = 0.0
         # The last status reply with the request and snapshot it answered (loop_status.py).
         self.status_reply: tuple[bytes, tuple[Any, ...], bytes] | None = None
-        # Wraps each scene-changing request (spawn, delete, load_model...): galton-daemon
-        # makes SIGTERM end the process at once inside it (server.sigterm_ends_at_once).
-        self.work_guard: Callable[[], AbstractContextManager[None]] = nullcontext
-        self.clock: tuple[int, float, float, int, bool] = (0, 0.0, 0.0, 0, False)
+        self.clock: WorldClock = STOPPED_AT_ZERO  # read by status on any thread
         self.refresh_clock()
         self.tune_switch_interval()
 
-    def schedule_checkpoints(self, save: Callable[[], None], period_s: float) -> None:
-        """Call ``save`` every ``period_s`` seconds between chunks of steps."""
-        self.checkpoint, self.checkpoint_period = save, period_s
-        self._next_checkpoint = time.monotonic() + period_s
+    # -- what the wiring gave (read-only: handlers see these through core/context.py) ----
+    @property
+    def instance(self) -> str:
+        return self.wiring.instance
+
+    @property
+    def limits(self) -> Limits:
+        return self.wiring.limits
+
+    @property
+    def engine_factory(self) -> Callable[[str], Any] | None:
+        return self.wiring.engine_factory
+
+    @property
+    def snapshot_key(self) -> bytes | None:
+        return self.wiring.snapshot_key
+
+    @property
+    def client_alive(self) -> Callable[[str], bool] | None:
+        return self.wiring.client_alive
+
+    @property
+    def advertised(self) -> dict[str, Any]:
+        """What capabilities adds from the fronts (ZeroMQ's endpoints)."""
+        return self.wiring.advertised()
 
     def tune_switch_interval(self) -> None:
         """Set the process's switch interval for this world's engine (see above)."""
@@ -188,7 +189,7 @@ class SimLoop:
     def _tick(self, next_telemetry: float) -> float:
         """Physics first (the steps due now), then telemetry, then requests until the next
         step is due; returns when the next telemetry sample is due."""
-        self._advance()
+        self.stepping.advance()
         self._start_queued()
         now = time.monotonic()
         if now >= next_telemetry:
@@ -196,9 +197,10 @@ class SimLoop:
             next_telemetry = max(next_telemetry + self.telemetry_period, now)
         if now >= self.streams.next_due:
             self.streams.publish_due(self, now)
-        if self.checkpoint is not None and now >= self._next_checkpoint:
-            self._next_checkpoint = now + self.checkpoint_period
-            self.checkpoint()
+        checkpoints = self.wiring.checkpoints
+        if checkpoints is not None and now >= self._next_checkpoint:
+            self._next_checkpoint = now + checkpoints.period_s
+            checkpoints.save()
         self._take_calls(self._idle_timeout(next_telemetry))
         return next_telemetry
 
@@ -212,7 +214,7 @@ class SimLoop:
     def _recover(self, exc: Exception) -> None:
         """The last line of defence: an error no request handler caught pauses the world."""
         if isinstance(exc, PhysicsError):
-            self._fault(exc)
+            self.stepping.fault(exc)
             return
         log.exception("the physics loop caught an unexpected error; the world is paused")
         error = OperationFailedError(f"the engine failed: {type(exc).__name__}: "
@@ -263,7 +265,7 @@ class SimLoop:
             try:
                 item.run()
             finally:
-                self._keep_invariants()
+                self.stepping.keep_invariants()
         else:
             self.handle(item)
 
@@ -296,19 +298,19 @@ class SimLoop:
             call.client = request.client
             call.world = typed.world if isinstance(typed.world, str) else None
             lease.check(self, call, op)  # while another client holds control: refused
-            with self.work_guard() if op.mutates and not op.steps else nullcontext():
+            with self.wiring.work_guard() if op.mutates and not op.steps else nullcontext():
                 result = HANDLERS[op.name](self, call, typed)
-            self._keep_invariants()  # before the reply: what the client asks next sees it
+            self.stepping.keep_invariants()  # before the reply: what the client asks next sees it
             if result is not None:
                 self._reply_ok(call, result)
         except StepBusyError:  # another step request runs: this one waits for it
             self._hold_step(call)
         except RemoteError as error:
-            self._keep_invariants()
+            self.stepping.keep_invariants()
             self.reply_error(call, error)
         except Exception as exc:  # the daemon keeps serving whatever an engine does
             log.exception("operation %s failed", call.op)
-            self._keep_invariants()
+            self.stepping.keep_invariants()
             self.reply_error(call, OperationFailedError(
                 f"{type(exc).__name__}: {brief(str(exc))}"))
 
@@ -336,20 +338,13 @@ class SimLoop:
         """A step job whose read entities are gone is answered now, not after its steps."""
         job_results.answer_if_reads_gone(self)
 
-    def _keep_invariants(self) -> None:
-        """A diverged world never plays or steps, whoever noticed the divergence."""
-        live_job = self.job is not None and self.job.world is None
-        if self.world.faulted and (self.state == SimState.PLAYING or live_job):
-            self._fault(PhysicsError(
-                f"the simulation diverged at step {self.world.step_index}; reset it (scope "
-                "'state' or 'all') before playing or stepping"))
-
     def emit(self, event: dict[str, Any]) -> None:
         """Publish an event with the next sequence number: a gap tells a subscriber what it
         missed."""
         self._event_seq += 1
         try:
-            self.publish_event({"seq": self._event_seq, **event})
+            self.wiring.publish(EVENTS, msgpack.packb(
+                {"instance": self.instance, "seq": self._event_seq, **event}))
         except Exception:
             log.exception("could not publish an event")
 
@@ -398,63 +393,7 @@ class SimLoop:
         except Exception:
             log.exception("could not answer a %s request", call.op)
 
-    # -- physics ------------------------------------------------------------------------
-    def _advance(self) -> None:
-        """Run one chunk of steps: a live step job's, or the paced playing clock's and then
-        a side world's (or a prediction's) job, which never delays the live world."""
-        job = self.job
-        if job is not None and job.world is None:
-            self._run_steps(min(job.steps_to_next_check(), self._chunk_size()))
-            return
-        if self.state == SimState.PLAYING:
-            self._play_due()
-        if job is not None and self.job is job:
-            side_jobs.run_chunk(self, job)
-
-    def _play_due(self) -> None:
-        """The steps the playing clock owes now, chunk after chunk until it has caught up
-        (for at most CATCH_UP_S): a request that held the thread for 20 ms (a render) is
-        followed by all the steps it delayed, not by one chunk, or a steady load of such
-        requests would slow the clock (issue 35, item 9). At RTF 0, one chunk. A state
-        sample that falls due ends the catch-up too: a world whose step is slow would
-        otherwise stream at the rate of its catch-ups (DART's 1,000 bodies: 12 a second
-        of 60 asked), and the sample costs the same wherever it is taken."""
-        started = time.monotonic()
-        dt = self.world.engine.timestep
-        while self.state == SimState.PLAYING:
-            now = time.monotonic()
-            due = self.pacer.steps_due(now, self.world.sim_time, dt)
-            count = self._chunk_size() if due < 0 else min(due, self._chunk_size())
-            if count:
-                self._run_steps(count)
-            if (due < 0 or count == due or now - started >= CATCH_UP_S
-                    or time.monotonic() >= self.streams.next_due):
-                return
-
-    def _chunk_size(self) -> int:
-        return max(1, min(10_000, int(CHUNK_WALL_S / self._step_cost)))
-
-    def _run_steps(self, count: int) -> None:
-        """Take ``count`` steps of the live world; they count towards a live step job only
-        (a side world's job runs its own steps, daemon/core/side_jobs.py)."""
-        started = time.perf_counter()
-        self.world.step(count)
-        now = time.perf_counter()
-        self._step_cost = smoothed_step_cost(self._step_cost, now - started, count)
-        job = self.job if self.job is not None and self.job.world is None else None
-        job_done = job is not None and job.remaining == count
-        checking = job is not None and job.rest is not None and (
-            (job.done + count) % job.rest.every == 0)
-        due = job_done or checking or now - self._last_verify >= VERIFY_PERIOD_S
-        if due and not self.verify_physics():
-            return
-        self.refresh_clock()
-        if job is not None:
-            job.remaining -= count
-            if job_done or (checking and job_results.at_rest(self.world, job)):
-                self.end_job()
-                self.finish_job(job)
-
+    # -- the step job (its steps: daemon/core/stepping.py) ----------------------------
     def start_job(self, job: StepJob) -> None:
         """Make ``job`` the step job: the one place it is set (``OpContext``)."""
         self.job = job
@@ -479,33 +418,10 @@ class SimLoop:
             job.release()
         self._reply_ok(job.call, result)
 
-    def verify_physics(self) -> bool:
-        """Check the unchecked steps; on a divergence, fault and return False."""
-        self._last_verify = time.perf_counter()
-        try:
-            self.world.verify()
-        except PhysicsError as error:
-            self._fault(error)
-            return False
-        return True
-
-    def _fault(self, error: PhysicsError) -> None:
-        """A diverged step: pause, tell subscribers, fail the step job; never publish it."""
-        self.refresh_clock()
-        self.set_state(SimState.PAUSED)
-        self.emit({"kind": "physics_error", "message": error.message,
-                   "step": self.world.step_index, "sim_time": self.world.sim_time})
-        job = self.job
-        if job is not None and job.world is None:
-            self.end_job()
-            self.reply_error(job.call, error)
-
     # -- status & telemetry -------------------------------------------------------------
     def refresh_clock(self) -> None:
-        """Publish the world's clock to other threads as one tuple, swapped atomically."""
-        world = self.world
-        self.clock = (world.step_index, world.sim_time, world.engine.timestep,
-                      len(world.entities), world.faulted)
+        """Publish the world's clock to other threads as one value, swapped atomically."""
+        self.clock = WorldClock.of(self.world)
 
     def status(self) -> SimStatus:
         """Safe to call from any thread: reads only values swapped atomically."""

@@ -14,7 +14,10 @@ import logging
 import time
 from typing import TYPE_CHECKING, Any
 
-from galton.daemon.core.calls import Call
+import msgpack
+
+from galton.daemon.core.calls import TELEMETRY, Call
+from galton.daemon.core.clock import WorldClock
 from galton.protocol import (
     NotFoundError,
     OperationFailedError,
@@ -46,13 +49,13 @@ def snapshot(loop: SimLoop) -> tuple[Any, ...]:
 
 
 def status_from(loop: SimLoop, taken: tuple[Any, ...]) -> SimStatus:
-    (step, sim_time, timestep, count, faulted), state, target_rtf, rtf, world, controller, \
-        stepping = taken
+    clock: WorldClock
+    clock, state, target_rtf, rtf, world, controller, stepping = taken
     return SimStatus(
-        state=state, step=step, sim_time=sim_time, timestep=timestep,
-        target_rtf=target_rtf, rtf=rtf, entity_count=count, engine=world.engine.name,
-        instance=loop.instance, world=world.name, faulted=faulted, controller=controller,
-        stepping=stepping)
+        state=state, step=clock.step, sim_time=clock.sim_time, timestep=clock.timestep,
+        target_rtf=target_rtf, rtf=rtf, entity_count=clock.entity_count,
+        engine=world.engine.name, instance=loop.instance, world=world.name,
+        faulted=clock.faulted, controller=controller, stepping=stepping)
 
 
 def answer_status(loop: SimLoop, call: Call) -> None:
@@ -95,7 +98,7 @@ def publish_telemetry(loop: SimLoop, now: float) -> None:
     """Publish one telemetry sample per world, the live one first (after checking it is
     still finite); a side world's sample reads as its ``status`` does (never playing)."""
     if not loop.world.faulted:
-        loop.verify_physics()
+        loop.stepping.verify()
     cpu, rss, peak = loop.monitor.sample()
     rtf = loop.rtf = loop.rtf_window.add(now, loop.world.sim_time)
     wall = time.time()
@@ -110,6 +113,6 @@ def publish_telemetry(loop: SimLoop, now: float) -> None:
             entity_count=len(world.entities), cpu_percent=cpu, rss_bytes=rss,
             peak_rss_bytes=peak, world=world.name)
         try:
-            loop.publish_telemetry(sample)
+            loop.wiring.publish(TELEMETRY, msgpack.packb(sample.to_wire()))
         except Exception:
             log.exception("could not publish telemetry")

@@ -247,6 +247,12 @@ class Engine(ABC):
         Arrays are (n,), checked and broadcast by the World."""
         raise self._unsupported("joint targets")
 
+    def set_joint_damping(self, names: Sequence[str], damping: np.ndarray) -> None:
+        """Set these 1-DOF joints' own viscous damping (N·m·s/rad or N·s/m, (n,), >= 0,
+        checked by the World), beside any held target's kd: ``joints`` reports it and
+        snapshots, restores and clones carry it (docs/PHYSICS.md, "Calibration")."""
+        raise self._unsupported("joint damping")
+
     def set_wrenches(self, names: Sequence[str], wrenches: np.ndarray,
                      points: np.ndarray | None) -> None:
         """Hold a world-frame wrench (n, 6: force, torque) on each body until cleared.

@@ -1,5 +1,7 @@
-"""What every front is: calls in, telemetry and events out, opened and closed by the
-composition root (daemon/server.py).
+"""What every front is: calls in; telemetry, events and state streams out. The composition
+root (daemon/server.py) builds each front from its options (with what it rides on, as
+ROS 2 the Zenoh session) and then opens, publishes to and closes them all through
+``Fronts``, never one by name.
 
 A front turns a transport's requests into ``Call`` objects and hands them to the core's
 call interface (``CallPort``: daemon/core/calls.py), the only part of the core it may
@@ -13,10 +15,9 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any, Protocol
 
-from galton.daemon.core.calls import CallPort
+from galton.daemon.core.calls import EVENTS, TELEMETRY, CallPort
 
-TELEMETRY = "telemetry"
-EVENTS = "events"
+__all__ = ["EVENTS", "TELEMETRY", "Front", "Fronts"]
 
 
 class Front(Protocol):
@@ -44,6 +45,11 @@ class Fronts:
 
     def __init__(self, fronts: Sequence[Front] = ()) -> None:
         self.fronts: list[Front] = list(fronts)
+
+    def open(self, core: CallPort) -> None:
+        """Open in order: a front built on another's session opens after it."""
+        for front in self.fronts:
+            front.open(core)
 
     def publish(self, topic: str, data: bytes) -> None:
         for front in self.fronts:

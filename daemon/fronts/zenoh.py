@@ -18,6 +18,7 @@ from galton.daemon.access.zenoh_security import remove_private_files
 from galton.daemon.core.calls import Call, CallPort
 from galton.daemon.fronts.base import EVENTS, TELEMETRY
 from galton.daemon.fronts.memory import after_request_of
+from galton.daemon.fronts.stream_sender import SampleSender
 from galton.daemon.fronts.zenoh_config import file_says, merge
 from galton.protocol import Keys
 from galton.protocol.keys import (
@@ -51,6 +52,8 @@ class ZenohFront:
         self._telemetry_pub = self.session.declare_publisher(
             self.keys.telemetry, congestion_control=zenoh.CongestionControl.DROP)
         self._events_pub = self.session.declare_publisher(self.keys.events)
+        # A state stream's samples are put off the physics thread (stream_sender.py).
+        self._samples = SampleSender(self._put_sample)
         self._core: CallPort | None = None
         self._queryable: Any = None
         self._token: Any = None
@@ -98,14 +101,18 @@ class ZenohFront:
 
     def publish(self, topic: str, data: bytes) -> None:
         """Telemetry and state streams are dropped rather than queued when the network is
-        congested; events are not."""
+        congested; events are not. A state stream's sample is handed to the sender's
+        thread: a 60 kB put would cost the physics thread as much as reading the poses."""
         if topic == TELEMETRY:
             self._telemetry_pub.put(data)
         elif topic == EVENTS:
             self._events_pub.put(data)
         else:
-            self.session.put(f"{self.keys.prefix}/{topic}", data,
-                             congestion_control=zenoh.CongestionControl.DROP)
+            self._samples.send(topic, data)
+
+    def _put_sample(self, topic: str, data: bytes) -> None:
+        self.session.put(f"{self.keys.prefix}/{topic}", data,
+                         congestion_control=zenoh.CongestionControl.DROP)
 
     def advertised(self) -> dict[str, Any]:
         return {}  # clients find the Zenoh front by its key expressions
@@ -117,6 +124,7 @@ class ZenohFront:
             self._token = None
 
     def close(self) -> None:
+        self._samples.close()  # the samples handed over before this go out first
         if self._queryable is not None:
             self._queryable.undeclare()
         if self._clients is not None:

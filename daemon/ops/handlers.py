@@ -28,7 +28,6 @@ from galton.daemon.ops import joints as ops_joints
 from galton.daemon.ops import perception as ops_perception
 from galton.daemon.ops import scene as ops
 from galton.daemon.ops.binding import binding_of
-from galton.daemon.world.scene import World
 from galton.protocol.operations import OPERATIONS
 from galton.protocol.requests import Args
 
@@ -47,26 +46,11 @@ def _scene(name: str, apply: ops.SceneOp) -> Handler:
         world = ctx.world_for(request)
         result = apply(world, request)
         if mutates:
-            event = {"kind": "scene", "op": name, "world": world.name,
-                     "step": world.step_index}
-            if name == "compare" and result is not None:  # the view charts the score
-                event.update(score=result["score"], sim_time=world.sim_time)
-            ctx.emit(event)
-            if name == "compare" and result is not None and result.get("suggested"):
-                ctx.emit(_suggestion(world, request, result))
+            ctx.emit({"kind": "scene", "op": name, "world": world.name,
+                      "step": world.step_index})
             ctx.check_job_reads()
         return result
     return handle
-
-
-def _suggestion(world: World, request: Any, result: dict[str, Any]) -> dict[str, Any]:
-    """compare's surprise trigger fired: what an architecture needs to start a calibration
-    (the bodies, since when the world has been surprised)."""
-    return {"kind": "calibration_suggested", "world": world.name, "step": world.step_index,
-            "sim_time": world.sim_time, "names": list(request.names),
-            "score": result["score"], "streak": result["streak"],
-            "since": world.surprise.since, "threshold": request.trigger.threshold,
-            "window": request.trigger.window}
 
 
 # The modules whose marked functions are handlers (daemon/ops/binding.py): a module that

@@ -22,7 +22,6 @@ from galton.daemon.core.reply_limit import require_room
 from galton.daemon.engines import ENGINE_CLASSES
 from galton.daemon.engines.base import FEATURE_SPAWN_INERTIA, Shape, ShapeMesh
 from galton.daemon.ops.binding import handles, scene_op
-from galton.daemon.world import pose_compare
 from galton.daemon.world.model_files import search_folders
 from galton.daemon.world.scene import World
 from galton.protocol import (
@@ -331,9 +330,3 @@ def capabilities(ctx: CapabilitiesContext, call: Call, request: rq.NoArgs) -> di
 
 def _wire_values(params: dict[str, Any]) -> dict[str, Any]:
     return {k: list(v) if isinstance(v, tuple) else v for k, v in params.items()}
-
-
-@scene_op("compare")
-def compare(world: World, request: rq.Compare) -> dict[str, Any]:
-    """Observed poses against the world's (daemon/world/pose_compare.py does the work)."""
-    return pose_compare.compare(world, request)

@@ -26,6 +26,7 @@ from galton.protocol import (
     JointInfo,
 )
 from galton.protocol.errors import unknown_names
+from galton.protocol.vocabulary import MAX_GAIN
 
 MODE_FEATURES = {"position": FEATURE_TARGET_POSITION, "velocity": FEATURE_TARGET_VELOCITY,
                  "effort": FEATURE_TARGET_EFFORT}
@@ -96,6 +97,17 @@ class JointTable:
         self.engine.set_joint_targets(names, mode, targets, kp, kd, max_effort)
         for name in names:
             self.by_name[name] = dataclasses.replace(self.by_name[name], mode=mode)
+
+    def set_damping(self, names: Sequence[str], damping: np.ndarray, where: str) -> None:
+        """Check whole (known 1-DOF joints, 0 <= damping <= MAX_GAIN), then have the engine
+        set each joint's own damping and read the joints again."""
+        self.require_scalar(names, where)
+        if not np.all((damping >= 0) & (damping <= MAX_GAIN)):
+            bad = float(damping[np.argmax(~((damping >= 0) & (damping <= MAX_GAIN)))])
+            raise InvalidArgumentError(f"{where}: a joint's damping must be within "
+                                       f"[0, {MAX_GAIN:g}], got {bad:g}")
+        self.engine.set_joint_damping(names, damping)
+        self.refresh()
 
     def release_all(self) -> None:
         """Every joint's mode back to none (the engine has restored its joints)."""

@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from galton.daemon.world.scene import World
+from galton.daemon.world.surprise import Sample
 from galton.protocol import InvalidArgumentError, pack_f64
 from galton.protocol import requests as rq
 from galton.protocol.model import (
@@ -67,7 +68,10 @@ def compare(world: World, request: rq.Compare) -> dict[str, Any]:
     result["corrected"] = correct
     trigger = request.trigger
     if trigger is not None:  # counted after the comparison, which a bad argument refuses
+        kept = None if trigger.calibrate is None else Sample(
+            world.sim_time, tuple(names), observed.copy(),
+            None if twists is None else twists.copy())
         result["suggested"] = world.surprise.observe(result["score"], trigger.threshold,
-                                                     trigger.window, world.sim_time)
+                                                     trigger.window, world.sim_time, kept)
         result["streak"] = world.surprise.count
     return result

@@ -302,6 +302,13 @@ class World:
             entity = self.entities[name]
             entity.info = dataclasses.replace(entity.info, **changes)
 
+    def set_joint_damping(self, names: Sequence[str], damping: np.ndarray,
+                          where: str = "set_joint_damping") -> None:
+        """These 1-DOF joints' own damping (part of the structure, as a body's friction)."""
+        self.joints.require_scalar(names, where)
+        self.structure = object()
+        self.joints.set_damping(names, np.asarray(damping, float), where)
+
     def set_params(self, params: dict[str, Any]) -> None:
         """The engine's parameters (part of the structure)."""
         self.structure = object()

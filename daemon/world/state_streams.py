@@ -1,5 +1,5 @@
 """State streams: the poses of all (or named) entities of a world, published at the rate
-a client asked (``stream_states``), beside telemetry on both transports.
+a client asked (``stream_states``), beside telemetry, on every front that carries them.
 
 A stream belongs to the client that opened it (its liveliness token over Zenoh, its
 connection over ZeroMQ) and ends when that client goes, on ``close_stream``, or when the
@@ -10,7 +10,8 @@ control, a non-blocking ZeroMQ send): a slow subscriber never slows the world.
 A sample is cheap for the physics thread (docs/PERFORMANCE.md, "State streams"): while its
 world holds the same entities a stream reuses its names, packed once, and the engine's pose
 reader of them (``Engine.pose_reader``); streams of the same world and names due together
-share one read; Zenoh's put runs on a thread of its own (daemon/world/stream_sender.py).
+share one read; the Zenoh front puts samples on a thread of its own
+(daemon/fronts/stream_sender.py).
 """
 
 from __future__ import annotations
@@ -25,10 +26,9 @@ from typing import Any
 import msgpack
 import numpy as np
 
-from galton.daemon.core.calls import Call
+from galton.daemon.core.calls import Call, Publish
 from galton.daemon.core.context import StreamContext
 from galton.daemon.world.scene import World, canonical_quaternions
-from galton.daemon.world.stream_sender import Publish, SampleSender
 from galton.protocol import InvalidArgumentError, Keys, NotFoundError, ResourceLimitError
 from galton.protocol import requests as rq
 from galton.protocol.arrays import pack_f64
@@ -77,9 +77,10 @@ class StateStream:
 class StateStreams:
     """Every open stream of one daemon; used on the physics thread only."""
 
-    def __init__(self, publish: Publish | None = None) -> None:
-        self.publish = publish  # called on the physics thread (the ZeroMQ front's sockets)
-        self.sender: SampleSender | None = None  # off it (Zenoh)
+    def __init__(self, publish: Publish) -> None:
+        # Every front's publish, on the physics thread: each front decides whether and how
+        # it carries a sample (Zenoh hands it to a thread of its own, ZeroMQ sends it).
+        self.publish = publish
         self.streams: dict[str, StateStream] = {}
         self.next_due = math.inf
 
@@ -179,15 +180,7 @@ class StateStreams:
         self._send_bytes(stream, msgpack.packb(sample))
 
     def _send_bytes(self, stream: StateStream, data: bytes) -> None:
-        if self.publish is not None:
-            self.publish(stream.topic, data)
-        if self.sender is not None:
-            self.sender.send(stream.topic, data)
-
-    def stop_sender(self) -> None:
-        """Stop the sender's thread (the daemon closes; the physics thread has stopped)."""
-        if self.sender is not None:
-            self.sender.close()
+        self.publish(stream.topic, data)
 
     def _reschedule(self) -> None:
         self.next_due = min((s.next_due for s in self.streams.values()), default=math.inf)

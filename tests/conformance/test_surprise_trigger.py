@@ -1,7 +1,8 @@
 """compare's surprise trigger over a real daemon: comparisons in a row above the threshold
 are counted per world, the one that makes the streak its window suggests a calibration
 (in its reply and in a `calibration_suggested` event) once per streak, an unsurprising
-comparison ends the streak, and a bad trigger is refused without counting."""
+comparison ends the streak, and a bad trigger is refused without counting; a trigger's
+``calibrate`` starts the daemon's own calibration (events, ended by pause)."""
 
 from __future__ import annotations
 
@@ -12,7 +13,7 @@ import numpy as np
 import pytest
 
 from galton.client import Client, spheres
-from galton.protocol import InvalidArgumentError
+from galton.protocol import InvalidArgumentError, NotFoundError
 
 TRIGGER = (3.0, 3)  # threshold, window
 SEEN_RIGHT = np.array([[0.0, 0.0, 1.0, 0, 0, 0, 1.0]])
@@ -60,3 +61,71 @@ def test_a_bad_trigger_is_refused_and_not_counted(sim: Client) -> None:
     assert sim.compare(["a"], SEEN_WRONG, trigger=TRIGGER).streak == 2
     sim.reset("state")
     assert sim.compare(["a"], SEEN_WRONG, trigger=TRIGGER).streak == 1  # reset: a new one
+
+
+CALIBRATE = {"fit": {"ball.mass": (0.05, 1.0)}, "max_predictions": 20_000}
+
+
+@pytest.mark.parametrize("engine", ["mujoco"])  # the daemon's job: engine-blind
+def test_a_trigger_that_calibrates_starts_the_job_and_pause_ends_it(sim: Client) -> None:
+    """With ``calibrate`` the comparison that makes the streak its window starts the
+    daemon's own calibration over the streak's observations (``calibrating``, and a
+    ``calibration_started`` event naming them); ``pause`` ends it as it ends any
+    calibrate, and a ``calibration_finished`` event says so. While it runs, another
+    streak's window starts none."""
+    sim.spawn(spheres(["ball"], [[0, 0, 1.0]], 0.05, mass=0.2))
+    events: dict[str, list[dict[str, Any]]] = {"calibration_started": [],
+                                               "calibration_finished": []}
+    finished = threading.Event()
+
+    def on_event(event: dict[str, Any]) -> None:
+        if event.get("kind") in events:
+            events[event["kind"]].append(event)
+            if event["kind"] == "calibration_finished":
+                finished.set()
+
+    def compare() -> Any:
+        sim.step(10)
+        seen = sim.get_states(["ball"]).poses + np.array([0.1, 0, 0, 0, 0, 0, 0])
+        return sim.compare(["ball"], seen, sigma_position=0.01, trigger=TRIGGER,
+                           calibrate=CALIBRATE)
+
+    with sim.on_event(on_event):
+        assert [compare().calibrating for _ in range(2)] == [False, False]
+        third = compare()
+        assert third.suggested and third.calibrating
+        here = sim.get_states(["ball"]).poses
+        assert sim.compare(["ball"], here, trigger=TRIGGER).streak == 0  # the streak ends
+        # a new streak of three while the job runs: its calibration is refused, busy
+        others = [sim.compare(["ball"], SEEN_WRONG, trigger=TRIGGER, calibrate=CALIBRATE)
+                  for _ in range(3)]
+        assert others[-1].suggested and not others[-1].calibrating
+        sim.pause()
+        assert finished.wait(30)
+    started = events["calibration_started"][0]
+    assert started["names"] == ["ball"] and started["samples"] == 3
+    assert started["fit"] == {"ball.mass": [0.05, 1.0]}
+    ended = [e for e in events["calibration_finished"] if e.get("error") == "OPERATION_FAILED"]
+    assert ended and "interrupted" in ended[0]["message"]
+    busy = [e for e in events["calibration_finished"] if e.get("error") == "INCORRECT_STATE"]
+    assert busy, events["calibration_finished"]  # the second streak's, refused: busy
+    assert sim.list(name="ball")[0].mass == pytest.approx(0.2)  # no apply: untouched
+
+
+@pytest.mark.parametrize("engine", ["mujoco"])
+def test_a_trigger_whose_fit_is_bad_is_refused_and_counts_nothing(sim: Client) -> None:
+    sim.spawn(spheres(["a"], [[0, 0, 1]], 0.05, static=True))
+    assert sim.compare(["a"], SEEN_WRONG, trigger=TRIGGER).streak == 1
+    pose = SEEN_WRONG.tobytes()
+    for bad, error in (({"fit": {"crate.friction": [0.1, 1.0]}}, NotFoundError),
+                       ({"fit": {"a.friction": [1.0, 0.5]}}, InvalidArgumentError),
+                       ({"fit": {"a.mass": [0.1, 1.0]}}, InvalidArgumentError),  # static
+                       ({"fit": {}}, InvalidArgumentError),
+                       ({"fit": {"a.friction": [0.1, 1.0]}, "max_predictions": 1},
+                        InvalidArgumentError),
+                       ({"fit": {"a.friction": [0.1, 1.0]}, "after": 1},
+                        InvalidArgumentError)):
+        with pytest.raises(error):
+            sim.call("compare", {"names": ["a"], "poses": pose, "trigger": {
+                "threshold": 3.0, "window": 3, "calibrate": bad}})
+    assert sim.compare(["a"], SEEN_WRONG, trigger=TRIGGER).streak == 2

@@ -4,7 +4,10 @@ from __future__ import annotations
 
 import contextlib
 import importlib.util
+import os
 import signal
+import subprocess
+import sys
 import threading
 import time
 from pathlib import Path
@@ -237,3 +240,12 @@ def test_sigterm_while_a_long_spawn_is_decoded_refuses_it_and_exits_within_the_g
         # refused, not begun (unreachable: the request never got to the daemon)
         assert isinstance(replies[0], OperationFailedError), replies
         assert "shutting down" in str(replies[0])
+
+
+def test_help_into_a_pipe_is_whole() -> None:
+    """Issue 47: ``galton-daemon --help | less`` was cut at 80 columns, its options' help
+    ending in "…"; "[ros2]" is kept (rich once read it as markup)."""
+    env = {k: v for k, v in os.environ.items() if k not in ("COLUMNS", "TERMINAL_WIDTH")}
+    done = subprocess.run([str(Path(sys.executable).with_name("galton-daemon")), "--help"],
+                          capture_output=True, text=True, env=env, timeout=60, check=True)
+    assert "…" not in done.stdout and "needs the [ros2] extra" in done.stdout, done.stdout

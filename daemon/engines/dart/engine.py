@@ -265,6 +265,9 @@ class DartEngine(Scene, Snapshots, Engine):
                 self._robots.targets[name] = Target(mode, float(targets[k]), float(kp[k]),
                                                     float(kd[k]), float(max_effort[k]))
 
+    def set_joint_damping(self, names: Sequence[str], damping: np.ndarray) -> None:
+        self._robots.set_damping(names, damping)
+
     def set_wrenches(self, names: Sequence[str], wrenches: np.ndarray,
                      points: np.ndarray | None) -> None:
         found = self._lookup(names)

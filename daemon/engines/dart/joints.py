@@ -65,6 +65,23 @@ class Robots:
             if joint.joint.getDampingCoefficient(0) != wanted:
                 joint.joint.setDampingCoefficient(0, wanted)
 
+    def set_damping(self, names: Sequence[str], damping: np.ndarray) -> None:
+        """These 1-DOF joints' own damping (the joint's damping coefficient, beside a held
+        target's kd: sync_damping before each step), which DART integrates implicitly."""
+        for joint, value in zip(self.scalar(names), np.asarray(damping, float).tolist(),
+                                strict=True):
+            joint.info.damping = value
+        self.sync_damping()
+
+    def own_damping(self) -> dict[str, float]:
+        """Each 1-DOF joint's own damping, for a snapshot (a restore loads the file's)."""
+        return {name: joint.info.damping for name, joint in self.joints.items()
+                if joint.info.scalar}
+
+    def put_back_damping(self, damping: dict[str, Any]) -> None:
+        """A snapshot's damping (``own_damping``) on the joints a restore loaded again."""
+        self.set_damping(list(damping), np.array([float(v) for v in damping.values()]))
+
     def effort(self, name: str) -> float:
         """What the joint's target applied in the last step: its drive and its damping at
         the velocity the step ended with."""

@@ -52,6 +52,7 @@ class Snapshots:
                 "targets": {n: [t.mode, t.target, t.kp, t.kd, t.max_effort]
                             for n, t in self._robots.targets.items()},
                 "efforts": dict(self._robots.efforts),
+                "damping": self._robots.own_damping(),
                 "wrenches": {n: [f.tolist(), t.tolist()]
                              for n, (_, f, t) in self._robots.wrenches.items()}}
 
@@ -105,6 +106,7 @@ class Snapshots:
             self._robots.targets[name] = Target(str(mode), float(target), float(kp),
                                                 float(kd), float(effort))
         self._robots.efforts.update({str(k): float(v) for k, v in data["efforts"].items()})
+        self._robots.put_back_damping(data.get("damping", {}))
         for name, (force, torque) in data["wrenches"].items():
             self._robots.wrenches[name] = (self._bodies[name].node,
                                            _vector(force), _vector(torque))

@@ -354,6 +354,10 @@ class MujocoEngine(Engine):
         self.own()  # the actuators' gains are model arrays
         self.joint_book.hold(self.model, self.data, names, mode, targets, kp, kd, max_effort)
 
+    def set_joint_damping(self, names: Sequence[str], damping: np.ndarray) -> None:
+        self.own()  # dof_damping is a model array
+        self.joint_book.set_damping(self.model, names, damping)
+
     def set_wrenches(self, names: Sequence[str], wrenches: np.ndarray,
                      points: np.ndarray | None) -> None:
         wrench.set_wrenches(self, names, wrenches, points)

@@ -134,6 +134,18 @@ class Joints:
         if velocities is not None:
             d.qvel[self.vadr[aid]] = velocities
 
+    # -- damping ---------------------------------------------------------------------------
+    def set_damping(self, m: mujoco.MjModel, names: Sequence[str], damping: np.ndarray) -> None:
+        """These 1-DOF joints' own damping (``dof_damping``, beside a held target's kd): kept
+        by name across recompiles (``own``) and in the descriptions, so snapshots carry it."""
+        aid = self.actuators(names)
+        wanted = {name: float(value) for name, value in zip(names, damping, strict=True)}
+        self.own.update(wanted)
+        self.own_damping[aid] = damping
+        m.dof_damping[self.vadr[aid]] = self.own_damping[aid] + self.target_damping[aid]
+        self.infos = {root: [replace(i, damping=wanted[i.name]) if i.name in wanted else i
+                             for i in infos] for root, infos in self.infos.items()}
+
     # -- targets ---------------------------------------------------------------------------
     def hold(self, m: mujoco.MjModel, d: mujoco.MjData, names: Sequence[str], mode: str,
              targets: np.ndarray, kp: np.ndarray, kd: np.ndarray,

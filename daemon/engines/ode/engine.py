@@ -325,6 +325,9 @@ class OdeEngine(Snapshots, Engine):
                 LIB.dBodyDisable(body.body)
         self._diverged = False
 
+    def set_joint_damping(self, names: Sequence[str], damping: np.ndarray) -> None:
+        self._robots.set_damping(names, damping, self._bodies)
+
     # -- wrenches ---------------------------------------------------------------------------
     def set_wrenches(self, names: Sequence[str], wrenches: np.ndarray,
                      points: np.ndarray | None) -> None:

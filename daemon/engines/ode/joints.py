@@ -184,6 +184,25 @@ class Robots:
             found.append(joint)
         return found
 
+    def set_damping(self, names: Sequence[str], damping: np.ndarray,
+                    bodies: dict[str, Body]) -> None:
+        """These 1-DOF joints' own damping. ODE has no joint damping of its own: as Webots
+        does for a joint's ``dampingConstant``, ``actuate`` pushes -damping q̇ on the joint
+        before each step (explicit, beside a target's law), as it does for URDF damping."""
+        for joint, value in zip(self._scalar(names), np.asarray(damping, float).tolist(),
+                                strict=True):
+            joint.info.damping = value
+            for link in (joint.info.parent, joint.info.child):
+                if link in bodies and not bodies[link].static:
+                    states.wake(bodies[link])
+
+    def put_back_damping(self, name: str, value: Any) -> None:
+        """A snapshot's damping of one joint (a restore loads the file's first)."""
+        if not isinstance(value, (int, float)) or not 0.0 <= float(value) < np.inf:
+            raise InvalidArgumentError(f"not an ode snapshot: joint {name!r}'s damping "
+                                       f"{value!r} is not a finite number >= 0")
+        self._scalar([name])[0].info.damping = float(value)
+
     def states(self, names: Sequence[str]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         joints = self._scalar(names)
         read = [j.read() for j in joints]

@@ -56,7 +56,8 @@ class Snapshots:
         links = [snapshots.body_data(b, b.awake, self._wrenches.get(b.name))
                  for b in self._robots.links_of(body.name, self._bodies)]
         joints = [{"name": j.info.name, "mode": j.info.mode, "target": j.target, "kp": j.kp,
-                   "kd": j.kd, "max_effort": j.max_effort, "effort": j.effort}
+                   "kd": j.kd, "max_effort": j.max_effort, "effort": j.effort,
+                   **({"damping": j.info.damping} if j.scalar else {})}
                   for j in model.joints]
         return snapshots.model_data(model.source, links, joints)
 
@@ -86,6 +87,8 @@ class Snapshots:
             held.info.mode = joint["mode"]
             held.target, held.kp, held.kd = joint["target"], joint["kp"], joint["kd"]
             held.max_effort, held.effort = joint["max_effort"], joint["effort"]
+            if "damping" in joint:
+                self._robots.put_back_damping(held.info.name, joint["damping"])
             if held.scalar:
                 velocity = held.target if held.info.mode == "velocity" else 0.0
                 damping = held.kd if held.info.mode in ("position", "velocity") else 0.0

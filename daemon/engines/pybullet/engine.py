@@ -81,6 +81,7 @@ from galton.daemon.engines.pybullet import state as states
 from galton.daemon.engines.pybullet.articulated import Articulated
 from galton.daemon.engines.pybullet.calls import engine_call
 from galton.daemon.engines.pybullet.frames import Offset
+from galton.daemon.engines.pybullet.joints import set_damping
 from galton.daemon.engines.pybullet.mesh_files import HullCache
 from galton.daemon.engines.pybullet.models import MODEL_FORMATS
 from galton.daemon.engines.pybullet.params import SPECS, Parameters
@@ -359,6 +360,9 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
             return
         for _ in range(count):
             step()
+
+    def set_joint_damping(self, names: Sequence[str], damping: np.ndarray) -> None:
+        set_damping(self._bc, self.robots.models, self._uid_of, names, damping)
 
     @engine_call
     def state_within(self, max_position: float, max_speed: float) -> bool:

@@ -30,7 +30,7 @@ keeps the explicit law.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -39,7 +39,7 @@ from pybullet_utils.bullet_client import BulletClient
 
 from galton.daemon.engines.pybullet.files import Axis, FileFacts
 from galton.daemon.engines.pybullet.frames import rotate
-from galton.protocol import JointInfo
+from galton.protocol import JointInfo, NotFoundError
 
 TYPES = {pybullet.JOINT_REVOLUTE: "revolute", pybullet.JOINT_PRISMATIC: "prismatic",
          pybullet.JOINT_SPHERICAL: "spherical", pybullet.JOINT_FIXED: "fixed"}
@@ -125,6 +125,24 @@ class Articulation:
         return tau - kd * accel, -own * accel
 
 
+    def set_damping(self, bc: BulletClient, uid: int, places: list[int],
+                    damping: np.ndarray) -> None:
+        """These 1-DOF joints' own damping: Bullet's ``jointDamping`` of each joint's child
+        link (stepSimulation applies -c qdot itself) and the books (its implicit part while
+        targets are held, what ``joints`` lists and snapshots carry)."""
+        scalar = [info for info in self.infos if info.scalar]
+        for place, value in zip(places, damping.tolist(), strict=True):
+            bc.changeDynamics(uid, self.indices[place], jointDamping=value)
+            scalar[place].damping = value
+        self.own_damping[places] = damping
+
+    def apply_damping(self, bc: BulletClient, uid: int) -> None:
+        """After the model is loaded again (a rebuild, a restore, a clone: its text gives
+        the file's damping), each 1-DOF joint's as the books hold it."""
+        for j, value in zip(self.indices, self.own_damping.tolist(), strict=True):
+            if bc.getJointInfo(uid, j)[6] != value:
+                bc.changeDynamics(uid, j, jointDamping=value)
+
     def fits(self, bc: BulletClient, uid: int) -> bool:
         """Whether the body's joint space is its 1-DOF joints' alone (a fixed base, no joint
         of several DOF), looked up once per PyBullet body (a rebuild makes a new one)."""
@@ -134,6 +152,21 @@ class Articulation:
             floating = any(info.type == "free" for info in self.infos)
             self.fit = (uid, not floating and movable == self.indices)
         return self.fit[1]
+
+
+def set_damping(bc: BulletClient, models: dict[str, Articulation], uid_of: Callable[[str], int],
+                names: Sequence[str], damping: np.ndarray) -> None:
+    """Set these 1-DOF joints' own damping (>= 0, checked by the World)."""
+    known = {name for model in models.values() for name in model.scalar}
+    unknown = [name for name in names if name not in known]
+    if unknown:
+        raise NotFoundError(f"no joint with one degree of freedom named {unknown[0]!r} in "
+                            "the PyBullet world")
+    for root, model in models.items():
+        rows = [row for row, name in enumerate(names) if name in model.scalar]
+        if rows:
+            model.set_damping(bc, uid_of(root), [model.scalar[names[r]] for r in rows],
+                              np.asarray(damping, float)[rows])
 
 
 def free_motors(bc: BulletClient, uid: int) -> None:

@@ -127,7 +127,9 @@ class Robots:
 
     def put_back(self, bc: BulletClient, uid_of: UidOf, states: JointStates) -> None:
         """Joint states carried across a rebuild; a model as loaded is left as loaded, so
-        that a rewound world replays bit for bit."""
+        that a rewound world replays bit for bit. Each joint's damping as the books hold it."""
+        for root, articulation in self.models.items():
+            articulation.apply_damping(bc, uid_of(root))
         for root, (q, qdot) in states.items():
             model = self.models.get(root)
             if model is None:

@@ -35,7 +35,6 @@ from galton.daemon.fronts.ros2.topics import Publisher, TopicLoop
 from galton.protocol import GaltonError, Reply, decode_reply, encode_request
 
 log = logging.getLogger("galton.daemon.fronts.ros2")
-Dispatch = Callable[[Call], None]
 
 
 def node_name(instance: str) -> str:
@@ -51,13 +50,11 @@ def service_name(type_name: str) -> str:
 
 class Ros2Front:
     """One ROS 2 node, named after the daemon's instance, with a server per service: a
-    ``Front`` (daemon/fronts/base.py) that serves from construction, on the Zenoh front's
-    session, and publishes its own topics (so the core's samples are not its business)."""
+    ``Front`` (daemon/fronts/base.py) built on the Zenoh front's session, serving from
+    ``open``, and publishing its own topics (so the core's samples are not its business)."""
 
-    def __init__(self, session: zenoh.Session, dispatch: Dispatch, node: str,
-                 options: Ros2Options) -> None:
+    def __init__(self, session: zenoh.Session, node: str, options: Ros2Options) -> None:
         self.session = session
-        self.dispatch = dispatch
         self.options = options
         self.identity = rmw_zenoh.NodeIdentity(
             options.domain, str(session.info.zid()), 0,
@@ -67,15 +64,23 @@ class Ros2Front:
             queue.SimpleQueue()
         self._reply_thread = threading.Thread(target=self._take_replies, name="ros2-replies",
                                               daemon=True)
-        self._reply_thread.start()
-        self._declared: list[Any] = [session.liveliness().declare_token(
-            self.identity.node_token())]
+        self._declared: list[Any] = []
         self._wake_topics: Callable[[], None] = lambda: None  # the topic loop's, once made
         self._core: CallPort | None = None  # set by open()
+        self.action: SimulateStepsServer | None = None
+        self.topics: TopicLoop | None = None
+
+    def open(self, core: CallPort) -> None:
+        """Start serving: the node's token, a server per service, the action, the topics;
+        their requests go to ``core.dispatch``."""
+        self._core = core
+        self._reply_thread.start()
+        self._declared.append(self.session.liveliness().declare_token(
+            self.identity.node_token()))
         for name, handler in HANDLERS.items():
             self._serve(name, handler)
         self.action = SimulateStepsServer(self)
-        self.topics = TopicLoop(self, options)
+        self.topics = TopicLoop(self, self.options)
         self._wake_topics = self.topics.wake
 
     def summary(self) -> str:
@@ -152,8 +157,9 @@ class Ros2Front:
         on the front's reply thread, so ROS-side work (CDR, the next request of a handler)
         never holds the physics thread that answered. ``client``: the id it is sent as (a
         goal's, so that ``lose`` can end its step)."""
-        self.dispatch(Call(op, encode_request(op, args, client),
-                           lambda data: self._replies.put((then, data))))
+        assert self._core is not None  # requests are served from open() on
+        self._core.dispatch(Call(op, encode_request(op, args, client),
+                                 lambda data: self._replies.put((then, data))))
 
     def lose(self, client: str) -> None:
         """End the step request sent as ``client`` now, running or waiting (the core ends a
@@ -169,11 +175,6 @@ class Ros2Front:
             except Exception:  # one bad continuation must not end the others
                 log.exception("ROS 2 front: a reply's continuation failed")
 
-    def open(self, core: CallPort) -> None:
-        """Nothing more to start: the node serves from construction (it needs the session);
-        the core's call interface is kept for ``lose``."""
-        self._core = core
-
     def publish(self, topic: str, data: bytes) -> None:
         """Not this front's: /clock, /tf and joint states are read by its own topic loop,
         which an event wakes (the clock may start moving: play, a step, a new world)."""
@@ -187,9 +188,12 @@ class Ros2Front:
         """The node's token goes at ``close``, after pending requests are answered."""
 
     def close(self) -> None:
-        self.topics.close()
-        self._replies.put(None)
-        self._reply_thread.join(timeout=5)
+        """Stop the topics and the reply thread, then undeclare (nothing, if never opened)."""
+        if self.topics is not None:
+            self.topics.close()
+        if self._reply_thread.is_alive():
+            self._replies.put(None)
+            self._reply_thread.join(timeout=5)
         for declared in reversed(self._declared):
             declared.undeclare()
         self._declared.clear()

@@ -105,6 +105,20 @@ def test_compare_with_a_trigger_counts_the_streak(target: list[str]) -> None:
     assert bad.exit_code != 0 and "THRESHOLD:WINDOW" in flat(bad.output)
 
 
+def test_compare_with_a_trigger_that_calibrates_is_checked_first(target: list[str]) -> None:
+    """--calibrate FIT (with --trigger): the fit is checked before the comparison counts;
+    without --trigger it is refused on the command line."""
+    args = [*target, "compare", "ball", "--poses", "0.03,0.04,0.5", "--trigger", "3:2"]
+    unknown = run([*args, "--calibrate", "crate.friction"])
+    assert unknown.exit_code != 0 and "crate" in flat(unknown.output)
+    counted = invoke([*args, "--calibrate", "ball.friction", "--calibrate-bounds",
+                      "ball.friction=0.1:1", "--calibrate-max-predictions", "10", "--json"])
+    assert counted["streak"] == 1 and not counted["calibrating"]  # the refusal counted none
+    lone = run([*target, "compare", "ball", "--poses", "0.03,0.04,0.5", "--calibrate",
+                "ball.friction"])
+    assert lone.exit_code == 2 and "--trigger" in flat(lone.output)
+
+
 def test_compare_takes_positions_as_set_states_does(target: list[str]) -> None:
     """x,y,z alone is an unrotated pose, in compare as in set-states (issue 33)."""
     short = invoke([*target, "compare", "ball", "--poses", "0.03,0.04,0.5", "--json"])

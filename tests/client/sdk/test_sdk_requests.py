@@ -278,6 +278,16 @@ CASES: dict[str, Case] = {
                     "sigma_position": 0.01, "sigma_angle": 0.1, "sigma_speed": 0.2,
                     "correct": True, "spread": 0.05,
                     "trigger": {"threshold": 3.0, "window": 4}}),
+    "compare-calibrating": Case(
+        lambda c: c.compare(["a"], POSE, trigger=(3.0, 4), calibrate={
+            "fit": {"a.friction": (0.1, 1)}, "apply": True}),
+        "compare", {"names": ["a"], "poses": rows(*POSE), "correct": False, **SIGMAS,
+                    "trigger": {"threshold": 3.0, "window": 4, "calibrate": {
+                        "fit": {"a.friction": [0.1, 1.0]}, "apply": True,
+                        "max_predictions": 200, "seed": 0}}},
+        before={"names": ["a"], "poses": rows(*POSE), "correct": False,
+                "trigger": {"threshold": 3.0, "window": 4, "calibrate": {
+                    "fit": {"a.friction": [0.1, 1.0]}, "apply": True}}}),
     "compare-spreads": Case(lambda c: c.compare(["a", "b"], POSE, spread=[0.1, 0.2]),
                             "compare", {"names": ["a", "b"], "poses": tiled(POSE, 2),
                                         "correct": False, "spread": rows(0.1, 0.2), **SIGMAS},
@@ -447,6 +457,12 @@ BAD: dict[str, tuple[Callable[[Client], Any], str, dict[str, Any]]] = {
         "names": ["a"], "wrenches": WRENCH, "duration": -1}}]]), "predict",
         {"horizon": 1.0, "plans": [[{"at": 0.0, "wrenches": {
             "names": ["a"], "wrenches": rows(*WRENCH), "duration": -1.0}}]]}),
+    "trigger-calibrate": (
+        lambda c: c.compare(["a"], POSE, trigger=(3.0, 4), calibrate={
+            "fit": {"a.friction": (0.1, 1)}, "population": 1}),
+        "compare", {"names": ["a"], "poses": rows(*POSE), "trigger": {
+            "threshold": 3.0, "window": 4, "calibrate": {"fit": {"a.friction": [0.1, 1.0]},
+                                                         "population": 1}}}),
     "numpy-nan": (lambda c: c.set_rtf(np.float64("nan")), "set_rtf", {"rtf": math.nan}),
     "trigger": (lambda c: c.compare(["a"], POSE, trigger=(3.0, 0)), "compare",
                 {"names": ["a"], "poses": rows(*POSE), "trigger": {"threshold": 3.0,

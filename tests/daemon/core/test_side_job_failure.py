@@ -11,6 +11,7 @@ import pytest
 
 from galton.daemon.core.calls import Call
 from galton.daemon.core.loop import SimLoop
+from galton.daemon.core.wiring import LoopWiring
 from galton.daemon.engines import create_engine
 from galton.daemon.world.scene import World
 from galton.protocol import ResultCode, SimState, decode_reply, encode_request
@@ -19,8 +20,8 @@ from galton.protocol import ResultCode, SimState, decode_reply, encode_request
 @pytest.fixture
 def loop() -> Iterator[SimLoop]:
     before = sys.getswitchinterval()
-    sim = SimLoop(World(create_engine("mujoco")), "test", lambda sample: None,
-                  lambda event: None, engine_factory=create_engine)
+    sim = SimLoop(World(create_engine("mujoco")),
+                  LoopWiring("test", engine_factory=create_engine))
     yield sim
     for world in sim.side.values():
         world.engine.close()
@@ -44,7 +45,7 @@ def test_a_failing_side_engine_fails_its_job_and_not_the_live_world(loop: SimLoo
     side.engine.step = fail  # type: ignore[method-assign]
     answers = handle(loop, "step", {"count": 100, "world": "side"})
     assert answers == [] and loop.job is not None
-    loop._advance()
+    loop.stepping.advance()
     assert len(answers) == 1
     reply = decode_reply(answers[0])
     assert reply.code == ResultCode.OPERATION_FAILED

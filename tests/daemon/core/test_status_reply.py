@@ -10,6 +10,7 @@ import pytest
 
 from galton.daemon.core.calls import Call
 from galton.daemon.core.loop import SimLoop
+from galton.daemon.core.wiring import LoopWiring
 from galton.daemon.engines import create_engine
 from galton.daemon.world.scene import World
 from galton.protocol import ResultCode, decode_reply, encode_request
@@ -18,8 +19,8 @@ from galton.protocol import ResultCode, decode_reply, encode_request
 @pytest.fixture
 def loop() -> Iterator[SimLoop]:
     before = sys.getswitchinterval()
-    sim = SimLoop(World(create_engine("mujoco")), "test", lambda sample: None,
-                  lambda event: None, engine_factory=create_engine)
+    sim = SimLoop(World(create_engine("mujoco")),
+                  LoopWiring("test", engine_factory=create_engine))
     yield sim
     sim.world.engine.close()
     sys.setswitchinterval(before)

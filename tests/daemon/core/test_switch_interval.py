@@ -8,6 +8,7 @@ from collections.abc import Iterator
 import pytest
 
 from galton.daemon.core.loop import DEFAULT_SWITCH_INTERVAL_S, SHORT_SWITCH_INTERVAL_S, SimLoop
+from galton.daemon.core.wiring import LoopWiring
 from galton.daemon.engines import create_engine
 from galton.daemon.world.scene import World
 
@@ -24,7 +25,7 @@ def keep_switch_interval() -> Iterator[None]:
 def test_the_switch_interval_follows_the_engine(engine: str, expected: float) -> None:
     world = World(create_engine(engine))
     try:
-        SimLoop(world, "test", lambda sample: None, lambda event: None)
+        SimLoop(world, LoopWiring("test"))
         assert sys.getswitchinterval() == pytest.approx(expected)
     finally:
         world.engine.close()

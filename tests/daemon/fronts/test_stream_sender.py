@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import threading
 
-from galton.daemon.world.stream_sender import SampleSender
+from galton.daemon.fronts.stream_sender import SampleSender
 
 WAIT_S = 10.0
 

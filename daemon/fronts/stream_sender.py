@@ -1,4 +1,5 @@
-"""State streams' samples published on a thread of their own (daemon/world/state_streams.py).
+"""The Zenoh front's state stream samples (daemon/world/state_streams.py), put on a thread
+of their own.
 
 Zenoh's put of a 60 kB sample cost the physics thread about as much as reading the poses
 (docs/PERFORMANCE.md, "State streams"); here the physics thread only hands the bytes over.
@@ -11,11 +12,10 @@ from __future__ import annotations
 import logging
 import queue
 import threading
-from collections.abc import Callable
+
+from galton.daemon.core.calls import Publish  # (topic "states/<id>", sample bytes)
 
 log = logging.getLogger(__name__)
-
-Publish = Callable[[str, bytes], None]  # (topic "states/<id>", sample bytes)
 
 
 class SampleSender:
