@@ -343,7 +343,7 @@ def sent_by(case: Case, client: Client, caught: Catching) -> tuple[str, dict[str
 
 
 @pytest.mark.parametrize("name", CASES)
-def test_each_method_sends_the_wire_map_it_always_sent(
+def test_each_method_sends_its_wire_map(
         name: str, catching: tuple[Client, Catching]) -> None:
     case = CASES[name]
     op, args = sent_by(case, *catching)
