@@ -41,7 +41,7 @@ from common import (
 from galton.client import Client
 from galton.daemon.engines import create_engine
 from galton.daemon.ops.joints import get_joint_states
-from galton.daemon.world.scene import World
+from galton.daemon.world.world import World
 from galton.protocol import pack_f64, unpack_f64
 
 KUKA = Path(pybullet_data.getDataPath()) / "kuka_iiwa" / "model.urdf"

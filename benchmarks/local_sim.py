@@ -15,7 +15,7 @@ from typing import Any
 
 from galton.client.sdk.client import Stamp, States
 from galton.daemon.engines import create_engine
-from galton.daemon.world.scene import World
+from galton.daemon.world.world import World
 from galton.protocol import BodyGroup, Capabilities, SimStatus
 
 

@@ -41,7 +41,7 @@ from galton.client.bench.build import ball_group, ball_names, board_groups
 from galton.client.bench.picture import board_camera
 from galton.daemon.engines import create_engine
 from galton.daemon.world.cameras import parse_camera, view_of
-from galton.daemon.world.scene import World
+from galton.daemon.world.world import World
 
 SIZE = (640, 480)
 BALLS = 100

@@ -34,7 +34,7 @@ from galton.client import Client
 from galton.client.bench.daemons import embedded_mesh
 from galton.client.bench.executor import Executor, LocalExecutor
 from galton.client.bench.experiment import ExperimentConfig, run_plan
-from galton.client.bench.pool import PoolExecutor
+from galton.client.bench.pool_executor import PoolExecutor
 from galton.client.bench.ray_executor import RaySettings, ray_executor
 
 TIMEOUT_S = 120.0

@@ -33,7 +33,7 @@ from galton.daemon.engines import ENGINE_CLASSES
 from galton.daemon.fronts import zenoh as zenoh_front
 from galton.daemon.fronts.zenoh import ZenohFront
 from galton.daemon.server import Daemon, DaemonOptions
-from galton.daemon.world.scene import World
+from galton.daemon.world.world import World
 
 BALLS = 20
 INSTANCE = "request-path"

@@ -155,7 +155,7 @@ def sample_in_steps(engine: str, rounds: int) -> dict[str, float]:
     """Median time of one stream sample over that of one step (item 3 of the docstring)."""
     from galton.daemon.engines import create_engine
     from galton.daemon.world import state_streams as streams
-    from galton.daemon.world.scene import World
+    from galton.daemon.world.world import World
 
     world = World(create_engine(engine))
     world.spawn([plane(), spheres([f"b{i:04d}" for i in range(1000)], _grid(1000),

@@ -31,7 +31,7 @@ from galton.daemon.fronts.zenoh import ZenohFront, merged_config
 from galton.daemon.fronts.zenoh_config import listen_endpoints
 from galton.daemon.fronts.zmq import ZmqFront, parse_endpoint
 from galton.daemon.world import checkpoint
-from galton.daemon.world.scene import World
+from galton.daemon.world.world import World
 from galton.protocol import InvalidArgumentError, OperationFailedError
 
 if TYPE_CHECKING:
@@ -127,7 +127,7 @@ class Daemon:
             options.instance, publish=self.fronts.publish,
             telemetry_rate_hz=options.telemetry_rate_hz, engine_factory=create_engine,
             limits=options.limits, polled=self.zmq, snapshot_key=options.snapshot_key,
-            advertised=self.fronts.advertised, client_alive=self.zenoh.client_alive,
+            advertised=self.fronts.advertised, client_alive=self.fronts.client_alive,
             work_guard=((lambda: sigterm_ends_at_once(signals)) if signals is not None
                         else nullcontext),
             checkpoints=checkpoints)
@@ -196,7 +196,7 @@ def _zmq_front(options: DaemonOptions) -> ZmqFront | None:
     security = (ZmqSecurity.load(options.zmq_key, options.users)
                 if options.zmq_key is not None else None)
     return ZmqFront([parse_endpoint(endpoint) for endpoint in options.zmq], options.instance,
-                    security)
+                    security, silence_s=options.limits.zmq_silence_s)
 
 
 def _ros2_front(options: DaemonOptions, zenoh_front: ZenohFront) -> Ros2Front | None:

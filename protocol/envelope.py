@@ -131,6 +131,14 @@ ENVELOPE_FIELDS = frozenset({"v", "op", "args", "client"})
 NOT_IN_CLIENT_ID = frozenset("/*$?#")
 
 
+def is_client_id(value: str) -> bool:
+    """Whether ``value`` may be a client id: a name no id can have is no client's (a
+    ZeroMQ connection's name starts with '@', so that no client can pass for one)."""
+    return 0 < len(value) <= CLIENT_ID_LENGTH and not NOT_IN_CLIENT_ID.intersection(value) \
+        and not value.startswith("@") and value.isprintable() \
+        and not any(c.isspace() for c in value)
+
+
 def _client_id(value: Any) -> str | None:
     """The envelope's client id, an id (issue 46): "*" once opened a stream every client
     would keep alive."""
@@ -139,8 +147,7 @@ def _client_id(value: Any) -> str | None:
     if not isinstance(value, str) or not 0 < len(value) <= CLIENT_ID_LENGTH:
         raise MalformedRequestError(
             f"'client' must be a string of 1-{CLIENT_ID_LENGTH} characters, got {brief(value)}")
-    if NOT_IN_CLIENT_ID.intersection(value) or value.startswith("@") or \
-            not value.isprintable() or any(c.isspace() for c in value):
+    if not is_client_id(value):
         raise InvalidArgumentError(
             f"'client' {brief(value)} is not a client id: it names one liveliness token "
             "galton/_clients/<id>, so it holds no '/', '*', '$', '?', '#' or space and does "

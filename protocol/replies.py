@@ -273,6 +273,9 @@ class StreamReply(Reply, kw_only=True):
     topic: str
     rate: float
     world: str
+    # Over ZeroMQ: the stream ends when its connection sends nothing for this long (any
+    # request keeps it; the SDK sends status); None over Zenoh (the liveliness token).
+    silence_s: float | None = None
 
 
 class StreamClosedReply(Reply, kw_only=True):

@@ -50,7 +50,7 @@ from galton.analysis.board_release import Perturbation, perturbation
 from galton.analysis.board_scoring import assign_bins
 from galton.client.bench.build import ball_group, board_groups
 from galton.daemon.engines import create_engine
-from galton.daemon.world.scene import World
+from galton.daemon.world.world import World
 from galton.protocol import BodyGroup
 
 MAX_FALL_S = 20.0  # a lone ball reaches its bin in about 2.5 s; one caught longer is reported

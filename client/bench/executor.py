@@ -5,7 +5,7 @@ its bins do not depend on where it ran) and returns every record in the plan's o
 calling the hooks as trials start and finish. Three of them:
 
 - ``LocalExecutor`` (this module): one daemon per engine, trial after trial (plain ``bench``);
-- ``PoolExecutor`` (``pool.py``): daemons already running anywhere, one worker thread each;
+- ``PoolExecutor`` (``pool_executor.py``): daemons already running anywhere, a thread each;
 - ``RayExecutor`` (``ray_executor.py``): Ray actors each hosting a daemon of their own.
 
 ``experiment.run_plan`` turns what an executor ran into an ``ExperimentResults`` whose

@@ -214,7 +214,7 @@ def _run_pool(config: ExperimentConfig, connect: list[str] | None,
               journal: Journal | None = None) -> ExperimentResults:
     """The plan over a pool of daemons: a progress row per daemon and one for the whole."""
     from galton.client.bench.daemons import pool_clients
-    from galton.client.bench.pool import PoolExecutor
+    from galton.client.bench.pool_executor import PoolExecutor
     with pool_clients(connect, instances, max(timeout, 30.0), size, config.engines[0],
                       credentials, use_running) as daemons:
         return _run_spread(PoolExecutor(daemons.clients, daemons.hosts), config, quiet,

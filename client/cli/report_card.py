@@ -71,7 +71,7 @@ def report_card(
     from galton.analysis.card_rules import load_rules
     from galton.analysis.errors import WeightsError
     from galton.client.report_card import CardPlan, run_card, write_report_card
-    from galton.client.report_card.pooled import executor_trials, pooled_trials
+    from galton.client.report_card.trial_runners import executor_trials, pool_trials
     refuse_with_ray(ray, **{"--pool": pool})
     try:
         rules = load_rules(weights)  # a bad file fails before anything is measured
@@ -100,7 +100,7 @@ def report_card(
                     executor.update(on_ray.describe())
         if not pool:
             return run_card(chosen or offered_engines(), plan, seed, say=say)
-        with pooled_trials(endpoints, names, max(ctx.obj.timeout, 30.0), say) as (
+        with pool_trials(endpoints, names, max(ctx.obj.timeout, 30.0), say) as (
                 trials_of, members):
             pooled.extend(members)
             return run_card(chosen or offered_engines(), plan, seed, say=say,

@@ -6,6 +6,9 @@ Each must be refused with one typed reply and change nothing, the world must the
 and the daemon must still serve: an accepted one is a finding too (a value past the
 protocol's bounds, docs/protocol.md "Bounds", must never reach an engine).
 ``run_extremes`` runs them; tests/conformance/test_extremes.py runs them on every engine.
+The extreme poses and twists (``extreme_poses``, ``extreme_twists``) are sent through the ROS
+2 front too, as SpawnEntity's initial_pose and SetEntityState's state, on every engine
+(tests/daemon/fronts/test_ros2_extremes.py).
 """
 
 from __future__ import annotations
@@ -43,8 +46,11 @@ ARM = ('<robot name="xarm"><link name="base"><inertial><mass value="1"/>'
 HUGE = (1e308, -1e308, 1e200, 1e155)
 TINY = (5e-324, 1e-300)
 # Quaternions (qx qy qz qw) no engine may be handed: huge, zero, tiny.
-BAD_QUATERNIONS = ((0.0, 1e308, 0.0, 1.0), (1e155, 0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 0.0),
-                   (1e-200, 0.0, 0.0, 0.0), (0.0, 0.0, 1e20, 1.0))
+Vector = tuple[float, float, float]
+Quaternion = tuple[float, float, float, float]
+BAD_QUATERNIONS: tuple[Quaternion, ...] = (
+    (0.0, 1e308, 0.0, 1.0), (1e155, 0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 0.0),
+    (1e-200, 0.0, 0.0, 0.0), (0.0, 0.0, 1e20, 1.0))
 
 
 @dataclass
@@ -87,21 +93,34 @@ def _sphere(**changes: Any) -> dict[str, Any]:
     return {"groups": [group]}
 
 
-def pose_cases(op: str, base: dict[str, Any], key: str) -> Iterator[tuple[str, dict[str, Any]]]:
-    """``base`` with its pose ``key`` at each bad quaternion and each huge position."""
+def extreme_poses() -> Iterator[tuple[Vector, Quaternion]]:
+    """(position, quaternion qx qy qz qw) pairs no engine may be handed: each bad
+    quaternion at a plain position, each huge position with the identity."""
     for quaternion in BAD_QUATERNIONS:
-        yield op, {**base, key: _pose(quaternion=quaternion)}
+        yield (0.0, 0.0, 1.0), quaternion
     for huge in HUGE:
-        yield op, {**base, key: _pose(position=(huge, 0.0, 1.0))}
+        yield (huge, 0.0, 1.0), (0.0, 0.0, 0.0, 1.0)
+
+
+def extreme_twists() -> Iterator[tuple[float, float, float, float, float, float]]:
+    """Twists (vx vy vz wx wy wz) past every bound: each huge value, linear and angular."""
+    for huge in HUGE:
+        yield huge, 0.0, 0.0, 0.0, 0.0, 0.0
+        yield 0.0, 0.0, 0.0, 0.0, 0.0, huge
+
+
+def pose_cases(op: str, base: dict[str, Any], key: str) -> Iterator[tuple[str, dict[str, Any]]]:
+    """``base`` with its pose ``key`` at each extreme pose."""
+    for position, quaternion in extreme_poses():
+        yield op, {**base, key: _pose(position, quaternion)}
 
 
 def cases(ball: str, joints: list[str]) -> Iterator[tuple[str, dict[str, Any]]]:
     """Every extreme case, as (operation, args): ``ball`` a free body, ``joints`` the arm's
     scalar joints."""
-    for quaternion in BAD_QUATERNIONS:
-        yield "spawn", _sphere(poses=_pose(quaternion=quaternion))
+    for position, quaternion in extreme_poses():
+        yield "spawn", _sphere(poses=_pose(position, quaternion))
     for huge in HUGE:
-        yield "spawn", _sphere(poses=_pose(position=(huge, 0.0, 1.0)))
         yield "spawn", _sphere(twists=_row(huge, 0, 0, 0, 0, 0))
         yield "spawn", _sphere(twists=_row(0, 0, 0, 0, huge, 0))
         yield "spawn", _sphere(mass=huge)
@@ -111,9 +130,9 @@ def cases(ball: str, joints: list[str]) -> Iterator[tuple[str, dict[str, Any]]]:
         yield "spawn", _sphere(mass=1.0, inertia=[tiny, tiny, tiny])
     yield from pose_cases("set_states", {"names": [ball]}, "poses")
     yield from pose_cases("compare", {"names": [ball]}, "poses")
+    for twist in extreme_twists():
+        yield "set_states", {"names": [ball], "twists": _row(*twist)}
     for huge in HUGE:
-        yield "set_states", {"names": [ball], "twists": _row(huge, 0, 0, 0, 0, 0)}
-        yield "set_states", {"names": [ball], "twists": _row(0, 0, 0, 0, 0, huge)}
         yield "apply_wrench", {"names": [ball], "wrenches": _row(huge, 0, 0, 0, 0, 0)}
         yield "apply_wrench", {"names": [ball], "wrenches": _row(0, 0, 0, 0, huge, 0)}
         yield "apply_wrench", {"names": [ball], "wrenches": _row(1, 0, 0, 0, 0, 0),

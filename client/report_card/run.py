@@ -21,7 +21,7 @@ from galton.analysis.report_card import CardResults
 from galton.client.bench.experiment import ExperimentConfig
 from galton.client.laws import choose, run_engine
 from galton.client.report_card import calibrated, measure
-from galton.client.report_card.pooled import TrialRunner, local_trials
+from galton.client.report_card.trial_runners import TrialRunner, local_trials
 from galton.client.sdk.client import Client
 from galton.client.sdk.embedded import EmbeddedDaemon
 from galton.protocol import RemoteError

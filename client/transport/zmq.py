@@ -6,12 +6,19 @@ timed out is recognised and dropped. ``ZMQ_IMMEDIATE`` keeps a socket unwritable
 connection is complete: whether the daemon is reachable is read off the socket itself, with
 no liveliness token (ZeroMQ has none) -- a connection that is up means "busy", one that is
 down means "unreachable".
+
+A state stream belongs to the connection that opened it, and the daemon ends it when that
+connection sends nothing for the stream's ``silence_s`` (a stopped process keeps its
+connection open): ``stream_states`` and ``close_stream`` go over one DEALER of their own,
+shared under a lock, on which a thread sends a ``status`` a third of that apart while a
+stream is open (docs/protocol.md, "ZeroMQ").
 """
 
 from __future__ import annotations
 
 import itertools
 import logging
+import math
 import os
 import threading
 import time
@@ -31,13 +38,15 @@ from galton.protocol import (
     decode_reply,
     encode_request,
 )
-from galton.protocol.errors import ClientClosedError, brief
+from galton.protocol.errors import ClientClosedError, GaltonError, brief
 
 log = logging.getLogger("galton.client")
 
 CONNECT_TIMEOUT_S = 1.0  # how long a new socket may take to connect before "unreachable"
 SUBSCRIBER_POLL_MS = 100
 HELLO_TIMEOUT_S = 10.0  # a subscription waits this long for the daemon's greeting
+STREAM_OPS = frozenset({"stream_states", "close_stream"})  # sent on the streams' DEALER
+KEEPALIVES_PER_SILENCE = 3  # keepalives sent within each stream's silence_s
 
 
 def check_endpoint(endpoint: str) -> str:
@@ -72,6 +81,7 @@ class ZmqTransport:
         self._sockets: list[zmq.Socket[bytes]] = []
         self._subscriptions: list[ZmqSubscription] = []
         self._telemetry_endpoint: str | None = None
+        self._keepalive = StreamKeepalive(self._connect)
         try:
             self._socket()  # fail now, as a Zenoh client does, if nothing answers there
         except (DaemonUnreachableError, AccessDeniedError, InvalidArgumentError):
@@ -82,29 +92,37 @@ class ZmqTransport:
         """This thread's DEALER (connecting it the first time)."""
         socket: zmq.Socket[bytes] | None = getattr(self._local, "socket", None)
         if socket is None:
-            socket = self.context.socket(zmq.DEALER)
-            socket.setsockopt(zmq.IMMEDIATE, 1)
-            socket.setsockopt(zmq.LINGER, 0)
-            if self.keys is not None:
-                self.keys.apply(socket)
-            monitor = socket.get_monitor_socket(HANDSHAKE_EVENTS)
-            try:
-                socket.connect(self.endpoint)
-            except zmq.ZMQError as error:  # e.g. tcp://nohost: no port, or not a number
-                socket.close(linger=0)
-                monitor.close(linger=0)
-                raise InvalidArgumentError(
-                    f"{brief(self.endpoint)} is not a ZeroMQ endpoint ZeroMQ can connect to "
-                    f"({error}): give zmq+ipc:///path/to/socket or zmq+tcp://HOST:PORT"
-                ) from None
-            with self._lock:
-                self._sockets.append(socket)
-            self._local.socket = socket
-            try:
-                wait_for_handshake(socket, monitor, self.endpoint, self.connect_timeout)
-            finally:
-                socket.disable_monitor()
-                monitor.close(linger=0)
+            socket = self._connect(lambda made: setattr(self._local, "socket", made))
+        return socket
+
+    def _connect(self, keep: Callable[[zmq.Socket[bytes]], None] | None = None
+                 ) -> zmq.Socket[bytes]:
+        """A new DEALER, connected (or DaemonUnreachableError), held for ``close`` and
+        handed to ``keep`` before the handshake is awaited (a late one may still connect)."""
+        socket = self.context.socket(zmq.DEALER)
+        socket.setsockopt(zmq.IMMEDIATE, 1)
+        socket.setsockopt(zmq.LINGER, 0)
+        if self.keys is not None:
+            self.keys.apply(socket)
+        monitor = socket.get_monitor_socket(HANDSHAKE_EVENTS)
+        try:
+            socket.connect(self.endpoint)
+        except zmq.ZMQError as error:  # e.g. tcp://nohost: no port, or not a number
+            socket.close(linger=0)
+            monitor.close(linger=0)
+            raise InvalidArgumentError(
+                f"{brief(self.endpoint)} is not a ZeroMQ endpoint ZeroMQ can connect to "
+                f"({error}): give zmq+ipc:///path/to/socket or zmq+tcp://HOST:PORT"
+            ) from None
+        with self._lock:
+            self._sockets.append(socket)
+        if keep is not None:
+            keep(socket)
+        try:
+            wait_for_handshake(socket, monitor, self.endpoint, self.connect_timeout)
+        finally:
+            socket.disable_monitor()
+            monitor.close(linger=0)
         return socket
 
     def _wait_connected(self, socket: zmq.Socket[bytes]) -> None:
@@ -123,11 +141,13 @@ class ZmqTransport:
             self._wait_connected(socket)
             socket.send_multipart(frames, zmq.NOBLOCK)
 
-    def exchange(self, what: str, payload: bytes, timeout: float) -> bytes:
-        """Send one request and wait for its reply's bytes; a client closed meanwhile (by
-        another thread) raises ClientClosedError."""
+    def exchange(self, what: str, payload: bytes, timeout: float,
+                 socket: zmq.Socket[bytes] | None = None) -> bytes:
+        """Send one request (on ``socket``, else this thread's DEALER) and wait for its
+        reply's bytes; a client closed meanwhile (by another thread) raises
+        ClientClosedError."""
         try:
-            return self._exchange(what, payload, timeout)
+            return self._exchange(what, payload, timeout, socket)
         except zmq.Again:  # connected a moment ago, gone before the send
             raise DaemonUnreachableError(f"{what}: the daemon at {self.endpoint} went away "
                                          "(no connection)") from None
@@ -137,8 +157,9 @@ class ZmqTransport:
                     f"{what}: the client was closed while its request waited") from None
             raise DaemonUnreachableError(f"{what}: ZeroMQ failed: {error}") from error
 
-    def _exchange(self, what: str, payload: bytes, timeout: float) -> bytes:
-        socket = self._socket()
+    def _exchange(self, what: str, payload: bytes, timeout: float,
+                  socket: zmq.Socket[bytes] | None = None) -> bytes:
+        socket = self._socket() if socket is None else socket
         tag = next(self._tags).to_bytes(8, "little")
         self._send(socket, [tag, payload])
         deadline = time.monotonic() + timeout
@@ -157,6 +178,9 @@ class ZmqTransport:
 
     def request(self, op: str, args: dict[str, Any] | None, timeout: float,
                 client: str | None) -> Reply:
+        if op in STREAM_OPS:
+            return self._keepalive.request(op, args, lambda socket: decode_reply(
+                self.exchange(op, encode_request(op, args, client), timeout, socket)))
         return decode_reply(self.exchange(op, encode_request(op, args, client), timeout))
 
     def send_raw(self, op: str, payload: bytes, timeout: float) -> list[bytes]:
@@ -195,11 +219,82 @@ class ZmqTransport:
         """Stop the subscriptions' threads (each closes its own socket: closing it under
         its thread's poll crashed that thread), then close every other socket and the
         context."""
+        self._keepalive.stop()
         with self._lock:
             subscriptions, self._subscriptions = self._subscriptions, []
         for subscription in subscriptions:
             subscription.undeclare()
         self.context.destroy(linger=0)
+
+
+class StreamKeepalive:
+    """The DEALER that opens and closes state streams, and the thread that keeps its
+    connection heard while a stream is open: a ``status`` when nothing went for a third of
+    the shortest ``silence_s`` (fire and forget: its replies are read off before the next)."""
+
+    def __init__(self, connect: Callable[[Callable[[zmq.Socket[bytes]], None]],
+                                         zmq.Socket[bytes]]) -> None:
+        self._connect = connect
+        self._lock = threading.Lock()  # the socket is used by one thread at a time
+        self._socket: zmq.Socket[bytes] | None = None
+        self._streams: set[str] = set()
+        self._period = math.inf
+        self._last_sent = 0.0
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+
+    def request(self, op: str, args: dict[str, Any] | None,
+                exchange: Callable[[zmq.Socket[bytes]], Reply]) -> Reply:
+        """``stream_states`` or ``close_stream`` through ``exchange`` on the streams'
+        DEALER; the streams open are counted from the replies."""
+        with self._lock:
+            if self._socket is None:
+                self._connect(self._keep)
+            assert self._socket is not None
+            reply = exchange(self._socket)
+            self._last_sent = time.monotonic()
+            if reply.ok and op == "stream_states":
+                self._streams.add(str(reply.result["stream"]))
+                silence = reply.result.get("silence_s")
+                if isinstance(silence, int | float) and silence > 0:
+                    self._period = min(self._period, silence / KEEPALIVES_PER_SILENCE)
+                    self._start()
+            elif op == "close_stream" and args is not None:
+                self._streams.discard(str(args.get("stream")))
+        return reply
+
+    def _keep(self, socket: zmq.Socket[bytes]) -> None:
+        self._socket = socket
+
+    def _start(self) -> None:
+        if self._thread is None:
+            self._thread = threading.Thread(target=self._run, name="galton-zmq-keepalive",
+                                            daemon=True)
+            self._thread.start()
+
+    def _run(self) -> None:
+        while not self._stop.wait(self._period):
+            try:
+                self._ping()
+            except (zmq.ZMQError, GaltonError) as error:  # closing, or the daemon went
+                log.debug("stream keepalive: %s", error)
+
+    def _ping(self) -> None:
+        with self._lock:
+            socket = self._socket
+            if socket is None or not self._streams or self._stop.is_set() or \
+                    time.monotonic() - self._last_sent < self._period * 0.9:
+                return
+            while socket.poll(0):  # the replies to the last pings
+                socket.recv_multipart()
+            socket.send_multipart([b"", encode_request("status", None, None)], zmq.NOBLOCK)
+            self._last_sent = time.monotonic()
+
+    def stop(self) -> None:
+        """Stop the thread (before the context closes its socket)."""
+        self._stop.set()
+        if self._thread is not None:  # a ping takes microseconds; a request holding the
+            self._thread.join(1.0)  # lock ends when the context closes (the thread returns)
 
 
 class ZmqSubscription:

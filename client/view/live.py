@@ -22,7 +22,7 @@ import viser.uplot
 from galton.client.sdk.client import Client
 from galton.client.sdk.drawn_shapes import shapes_for_drawing
 from galton.client.sdk.streams import StateSample, StateStream
-from galton.client.view.scene import WorldDrawing, framing
+from galton.client.view.drawing import WorldDrawing, framing
 from galton.protocol import AccessDeniedError, GaltonError, RequestTimeoutError
 
 log = logging.getLogger("galton.client")

@@ -11,7 +11,7 @@ import numpy as np
 import viser
 
 from galton.client.sdk.recording import Recording, recordings_in
-from galton.client.view.scene import WorldDrawing, framing
+from galton.client.view.drawing import WorldDrawing, framing
 
 FRAME_PERIOD_S = 1 / 30
 TIME_STEP_S = 0.001  # the time slider's resolution (sim time)

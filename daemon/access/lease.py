@@ -77,16 +77,16 @@ class Lease:
         return None if holder is None else holder.name
 
 
-def check(loop: AccessContext, call: Call, op: Operation) -> None:
+def check(ctx: AccessContext, call: Call, op: Operation) -> None:
     """Refuse a request that would change or step a world while another client holds
     control (called before its handler runs, so a refused request changed nothing)."""
-    holder = loop.lease.holder
+    holder = ctx.lease.holder
     if holder is None or not (op.mutates or op.steps) or holder.sent(call):
         return
     raise _held(holder, f"{op.name} from {_asker(call)} would change the world and is refused")
 
 
-def take_control(loop: AccessContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
+def take_control(ctx: AccessContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
     """Take the lease, or keep it (taking it again is no change); refused while another
     client holds it."""
     if call.client is None and call.peer is None:
@@ -96,42 +96,42 @@ def take_control(loop: AccessContext, call: Call, request: rq.NoArgs) -> dict[st
         raise InvalidArgumentError(
             f"client {call.client!r} names no single liveliness token galton/_clients/<id>: "
             "control is tied to that token, so the id may hold no '/', '*', '$', '?' or '#'")
-    if call.peer is None and loop.client_alive is not None and call.client is not None \
-            and not loop.client_alive(call.client):
+    if call.peer is None and ctx.client_alive is not None and call.client is not None \
+            and not ctx.client_alive(call.client):
         # A made-up id would hold control for ever: nothing would ever say it has gone.
         raise InvalidArgumentError(
             f"client {call.client!r} holds no liveliness token galton/_clients/"
             f"{call.client}: control is tied to that token (the SDK declares it)")
-    holder = loop.lease.holder
+    holder = ctx.lease.holder
     if holder is not None:
         if holder.sent(call):
             return {"controller": holder.name, "taken": False}
         raise _held(holder, "take_control is refused")
     taker = Holder(call.client, call.peer)
-    loop.lease.holder = taker
-    _announce(loop, taker, "taken")
+    ctx.lease.holder = taker
+    _announce(ctx, taker, "taken")
     return {"controller": taker.name, "taken": True}
 
 
-def release_control(loop: AccessContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
+def release_control(ctx: AccessContext, call: Call, request: rq.NoArgs) -> dict[str, Any]:
     """Give the lease back (its holder only); with nobody holding it, nothing to do."""
-    holder = loop.lease.holder
+    holder = ctx.lease.holder
     if holder is None:
         return {"controller": None, "released": False}
     if not holder.sent(call):
         raise _held(holder, "release_control is refused: only the holder releases control")
-    loop.lease.holder = None
-    _announce(loop, holder, "released")
+    ctx.lease.holder = None
+    _announce(ctx, holder, "released")
     return {"controller": None, "released": True}
 
 
-def client_gone(loop: AccessContext, who: str) -> None:
+def client_gone(ctx: AccessContext, who: str) -> None:
     """A client's token went, or a ZeroMQ connection closed: if it held control, the lease
     ends now."""
-    holder = loop.lease.holder
+    holder = ctx.lease.holder
     if holder is not None and holder.gone_with(who):
-        loop.lease.holder = None
-        _announce(loop, holder, "lost")
+        ctx.lease.holder = None
+        _announce(ctx, holder, "lost")
 
 
 def _held(holder: Holder, what: str) -> ControlHeldError:
@@ -149,5 +149,5 @@ def _asker(call: Call) -> str:
     return "an anonymous request (no 'client' in its envelope)"
 
 
-def _announce(loop: AccessContext, holder: Holder, change: str) -> None:
-    loop.emit({"kind": "control", "holder": holder.name, "change": change})
+def _announce(ctx: AccessContext, holder: Holder, change: str) -> None:
+    ctx.emit({"kind": "control", "holder": holder.name, "change": change})

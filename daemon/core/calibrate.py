@@ -25,8 +25,8 @@ from galton.daemon.core.observations import (
     sample_times,
     start_twists,
 )
-from galton.daemon.world.scene import World
 from galton.daemon.world.snapshot import clone_of, decode, world_from
+from galton.daemon.world.world import World
 from galton.protocol import (
     IncorrectStateError,
     InvalidArgumentError,
@@ -175,61 +175,61 @@ def latin_hypercube(count: int, dimensions: int, rng: np.random.Generator) -> np
     return points
 
 
-def calibrate(loop: PredictContext, call: Call, request: Calibrate) -> None:
+def calibrate(ctx: PredictContext, call: Call, request: Calibrate) -> None:
     """Start a calibration job (answered when its search ends)."""
-    if loop.job is not None:
+    if ctx.job is not None:
         raise IncorrectStateError("another step request is still running; wait for it")
-    if loop.engine_factory is None:
+    if ctx.engine_factory is None:
         raise OperationFailedError("this daemon cannot make engines")
-    source = loop.world_for(request)
+    source = ctx.world_for(request)
     names = check_names(request.names, "calibrate.names")
     times = sample_times(request.times)
     poses = sample_poses(request.poses, len(times), len(names))
-    start = _start(loop, source, request, names, times, poses)
+    start = _start(ctx, source, request, names, times, poses)
     try:
-        run = _calibration(loop, start, request, names, times, poses)
+        run = _calibration(ctx, start, request, names, times, poses)
     except Exception:
         start.engine.close()
         raise
-    run.emit = lambda event: loop.emit({**event, "world": source.name})
+    run.emit = lambda event: ctx.emit({**event, "world": source.name})
     if request.apply:
-        run.on_result = lambda values: _apply(loop, source, run.params, values)
+        run.on_result = lambda values: _apply(ctx, source, run.params, values)
     total = run.max_predictions * run.seen.horizon
     job = StepJob(call, total, total, world=start, scratch=True, driver=run)
     job.source = source
-    loop.start_job(job)
+    ctx.start_job(job)
 
 
-def _calibration(loop: PredictContext, start: World, request: Calibrate, names: list[str],
+def _calibration(ctx: PredictContext, start: World, request: Calibrate, names: list[str],
                  times: np.ndarray, poses: np.ndarray) -> Calibration:
     start.require_known(names)
     params = parameters(start, request.fit)
     seen = observation(names, times, poses, start.engine.timestep)
-    limit = loop.limits.max_steps  # the whole search's steps, as one step request's
+    limit = ctx.limits.max_steps  # the whole search's steps, as one step request's
     if seen.horizon * request.max_predictions > limit:
         raise InvalidArgumentError(
             f"calibrate: {request.max_predictions} predictions of {seen.horizon} steps "
             f"would take {seen.horizon * request.max_predictions} steps; at most {limit} "
             "(ask for fewer max_predictions, or observe a shorter time)",
             {"max_steps": limit})
-    return Calibration(start, params, seen, loop.limits, request)
+    return Calibration(start, params, seen, ctx.limits, request)
 
 
-def _start(loop: PredictContext, source: World, request: Calibrate, names: list[str],
+def _start(ctx: PredictContext, source: World, request: Calibrate, names: list[str],
            times: np.ndarray, poses: np.ndarray) -> World:
     """The world every candidate starts from: a snapshot slot's, or a copy of ``source``
     with the observed bodies set to the first sample (and its twists)."""
     name = f"{source.name}:calibration"
     if request.slot is not None:  # a slot kept in memory has no blob: its twin's copy
-        factory = loop.engine_factory
+        factory = ctx.engine_factory
         assert factory is not None
-        return loop.slots.world_of(loop.slots.get(request.slot), name, lambda blob: world_from(
-            decode(blob, loop.limits, loop.snapshot_key), factory, name, loop.limits))
+        return ctx.slots.world_of(ctx.slots.get(request.slot), name, lambda blob: world_from(
+            decode(blob, ctx.limits, ctx.snapshot_key), factory, name, ctx.limits))
     source.require_known(names)
     twists = (start_twists(times, poses, source.engine.timestep) if request.twists is None
               else decode_twists(request.twists, len(names), "calibrate.twists"))
     source.verify()
-    copy = clone_of(source, name, loop.limits)
+    copy = clone_of(source, name, ctx.limits)
     try:
         copy.set_states(names, poses[0].copy(), twists)
     except Exception:
@@ -238,9 +238,9 @@ def _start(loop: PredictContext, source: World, request: Calibrate, names: list[
     return copy
 
 
-def _apply(loop: PredictContext, world: World, params: list[Parameter],
+def _apply(ctx: PredictContext, world: World, params: list[Parameter],
            values: dict[str, float]) -> bool:
     apply_values(world, params, values)
-    loop.emit({"kind": "scene", "op": "calibrate", "world": world.name,
+    ctx.emit({"kind": "scene", "op": "calibrate", "world": world.name,
                "step": world.step_index})
     return True

@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 
 if TYPE_CHECKING:
     from galton.daemon.world.futures import FutureSet
-    from galton.daemon.world.scene import World
+    from galton.daemon.world.world import World
 
 
 class Sampler(Protocol):

@@ -29,7 +29,7 @@ from galton.daemon.core.fit_params import (
 )
 from galton.daemon.core.limits import Limits
 from galton.daemon.world.futures import FutureSet, FutureSpec
-from galton.daemon.world.scene import World
+from galton.daemon.world.world import World
 from galton.protocol import PhysicsError
 
 CHUNK_WALL_S = 0.002  # as a prediction's chunk (daemon/core/side_jobs.py)

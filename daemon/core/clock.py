@@ -7,7 +7,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, NamedTuple
 
 if TYPE_CHECKING:
-    from galton.daemon.world.scene import World
+    from galton.daemon.world.world import World
 
 
 class WorldClock(NamedTuple):

@@ -22,9 +22,9 @@ if TYPE_CHECKING:
     from galton.daemon.core.limits import Limits
     from galton.daemon.core.monitor import Pacer, RtfWindow
     from galton.daemon.core.step_queue import StepQueue
-    from galton.daemon.world.scene import World
     from galton.daemon.world.slots import SnapshotSlots
     from galton.daemon.world.state_streams import StateStreams
+    from galton.daemon.world.world import World
     from galton.protocol import RemoteError, SimState, SimStatus
     from galton.protocol.requests import Args
 
@@ -77,7 +77,7 @@ class Clock(Protocol):
         """The status reply's values now."""
 
     def refresh_clock(self) -> None:
-        """Take the world's clock into the atomic status snapshot."""
+        """Take the world's clock into the status values (read at once by status)."""
 
     def tune_switch_interval(self) -> None:
         """Set Python's switch interval for the live world's engine."""
@@ -133,7 +133,7 @@ class AccessContext(Events, Protocol):
     lease: Lease
 
     @property
-    def client_alive(self) -> Callable[[str], bool] | None: ...
+    def client_alive(self) -> Callable[[str], bool | None] | None: ...
 
 
 class StreamContext(WorldChoice, Protocol):
@@ -150,7 +150,10 @@ class StreamContext(WorldChoice, Protocol):
     def instance(self) -> str: ...
 
     @property
-    def client_alive(self) -> Callable[[str], bool] | None: ...
+    def client_alive(self) -> Callable[[str], bool | None] | None: ...
+
+    @property
+    def limits(self) -> Limits: ...
 
 
 class PredictContext(Worlds, Jobs, Protocol):

@@ -18,7 +18,7 @@ from galton.daemon.engines.base import (
     FEATURE_UPDATE_RESTITUTION,
     Engine,
 )
-from galton.daemon.world.scene import World
+from galton.daemon.world.world import World
 from galton.protocol import (
     BodyProperties,
     FeatureUnsupportedError,

@@ -12,7 +12,7 @@ import numpy as np
 
 from galton.daemon.ops import joints as ops_joints
 from galton.daemon.world.futures import Action, FutureSpec
-from galton.daemon.world.scene import World
+from galton.daemon.world.world import World
 from galton.protocol import InvalidArgumentError
 from galton.protocol import requests as rq
 

@@ -10,7 +10,7 @@ import numpy as np
 from galton.daemon.core.calls import StepJob
 from galton.daemon.core.context import JobEnd
 from galton.daemon.ops.joints import joint_states
-from galton.daemon.world.scene import World
+from galton.daemon.world.world import World
 from galton.protocol import NotFoundError, RemoteError, pack_f64
 from galton.protocol.errors import brief
 
@@ -49,18 +49,18 @@ def job_result(world: World, job: StepJob) -> dict[str, Any]:
     return result
 
 
-def answer_if_reads_gone(loop: JobEnd) -> None:
+def answer_if_reads_gone(ctx: JobEnd) -> None:
     """A step job whose read entities (or joints) were deleted is answered now with
     NOT_FOUND, not after its steps (a prediction's scratch world cannot lose them)."""
-    job = loop.job
+    job = ctx.job
     if job is None or job.scratch:
         return
-    world = job.world or loop.world
+    world = job.world or ctx.world
     gone = [name for name in job.read or () if name not in world.entities]
     gone += [name for name in job.read_joints or () if name not in world.joints.by_name]
     if gone:
-        loop.end_job()
-        loop.reply_error(job.call, NotFoundError(
+        ctx.end_job()
+        ctx.reply_error(job.call, NotFoundError(
             f"{brief(gone[0])}, which this step request reads, was deleted after "
             f"{job.done} of {job.total} steps", {"missing": gone[:100],
                                                  "steps_done": job.done}))

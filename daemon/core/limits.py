@@ -35,6 +35,9 @@ class Limits:
     max_rays: int = 1_000_000  # rays one raycast request casts
     max_steps: int = 1_000_000_000  # steps one step / run_until request may take
     max_reply_bytes: int = 64 * MIB  # any one reply (daemon/core/reply_limit.py)
+    # Seconds a ZeroMQ connection holding state streams may send nothing before they end
+    # (it may have stopped without closing; the SDK sends a status a third of this apart).
+    zmq_silence_s: float = 10.0
     max_position: float = 1e6  # metres from the origin beyond which a world has diverged
     max_speed: float = 1e5  # m/s (or rad/s) beyond which a world has diverged
     # Native threads a prediction's futures step on (engines that release the GIL): the

@@ -37,9 +37,9 @@ from galton.daemon.core.step_queue import StepBusyError, StepQueue
 from galton.daemon.core.stepping import Stepping
 from galton.daemon.core.wiring import LoopWiring
 from galton.daemon.ops.handlers import HANDLERS
-from galton.daemon.world.scene import World
 from galton.daemon.world.slots import SnapshotSlots
 from galton.daemon.world.state_streams import StateStreams
+from galton.daemon.world.world import World
 from galton.protocol import (
     DecodeLimits,
     NotFoundError,
@@ -110,7 +110,7 @@ class SimLoop:
         self._event_seq = 0
         self._stopping = False
         self.rtf = 0.0
-        # The last status reply with the request and snapshot it answered (loop_status.py).
+        # The last status reply with the request and status reading it answered (loop_status.py).
         self.status_reply: tuple[bytes, tuple[Any, ...], bytes] | None = None
         self.clock: WorldClock = STOPPED_AT_ZERO  # read by status on any thread
         self.refresh_clock()
@@ -134,7 +134,7 @@ class SimLoop:
         return self.wiring.snapshot_key
 
     @property
-    def client_alive(self) -> Callable[[str], bool] | None:
+    def client_alive(self) -> Callable[[str], bool | None] | None:
         return self.wiring.client_alive
 
     @property
@@ -425,7 +425,7 @@ class SimLoop:
 
     def status(self) -> SimStatus:
         """Safe to call from any thread: reads only values swapped atomically."""
-        return loop_status.status_from(self, loop_status.snapshot(self))
+        return loop_status.status_from(self, loop_status.read_status(self))
 
     def handle_readonly(self, call: Call) -> None:
         """Answer a status request on the caller's thread (daemon/core/loop_status.py)."""

@@ -14,12 +14,12 @@ from galton.daemon.core import imagining
 from galton.daemon.core.calls import Call, StepJob
 from galton.daemon.core.context import PredictContext
 from galton.daemon.core.reply_limit import VALUE_BYTES, reads_size, require_room
+from galton.daemon.ops import entities as ops
 from galton.daemon.ops import joints as ops_joints
-from galton.daemon.ops import scene as ops
 from galton.daemon.world import futures as fs
 from galton.daemon.world.futures import FutureSet
-from galton.daemon.world.scene import World
 from galton.daemon.world.snapshot import clone_of, decode, world_from
+from galton.daemon.world.world import World
 from galton.protocol import (
     IncorrectStateError,
     InvalidArgumentError,
@@ -87,36 +87,36 @@ class PredictSampler:
         return out
 
 
-def predict(loop: PredictContext, call: Call, request: rq.Predict) -> None:
+def predict(ctx: PredictContext, call: Call, request: rq.Predict) -> None:
     """Start a prediction job (answered when its horizon is done)."""
-    if loop.job is not None:
+    if ctx.job is not None:
         raise IncorrectStateError("another step request is still running; wait for it")
-    if loop.engine_factory is None:
+    if ctx.engine_factory is None:
         raise OperationFailedError("this daemon cannot make engines")
     horizon = request.horizon
-    source = loop.world_for(request)
+    source = ctx.world_for(request)
     slot = request.slot
     name = f"{source.name}:prediction"
     if slot is None:
         source.verify()
-        copy = clone_of(source, name, loop.limits)
+        copy = clone_of(source, name, ctx.limits)
     else:
-        factory = loop.engine_factory
-        copy = loop.slots.world_of(loop.slots.get(slot), name, lambda blob: world_from(
-            decode(blob, loop.limits, loop.snapshot_key), factory, name, loop.limits))
+        factory = ctx.engine_factory
+        copy = ctx.slots.world_of(ctx.slots.get(slot), name, lambda blob: world_from(
+            decode(blob, ctx.limits, ctx.snapshot_key), factory, name, ctx.limits))
     try:
-        job = _job(loop, call, copy, horizon, request)
+        job = _job(ctx, call, copy, horizon, request)
     except Exception:
         copy.engine.close()
         raise
     job.source = source
-    loop.start_job(job)
+    ctx.start_job(job)
 
 
-def _job(loop: PredictContext, call: Call, copy: World, horizon: float,
+def _job(ctx: PredictContext, call: Call, copy: World, horizon: float,
          request: rq.Predict) -> StepJob:
     dt = copy.engine.timestep
-    steps = horizon_steps(horizon, dt, loop.limits.max_steps)
+    steps = horizon_steps(horizon, dt, ctx.limits.max_steps)
     every = 1 if request.every is None else sample_period(request.every, dt, steps)
     read = _names(request.read, "read")
     joints = _names(request.read_joints, "read_joints")
@@ -125,11 +125,11 @@ def _job(loop: PredictContext, call: Call, copy: World, horizon: float,
     if joints is not None:
         copy.joints.require_scalar(joints, "predict.read_joints")
     count = imagining.future_count(request)
-    _require_reply_room(loop.limits.max_reply_bytes, count * (steps // every + 1), read,
+    _require_reply_room(ctx.limits.max_reply_bytes, count * (steps // every + 1), read,
                         joints)
     _apply_changes(copy, request)
     specs, seed = imagining.specs(copy, request, count, steps, dt)
-    futures = FutureSet.fork(copy, specs, loop.limits, loop.limits.future_threads,
+    futures = FutureSet.fork(copy, specs, ctx.limits, ctx.limits.future_threads,
                              first=copy)
     try:
         sampler = PredictSampler(min(every, steps), read, joints, futures, request.score,

@@ -30,10 +30,10 @@ def chunk_wall(job: StepJob) -> float:
     return FUTURES_CHUNK_WALL_S if several else CHUNK_WALL_S
 
 
-def run_chunk(loop: JobEnd, job: StepJob) -> None:
+def run_chunk(ctx: JobEnd, job: StepJob) -> None:
     """One chunk of a side job's steps; answers it when done, at rest, or failed."""
     if job.driver is not None:
-        run_driven(loop, job)
+        run_driven(ctx, job)
         return
     world = job.world
     assert world is not None
@@ -55,19 +55,19 @@ def run_chunk(loop: JobEnd, job: StepJob) -> None:
         if finished or resting:
             (job.futures or world).verify()
     except RemoteError as error:  # a diverged side world fails its job, not the daemon
-        end(loop, job, error)
+        end(ctx, job, error)
         return
     except Exception as exc:  # nor does its engine failing pause the live world
         log.exception("a side world's steps failed")
-        end(loop, job, OperationFailedError(f"the engine failed: {type(exc).__name__}: "
+        end(ctx, job, OperationFailedError(f"the engine failed: {type(exc).__name__}: "
                                             f"{brief(str(exc))}"))
         return
     if finished or resting:
-        loop.end_job()
-        loop.finish_job(job)
+        ctx.end_job()
+        ctx.finish_job(job)
 
 
-def run_driven(loop: JobEnd, job: StepJob) -> None:
+def run_driven(ctx: JobEnd, job: StepJob) -> None:
     """One chunk of a driven side job (calibrate's: one prediction); answers it when its
     driver has finished, or failed."""
     assert job.driver is not None
@@ -75,23 +75,23 @@ def run_driven(loop: JobEnd, job: StepJob) -> None:
         job.remaining = max(0, job.remaining - job.driver.advance())
         finished = job.driver.finished
     except RemoteError as error:
-        end(loop, job, error)
+        end(ctx, job, error)
         return
     except Exception as exc:
         log.exception("a driven side job failed")
-        end(loop, job, OperationFailedError(f"the engine failed: {type(exc).__name__}: "
+        end(ctx, job, OperationFailedError(f"the engine failed: {type(exc).__name__}: "
                                             f"{brief(str(exc))}"))
         return
     if finished:
-        loop.end_job()
-        loop.finish_job(job)
+        ctx.end_job()
+        ctx.finish_job(job)
 
 
-def end(loop: JobEnd, job: StepJob, error: RemoteError) -> None:
+def end(ctx: JobEnd, job: StepJob, error: RemoteError) -> None:
     """Answer a side job with an error and release what it held."""
-    if loop.job is job:
-        loop.end_job()
+    if ctx.job is job:
+        ctx.end_job()
     if isinstance(error, PhysicsError):
         error.details["steps_done"] = job.done
     job.release()
-    loop.reply_error(job.call, error)
+    ctx.reply_error(job.call, error)

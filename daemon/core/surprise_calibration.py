@@ -16,7 +16,7 @@ from galton.daemon.core.calibrate import calibrate
 from galton.daemon.core.calls import Call
 from galton.daemon.core.context import PredictContext
 from galton.daemon.core.fit_params import parameters
-from galton.daemon.world.scene import World
+from galton.daemon.world.world import World
 from galton.protocol import RemoteError, pack_f64
 from galton.protocol import requests as rq
 from galton.protocol.envelope import decode_reply

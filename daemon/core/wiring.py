@@ -48,9 +48,10 @@ class LoopWiring:
     snapshot_key: bytes | None = None  # galton-daemon --snapshot-key: blobs' seal
     # What ``capabilities`` adds from the fronts (ZeroMQ's endpoints), asked each time.
     advertised: Callable[[], dict[str, Any]] = _nothing
-    # Whether a client is still there (its Zenoh liveliness token): take_control and
-    # stream_states tie what they give to it. None: nobody to ask (embedded, no session).
-    client_alive: Callable[[str], bool] | None = None
+    # Whether a client is still there, as the fronts know it (Fronts.client_alive: Zenoh's
+    # liveliness token, a ZeroMQ connection's last word): take_control and stream_states
+    # tie what they give to it. None: nobody to ask (embedded, no session).
+    client_alive: Callable[[str], bool | None] | None = None
     # Wraps each scene-changing request (spawn, delete, load_model...): galton-daemon makes
     # SIGTERM end the process at once inside it (server.sigterm_ends_at_once).
     work_guard: Callable[[], AbstractContextManager[None]] = nullcontext

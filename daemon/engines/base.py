@@ -16,13 +16,16 @@ import contextlib
 import os
 import sys
 from abc import ABC, abstractmethod
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, ClassVar, NamedTuple
 
 import numpy as np
 
+from galton.daemon.engines.params import ParamSpec
 from galton.protocol import (
+    BODY_SHAPES,
+    PROTOCOL_VERSION,
     BodyGroup,
     BodyProperties,
     Capabilities,
@@ -62,6 +65,18 @@ KNOWN_FEATURES = (FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDA
                   FEATURE_TARGET_EFFORT, FEATURE_WRENCH, FEATURE_SNAPSHOT, FEATURE_RENDER,
                   FEATURE_RAYCAST, FEATURE_CONTACTS, FEATURE_SPAWN_INERTIA,
                   FEATURE_MODEL_SHAPES)
+# What every engine does: the abstract methods below (spawn, delete, set_states, update,
+# load_model).
+CORE_FEATURES = (FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDATE_MASS,
+                 FEATURE_UPDATE_FRICTION, FEATURE_UPDATE_RESTITUTION, FEATURE_UPDATE_RGBA,
+                 FEATURE_LOAD_MODEL, FEATURE_STATIC_POSE)
+# The optional features, each with the method an engine overrides to have it.
+FEATURE_METHODS = {FEATURE_JOINTS: "get_joint_states", FEATURE_JOINT_TARGETS: "set_joint_targets",
+                   FEATURE_WRENCH: "set_wrenches", FEATURE_SNAPSHOT: "snapshot",
+                   FEATURE_RENDER: "render", FEATURE_RAYCAST: "raycast",
+                   FEATURE_CONTACTS: "contacts", FEATURE_MODEL_SHAPES: "shapes"}
+TARGET_MODE_FEATURES = {"position": FEATURE_TARGET_POSITION,
+                        "velocity": FEATURE_TARGET_VELOCITY, "effort": FEATURE_TARGET_EFFORT}
 # One collision shape: kind (a BODY_SHAPES name or "mesh"), half sizes as SIZE_LAYOUT
 # (a mesh: the half sizes of a box around it), its pose in its body's frame (7 wide).
 Shape = tuple[str, tuple[float, ...], tuple[float, ...]]
@@ -84,6 +99,18 @@ class CameraView:
     near: float
     far: float
     outputs: tuple[str, ...]  # among IMAGE_OUTPUTS
+
+
+@dataclass(frozen=True)
+class Target:
+    """A target held on one joint (``set_joint_targets``; mode "none" is never held: it is
+    the absence of one)."""
+
+    mode: str
+    target: float
+    kp: float
+    kd: float
+    max_effort: float
 
 
 class RayHits(NamedTuple):
@@ -115,10 +142,47 @@ class Engine(ABC):
     # the GIL needs a short switch interval so that status requests (answered on Zenoh's
     # threads) get in between its steps; one that releases it runs faster without.
     releases_gil_while_stepping: ClassVar[bool] = False
+    # What capabilities() tells, declared by each engine (its params.py and models.py).
+    param_specs: ClassVar[Mapping[str, ParamSpec]]
+    model_formats: ClassVar[tuple[str, ...]]
+    body_shapes: ClassVar[tuple[str, ...]] = tuple(BODY_SHAPES)
+    # The joint target modes set_joint_targets holds (where the engine overrides it).
+    target_modes: ClassVar[tuple[str, ...]] = tuple(TARGET_MODE_FEATURES)
+    # Whether spawn honours a group's own ``inertia`` (FEATURE_SPAWN_INERTIA).
+    spawn_inertia: ClassVar[bool] = False
 
+    @classmethod
+    def features(cls) -> tuple[str, ...]:
+        """What this engine does, derived once here from what it implements: the core every
+        engine has, each optional method it overrides, the target modes and spawn inertia
+        it declares; in KNOWN_FEATURES order."""
+        have = set(CORE_FEATURES)
+        have.update(feature for feature, method in FEATURE_METHODS.items()
+                    if getattr(cls, method) is not getattr(Engine, method))
+        if FEATURE_JOINT_TARGETS in have:
+            have.update(TARGET_MODE_FEATURES[mode] for mode in cls.target_modes)
+        if cls.spawn_inertia:
+            have.add(FEATURE_SPAWN_INERTIA)
+        return tuple(f for f in KNOWN_FEATURES if f in have)
+
+    @classmethod
     @abstractmethod
+    def engine_version(cls) -> str:
+        """The version of the simulator this engine drives."""
+
+    def render_backend(self) -> str | None:
+        """How the engine renders headless (egl, osmesa, tinyrenderer); None: no render."""
+        return None
+
     def capabilities(self) -> Capabilities:
-        """Engine name and version, body shapes, model formats, features, parameters."""
+        """Engine name and version, body shapes, model formats, features, parameters: all
+        from the engine's declarations (``features`` from what it overrides)."""
+        return Capabilities(
+            engine=self.name, engine_version=self.engine_version(),
+            protocol_version=PROTOCOL_VERSION, body_shapes=self.body_shapes,
+            model_formats=self.model_formats, features=self.features(),
+            params={name: spec.describe() for name, spec in self.param_specs.items()},
+            render_backend=self.render_backend())
 
     @abstractmethod
     def spawn(self, groups: Sequence[BodyGroup]) -> None:

@@ -13,6 +13,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from galton.daemon.engines.geometry import volume as primitive_volume
+
 DEFAULT_DENSITY = 1000.0  # kg/m³, MuJoCo's
 PRIMITIVES = ("sphere", "box", "capsule", "cylinder", "ellipsoid")
 Attrs = dict[str, str]
@@ -32,15 +34,10 @@ def volume(geom: Attrs) -> float | None:
     kind, size = _shape(geom)
     if kind is None:
         return None
-    r = size[0]
-    if kind == "sphere":
-        return 4 / 3 * math.pi * r**3
-    if kind == "box":
-        return 8 * size[0] * size[1] * size[2]
     if kind == "ellipsoid":
         return 4 / 3 * math.pi * size[0] * size[1] * size[2]
-    caps = 4 / 3 * math.pi * r**3 if kind == "capsule" else 0.0
-    return math.pi * r**2 * 2 * size[1] + caps
+    widths = {"sphere": 1, "capsule": 2, "cylinder": 2, "box": 3}
+    return primitive_volume(kind, tuple(size[:widths[kind]]))
 
 
 def inertial(geoms: Sequence[Attrs], angles: Angles) -> Attrs | None:

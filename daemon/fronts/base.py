@@ -33,6 +33,11 @@ class Front(Protocol):
     def advertised(self) -> dict[str, Any]:
         """What ``capabilities`` tells clients about this front (empty: nothing)."""
 
+    def client_alive(self, client: str) -> bool | None:
+        """Whether a client (an owner of state streams, a lease holder) is still there, as
+        this front knows it: True (alive), False (gone: its token went, or its connection
+        closed or fell silent), None (not a client of this front, or it cannot tell)."""
+
     def withdraw(self) -> None:
         """Stop being found (the first step of a shutdown); pending calls still get answers."""
 
@@ -60,6 +65,15 @@ class Fronts:
         for front in self.fronts:
             found.update(front.advertised())
         return found
+
+    def client_alive(self, client: str) -> bool | None:
+        """The first front's answer that knows the client (a client is one front's: a
+        Zenoh client id, a ZeroMQ connection's name), else None."""
+        for front in self.fronts:
+            alive = front.client_alive(client)
+            if alive is not None:
+                return alive
+        return None
 
     def withdraw(self) -> None:
         for front in self.fronts:

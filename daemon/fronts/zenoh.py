@@ -21,6 +21,7 @@ from galton.daemon.fronts.memory import after_request_of
 from galton.daemon.fronts.stream_sender import SampleSender
 from galton.daemon.fronts.zenoh_config import file_says, merge
 from galton.protocol import Keys
+from galton.protocol.envelope import is_client_id
 from galton.protocol.keys import (
     CLIENTS_PATTERN,
     client_from_token_key,
@@ -71,10 +72,13 @@ class ZenohFront:
         self._queryable = self.session.declare_queryable(self.keys.control_all, self._on_query)
         self._token = self.session.liveliness().declare_token(self.keys.alive)
 
-    def client_alive(self, client: str) -> bool:
+    def client_alive(self, client: str) -> bool | None:
         """Whether the client's liveliness token is there: seen by the subscriber (no wait),
         else asked once (a token declared a moment ago may not have reached us yet; the get
-        holds the physics thread, under a millisecond on loopback)."""
+        holds the physics thread, under a millisecond on loopback). None for a name that is
+        no client id (another front's client, e.g. a ZeroMQ connection): not asked."""
+        if not is_client_id(client):  # another front's client, whatever tokens say
+            return None
         if client in self._live_clients:
             return True
         replies = self.session.liveliness().get(client_token_key(client),
@@ -83,8 +87,8 @@ class ZenohFront:
 
     def _on_client_token(self, sample: zenoh.Sample) -> None:
         client = client_from_token_key(str(sample.key_expr))
-        if client is None:
-            return
+        if client is None or not is_client_id(client):  # no ZeroMQ connection's name: its
+            return  # going is its own front's to say
         if sample.kind == zenoh.SampleKind.PUT:
             self._live_clients.add(client)
         else:

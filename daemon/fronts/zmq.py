@@ -9,6 +9,9 @@ come over Zenoh are queued as before and wake the poll through a pipe.
 
 A long step is tied to the connection it came on: a socket monitor reports each closed
 connection by its file descriptor, which the first request on it mapped to the peer.
+A connection that sends nothing for ``silence_s`` (the ``zmq_silence_s`` limit) is gone
+for ``client_alive``: the core ends its state streams (a stopped client's connection stays
+open; the SDK sends a ``status`` now and then while it holds streams).
 """
 
 from __future__ import annotations
@@ -54,7 +57,8 @@ MAX_QUEUED_PER_CONNECTION = 64
 # No ZMTP heartbeats (a liveness check of each connection): with libzmq 4.3.5 a heartbeat
 # timer firing after an I/O error aborts the process ("Assertion failed: !_io_error
 # (src/stream_engine_base.cpp:310)"), seen under the test suite's load (issue 46). A stopped
-# client keeps its connection, and so at most its share of the streams and step queue.
+# client keeps its connection, and so its place in the step queue; its state streams end
+# when it has been silent for ``silence_s`` (an application-level keepalive: ``client_alive``).
 LOOPBACK = "127.0.0.1"
 
 
@@ -95,8 +99,9 @@ class ZmqFront:
     sockets, the monitor of each ROUTER and the pipe that wakes the poll."""
 
     def __init__(self, endpoints: list[str], instance: str,
-                 security: ZmqSecurity | None = None) -> None:
+                 security: ZmqSecurity | None = None, *, silence_s: float) -> None:
         self.context = zmq.Context()
+        self.silence_s = silence_s
         self.security = security
         self.authenticator = (start_authenticator(self.context, security)
                               if security is not None else None)
@@ -105,6 +110,12 @@ class ZmqFront:
         # Per ROUTER: the peer identity each connection's file descriptor carries, and back.
         self.peers: list[dict[int, bytes]] = []
         self.known: list[dict[bytes, int]] = []
+        # Per ROUTER: when each peer was last heard from (its last message's receive), and
+        # when the ROUTER was last read empty: a peer is silent only if, with everything
+        # sent to us read, we had not heard from it for silence_s (a physics thread held by
+        # a long request has not read the pings waiting meanwhile).
+        self.heard: list[dict[bytes, float]] = []
+        self.drained: list[float] = []
         self.control: list[str] = []
         self.telemetry: list[str] = []
         self.files: dict[str, tuple[int, int]] = {}  # our ipc socket files: (device, inode)
@@ -155,6 +166,8 @@ class ZmqFront:
         self.monitors.append(router.get_monitor_socket(zmq.EVENT_DISCONNECTED))
         self.peers.append({})
         self.known.append({})
+        self.heard.append({})
+        self.drained.append(0.0)
         bound = router.getsockopt_string(zmq.LAST_ENDPOINT)
         self.control.append(bound)
         self._own(bound)
@@ -224,12 +237,28 @@ class ZmqFront:
             for index in range(len(self.monitors)):
                 self._take_closed(index, gone, items)
         for index, router in enumerate(self.routers):
-            while _has_input(router):
-                call = self._call(index, router, gone, items)
+            while True:
+                if not _has_input(router):
+                    self.drained[index] = now
+                    break
+                call = self._call(index, router, gone, items, now)
                 if call is not None:
                     items.append(call)
                     break
         return items
+
+    def client_alive(self, client: str) -> bool | None:
+        """For a connection's name (``peer_name``): False once it has closed, or sent
+        nothing for ``silence_s`` while the daemon was reading; True else. None for a name
+        that is none of ours (a Zenoh client id)."""
+        found = parse_peer_name(client)
+        if found is None or not 0 <= found[0] < len(self.routers):
+            return None
+        index, identity = found
+        heard = self.heard[index].get(identity)
+        if heard is None:
+            return False  # closed (or never seen): its close ends what it held
+        return self.drained[index] - heard <= self.silence_s
 
     def _take_closed(self, index: int, gone: Callable[[str], Task],
                      items: list[Call | Task]) -> None:
@@ -240,10 +269,11 @@ class ZmqFront:
             identity = self.peers[index].pop(int(event["value"]), None)
             if identity is not None:
                 self.known[index].pop(identity, None)
+                self.heard[index].pop(identity, None)
                 items.append(gone(peer_name(index, identity)))
 
     def _call(self, index: int, router: zmq.Socket[bytes], gone: Callable[[str], Task],
-              items: list[Call | Task]) -> Call | None:
+              items: list[Call | Task], now: float) -> Call | None:
         """A Call for the message waiting on ``router``; a message that is no request is
         dropped, as ZeroMQ cannot address an answer to a malformed envelope."""
         first = frame = _recv(router, 0, False)  # the peer's identity: it knows its fd
@@ -252,6 +282,8 @@ class ZmqFront:
             frame = _recv(router, 0, False)
             frames.append(frame.bytes)
         routing, payload = frames[:-1], frames[-1]
+        if frames[0] in self.known[index]:
+            self.heard[index][frames[0]] = now  # any message counts, a malformed one too
         if len(frames) < 2 or len(frames) - 1 > MAX_FRAMES or any(
                 len(part) > MAX_ROUTING_FRAME_BYTES for part in routing[1:]):
             return None
@@ -262,6 +294,7 @@ class ZmqFront:
             fd = int(first.get(_SRCFD))
             self.peers[index][fd] = routing[0]
             self.known[index][routing[0]] = fd
+            self.heard[index][routing[0]] = now
 
         def respond(data: bytes) -> None:
             # A peer whose queue is full, or which has gone, loses it (as ROUTER would):
@@ -325,9 +358,23 @@ def _has_input(socket: zmq.Socket[bytes]) -> bool:
     return bool(_get(socket, _EVENTS) & _POLLIN)
 
 
+PEER_PREFIX = "@zmq:"  # '@': no client id starts so, so no Zenoh client passes for one
+
+
 def peer_name(index: int, identity: bytes) -> str:
-    """The name a connection goes by in the loop (a step job's client)."""
-    return f"zmq:{index}:{identity.hex()}"
+    """The name a connection goes by in the loop (a step job's client, a stream's owner)."""
+    return f"{PEER_PREFIX}{index}:{identity.hex()}"
+
+
+def parse_peer_name(name: str) -> tuple[int, bytes] | None:
+    """The ROUTER index and peer identity of a ``peer_name``, else None."""
+    if not name.startswith(PEER_PREFIX):
+        return None
+    index, _, identity = name[len(PEER_PREFIX):].partition(":")
+    try:
+        return int(index), bytes.fromhex(identity)
+    except ValueError:
+        return None
 
 
 def _remove_socket_file(endpoint: str, identity: tuple[int, int]) -> None:

@@ -1,6 +1,6 @@
 """Binding a handler to its operation where the handler is written, so that a new
 operation edits no central table: ``@handles("op")`` marks a handler
-``(context, call, request) -> result``; ``@scene_op("op")`` marks a scene operation
+``(ctx, call, request) -> result``; ``@scene_op("op")`` marks a scene operation
 ``(world, request) -> result``, which handlers.py wraps as it wraps the others (the world
 the request names; a ``scene`` event when the operation mutates).
 
@@ -27,7 +27,7 @@ class Binding(NamedTuple):
 
 
 def handles(operation: str) -> Callable[[F], F]:
-    """Mark a function ``(context, call, request) -> result`` as ``operation``'s handler."""
+    """Mark a function ``(ctx, call, request) -> result`` as ``operation``'s handler."""
     return _mark(Binding(operation, scene=False))
 
 

@@ -9,10 +9,11 @@ access/, the state streams and pose comparison of world/), an ops/ module holds 
 adapter that names the operation.
 
 Time-control operations (daemon/ops/time_control.py) act on the loop; scene operations
-(daemon/ops/scene.py) act on its World and, when they change it, publish a ``scene`` event. The
-one ``fast`` operation, status, is answered on the transport's thread from the loop's
-atomic snapshot (``SimLoop.handle_readonly``) and never reaches this table's callers; it is
-bound here too, so that a status that does reach the physics thread is answered the same.
+(daemon/ops/entities.py) act on its World and, when they change it, publish a ``scene``
+event. The one ``fast`` operation, status, is answered on the transport's thread from one
+reading of the loop's status values (``SimLoop.handle_readonly``) and never reaches this
+table's callers; it is bound here too, so that a status that does reach the physics thread
+is answered the same.
 """
 
 from __future__ import annotations
@@ -24,9 +25,9 @@ from typing import Any
 from galton.daemon.core.calls import Call
 from galton.daemon.core.context import OpContext, SceneContext
 from galton.daemon.ops import control, look_ahead, streams, time_control, worlds
+from galton.daemon.ops import entities as ops
 from galton.daemon.ops import joints as ops_joints
 from galton.daemon.ops import perception as ops_perception
-from galton.daemon.ops import scene as ops
 from galton.daemon.ops.binding import binding_of
 from galton.protocol.operations import OPERATIONS
 from galton.protocol.requests import Args
@@ -79,21 +80,21 @@ def collect(modules: Iterable[ModuleType]) -> dict[str, Handler]:
 HANDLERS: dict[str, Handler] = collect(OP_MODULES)
 
 
-# What the transport's thread can answer from the loop's snapshot (SimLoop.handle_readonly).
-ANSWERED_FROM_SNAPSHOT = frozenset({"status"})
+# What the transport's thread answers from the loop's status values (SimLoop.handle_readonly).
+ANSWERED_ON_TRANSPORT_THREAD = frozenset({"status"})
 
 
 def check_bindings(handlers: dict[str, Handler]) -> None:
     """Every declared operation has a handler and every handler a declaration; the
-    operations declared fast are those the snapshot can answer."""
+    operations declared fast are those the transport's thread answers."""
     unbound = sorted(set(OPERATIONS) - set(handlers))
     undeclared = sorted(set(handlers) - set(OPERATIONS))
     fast = {name for name, op in OPERATIONS.items() if op.fast}
-    if unbound or undeclared or fast != ANSWERED_FROM_SNAPSHOT:
+    if unbound or undeclared or fast != ANSWERED_ON_TRANSPORT_THREAD:
         raise RuntimeError(
             f"operations without a handler: {unbound}; handlers without a declaration in "
             f"protocol/operations.py: {undeclared}; declared fast: {sorted(fast)}, answered "
-            f"from the snapshot: {sorted(ANSWERED_FROM_SNAPSHOT)}")
+            f"on the transport's thread: {sorted(ANSWERED_ON_TRANSPORT_THREAD)}")
 
 
 check_bindings(HANDLERS)

@@ -13,7 +13,7 @@ import numpy as np
 
 from galton.daemon.core.reply_limit import reads_size, require_room
 from galton.daemon.ops.binding import scene_op
-from galton.daemon.world.scene import World
+from galton.daemon.world.world import World
 from galton.protocol import InvalidArgumentError, pack_f64
 from galton.protocol import requests as rq
 from galton.protocol.model import (

@@ -14,7 +14,7 @@ from galton.daemon.core.calls import Call
 from galton.daemon.core.context import PredictContext
 from galton.daemon.ops.binding import handles
 from galton.daemon.world import pose_compare
-from galton.daemon.world.scene import World
+from galton.daemon.world.world import World
 from galton.protocol import requests as rq
 from galton.protocol.operations import Calibrate
 

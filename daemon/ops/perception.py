@@ -12,7 +12,7 @@ import numpy as np
 from galton.daemon.core.reply_limit import RAW_PIXEL_BYTES, RAY_BYTES, require_room
 from galton.daemon.ops.binding import scene_op
 from galton.daemon.world.cameras import Camera, parse_camera, view_of
-from galton.daemon.world.scene import World
+from galton.daemon.world.world import World
 from galton.protocol import InvalidArgumentError, NotFoundError, ResourceLimitError, pack_f64
 from galton.protocol import requests as rq
 from galton.protocol.errors import brief

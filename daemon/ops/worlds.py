@@ -17,9 +17,9 @@ from galton.daemon.core.context import WorldsContext
 from galton.daemon.core.reply_limit import require_room
 from galton.daemon.ops.binding import handles
 from galton.daemon.world import states
-from galton.daemon.world.scene import World
 from galton.daemon.world.slots import Slot
 from galton.daemon.world.snapshot import clone_of, decode, encode, snapshot_of, world_from
+from galton.daemon.world.world import World
 from galton.protocol import (
     InvalidArgumentError,
     NameNotUniqueError,

@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 
 from galton.daemon.engines.base import IMAGE_OUTPUTS, CameraView
-from galton.daemon.world.scene import World
+from galton.daemon.world.world import World
 from galton.protocol import InvalidArgumentError
 from galton.protocol.errors import brief
 from galton.protocol.model import check_name, check_type, finite_number, integer_in

@@ -17,8 +17,8 @@ from pathlib import Path
 
 from galton.daemon.core.limits import Limits
 from galton.daemon.engines.base import Engine
-from galton.daemon.world.scene import World
 from galton.daemon.world.snapshot import decode, encode, snapshot_of, world_from
+from galton.daemon.world.world import World
 from galton.protocol import GaltonError
 
 log = logging.getLogger("galton.daemon")

@@ -22,8 +22,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from galton.daemon.core.limits import Limits
-from galton.daemon.world.scene import World
 from galton.daemon.world.snapshot import clone_of
+from galton.daemon.world.world import World
 from galton.protocol import BodyProperties
 
 Action = Callable[[World], None]

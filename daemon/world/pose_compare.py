@@ -8,8 +8,8 @@ from typing import Any
 
 import numpy as np
 
-from galton.daemon.world.scene import World
 from galton.daemon.world.surprise import Sample
+from galton.daemon.world.world import World
 from galton.protocol import InvalidArgumentError, pack_f64
 from galton.protocol import requests as rq
 from galton.protocol.model import (

@@ -16,8 +16,8 @@ from dataclasses import dataclass
 
 from galton.daemon.core.limits import Limits
 from galton.daemon.world import states
-from galton.daemon.world.scene import World
 from galton.daemon.world.snapshot import clone_of
+from galton.daemon.world.world import World
 from galton.protocol import NotFoundError, ResourceLimitError
 from galton.protocol.errors import brief, did_you_mean
 

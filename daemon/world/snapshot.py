@@ -19,7 +19,7 @@ import numpy as np
 from galton.daemon.core.limits import Limits
 from galton.daemon.engines.base import Engine
 from galton.daemon.world import snapshot_checks as checks
-from galton.daemon.world.scene import Entity, Mesh, World, frozen_mesh
+from galton.daemon.world.world import Entity, Mesh, World, frozen_mesh
 from galton.protocol import (
     POSE_WIDTH,
     TARGET_MODES,

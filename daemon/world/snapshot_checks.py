@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from galton.daemon.world.scene import World
+from galton.daemon.world.world import World
 from galton.protocol import BODY_SHAPES, EntityInfo, InvalidArgumentError, RemoteError
 from galton.protocol.errors import brief
 from galton.protocol.model import check_name

@@ -3,9 +3,13 @@ a client asked (``stream_states``), beside telemetry, on every front that carrie
 
 A stream belongs to the client that opened it (its liveliness token over Zenoh, its
 connection over ZeroMQ) and ends when that client goes, on ``close_stream``, or when the
-side world it watches is deleted. Samples are built on the physics thread between chunks of
-steps and handed to publishers that drop rather than wait (Zenoh's ``DROP`` congestion
-control, a non-blocking ZeroMQ send): a slow subscriber never slows the world.
+side world it watches is deleted. Besides the fronts' word that a client went, the owners
+are asked of the fronts every LIVENESS_PERIOD_S (``client_alive``): a ZeroMQ connection
+silent for ``zmq_silence_s`` counts as gone, though a stopped process keeps it open.
+
+Samples are built on the physics thread between chunks of steps and handed to publishers
+that drop rather than wait (Zenoh's ``DROP`` congestion control, a non-blocking ZeroMQ
+send): a slow subscriber never slows the world.
 
 A sample is cheap for the physics thread (docs/PERFORMANCE.md, "State streams"): while its
 world holds the same entities a stream reuses its names, packed once, and the engine's pose
@@ -16,6 +20,7 @@ share one read; the Zenoh front puts samples on a thread of its own
 
 from __future__ import annotations
 
+import logging
 import math
 import secrets
 import time
@@ -28,7 +33,7 @@ import numpy as np
 
 from galton.daemon.core.calls import Call, Publish
 from galton.daemon.core.context import StreamContext
-from galton.daemon.world.scene import World, canonical_quaternions
+from galton.daemon.world.world import World, canonical_quaternions
 from galton.protocol import InvalidArgumentError, Keys, NotFoundError, ResourceLimitError
 from galton.protocol import requests as rq
 from galton.protocol.arrays import pack_f64
@@ -42,6 +47,9 @@ MAX_STREAMS_PER_CLIENT = 8
 NO_OWNER = ("a state stream belongs to a client, and ends when it goes: the request needs "
             "a 'client' id in its envelope (the SDK sends one)")
 CLIENT_GONE = "its client went"  # the ``ended`` of a stream whose client went
+LIVENESS_PERIOD_S = 0.25  # how often the streams' owners are asked of the fronts
+
+log = logging.getLogger("galton.daemon")
 
 
 @dataclass
@@ -83,26 +91,28 @@ class StateStreams:
         self.publish = publish
         self.streams: dict[str, StateStream] = {}
         self.next_due = math.inf
+        self.next_liveness = 0.0
 
-    def open(self, loop: StreamContext, call: Call, request: rq.StreamStates) -> dict[str, Any]:
+    def open(self, ctx: StreamContext, call: Call, request: rq.StreamStates) -> dict[str, Any]:
         """Open a stream for the request's client; its first sample is due at once."""
         rate = request.rate
         names = request.names
-        world = loop.world_for(request)
+        world = ctx.world_for(request)
         if names is not None:
             world.require_known(names)
-        owner = _owner(loop, call)
+        owner = _owner(ctx, call)
         self._require_room(owner)
         named = request.world
         stream = StateStream(secrets.token_hex(8), owner,
-                             named if isinstance(named, str) and world is not loop.world
+                             named if isinstance(named, str) and world is not ctx.world
                              else None,
                              tuple(names) if names is not None else None, 1.0 / rate,
                              time.monotonic())
         self.streams[stream.stream_id] = stream
         self.next_due = min(self.next_due, stream.next_due)
-        return {"stream": stream.stream_id, "key": f"{Keys(loop.instance).prefix}/{stream.topic}",
-                "topic": stream.topic, "rate": rate, "world": world.name}
+        return {"stream": stream.stream_id, "key": f"{Keys(ctx.instance).prefix}/{stream.topic}",
+                "topic": stream.topic, "rate": rate, "world": world.name,
+                "silence_s": ctx.limits.zmq_silence_s if call.peer is not None else None}
 
     def _require_room(self, owner: str) -> None:
         """RESOURCE_LIMIT past the pool, or past this client's share of it (docs/protocol.md,
@@ -136,21 +146,37 @@ class StateStreams:
         for stream in [s for s in self.streams.values() if s.owner == owner]:
             self._end(stream, CLIENT_GONE)
 
-    def publish_due(self, loop: StreamContext, now: float) -> None:
-        """Publish a sample of every stream that is due, and schedule each one's next."""
+    def end_gone_owners(self, ctx: StreamContext) -> None:
+        """End the streams of every owner a front knows to be gone (not those no front can
+        tell of): the fronts' word comes as a task, but a silent ZeroMQ connection is found
+        only by asking."""
+        if ctx.client_alive is None:
+            return
+        for owner in {stream.owner for stream in self.streams.values()}:
+            if ctx.client_alive(owner) is False:
+                log.warning("the state streams of %s end: its client has gone (or, over "
+                            "ZeroMQ, sent nothing for %g s)", owner, ctx.limits.zmq_silence_s)
+                self.owner_gone(owner)
+
+    def publish_due(self, ctx: StreamContext, now: float) -> None:
+        """Publish a sample of every stream that is due, and schedule each one's next;
+        first, now and then, end those of owners gone (streams are due at least 1 Hz)."""
+        if now >= self.next_liveness:
+            self.next_liveness = now + LIVENESS_PERIOD_S
+            self.end_gone_owners(ctx)
         shared: dict[tuple[int, int, tuple[str, ...] | None], bytes] = {}
         for stream in list(self.streams.values()):
             if now < stream.next_due:
                 continue
             stream.next_due = max(stream.next_due + stream.period, now)
-            self._sample(loop, stream, shared)
+            self._sample(ctx, stream, shared)
         self._reschedule()
 
-    def _sample(self, loop: StreamContext, stream: StateStream,
+    def _sample(self, ctx: StreamContext, stream: StateStream,
                 shared: dict[tuple[int, int, tuple[str, ...] | None], bytes]) -> None:
         """One sample; ``shared`` holds the poses this round already read, by world and
         names, so that streams of the same world read it once."""
-        world = loop.world if stream.world is None else loop.side.get(stream.world)
+        world = ctx.world if stream.world is None else ctx.side.get(stream.world)
         if world is None:
             self._end(stream, f"world {stream.world!r} was deleted")
             return
@@ -162,11 +188,11 @@ class StateStreams:
         if poses is None:
             poses = shared[key] = _pose_bytes(world, reading)
         stream.seq += 1
-        live = world is loop.world
+        live = world is ctx.world
         header = {"stream": stream.stream_id, "seq": stream.seq, "world": world.name,
                   "step": world.step_index, "sim_time": world.sim_time,
-                  "state": loop.state.value if live else "paused",
-                  "rtf": loop.rtf if live else 0.0, "poses": poses}
+                  "state": ctx.state.value if live else "paused",
+                  "rtf": ctx.rtf if live else 0.0, "poses": poses}
         self._send_bytes(stream, _pack_sample(header, reading.packed_names))
 
     def _end(self, stream: StateStream, reason: str = "") -> None:
@@ -239,11 +265,11 @@ def _caller(call: Call) -> str | None:
     return call.peer if call.peer is not None else call.client
 
 
-def _owner(loop: StreamContext, call: Call) -> str:
+def _owner(ctx: StreamContext, call: Call) -> str:
     owner = _caller(call)
     if owner is None:
         raise InvalidArgumentError(NO_OWNER)
-    if call.peer is None and loop.client_alive is not None and not loop.client_alive(owner):
+    if call.peer is None and ctx.client_alive is not None and not ctx.client_alive(owner):
         # A made-up id would keep its stream for ever: nothing would say it has gone.
         raise InvalidArgumentError(
             f"client {owner!r} holds no liveliness token galton/_clients/{owner}: a state "
@@ -251,11 +277,11 @@ def _owner(loop: StreamContext, call: Call) -> str:
     return owner
 
 
-def stream_states(loop: StreamContext, call: Call, request: rq.StreamStates) -> dict[str, Any]:
+def stream_states(ctx: StreamContext, call: Call, request: rq.StreamStates) -> dict[str, Any]:
     """The ``stream_states`` operation (docs/protocol.md, "State streams")."""
-    return loop.streams.open(loop, call, request)
+    return ctx.streams.open(ctx, call, request)
 
 
-def close_stream(loop: StreamContext, call: Call, request: rq.CloseStream) -> dict[str, Any]:
+def close_stream(ctx: StreamContext, call: Call, request: rq.CloseStream) -> dict[str, Any]:
     """The ``close_stream`` operation."""
-    return loop.streams.close(call, request)
+    return ctx.streams.close(call, request)

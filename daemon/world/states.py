@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from galton.daemon.world.scene import World
+from galton.daemon.world.world import World
 from galton.protocol import JointInfo
 
 # What a kept state costs beside the engine's part, counted against max_snapshot_bytes.

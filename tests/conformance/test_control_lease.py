@@ -184,7 +184,7 @@ def test_take_control_needs_an_identity(sim: Client, other: Client) -> None:
         return
     assert code == ResultCode.OK
     holder = sim.status().controller
-    assert holder is not None and holder.startswith("zmq:")
+    assert holder is not None and holder.startswith("@zmq:")
     with pytest.raises(ControlHeldError, match=holder):
         sim.step(1)
     other.close()  # the connection control was taken on closes

@@ -45,10 +45,10 @@ def test_a_breach_is_seen(tmp_path: Path) -> None:
         "from typing import TYPE_CHECKING\n"
         "from galton.daemon.core.calls import Call\n"
         "if TYPE_CHECKING:\n    from galton.daemon.core.loop import SimLoop\n"
-        "def f() -> None:\n    import galton.daemon.world.scene\n")
+        "def f() -> None:\n    import galton.daemon.world.world\n")
     assert breaches(tmp_path / "fronts") == [
         "fronts/bad.py imports galton.daemon.core.loop.SimLoop",
-        "fronts/bad.py imports galton.daemon.world.scene"]
+        "fronts/bad.py imports galton.daemon.world.world"]
 
 
 # The loop itself: built by the composition root; loop_status.py is the loop's own telemetry

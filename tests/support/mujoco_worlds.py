@@ -91,14 +91,14 @@ SLEEP_BOOKS = ("tree_asleep", "tree_awake", "body_awake", "body_awake_ind",
 
 
 def carried(data: Any) -> dict[str, np.ndarray]:
-    """What a snapshot carries of an MjData: its float arrays and its sleep books."""
+    """What a snapshot carries of an MjData: its float arrays and its sleep records."""
     return {n: v for n, v in arrays(data).items() if v.dtype == np.float64 or n in SLEEP_BOOKS}
 
 
 def assert_same_world(a: MujocoEngine, b: MujocoEngine) -> None:
     """The compiled models alike in every array but the names (big groups' bodies are
     renamed in the spec after their compile: the source's model may hold their temporary
-    names, which nothing reads); the data in every float array and the sleep books (its
+    names, which nothing reads); the data in every float array and the sleep records (its
     other integers are remade by the next step)."""
     for one, other in ((a.model, b.model), (a.data, b.data)):
         mine, theirs = arrays(one), arrays(other)

@@ -8,10 +8,11 @@ the constraint solver's collision option, so this engine runs DART's own limit (
 contacts a step, shared between colliding pairs) and no per-pair cap. Past 1,000
 touching pairs the pairs found last get no contact (DART warns once).
 
-The engine's parts: spawn.py (books, spawned skeletons, the world's set-up), state.py
+The engine's parts: spawn.py (records, spawned skeletons, the world's set-up), state.py
 (states and divergence), models.py (URDF and MJCF), joints.py (joints, targets, wrenches),
-snapshot.py (snapshots, rebuilds), meshes.py (mesh shapes) and contacts.py. dartpy has no
-ray casts and no headless renderer: ``raycast`` and ``render`` are FEATURE_UNSUPPORTED.
+snapshot/ (snapshots), rebuild.py (records, rebuilds), meshes.py (mesh shapes), shapes.py
+and contacts.py. dartpy has no ray casts and no headless renderer: ``raycast`` and
+``render`` are FEATURE_UNSUPPORTED (rays.py and render.py say so).
 """
 
 from __future__ import annotations
@@ -24,85 +25,55 @@ from typing import Any
 import numpy as np
 
 from galton.daemon.engines.base import (
-    FEATURE_CONTACTS,
-    FEATURE_DELETE,
-    FEATURE_JOINT_TARGETS,
-    FEATURE_JOINTS,
-    FEATURE_LOAD_MODEL,
-    FEATURE_MODEL_SHAPES,
-    FEATURE_SET_STATE,
-    FEATURE_SNAPSHOT,
-    FEATURE_SPAWN,
-    FEATURE_SPAWN_INERTIA,
-    FEATURE_STATIC_POSE,
-    FEATURE_TARGET_EFFORT,
-    FEATURE_TARGET_POSITION,
-    FEATURE_TARGET_VELOCITY,
-    FEATURE_UPDATE_FRICTION,
-    FEATURE_UPDATE_MASS,
-    FEATURE_UPDATE_RESTITUTION,
-    FEATURE_UPDATE_RGBA,
-    FEATURE_WRENCH,
     ContactPoints,
     Engine,
     Shape,
     ShapeMesh,
+    Target,
 )
 from galton.daemon.engines.dart import contacts as contact_points
 from galton.daemon.engines.dart import fast_state, frames, meshes, state
-from galton.daemon.engines.dart import spawn as books
-from galton.daemon.engines.dart.joints import Robots, Target
+from galton.daemon.engines.dart import spawn as spawning
+from galton.daemon.engines.dart.joints import Robots
 from galton.daemon.engines.dart.mesh_files import MeshFiles
 from galton.daemon.engines.dart.models import MODEL_FORMATS
-from galton.daemon.engines.dart.params import SPECS
-from galton.daemon.engines.dart.scene import Scene
+from galton.daemon.engines.dart.params import PARAMS
+from galton.daemon.engines.dart.rebuild import Rebuilding
 from galton.daemon.engines.dart.shapes import node_meshes, node_shapes
 from galton.daemon.engines.dart.snapshot import Snapshots
 from galton.daemon.engines.params import check_updates
 from galton.protocol import (
-    PROTOCOL_VERSION,
     BodyGroup,
     BodyProperties,
-    Capabilities,
     EntityInfo,
     InvalidArgumentError,
     JointInfo,
 )
-from galton.protocol.vocabulary import BODY_SHAPES, POSE_WIDTH, TWIST_WIDTH
-
-FEATURES = (FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDATE_MASS,
-            FEATURE_UPDATE_FRICTION, FEATURE_UPDATE_RESTITUTION, FEATURE_UPDATE_RGBA,
-            FEATURE_LOAD_MODEL, FEATURE_STATIC_POSE, FEATURE_JOINTS, FEATURE_JOINT_TARGETS,
-            FEATURE_TARGET_POSITION, FEATURE_TARGET_VELOCITY, FEATURE_TARGET_EFFORT,
-            FEATURE_WRENCH, FEATURE_SNAPSHOT, FEATURE_CONTACTS, FEATURE_SPAWN_INERTIA,
-            FEATURE_MODEL_SHAPES)
+from galton.protocol.vocabulary import POSE_WIDTH, TWIST_WIDTH
 
 
-SHAPES = BODY_SHAPES  # a mesh: a DART MeshShape (meshes.py, docs/ENGINES.md "Meshes")
-
-
-class DartEngine(Scene, Snapshots, Engine):
+class DartEngine(Rebuilding, Snapshots, Engine):
     """Named rigid bodies and models in a DART world."""
 
     name = "dart"
+    param_specs = PARAMS
+    model_formats = MODEL_FORMATS
+    spawn_inertia = True
 
     def __init__(self) -> None:
-        self._values: dict[str, Any] = books.defaults()
-        self._world = books.new_world(self._values)
-        self._bodies: dict[str, books.Body] = {}
+        self._values: dict[str, Any] = spawning.defaults()
+        self._world = spawning.new_world(self._values)
+        self._bodies: dict[str, spawning.Body] = {}
         self._robots = Robots()
         self._mesh_files = MeshFiles()  # model mesh files' triangles, for get_shapes
-        self._init_scene()
+        self._init_records()
         self._unchecked = False  # states were set from outside since the last step
         self._diverged = False
 
     # -- description ----------------------------------------------------------------------
-    def capabilities(self) -> Capabilities:
-        return Capabilities(
-            engine=self.name, engine_version=importlib.metadata.version("dartpy"),
-            protocol_version=PROTOCOL_VERSION, body_shapes=SHAPES,
-            model_formats=MODEL_FORMATS, features=FEATURES,
-            params={name: spec.describe() for name, spec in SPECS.items()})
+    @classmethod
+    def engine_version(cls) -> str:
+        return importlib.metadata.version("dartpy")
 
     @property
     def timestep(self) -> float:
@@ -112,22 +83,22 @@ class DartEngine(Scene, Snapshots, Engine):
         return {k: list(v) if isinstance(v, tuple) else v for k, v in self._values.items()}
 
     def set_params(self, params: dict[str, Any]) -> None:
-        clean = check_updates(self.name, SPECS, params)
+        clean = check_updates(self.name, PARAMS, params)
         self._values.update(clean)
-        books.configure(self._world, self._values)
+        spawning.configure(self._world, self._values)
         self._follow_defaults(clean)
 
     # -- bodies ---------------------------------------------------------------------------
     def spawn(self, groups: Sequence[BodyGroup]) -> None:
         self._check_new([n for g in groups for n in g.names])
         for group in groups:
-            books.check_group(group)
+            spawning.check_group(group)
         for group in groups:
             if group.names:
                 self._spawn_group(group)
 
     def _spawn_group(self, group: BodyGroup) -> None:
-        mass, friction, restitution = books.group_values(group, self._values)
+        mass, friction, restitution = spawning.group_values(group, self._values)
         size = tuple(float(s) for s in group.size)
         poses = np.asarray(group.poses, dtype=float).reshape(-1, POSE_WIDTH)
         twists = np.zeros((len(poses), TWIST_WIDTH)) if group.twists is None else (
@@ -140,12 +111,12 @@ class DartEngine(Scene, Snapshots, Engine):
             group.vertices, group.faces)
         shared = None if mesh is None else meshes.mesh_shape(*mesh)
         for k, name in enumerate(group.names):
-            body = books.Body(name, group.shape, size, group.static, mass, friction,
+            body = spawning.Body(name, group.shape, size, group.static, mass, friction,
                               restitution, group.friction is None, group.restitution is None,
                               None, None, group.rgba, unit_inertia=None if group.inertia is None
                               else tuple(i / mass for i in group.inertia),
                               mesh=mesh, mesh_shape=shared)
-            books.build(body, positions[k], velocities[k])
+            spawning.build(body, positions[k], velocities[k])
             self._add(body)
 
     def delete(self, names: Sequence[str]) -> None:
@@ -154,10 +125,10 @@ class DartEngine(Scene, Snapshots, Engine):
             self._remove(body)
 
     def clear(self) -> None:
-        self._world = books.new_world(self._values)
+        self._world = spawning.new_world(self._values)
         self._bodies.clear()
         self._robots = Robots()
-        self._init_scene()
+        self._init_records()
         self._diverged = False
 
     def reset_dynamics(self) -> None:
@@ -287,7 +258,7 @@ class DartEngine(Scene, Snapshots, Engine):
             self._robots.wrenches.pop(name, None)
 
     def save_state(self) -> object | None:
-        """Skeletons' positions and velocities, the time and the held books (fast_state)."""
+        """Skeletons' positions and velocities, the time and the held records (fast_state)."""
         return fast_state.save(self)
 
     def load_state(self, state: object) -> bool:

@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from galton.daemon.engines.dart.joints import Target
+from galton.daemon.engines.base import Target
 
 if TYPE_CHECKING:
     from galton.daemon.engines.dart.engine import DartEngine

@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from galton.daemon.engines.base import Target
 from galton.protocol import InvalidArgumentError, JointInfo, NotFoundError
 
 URDF_ROOT_JOINT = "rootJoint"  # DartLoader's joint of a URDF's root to the world
@@ -31,15 +32,6 @@ class Joint:
     info: JointInfo
     joint: Any
     loaded: list[float]  # its positions as loaded
-
-
-@dataclass
-class Target:
-    mode: str
-    target: float
-    kp: float
-    kd: float
-    max_effort: float
 
 
 @dataclass

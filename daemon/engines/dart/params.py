@@ -28,7 +28,7 @@ SOURCES = {
     "dart.sleep": "Gazebo's (DART 6.13 has no sleeping)",
 }
 
-SPECS: dict[str, ParamSpec] = with_sources({spec.name: spec for spec in (
+PARAMS: dict[str, ParamSpec] = with_sources({spec.name: spec for spec in (
     shared("timestep", 0.001, "Simulated time per step (SDF max_step_size, "
            "Gazebo's default)."),
     shared("gravity", (0.0, 0.0, -9.8), "Gravity vector, world frame (SDF's "

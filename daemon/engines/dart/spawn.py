@@ -1,4 +1,4 @@
-"""A DART world's bodies: what the engine keeps of each (its books), how a spawned body
+"""A DART world's bodies: what the engine keeps of each (its records), how a spawned body
 becomes a one-link skeleton, and how a world is set up as gz-physics sets one up.
 
 Every spawned body is its own skeleton: a free joint holding one body node with one shape
@@ -15,13 +15,12 @@ from typing import Any
 import dartpy as dart
 import numpy as np
 
-from galton.daemon.engines.dart.params import SPECS
+from galton.daemon.engines.dart.params import PARAMS
+from galton.daemon.engines.geometry import default_mass
 from galton.protocol import BodyGroup, InvalidArgumentError
-from galton.protocol import mesh as mesh_wire
 from galton.protocol.vocabulary import BODY_SHAPES
 
 SPAWNED, MODEL = "b:", "m:"  # skeleton name prefixes: unique, whatever entities are named
-DENSITY = 1000.0  # kg/m³: the interface's mass for a body spawned with mass None
 
 
 @dataclass
@@ -63,15 +62,6 @@ def make_shape(shape: str, size: tuple[float, ...]) -> Any:
     return dart.dynamics.PlaneShape(np.array([0.0, 0.0, 1.0]), 0.0)
 
 
-def volume(shape: str, size: tuple[float, ...]) -> float:
-    """Volume (m³) of a solid shape from its half sizes."""
-    ball = 4.0 / 3.0 * math.pi * size[0] ** 3
-    if shape == "sphere":
-        return ball
-    if shape == "box":
-        return 8.0 * size[0] * size[1] * size[2]
-    cylinder = math.pi * size[0] ** 2 * 2.0 * size[1]
-    return cylinder + (ball if shape == "capsule" else 0.0)
 
 
 def check_group(group: BodyGroup) -> None:
@@ -84,11 +74,7 @@ def check_group(group: BodyGroup) -> None:
 
 def group_values(group: BodyGroup, values: dict[str, Any]) -> tuple[float, float, float]:
     """Each body's mass (NaN when static), friction and restitution."""
-    size = tuple(float(s) for s in group.size)
-    solid = volume(group.shape, size) if group.vertices is None or group.faces is None \
-        else mesh_wire.volume(group.vertices, group.faces)
-    mass = math.nan if group.static else (
-        float(group.mass) if group.mass is not None else DENSITY * solid)
+    mass = math.nan if group.static else default_mass(group)
     kind = "default_static_" if group.static else "default_"
     friction = group.friction if group.friction is not None else values[kind + "friction"]
     restitution = group.restitution if group.restitution is not None else (
@@ -97,7 +83,7 @@ def group_values(group: BodyGroup, values: dict[str, Any]) -> tuple[float, float
 
 
 def build(body: Body, positions: np.ndarray, velocities: np.ndarray) -> None:
-    """Make a spawned body's skeleton (its books already filled) at this free-joint state."""
+    """Make a spawned body's skeleton (its records already filled) at this free-joint state."""
     skeleton = dart.dynamics.Skeleton(SPAWNED + body.name)
     _, node = skeleton.createFreeJointAndBodyNodePair()
     node.setName(body.name)
@@ -167,4 +153,4 @@ def configure(world: Any, values: dict[str, Any]) -> None:
 
 
 def defaults() -> dict[str, Any]:
-    return {name: spec.default for name, spec in SPECS.items()}
+    return {name: spec.default for name, spec in PARAMS.items()}

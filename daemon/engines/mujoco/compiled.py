@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from galton.daemon.engines.mujoco import spec as ms
+from galton.daemon.engines.mujoco import mj_spec as ms
 from galton.daemon.engines.mujoco.entities import MUJOCO_ERRORS, mujoco_error
 from galton.daemon.engines.mujoco.state import FREE
 
@@ -21,7 +21,7 @@ def compile_in_place(engine: MujocoEngine, nbody: int | None, nv: int | None) ->
     bodies and ``nv`` degrees of freedom (the model's own by default). On failure the
     model and data in use are untouched; raise with MuJoCo's words. (Reindex after.)"""
     engine.xml = None
-    m, spec = engine.model, engine.spec
+    m, spec = engine.model, engine.mj_spec
     memory = spec.memory
     spec.memory = ms.arena_bytes(m.nbody if nbody is None else nbody, m.nv if nv is None else nv)
     try:
@@ -30,7 +30,7 @@ def compile_in_place(engine: MujocoEngine, nbody: int | None, nv: int | None) ->
         spec.memory = memory
         raise mujoco_error(exc, "MuJoCo rejected the change") from exc
     engine.workers = 0  # the recompiled MjData has no thread pool
-    engine.pool_edited = False
+    engine.parked_edited = False
     engine.start_workers()
 
 

@@ -3,19 +3,19 @@
 A model load, and a delete that removes bodies, edit the spec and recompile it once, in
 place (``MjSpec.recompile``), so the bodies already there keep their positions, velocities
 and warm starts. A spawn does too unless the pool holds enough parked, pre-compiled bodies of
-the group's kind: then it binds the names to them, no compile (``pool``); a compiling
+the group's kind: then it binds the names to them, no compile (``parked``); a compiling
 spawn adds spare parked twins, and delete and clear park spawned bodies again (no compile
 when they all fit in the pool).
 
 Dynamic bodies have a free joint; static ones are jointless children of the
 world whose pose is written into the compiled model (and the spec), so moving them needs no
-recompile, and balls resting on them can sleep (see ``spec.add_group``). States are
+recompile, and balls resting on them can sleep (see ``parked``). States are
 read and written in batches through numpy index arrays (``state``) rebuilt after each
 compile: nothing in Python runs per body per step.
 
 Every change is all or nothing. What can fail (a recompile MuJoCo rejects, a world MuJoCo
 cannot hold) comes before anything that cannot; a failed recompile leaves the model and data
-in use untouched, and the spec's edits and the engine's books are put back. Removed bodies
+in use untouched, and the spec's edits and the engine's records are put back. Removed bodies
 cannot be put back, so a delete in a world holding a loaded model (whose references may
 reach other bodies) is first tried on a copy of the spec.
 
@@ -25,13 +25,16 @@ spec are plain functions of the engine in their own modules: ``spawn``,
 ``removal`` (delete, clear), ``teleport`` (set_states) and ``props``
 (update, properties, MuJoCo's contact rules); ``entities`` holds what they share.
 Loaded models' joints, with one actuator each holding a target, are kept by
-``joints``, wrenches by ``wrench``; both books are written again into the
+``joints``, wrenches by ``wrench``; both records are written again into the
 compiled model after every compile. The compile in place and the rows it indexes are in
 ``compiled``; stepping, its periodic looks and the rewind in ``stepping``.
-Cameras, rays and contacts (``render``, ``perception``) see entities only, never
-parked bodies.
+Cameras, rays and contacts (``render``, ``rays``, ``contacts``; what the last step left,
+kept until the next: ``observed``) see entities only, never parked bodies. The engine's
+parameters are ``params``; what it writes into the ``MjSpec`` is ``mj_spec``; a loaded
+model's colliding shapes ``shapes``; the guard against sleeping balanced on a pin
+``sleep_guard``; snapshots ``snapshot`` and states kept in memory ``fast_state``.
 
-Size: MuJoCo holds at most ``spec.MAX_BODIES`` bodies, and its compile costs
+Size: MuJoCo holds at most ``params.MAX_BODIES`` bodies, and its compile costs
 O(free bodies x degrees of freedom): about 1.6 s for 4,000 free spheres, four times that for
 twice as many. Everything else here is linear in the bodies a call touches.
 """
@@ -45,27 +48,6 @@ import mujoco
 import numpy as np
 
 from galton.daemon.engines.base import (
-    FEATURE_CONTACTS,
-    FEATURE_DELETE,
-    FEATURE_JOINT_TARGETS,
-    FEATURE_JOINTS,
-    FEATURE_LOAD_MODEL,
-    FEATURE_MODEL_SHAPES,
-    FEATURE_RAYCAST,
-    FEATURE_RENDER,
-    FEATURE_SET_STATE,
-    FEATURE_SNAPSHOT,
-    FEATURE_SPAWN,
-    FEATURE_SPAWN_INERTIA,
-    FEATURE_STATIC_POSE,
-    FEATURE_TARGET_EFFORT,
-    FEATURE_TARGET_POSITION,
-    FEATURE_TARGET_VELOCITY,
-    FEATURE_UPDATE_FRICTION,
-    FEATURE_UPDATE_MASS,
-    FEATURE_UPDATE_RESTITUTION,
-    FEATURE_UPDATE_RGBA,
-    FEATURE_WRENCH,
     CameraView,
     ContactPoints,
     Engine,
@@ -76,40 +58,32 @@ from galton.daemon.engines.base import (
 from galton.daemon.engines.mujoco import clone as cloning
 from galton.daemon.engines.mujoco import compiled as compiling
 from galton.daemon.engines.mujoco import fast_state, models, removal, teleport, wrench
-from galton.daemon.engines.mujoco import geoms as colliders
+from galton.daemon.engines.mujoco import mj_spec as ms
 from galton.daemon.engines.mujoco import observed as observing
-from galton.daemon.engines.mujoco import perception as sensing
-from galton.daemon.engines.mujoco import pool as mp
+from galton.daemon.engines.mujoco import params as mparams
+from galton.daemon.engines.mujoco import parked as mp
 from galton.daemon.engines.mujoco import props as mpr
+from galton.daemon.engines.mujoco import rays as sensing
 from galton.daemon.engines.mujoco import render as rendering
+from galton.daemon.engines.mujoco import shapes as colliders
 from galton.daemon.engines.mujoco import snapshot as snapshots
 from galton.daemon.engines.mujoco import spawn as adding
-from galton.daemon.engines.mujoco import spec as ms
 from galton.daemon.engines.mujoco import state as mst
 from galton.daemon.engines.mujoco import stepping as timing
-from galton.daemon.engines.mujoco.balance import BalanceGuard
 from galton.daemon.engines.mujoco.entities import Entity
 from galton.daemon.engines.mujoco.joints import Joints
 from galton.daemon.engines.mujoco.poses import PoseReader
+from galton.daemon.engines.mujoco.sleep_guard import SleepGuard
 from galton.daemon.engines.mujoco.wrench import Wrenches
 from galton.daemon.engines.params import check_updates
 from galton.protocol import (
-    BODY_SHAPES,
-    PROTOCOL_VERSION,
     BodyGroup,
     BodyProperties,
-    Capabilities,
     EntityInfo,
     JointInfo,
     NotFoundError,
 )
 
-FEATURES = (FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDATE_MASS,
-            FEATURE_UPDATE_FRICTION, FEATURE_UPDATE_RESTITUTION, FEATURE_UPDATE_RGBA,
-            FEATURE_LOAD_MODEL, FEATURE_STATIC_POSE, FEATURE_JOINTS, FEATURE_JOINT_TARGETS,
-            FEATURE_TARGET_POSITION, FEATURE_TARGET_VELOCITY, FEATURE_TARGET_EFFORT,
-            FEATURE_WRENCH, FEATURE_SNAPSHOT, FEATURE_RENDER, FEATURE_RAYCAST,
-            FEATURE_CONTACTS, FEATURE_SPAWN_INERTIA, FEATURE_MODEL_SHAPES)
 # Contacts at which MuJoCo's worker threads start helping, and below which they stop.
 WORKERS_ON_CONTACTS = 400
 WORKERS_OFF_CONTACTS = 200
@@ -120,6 +94,9 @@ class MujocoEngine(Engine):
 
     name: ClassVar[str] = "mujoco"
     releases_gil_while_stepping: ClassVar[bool] = True  # mj_step runs without the GIL
+    param_specs = mparams.PARAMS
+    model_formats = models.FORMATS
+    spawn_inertia = True
     # What the last step left, frozen before an edit until the next step (a class default:
     # a clone is made without __init__).
     observed: observing.Observed | None = None
@@ -129,7 +106,7 @@ class MujocoEngine(Engine):
 
     def __init__(self) -> None:
         ms.route_warnings()
-        self.values: dict[str, Any] = {n: p.default for n, p in ms.PARAMS.items()}
+        self.values: dict[str, Any] = {n: p.default for n, p in mparams.PARAMS.items()}
         self.entities: dict[str, Entity] = {}
         self.diverged = False
         self.crowded = False
@@ -140,31 +117,31 @@ class MujocoEngine(Engine):
 
     # -- compile & index ----------------------------------------------------------------
     def build_empty(self) -> None:
-        self.pool = mp.Pool()
-        self.spec = mujoco.MjSpec()
-        self.spec.modelname = "galton"
-        self.spec.copy_during_attach = True  # see spec.add_group
-        self.litter: list[Any] = []  # empty frames, deleted with the next bodies removed
+        self.parked = mp.ParkedBodies()
+        self.mj_spec = mujoco.MjSpec()
+        self.mj_spec.modelname = "galton"
+        self.mj_spec.copy_during_attach = True  # see parked.Builders
+        self.empty_frames: list[Any] = []  # empty frames, deleted with the next bodies removed
         self.builders = mp.Builders()
-        self.spec.memory = ms.arena_bytes(1, 0)
+        self.mj_spec.memory = ms.arena_bytes(1, 0)
         self.parts: set[str] = set()  # names of loaded models' links
-        self.joint_book = Joints()
+        self.loaded_joints = Joints()
         self.wrenches = Wrenches()
         self.models = 0  # model entities alive
         self.broken = False
         # Bodies bound from or parked into the pool since the last compile: the compiled
         # model then differs from what its spec compiles to (see snapshot).
-        self.pool_edited = False
+        self.parked_edited = False
         self.xml: str | None = None  # the spec as MJCF, kept until the spec changes
-        ms.write_options(self.spec.option, self.values)
-        self.model = self.spec.compile()
+        ms.write_options(self.mj_spec.option, self.values)
+        self.model = self.mj_spec.compile()
         self.data = mujoco.MjData(self.model)
         self.workers = 0  # a new MjData has no thread pool
         self.start_workers()
         self.reindex()
 
     def own(self) -> None:
-        """Before changing the spec, the model or the books naming spec elements: its own
+        """Before changing the spec, the model or the records naming spec elements: its own
         copy of them if it shares them with a fork or a source (clone.own)."""
         if self.sharing is not None:
             cloning.own(self)
@@ -204,17 +181,17 @@ class MujocoEngine(Engine):
 
     def reindex(self) -> None:
         self.index = mst.StateIndex.of(self.model)
-        self.balance = self.balance_guard()
+        self.sleep_guard = self.new_sleep_guard()
         self.ids = {name: e.body.id for name, e in self.entities.items()}
         self.watch: np.ndarray | None = None
         self.warnings = self.data.warning.number
-        self.joint_book.reindex(self.model)
-        self.joint_book.apply(self.model, self.data)
+        self.loaded_joints.reindex(self.model)
+        self.loaded_joints.apply(self.model, self.data)
         self.wrenches.apply(self.data, self.ids)
 
-    def balance_guard(self) -> BalanceGuard | None:
-        """A guard for the compiled model, if wanted (see balance)."""
-        return BalanceGuard(self.model) if self.values["mujoco.wake_balanced"] else None
+    def new_sleep_guard(self) -> SleepGuard | None:
+        """A guard for the compiled model, if wanted (see sleep_guard)."""
+        return SleepGuard(self.model) if self.values["mujoco.wake_balanced"] else None
 
     def body_ids(self, names: Sequence[str]) -> np.ndarray:
         try:
@@ -231,13 +208,12 @@ class MujocoEngine(Engine):
         return self.watch
 
     # -- Engine: description & parameters ------------------------------------------------
-    def capabilities(self) -> Capabilities:
-        return Capabilities(
-            engine=self.name, engine_version=mujoco.__version__,
-            protocol_version=PROTOCOL_VERSION, body_shapes=tuple(BODY_SHAPES),
-            model_formats=models.FORMATS, features=FEATURES,
-            params={n: p.describe() for n, p in ms.PARAMS.items()},
-            render_backend=rendering.backend_name())
+    @classmethod
+    def engine_version(cls) -> str:
+        return str(mujoco.__version__)
+
+    def render_backend(self) -> str:
+        return rendering.backend_name()
 
     @property
     def timestep(self) -> float:
@@ -247,20 +223,20 @@ class MujocoEngine(Engine):
         return {n: list(v) if isinstance(v, tuple) else v for n, v in self.values.items()}
 
     def set_params(self, params: dict[str, Any]) -> None:
-        clean = check_updates(self.name, ms.PARAMS, params)
+        clean = check_updates(self.name, mparams.PARAMS, params)
         self.own()
         observing.freeze(self)
         self.xml = None
         self.values.update(clean)
-        ms.write_options(self.spec.option, self.values)
+        ms.write_options(self.mj_spec.option, self.values)
         ms.write_options(self.model.opt, self.values)
         if "mujoco.threads" in clean:
             self.start_workers()
         if "mujoco.wake_balanced" in clean:
-            if self.balance is not None:
-                self.balance.release_all(self.model)
-            self.balance = self.balance_guard()
-        if ms.CONTACT_PARAMS & clean.keys():
+            if self.sleep_guard is not None:
+                self.sleep_guard.release_all(self.model)
+            self.sleep_guard = self.new_sleep_guard()
+        if mparams.CONTACT_PARAMS & clean.keys():
             for entity in self.entities.values():
                 entity.key = None  # its values are rewritten: it no longer matches its kind
             self._apply_contacts(list(self.entities))
@@ -326,7 +302,7 @@ class MujocoEngine(Engine):
         return timing.state_within(self, max_position, max_speed)
 
     def reset_dynamics(self) -> None:
-        self.own()  # the balance guard gives back its sleep policies
+        self.own()  # the sleep guard gives back its sleep policies
         timing.reset_dynamics(self)
 
     def restart_looks(self) -> None:
@@ -335,11 +311,11 @@ class MujocoEngine(Engine):
 
     # -- Engine: joints and wrenches (joints, wrench) ------------------------
     def joints(self) -> list[JointInfo]:
-        return self.joint_book.describe()
+        return self.loaded_joints.describe()
 
     def get_joint_states(self, names: Sequence[str]
                          ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        positions, velocities, efforts = self.joint_book.read(self.data, names)
+        positions, velocities, efforts = self.loaded_joints.read(self.data, names)
         return positions, velocities, observing.efforts(self, names, efforts)
 
     def set_joint_states(self, names: Sequence[str], positions: np.ndarray,
@@ -347,16 +323,16 @@ class MujocoEngine(Engine):
         """Written into qpos/qvel; a model's trees never sleep (their actuators keep them
         awake), so nothing needs waking."""
         observing.freeze(self)
-        self.joint_book.write(self.data, names, positions, velocities)
+        self.loaded_joints.write(self.data, names, positions, velocities)
 
     def set_joint_targets(self, names: Sequence[str], mode: str, targets: np.ndarray,
                           kp: np.ndarray, kd: np.ndarray, max_effort: np.ndarray) -> None:
         self.own()  # the actuators' gains are model arrays
-        self.joint_book.hold(self.model, self.data, names, mode, targets, kp, kd, max_effort)
+        self.loaded_joints.hold(self.model, self.data, names, mode, targets, kp, kd, max_effort)
 
     def set_joint_damping(self, names: Sequence[str], damping: np.ndarray) -> None:
         self.own()  # dof_damping is a model array
-        self.joint_book.set_damping(self.model, names, damping)
+        self.loaded_joints.set_damping(self.model, names, damping)
 
     def set_wrenches(self, names: Sequence[str], wrenches: np.ndarray,
                      points: np.ndarray | None) -> None:
@@ -408,7 +384,7 @@ class MujocoEngine(Engine):
     # -- Engine: perception (render, perception) -------------------------------
     def render(self, cameras: Sequence[CameraView]
                ) -> tuple[list[dict[str, np.ndarray]], list[str]]:
-        return sensing.render(self, cameras)
+        return rendering.render(self, cameras)
 
     def raycast(self, origins: np.ndarray, directions: np.ndarray, max_length: float
                 ) -> RayHits:

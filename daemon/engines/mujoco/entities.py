@@ -1,15 +1,16 @@
-"""What the MuJoCo engine's parts share: its entities' books, and MuJoCo's refusals as typed
+"""What the MuJoCo engine's parts share: its entities' records, and MuJoCo's refusals as typed
 errors."""
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
 import mujoco
 import numpy as np
 
-from galton.daemon.engines.mujoco import pool as mp
+from galton.daemon.engines.mujoco import parked as mp
 from galton.protocol import GaltonError, InvalidArgumentError, ResourceLimitError
 
 GEOM = mujoco.mjtObj.mjOBJ_GEOM
@@ -81,3 +82,12 @@ def mujoco_error(exc: Exception, what: str) -> GaltonError:
     if "allocate memory" in words or "must be less than" in words:
         return ResourceLimitError(f"{what}: MuJoCo cannot hold the world ({words})")
     return InvalidArgumentError(f"{what}: {words}")
+
+
+def geom_entities(model: mujoco.MjModel, ids: Mapping[str, int]
+                  ) -> tuple[list[str], np.ndarray]:
+    """Entity names, and each geom's index into them (-1: no entity's, e.g. parked)."""
+    names = list(ids)
+    of_body = np.full(model.nbody, -1, np.int32)
+    of_body[np.fromiter(ids.values(), np.int64, len(ids))] = np.arange(len(names))
+    return names, of_body[model.geom_bodyid]

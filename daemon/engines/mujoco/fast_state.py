@@ -1,8 +1,8 @@
 """A MuJoCo world's state kept in memory, for snapshots and restores of an unchanged
 structure (daemon/world/scene.py ``World.save_state``): the whole MjData (``mj_copyData``:
-contacts, warm starts, sleep books, the lot, so the world goes on bit for bit as from the
+contacts, warm starts, sleep records, the lot, so the world goes on bit for bit as from the
 moment it was kept), the few model arrays the engine edits between compiles (joint targets'
-gains and damping, the balance guard's sleep policies) and the engine's own books.
+gains and damping, the sleep guard's sleep policies) and the engine's own records.
 
 No MJCF, no compile: tens of microseconds for a 100-ball board, where a portable snapshot
 writes and compiles the spec. The state fits any engine whose compiled model has the same
@@ -22,7 +22,7 @@ if TYPE_CHECKING:
     from galton.daemon.engines.mujoco.engine import MujocoEngine
 
 # Model arrays the engine writes between compiles (joints.write_targets, Joints.write_law,
-# balance.BalanceGuard): kept with the state, put back with it.
+# sleep_guard.SleepGuard): kept with the state, put back with it.
 EDITED_MODEL_ARRAYS = ("actuator_gainprm", "actuator_biasprm", "actuator_forcelimited",
                        "actuator_forcerange", "dof_damping", "tree_sleep_policy")
 SPARES = 2  # dropped MjData kept for reuse, per layout
@@ -80,7 +80,7 @@ class MujocoState:
     layout: tuple[int, ...]
     data: mujoco.MjData
     model_arrays: dict[str, np.ndarray]
-    books: dict[str, Any]
+    records: dict[str, Any]
     nbytes: int
 
 
@@ -96,13 +96,13 @@ def save(engine: MujocoEngine) -> MujocoState | None:
     data = data_for(m)
     mujoco.mj_copyData(data, m, engine.data)
     arrays = {name: getattr(m, name).copy() for name in EDITED_MODEL_ARRAYS}
-    books = {"joints": engine.joint_book.copy(),
+    records = {"joints": engine.loaded_joints.copy(),
              "held": {n: w.copy() for n, w in engine.wrenches.held.items()},
-             "balance": None if engine.balance is None else engine.balance.copy(),
+             "balance": None if engine.sleep_guard is None else engine.sleep_guard.copy(),
              "looks": (engine.diverged, engine.crowded, engine.steps_since_look)}
     nbytes = int(mujoco.mj_stateSize(m, mujoco.mjtState.mjSTATE_INTEGRATION) * 8
                  + sum(a.nbytes for a in arrays.values()))
-    return MujocoState(_sizes(m), layout(m), data, arrays, books, nbytes)
+    return MujocoState(_sizes(m), layout(m), data, arrays, records, nbytes)
 
 
 def load(engine: MujocoEngine, state: Any) -> bool:
@@ -117,11 +117,11 @@ def load(engine: MujocoEngine, state: Any) -> bool:
         for name, values in state.model_arrays.items():
             getattr(m, name)[...] = values
     mujoco.mj_copyData(engine.data, m, state.data)
-    books = state.books
-    engine.joint_book = books["joints"].copy()
-    engine.wrenches.held = {n: w.copy() for n, w in books["held"].items()}
-    engine.balance = None if books["balance"] is None else books["balance"].copy()
-    engine.diverged, engine.crowded, engine.steps_since_look = books["looks"]
+    records = state.records
+    engine.loaded_joints = records["joints"].copy()
+    engine.wrenches.held = {n: w.copy() for n, w in records["held"].items()}
+    engine.sleep_guard = None if records["balance"] is None else records["balance"].copy()
+    engine.diverged, engine.crowded, engine.steps_since_look = records["looks"]
     engine.broken = False
     engine.observed = None
     engine.start_workers()

@@ -1,6 +1,6 @@
 """Loaded models' joints in the MuJoCo world: their descriptions, states and held targets.
 
-Every 1-DOF joint has one general actuator of its own name (``rig``); a target is
+Every 1-DOF joint has one general actuator of its own name (``model_setup``); a target is
 written into that actuator's gain, bias, control and force range, and its damping into the
 joint's own damping, so MuJoCo applies the PD law itself in every step:
 
@@ -24,12 +24,13 @@ through index arrays, one numpy operation per call.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import mujoco
 import numpy as np
 
-from galton.daemon.engines.mujoco.rig import Facts, entity_name, fixed_joint_name
+from galton.daemon.engines.base import Target
+from galton.daemon.engines.mujoco.model_setup import Facts, entity_name, fixed_joint_name
 from galton.protocol import InvalidArgumentError, JointInfo, NotFoundError
 
 JOINT_TYPES = {mujoco.mjtJoint.mjJNT_FREE: "free", mujoco.mjtJoint.mjJNT_BALL: "spherical",
@@ -38,19 +39,8 @@ _WIDTHS = {mujoco.mjtJoint.mjJNT_BALL: (4, 3)}  # qpos, qvel rows; 1-DOF joints:
 _FREE = mujoco.mjtJoint.mjJNT_FREE
 
 
-@dataclass(frozen=True)
-class Target:
-    """A target held on one joint (mode "none" is never held: it is the absence of one)."""
-
-    mode: str
-    target: float
-    kp: float
-    kd: float
-    max_effort: float
-
-
 class Joints:
-    """The engine's books of joints: descriptions by model, targets by joint, and where each
+    """The engine's records of joints: descriptions by model, targets by joint, and where each
     1-DOF joint's state and actuator live in the compiled model."""
 
     def __init__(self) -> None:
@@ -64,7 +54,7 @@ class Joints:
         self.target_damping = np.zeros(0)  # by actuator id: what a held target adds
 
     def copy(self) -> Joints:
-        """An independent copy of the books (a fork's, a kept state's)."""
+        """An independent copy of the records (a fork's, a kept state's)."""
         joints = Joints()
         joints.infos = {root: list(infos) for root, infos in self.infos.items()}
         joints.targets = dict(self.targets)  # Target is frozen
@@ -74,7 +64,7 @@ class Joints:
         joints.target_damping = self.target_damping.copy()
         return joints
 
-    # -- books -----------------------------------------------------------------------------
+    # -- records -----------------------------------------------------------------------------
     def reindex(self, m: mujoco.MjModel) -> None:
         """Where the joints live after a compile (actuators are ours alone, one per joint)."""
         self.slot = {mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_ACTUATOR, a): a
@@ -82,7 +72,7 @@ class Joints:
         joint = m.actuator_trnid[:, 0]
         self.qadr = m.jnt_qposadr[joint].astype(np.int64)
         self.vadr = m.jnt_dofadr[joint].astype(np.int64)
-        for name, a in self.slot.items():  # a joint new to the books has its compiled value
+        for name, a in self.slot.items():  # a joint new to the records has its compiled value
             self.own.setdefault(name, float(m.dof_damping[self.vadr[a]]))
         self.own_damping = np.array([self.own[name] for name in self.slot], float)
         self.target_damping = np.zeros(m.nu)

@@ -1,7 +1,7 @@
 """Loading MJCF and URDF models into the MuJoCo world, as functions of the engine.
 
 Every top-level body of the model is a model: its root becomes an entity, and so does every
-other body of its subtree (a link). The parsed model is rigged first (``rig``: names,
+other body of its subtree (a link). The parsed model is rigged first (``model_setup``: names,
 a floating base, one actuator per joint); its joints are described once compiled
 (``joints``). Attaching cannot be undone, so it is tried on a copy of the spec first.
 """
@@ -17,8 +17,8 @@ import mujoco
 import numpy as np
 
 from galton.daemon.engines.mujoco import joints as mj
-from galton.daemon.engines.mujoco import pool as mp
-from galton.daemon.engines.mujoco import spec as ms
+from galton.daemon.engines.mujoco import mj_spec as ms
+from galton.daemon.engines.mujoco import parked as mp
 from galton.daemon.engines.mujoco import state as mst
 from galton.daemon.engines.mujoco.entities import (
     MUJOCO_ERRORS,
@@ -29,12 +29,12 @@ from galton.daemon.engines.mujoco.entities import (
     delete_assets,
     mujoco_error,
 )
-from galton.daemon.engines.mujoco.rig import (
+from galton.daemon.engines.mujoco.model_setup import (
     Facts,
     body_name,
     entity_name,
+    ready_model,
     rename_attached,
-    rig,
 )
 from galton.daemon.engines.mujoco.state import JOINTED
 from galton.daemon.engines.mujoco.urdf import parse_urdf
@@ -71,7 +71,7 @@ def load_model(engine: MujocoEngine, fmt: str, text: str | None, path: str | Non
     infos: list[EntityInfo] = []
     for name in tops:
         root = engine.ids[name]
-        engine.joint_book.add_model(name, mj.describe_model(engine.model, root, name, prefix,
+        engine.loaded_joints.add_model(name, mj.describe_model(engine.model, root, name, prefix,
                                                          facts))
         infos.append(model_info(engine, name))
         infos += [link_info(engine, int(b), name)
@@ -84,7 +84,7 @@ def try_attaching(engine: MujocoEngine, child: mujoco.MjSpec, prefix: str, facts
     """The world compiled with the model on a copy of the spec (attaching cannot be
     undone); the compile's warnings go where MuJoCo's others go: to the log."""
     try:
-        trial = engine.spec.copy()
+        trial = engine.mj_spec.copy()
         with warnings.catch_warnings(record=True) as said:
             warnings.simplefilter("always")
             attach(trial, child.copy(), prefix, trial.worldbody.add_frame(), facts)
@@ -99,26 +99,26 @@ def try_attaching(engine: MujocoEngine, child: mujoco.MjSpec, prefix: str, facts
 
 def enter(engine: MujocoEngine, child: mujoco.MjSpec, prefix: str, facts: Facts,
           tops: list[str], parts: list[tuple[str, ...]], size: mujoco.MjModel) -> None:
-    """Attach the model to the world's spec, book its roots and links, recompile; on a
+    """Attach the model to the world's spec, record its roots and links, recompile; on a
     failure take it all out again (its bodies and what uses them, its assets)."""
-    frame = engine.spec.worldbody.add_frame()
-    before = asset_names(engine.spec)
+    frame = engine.mj_spec.worldbody.add_frame()
+    before = asset_names(engine.mj_spec)
     try:
-        attach(engine.spec, child, prefix, frame, facts)
-        assets = Assets(asset_names(engine.spec) - before, len(tops))
+        attach(engine.mj_spec, child, prefix, frame, facts)
+        assets = Assets(asset_names(engine.mj_spec) - before, len(tops))
         for name, inner in zip(tops, parts, strict=True):
-            body = engine.spec.body(body_name(name))
+            body = engine.mj_spec.body(body_name(name))
             engine.entities[name] = Entity(body, static=bool(body.mocap), source="model",
                                             parts=inner, model=name, assets=assets)
             for link in inner:
-                engine.entities[link] = Entity(engine.spec.body(body_name(link)),
+                engine.entities[link] = Entity(engine.mj_spec.body(body_name(link)),
                                                 static=False, source="link", model=name)
         engine.recompile(size.nbody, size.nv)
     except (GaltonError, *MUJOCO_ERRORS) as exc:
         for name in [*tops, *(n for names in parts for n in names)]:
             engine.entities.pop(name, None)
-        mp.remove_frame(engine.spec, frame)
-        delete_assets(engine.spec, asset_names(engine.spec) - before)
+        mp.remove_frame(engine.mj_spec, frame)
+        delete_assets(engine.mj_spec, asset_names(engine.mj_spec) - before)
         if isinstance(exc, GaltonError):
             raise
         raise mujoco_error(exc, "the model does not fit this world") from exc
@@ -135,8 +135,8 @@ def attach(spec: mujoco.MjSpec, child: mujoco.MjSpec, prefix: str, frame: Any,
 
 def parse(fmt: str, text: str | None, path: str | None,
           fixed_base: bool) -> tuple[mujoco.MjSpec, Facts]:
-    """A model parsed and rigged (rig); URDF's base floats unless ``fixed_base``,
-    MJCF's is as the file says."""
+    """A model parsed and readied (model_setup.ready_model); URDF's base floats unless
+    ``fixed_base``, MJCF's is as the file says."""
     if fmt == "mjcf":
         child, facts = ms.parse_mjcf(text, path), Facts()
     elif fmt == "urdf":
@@ -145,7 +145,7 @@ def parse(fmt: str, text: str | None, path: str | None,
         raise FeatureUnsupportedError(f"model format {fmt!r} is not supported by MuJoCo "
                                       f"here; supported: {', '.join(FORMATS)}")
     try:
-        rig(child, facts, float_base=fmt == "urdf" and not fixed_base, urdf=fmt == "urdf")
+        ready_model(child, facts, float_base=fmt == "urdf" and not fixed_base, urdf=fmt == "urdf")
         ms.ready_tops(child, fmt)
     except MUJOCO_ERRORS as exc:
         raise mujoco_error(exc, f"the {fmt.upper()} model cannot be rigged") from exc
@@ -155,7 +155,7 @@ def parse(fmt: str, text: str | None, path: str | None,
 def check_model_names(engine: MujocoEngine, names: Sequence[str], *,
                       world_link: bool = False) -> None:
     """Refuse a model whose bodies' names are taken, or the engine's own (but "world" for
-    a URDF's world link, which MuJoCo knows by another name: ``rig.body_name``)."""
+    a URDF's world link, which MuJoCo knows by another name: ``model_setup.body_name``)."""
     for name in names:
         own = (name == WORLD and not world_link) or name.startswith(mp.PREFIX)
         if name in engine.entities or name in engine.parts or own:

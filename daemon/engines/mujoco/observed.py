@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from galton.daemon.engines.mujoco import perception as sensing
+from galton.daemon.engines.mujoco import contacts as touches
 
 if TYPE_CHECKING:
     from galton.daemon.engines.mujoco.engine import MujocoEngine
@@ -35,9 +35,9 @@ def freeze(engine: MujocoEngine) -> None:
     """Keep what the last step left, before an edit recomputes it (once per step)."""
     if engine.observed is not None:
         return
-    names = [j.name for j in engine.joint_book.describe() if j.scalar]
-    efforts = engine.joint_book.read(engine.data, names)[2] if names else np.zeros(0)
-    engine.observed = Observed(sensing.touching(engine, None),
+    names = [j.name for j in engine.loaded_joints.describe() if j.scalar]
+    efforts = engine.loaded_joints.read(engine.data, names)[2] if names else np.zeros(0)
+    engine.observed = Observed(touches.touching(engine, None),
                                 dict(zip(names, efforts.tolist(), strict=True)))
 
 
@@ -45,7 +45,7 @@ def contacts(engine: MujocoEngine, names: Sequence[str] | None) -> ContactRows:
     """The last step's contacts among entities still there (either among ``names``)."""
     observed = engine.observed
     if observed is None:
-        return sensing.touching(engine, names)
+        return touches.touching(engine, names)
     if names is not None:
         engine.body_ids(names)  # NotFoundError for a name that is no entity's
     first, second, positions, normals, forces, depths = observed.contacts

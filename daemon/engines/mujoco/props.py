@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from galton.daemon.engines.mujoco import spec as ms
+from galton.daemon.engines.mujoco import mj_spec as ms
 from galton.daemon.engines.mujoco import state as mst
 from galton.daemon.engines.mujoco.entities import BODY, Entity
 from galton.protocol import BodyProperties, GaltonError

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any
 import mujoco
 import numpy as np
 
-from galton.daemon.engines.mujoco import pool as mp
+from galton.daemon.engines.mujoco import parked as mp
 from galton.daemon.engines.mujoco.entities import (
     MUJOCO_ERRORS,
     Entity,
@@ -36,9 +36,9 @@ def delete(engine: MujocoEngine, names: Sequence[str]) -> None:
         if entity.source == "link":
             raise InvalidArgumentError(f"entity {name!r} is a link of the model "
                                        f"{entity.model!r}: delete the model")
-    parked, removed = engine.pool.split(entities)
+    parked, removed = engine.parked.split(entities)
     if removed and engine.models:
-        try_removing(engine.spec, removed)
+        try_removing(engine.mj_spec, removed)
     for name, entity in zip(names, entities, strict=True):
         forget(engine, name, entity)
     if put_away(engine, parked, removed):
@@ -53,9 +53,9 @@ def delete(engine: MujocoEngine, names: Sequence[str]) -> None:
     else:
         chosen = {id(e) for e in parked}
         park = ids[[i for i, e in enumerate(entities) if id(e) in chosen]]
-        engine.pool_edited |= bool(len(park))
-        if engine.balance is not None:
-            engine.balance.forget(engine.model, engine.model.body_treeid[park])
+        engine.parked_edited |= bool(len(park))
+        if engine.sleep_guard is not None:
+            engine.sleep_guard.forget(engine.model, engine.model.body_treeid[park])
     mp.park_arrays(engine.model, engine.data, engine.index, park)
     engine.wrenches.apply(engine.data, engine.ids)
 
@@ -71,7 +71,7 @@ def clear(engine: MujocoEngine) -> None:
     if engine.models or engine.broken:
         engine.build_empty()  # a model may bring more than bodies: start afresh
         return
-    parked, removed = engine.pool.split(entities)
+    parked, removed = engine.parked.split(entities)
     if put_away(engine, parked, removed):
         try:
             engine.recompile()
@@ -79,7 +79,7 @@ def clear(engine: MujocoEngine) -> None:
             engine.build_empty()
             return
     else:
-        engine.pool_edited |= bool(parked)
+        engine.parked_edited |= bool(parked)
     mp.park_arrays(engine.model, engine.data, engine.index,
                    np.array([e.body.id for e in parked], dtype=np.int64))
     mujoco.mj_resetData(engine.model, engine.data)
@@ -90,30 +90,30 @@ def put_away(engine: MujocoEngine, parked: Sequence[Entity],
              removed: Sequence[Entity]) -> bool:
     """Park what the pool takes and take the rest out of the spec; whether a recompile
     must follow."""
-    engine.pool.park(parked)
+    engine.parked.park(parked)
     if removed:
-        mp.remove_bodies(engine.spec, [e.body for e in removed], sweep(engine))
-        drop_assets(engine.spec, list(removed))
+        mp.remove_bodies(engine.mj_spec, [e.body for e in removed], sweep(engine))
+        drop_assets(engine.mj_spec, list(removed))
     return bool(removed) or gravcomp_missing(engine.model, parked)
 
 
 def forget(engine: MujocoEngine, name: str, entity: Entity) -> None:
     """Strike an entity (with a model's links, joints and targets) from the engine's
-    books, and its wrenches."""
+    records, and its wrenches."""
     for gone in (name, *entity.parts):
         del engine.entities[gone]
         del engine.ids[gone]
     engine.wrenches.drop([name, *entity.parts])
-    engine.joint_book.forget_model(name)
+    engine.loaded_joints.forget_model(name)
     engine.watch = None
     engine.parts.difference_update(entity.parts)
     engine.models -= entity.source == "model"
 
 
 def sweep(engine: MujocoEngine) -> list[Any]:
-    """The litter (see pool.Additions.bodies), handed over to be deleted."""
-    litter, engine.litter = engine.litter, []
-    return litter
+    """The empty frames (see parked.Additions.bodies), handed over to be deleted."""
+    empty_frames, engine.empty_frames = engine.empty_frames, []
+    return empty_frames
 
 
 def gravcomp_missing(model: mujoco.MjModel, parked: Sequence[Entity]) -> bool:

@@ -20,13 +20,17 @@ import importlib
 import os
 import sys
 from collections.abc import Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import mujoco
 import numpy as np
 
 from galton.daemon.engines.base import CameraView
+from galton.daemon.engines.mujoco.entities import geom_entities
 from galton.protocol import OperationFailedError
+
+if TYPE_CHECKING:
+    from galton.daemon.engines.mujoco.engine import MujocoEngine
 
 BACKENDS = ("egl", "osmesa")
 SHOWN, HIDDEN = 0, 1  # geom groups while a scene is made: entities' and the rest
@@ -224,3 +228,25 @@ def _z_depth(raw: np.ndarray, near: float, far: float) -> np.ndarray:
     depth = far * near / ((far - near) * raw64 + near)
     depth[raw64 <= 0.0] = np.inf
     return depth.astype(np.float32)
+
+
+def render(engine: MujocoEngine, cameras: Sequence[CameraView]
+           ) -> tuple[list[dict[str, np.ndarray]], list[str]]:
+    """The cameras' images at the current positions; labels are the entities seen."""
+    if not cameras:
+        return [], []
+    if engine.cameras is None:
+        engine.cameras = CameraRig()
+    m, d = engine.model, engine.data
+    mujoco.mj_kinematics(m, d)  # the data's poses are from before the last step's move
+    names, label = geom_entities(m, engine.ids)
+    images = engine.cameras.render(m, d, label >= 0, label, cameras)
+    seen = np.unique(np.concatenate([im["segmentation"].ravel() for im in images
+                                     if "segmentation" in im] or [np.empty(0, np.int32)]))
+    seen = seen[seen >= 0]
+    compact = np.full(len(names) + 1, -1, np.int32)  # the last entry maps -1 to -1
+    compact[seen] = np.arange(len(seen))
+    for im in images:
+        if "segmentation" in im:
+            im["segmentation"] = compact[im["segmentation"]]
+    return images, [names[i] for i in seen]

@@ -1,7 +1,7 @@
 """Spawning into the MuJoCo world, as functions of the engine.
 
 A spawn binds the names to parked, pre-compiled bodies where the pool holds enough of a
-group's kind: no compile (``pool``). The other groups are added to the spec, with spare
+group's kind: no compile (``parked``). The other groups are added to the spec, with spare
 parked twins, and compiled in one recompile that keeps the state of the bodies already there.
 """
 
@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from galton.daemon.engines.mujoco import pool as mp
+from galton.daemon.engines.mujoco import parked as mp
 from galton.daemon.engines.mujoco import state as mst
 from galton.daemon.engines.mujoco.entities import WORLD, Entity
 from galton.protocol import BodyGroup, InvalidArgumentError, NameNotUniqueError
@@ -25,7 +25,7 @@ def spawn(engine: MujocoEngine, groups: Sequence[BodyGroup]) -> None:
     """Bind parked bodies where the pool has enough of a group's kind; compile the other
     groups (with spare parked twins) in one recompile."""
     check_new(engine, [n for g in groups for n in g.names])
-    pooled, compiled = engine.pool.plan(groups, engine.values, engine.model.nbody,
+    pooled, compiled = engine.parked.plan(groups, engine.values, engine.model.nbody,
                                          len(engine.entities), engine.free_bodies())
     if compiled:
         compile_groups(engine, compiled)
@@ -53,35 +53,35 @@ def check_new(engine: MujocoEngine, names: Sequence[str]) -> None:
 
 def compile_groups(engine: MujocoEngine, compiled: Sequence[mp.Planned]) -> None:
     """Add the groups' bodies and spares, recompile; on any failure take them out."""
-    snapshot = engine.pool.snapshot()
-    additions = mp.Additions(engine.spec, engine.builders)
+    snapshot = engine.parked.snapshot()
+    additions = mp.Additions(engine.mj_spec, engine.builders)
     nbody, nv = engine.model.nbody, engine.model.nv
     try:
         for group, material, _, spares in compiled:
             additions.add(group, material)
             if spares:
-                additions.add(engine.pool.spare_group(group, spares), material, parked=True)
+                additions.add(engine.parked.spare_group(group, spares), material, parked=True)
             nbody += len(group) + spares
             nv += 0 if group.static else 6 * (len(group) + spares)
         engine.compile(nbody, nv)
     except BaseException:
-        engine.pool.restore(snapshot)
+        engine.parked.restore(snapshot)
         additions.undo()
         raise
     made = iter(additions.bodies())
-    engine.litter += additions.litter
+    engine.empty_frames += additions.empty_frames
     for group, _, key, spares in compiled:
         for name, body in zip(group.names, next(made), strict=True):
             engine.entities[name] = Entity(body, group.static, friction=group.friction,
                                             restitution=group.restitution, key=key)
         if spares and key is not None:
-            engine.pool.adopt(key, next(made))
+            engine.parked.adopt(key, next(made))
     engine.reindex()
 
 
 def bind(engine: MujocoEngine, group: BodyGroup, key: mp.Key) -> None:
     """Give a group's names to parked bodies of its kind and release them: no compile."""
-    bodies = engine.pool.take(key, len(group))
+    bodies = engine.parked.take(key, len(group))
     poses = np.asarray(group.poses, dtype=float)
     mp.bind_spec(bodies, group.names, poses)
     for name, body in zip(group.names, bodies, strict=True):
@@ -89,6 +89,6 @@ def bind(engine: MujocoEngine, group: BodyGroup, key: mp.Key) -> None:
                                         restitution=group.restitution, key=key)
         engine.ids[name] = body.id
     engine.watch = None
-    engine.pool_edited = True
+    engine.parked_edited = True
     mp.bind_arrays(engine.model, engine.data, engine.index, engine.body_ids(group.names),
                    poses)

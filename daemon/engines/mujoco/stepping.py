@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 import mujoco
 import numpy as np
 
-from galton.daemon.engines.mujoco import spec as ms
+from galton.daemon.engines.mujoco import mj_spec as ms
 from galton.daemon.engines.mujoco import state as mst
 from galton.protocol import OperationFailedError
 
@@ -76,8 +76,8 @@ def look(engine: MujocoEngine) -> None:
     costs about 40 µs, twice a small world's step, so never once per step."""
     engine.steps_since_look = 0
     engine.track_crowding()
-    if engine.balance is not None:
-        engine.balance.check(engine.model, engine.data, engine.writable_model)
+    if engine.sleep_guard is not None:
+        engine.sleep_guard.check(engine.model, engine.data, engine.writable_model)
 
 
 def state_within(engine: MujocoEngine, max_position: float, max_speed: float) -> bool:
@@ -103,9 +103,9 @@ def reset_dynamics(engine: MujocoEngine) -> None:
 
 
 def restart_looks(engine: MujocoEngine) -> None:
-    """The periodic looks start over, with a fresh balance guard: a rewound or cleared
+    """The periodic looks start over, with a fresh sleep guard: a rewound or cleared
     world replays its trajectory exactly."""
     engine.steps_since_look = 0
-    if engine.balance is not None:
-        engine.balance.release_all(engine.model)
-        engine.balance = engine.balance_guard()
+    if engine.sleep_guard is not None:
+        engine.sleep_guard.release_all(engine.model)
+        engine.sleep_guard = engine.new_sleep_guard()

@@ -16,7 +16,7 @@ import xml.etree.ElementTree as ET
 
 import mujoco
 
-from galton.daemon.engines.mujoco.rig import STAND_IN, WORLD_LINK, Facts
+from galton.daemon.engines.mujoco.model_setup import STAND_IN, WORLD_LINK, Facts
 from galton.protocol import InvalidArgumentError
 
 COMPILER = {"fusestatic": "false", "discardvisual": "false", "strippath": "false",

@@ -3,7 +3,7 @@
 MuJoCo applies ``xfrc_applied`` (force, torque; world frame) at a body's centre of mass in
 every step, and wakes a sleeping body it pushes. A wrench given at a point p is moved to the
 centre of mass c taken at the time of the call (torque + (p - c) x force) and then held
-constant. The books are kept by entity name and written again whole after every change of
+constant. The records are kept by entity name and written again whole after every change of
 the body ids (a compile, a delete), so a parked or removed body keeps no force.
 """
 
@@ -71,7 +71,7 @@ def clear_wrenches(engine: MujocoEngine, names: Sequence[str] | None) -> None:
 
 def restore_joints(engine: MujocoEngine) -> None:
     """Every loaded model's joints back as loaded, no targets held, no wrenches."""
-    joints = engine.joint_book
+    joints = engine.loaded_joints
     roots = np.fromiter((engine.ids[n] for n in joints.infos), dtype=np.int64,
                         count=len(joints.infos))
     joints.restore(engine.model, engine.data, roots)

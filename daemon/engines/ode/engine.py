@@ -6,7 +6,7 @@ Webots sources in docs/ENGINES.md).
 One world, one sweep-and-prune space holding every geom, one group of contact joints emptied before
 each step's collision. Parts: bodies (spawn.py; meshes: trimesh.py), states (state.py),
 collision and contact reports (contacts.py), ray casts (rays.py), snapshots (snapshot.py,
-snapshot_format.py), robots (joints.py, urdf.py).
+snapshot/format.py), robots (joints.py, models.py).
 
 Determinism: ``dWorldStep`` draws no random numbers, ODE's space visits geoms in the order
 they were made, and a restore makes them again in that order, so the same steps give the
@@ -22,26 +22,6 @@ from typing import Any
 import numpy as np
 
 from galton.daemon.engines.base import (
-    FEATURE_CONTACTS,
-    FEATURE_DELETE,
-    FEATURE_JOINT_TARGETS,
-    FEATURE_JOINTS,
-    FEATURE_LOAD_MODEL,
-    FEATURE_MODEL_SHAPES,
-    FEATURE_RAYCAST,
-    FEATURE_SET_STATE,
-    FEATURE_SNAPSHOT,
-    FEATURE_SPAWN,
-    FEATURE_SPAWN_INERTIA,
-    FEATURE_STATIC_POSE,
-    FEATURE_TARGET_EFFORT,
-    FEATURE_TARGET_POSITION,
-    FEATURE_TARGET_VELOCITY,
-    FEATURE_UPDATE_FRICTION,
-    FEATURE_UPDATE_MASS,
-    FEATURE_UPDATE_RESTITUTION,
-    FEATURE_UPDATE_RGBA,
-    FEATURE_WRENCH,
     ContactPoints,
     Engine,
     RayHits,
@@ -52,19 +32,17 @@ from galton.daemon.engines.ode import spawn as spawning
 from galton.daemon.engines.ode import state as states
 from galton.daemon.engines.ode.contacts import Collider, sync_sleep
 from galton.daemon.engines.ode.joints import Robots, place
+from galton.daemon.engines.ode.models import MODEL_FORMATS, load_urdf
 from galton.daemon.engines.ode.native import LIB, SAP_AXES_XZY, version
-from galton.daemon.engines.ode.params import SPECS, SURFACE_DEFAULTS, default_keys
+from galton.daemon.engines.ode.params import PARAMS, SURFACE_DEFAULTS, default_keys
 from galton.daemon.engines.ode.rays import RayCaster
+from galton.daemon.engines.ode.shapes import model_shapes
 from galton.daemon.engines.ode.snapshot import Snapshots
 from galton.daemon.engines.ode.spawn import Body
-from galton.daemon.engines.ode.urdf import MODEL_FORMATS, load_urdf
 from galton.daemon.engines.params import check_updates
 from galton.protocol import (
-    BODY_SHAPES,
-    PROTOCOL_VERSION,
     BodyGroup,
     BodyProperties,
-    Capabilities,
     EntityInfo,
     FeatureUnsupportedError,
     InvalidArgumentError,
@@ -73,22 +51,16 @@ from galton.protocol import (
     NotFoundError,
 )
 
-FEATURES = (FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDATE_MASS,
-            FEATURE_UPDATE_FRICTION, FEATURE_UPDATE_RESTITUTION, FEATURE_UPDATE_RGBA,
-            FEATURE_STATIC_POSE, FEATURE_LOAD_MODEL, FEATURE_JOINTS, FEATURE_JOINT_TARGETS,
-            FEATURE_TARGET_POSITION, FEATURE_TARGET_VELOCITY, FEATURE_TARGET_EFFORT,
-            FEATURE_WRENCH, FEATURE_SNAPSHOT, FEATURE_RAYCAST,
-            FEATURE_CONTACTS, FEATURE_SPAWN_INERTIA, FEATURE_MODEL_SHAPES)
-
-
 MAX_SPIN = 1e8  # rad/s: the most spin ODE integrates in a body (above the protocol's MAX_TWIST)
-SHAPES = BODY_SHAPES  # a mesh: an ODE trimesh (trimesh.py, docs/ENGINES.md "Meshes")
 
 
 class OdeEngine(Snapshots, Engine):
     """Named rigid bodies in an ODE world stepped as Webots steps it."""
 
     name = "ode"
+    param_specs = PARAMS
+    model_formats = MODEL_FORMATS
+    spawn_inertia = True
 
     def __init__(self) -> None:
         self._world = int(LIB.dWorldCreate())
@@ -105,7 +77,7 @@ class OdeEngine(Snapshots, Engine):
         self._moving: list[Body] = []
         self._serials = itertools.count()
         self._wrenches: dict[str, list[float]] = {}
-        self._values: dict[str, Any] = {n: s.default for n, s in SPECS.items()}
+        self._values: dict[str, Any] = {n: s.default for n, s in PARAMS.items()}
         self._collider = Collider(self._world, self._space, self._by_geom)
         self._rays = RayCaster(self._space, self._by_geom)
         self._robots = Robots()
@@ -118,11 +90,9 @@ class OdeEngine(Snapshots, Engine):
         self._apply(self._values)
 
     # -- description and parameters ---------------------------------------------------------
-    def capabilities(self) -> Capabilities:
-        return Capabilities(engine=self.name, engine_version=version(),
-                            protocol_version=PROTOCOL_VERSION, body_shapes=SHAPES,
-                            model_formats=MODEL_FORMATS, features=FEATURES,
-                            params={n: s.describe() for n, s in SPECS.items()})
+    @classmethod
+    def engine_version(cls) -> str:
+        return version()
 
     @property
     def timestep(self) -> float:
@@ -132,7 +102,7 @@ class OdeEngine(Snapshots, Engine):
         return {k: list(v) if isinstance(v, tuple) else v for k, v in self._values.items()}
 
     def set_params(self, params: dict[str, Any]) -> None:
-        clean = check_updates(self.name, SPECS, params)
+        clean = check_updates(self.name, PARAMS, params)
         self._values.update(clean)
         self._apply(clean)
 
@@ -225,8 +195,8 @@ class OdeEngine(Snapshots, Engine):
             raise NotFoundError(f"no entity named {exc.args[0]!r} in the ODE world") from None
 
     def shapes(self, names: Sequence[str]) -> list[list[Shape]]:
-        """A link's collision shapes as loaded (urdf.py: a mesh is already its box)."""
-        return [list(body.link_shapes) for body in self._lookup(names)]
+        """A link's collision shapes as loaded (shapes.py: a mesh is already its box)."""
+        return model_shapes(self._lookup(names))
 
     def update(self, names: Sequence[str], props: BodyProperties) -> None:
         bodies = self._lookup(names)
@@ -361,7 +331,7 @@ class OdeEngine(Snapshots, Engine):
             self._lookup(list(wanted))
         return ContactPoints(*self._collider.report(wanted))
 
-    # -- models and joints (joints.py, urdf.py) -----------------------------------------------
+    # -- models and joints (joints.py, models.py) ----------------------------------------------
     def load_model(self, fmt: str, text: str | None, path: str | None,
                    prefix: str, *, fixed_base: bool = True) -> list[EntityInfo]:
         if fmt not in MODEL_FORMATS:

@@ -52,7 +52,7 @@ SOURCES = {
                                      "(WorldInfo.physicsDisableAngularThreshold)",
 }
 
-SPECS: dict[str, ParamSpec] = with_sources({spec.name: spec for spec in (
+PARAMS: dict[str, ParamSpec] = with_sources({spec.name: spec for spec in (
     shared("timestep", DEFAULT_TIMESTEP, "Simulated time per step (Webots' default "
            f"basicTimeStep is {WEBOTS_TIMESTEP} s: the paper-webots board sets it)."),
     shared("gravity", (0.0, 0.0, -9.81), "Gravity vector, world frame."),

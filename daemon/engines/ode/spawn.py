@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from galton.daemon.engines.geometry import DENSITY, volume
 from galton.daemon.engines.ode import frames
 from galton.daemon.engines.ode.frames import Frame
 from galton.daemon.engines.ode.native import LIB, Mass, body_state, quaternion
@@ -28,7 +29,6 @@ from galton.protocol import BodyGroup, InvalidArgumentError
 from galton.protocol import mesh as mesh_wire
 from galton.protocol.vocabulary import POSE_WIDTH, TWIST_WIDTH
 
-DENSITY = 1000.0  # kg/m³ of a body spawned with no mass
 AWAKE, STATIC, ASLEEP, RAY = 1, 2, 4, 8
 COLLIDES = {AWAKE: AWAKE | STATIC | ASLEEP | RAY, STATIC: AWAKE | RAY, ASLEEP: AWAKE | RAY}
 
@@ -75,14 +75,6 @@ class Body:
             LIB.dGeomSetCollideBits(geom, COLLIDES[kind])
 
 
-def volume(shape: str, size: tuple[float, ...]) -> float:
-    ball = 4.0 / 3.0 * math.pi * size[0] ** 3
-    if shape == "sphere":
-        return ball
-    if shape == "box":
-        return 8.0 * size[0] * size[1] * size[2]
-    cylinder = math.pi * size[0] ** 2 * 2.0 * size[1]
-    return cylinder + (ball if shape == "capsule" else 0.0)
 
 
 def mass_of(shape: str, size: tuple[float, ...], total: float) -> Mass:

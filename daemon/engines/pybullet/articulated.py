@@ -1,5 +1,5 @@
 """The PyBullet engine's part that loads models and drives their joints: a model's root and
-links as entities, its joints, targets and held wrenches (books in robots.py,
+links as entities, its joints, targets and held wrenches (records in robots.py,
 the actuator law in joints.py, link frames in frames.py).
 
 A URDF model is one multibody: its base is the root entity, every other link a link
@@ -21,6 +21,7 @@ import numpy as np
 from pybullet_utils.bullet_client import BulletClient
 
 from galton.daemon.engines.pybullet import models
+from galton.daemon.engines.pybullet.bodies import link_masses, load_bodies
 from galton.daemon.engines.pybullet.files import facts
 from galton.daemon.engines.pybullet.frames import (
     Offset,
@@ -31,11 +32,10 @@ from galton.daemon.engines.pybullet.frames import (
 from galton.daemon.engines.pybullet.joints import articulation, free_motors
 from galton.daemon.engines.pybullet.rebuild import Body, Model
 from galton.daemon.engines.pybullet.robots import Robots
-from galton.daemon.engines.pybullet.shapes import link_masses, load_bodies
 from galton.protocol import EntityInfo, JointInfo, NameNotUniqueError, NotFoundError
 
 if TYPE_CHECKING:
-    from galton.daemon.engines.pybullet.shapes import BodyMaker
+    from galton.daemon.engines.pybullet.bodies import BodyMaker
 
 
 class Articulated:

@@ -30,7 +30,7 @@ The engine's parts: this module (bodies, models), ``Parameters``
 (params.py), ``Rebuilding`` (rebuild.py), ``Articulated`` (joints,
 articulated.py), ``Snapshots`` (snapshot.py) and ``Perception``
 (render, raycast, contacts: perception.py). Plain functions do the rest:
-states and the divergence check (state.py), a spawn group's values and books
+states and the divergence check (state.py), a spawn group's values and records
 (spawn.py), a body's updates and properties
 (props.py), a model load's checks and names (models.py).
 """
@@ -47,68 +47,48 @@ import pybullet
 from pybullet_utils.bullet_client import BulletClient
 
 from galton.daemon.engines.base import (
-    FEATURE_CONTACTS,
-    FEATURE_DELETE,
-    FEATURE_JOINT_TARGETS,
-    FEATURE_JOINTS,
-    FEATURE_LOAD_MODEL,
-    FEATURE_MODEL_SHAPES,
-    FEATURE_RAYCAST,
-    FEATURE_RENDER,
-    FEATURE_SET_STATE,
-    FEATURE_SNAPSHOT,
-    FEATURE_SPAWN,
-    FEATURE_SPAWN_INERTIA,
-    FEATURE_STATIC_POSE,
-    FEATURE_TARGET_EFFORT,
-    FEATURE_TARGET_POSITION,
-    FEATURE_TARGET_VELOCITY,
-    FEATURE_UPDATE_FRICTION,
-    FEATURE_UPDATE_MASS,
-    FEATURE_UPDATE_RESTITUTION,
-    FEATURE_UPDATE_RGBA,
-    FEATURE_WRENCH,
     Engine,
     Shape,
     ShapeMesh,
     native_output_silenced,
 )
 from galton.daemon.engines.params import check_updates
-from galton.daemon.engines.pybullet import collisions, rebuild
 from galton.daemon.engines.pybullet import props as bodyprops
+from galton.daemon.engines.pybullet import rebuild, shapes
 from galton.daemon.engines.pybullet import spawn as spawning
 from galton.daemon.engines.pybullet import state as states
 from galton.daemon.engines.pybullet.articulated import Articulated
+from galton.daemon.engines.pybullet.bodies import BodyMaker, ShapeCache
 from galton.daemon.engines.pybullet.calls import engine_call
 from galton.daemon.engines.pybullet.frames import Offset
 from galton.daemon.engines.pybullet.joints import set_damping
 from galton.daemon.engines.pybullet.mesh_files import HullCache
 from galton.daemon.engines.pybullet.models import MODEL_FORMATS
-from galton.daemon.engines.pybullet.params import SPECS, Parameters
+from galton.daemon.engines.pybullet.params import PARAMS, Parameters
 from galton.daemon.engines.pybullet.perception import Perception
 from galton.daemon.engines.pybullet.rebuild import Body as _Body
 from galton.daemon.engines.pybullet.rebuild import Rebuilding
 from galton.daemon.engines.pybullet.render import RENDER_BACKEND
 from galton.daemon.engines.pybullet.robots import Robots
-from galton.daemon.engines.pybullet.shapes import BodyMaker, ShapeCache
 from galton.daemon.engines.pybullet.snapshot import Snapshots
 from galton.protocol import (
-    PROTOCOL_VERSION,
     BodyGroup,
     BodyProperties,
-    Capabilities,
     EntityInfo,
     InvalidArgumentError,
     NameNotUniqueError,
     NotFoundError,
 )
-from galton.protocol.vocabulary import BODY_SHAPES, POSE_WIDTH, TWIST_WIDTH
+from galton.protocol.vocabulary import POSE_WIDTH, TWIST_WIDTH
 
 
 class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception, Engine):
     """Named rigid bodies in a headless PyBullet world."""
 
     name = "pybullet"
+    param_specs = PARAMS
+    model_formats = MODEL_FORMATS
+    spawn_inertia = True
 
     def __init__(self) -> None:
         with native_output_silenced():  # "argv[0]=" when it connects
@@ -126,7 +106,7 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
         self._hulls = HullCache()  # model mesh files' hulls, for get_shapes
         self.bodies: dict[str, _Body] = {}
         self._maker = BodyMaker(bc)
-        self._values: dict[str, Any] = {name: spec.default for name, spec in SPECS.items()}
+        self._values: dict[str, Any] = {name: spec.default for name, spec in PARAMS.items()}
         self._removed = 0  # bodies removed since resetSimulation last ran
         self.held: dict[str, rebuild.Held] = {}  # states a rebuild could not set bit for bit
         # Poses given to PyBullet (spawn, set_states) since the last step: a rebuild sets
@@ -139,23 +119,12 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
         self._configure_world()
 
     # -- description ----------------------------------------------------------------------
-    def capabilities(self) -> Capabilities:
-        return Capabilities(
-            engine=self.name,
-            engine_version=importlib.metadata.version("pybullet"),
-            protocol_version=PROTOCOL_VERSION,
-            body_shapes=BODY_SHAPES,
-            model_formats=MODEL_FORMATS,
-            features=(FEATURE_SPAWN, FEATURE_DELETE, FEATURE_SET_STATE, FEATURE_UPDATE_MASS,
-                      FEATURE_UPDATE_FRICTION, FEATURE_UPDATE_RESTITUTION, FEATURE_UPDATE_RGBA,
-                      FEATURE_LOAD_MODEL, FEATURE_STATIC_POSE, FEATURE_JOINTS,
-                      FEATURE_JOINT_TARGETS, FEATURE_TARGET_POSITION, FEATURE_TARGET_VELOCITY,
-                      FEATURE_TARGET_EFFORT, FEATURE_WRENCH, FEATURE_SNAPSHOT, FEATURE_RENDER,
-                      FEATURE_RAYCAST, FEATURE_CONTACTS, FEATURE_SPAWN_INERTIA,
-                      FEATURE_MODEL_SHAPES),
-            params={name: spec.describe() for name, spec in SPECS.items()},
-            render_backend=RENDER_BACKEND,
-        )
+    @classmethod
+    def engine_version(cls) -> str:
+        return importlib.metadata.version("pybullet")
+
+    def render_backend(self) -> str:
+        return RENDER_BACKEND
 
     @property
     def timestep(self) -> float:
@@ -167,7 +136,7 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
 
     @engine_call
     def set_params(self, params: dict[str, Any]) -> None:
-        clean = check_updates(self.name, SPECS, params)
+        clean = check_updates(self.name, PARAMS, params)
         self._values.update(clean)
         self._apply(clean)
 
@@ -215,7 +184,7 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
                 self.reset_velocity(uid, twists[k][:3], twists[k][3:])
             self._change(uid, -1, **dynamics)
         self._set_margin(ids[0], group.shape, size)
-        return spawning.books(group, ids, size, mass, (friction, restitution), batch, redo)
+        return spawning.records(group, ids, size, mass, (friction, restitution), batch, redo)
 
     def _group_shapes(self, group: BodyGroup, size: tuple[float, ...]) -> tuple[int, int]:
         """A group's collision and visual shapes (shared through the cache)."""
@@ -327,7 +296,7 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
         found = []
         for name in names:
             uid, link = self._link_of(name)
-            found.append(collisions.link_shapes_and_meshes(self._bc, uid, link, self._hulls))
+            found.append(shapes.link_shapes_and_meshes(self._bc, uid, link, self._hulls))
         return found
 
     def _link_of(self, name: str) -> tuple[int, int]:
@@ -393,7 +362,7 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
     # -- snapshots (snapshot.py) ------------------------------------------------
     @engine_call
     def snapshot(self, *, canonical: bool = True) -> dict[str, Any]:
-        """The world as plain data: every body's books, model texts, articulations, targets,
+        """The world as plain data: every body's records, model texts, articulations, targets,
         wrenches, parameters and states. Bullet's contact points and warm starts cannot be
         read out, so a restore starts without them, as ``reset_dynamics`` leaves a world.
         The promise (on the same PyBullet build): a fresh engine restored from the

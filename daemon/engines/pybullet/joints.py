@@ -49,7 +49,7 @@ SCALAR = (pybullet.JOINT_REVOLUTE, pybullet.JOINT_PRISMATIC)
 @dataclass(slots=True)
 class Articulation:
     """One model's links and joints, by entity and joint name (never by PyBullet id, so
-    that the books outlive a rebuild), with the targets its 1-DOF joints hold."""
+    that the records outlive a rebuild), with the targets its 1-DOF joints hold."""
 
     root: str
     links: list[str | None]  # entity names (None: hidden); position j is PyBullet link j

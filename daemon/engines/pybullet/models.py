@@ -13,9 +13,9 @@ from typing import Any
 from pybullet_utils.bullet_client import BulletClient
 
 from galton.daemon.engines.pybullet import props
+from galton.daemon.engines.pybullet.bodies import read_text, unique_name
 from galton.daemon.engines.pybullet.files import FileFacts
 from galton.daemon.engines.pybullet.rebuild import Body, Model
-from galton.daemon.engines.pybullet.shapes import read_text, unique_name
 from galton.protocol import (
     EntityInfo,
     FeatureUnsupportedError,
@@ -80,7 +80,7 @@ def link_names(bc: BulletClient, ids: list[int], roots: list[str], prefix: str,
 
 def model_body(bc: BulletClient, change: Callable[..., Any], ccd_radius: float, uid: int,
                batch: int) -> Body:
-    """A loaded body's books, with the settings every dynamic body gets."""
+    """A loaded body's records, with the settings every dynamic body gets."""
     static = bc.getDynamicsInfo(uid, -1)[0] <= 0
     # A multibody's damping (0.04 by default) slows its links too, welded base or not.
     change(uid, -1, linearDamping=0.0, angularDamping=0.0)

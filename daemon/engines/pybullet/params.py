@@ -14,7 +14,7 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from galton.daemon.engines.params import ParamSpec, flag, number, shared, with_sources
-from galton.daemon.engines.pybullet.shapes import margin_for
+from galton.daemon.engines.pybullet.bodies import margin_for
 
 if TYPE_CHECKING:
     from pybullet_utils.bullet_client import BulletClient
@@ -45,7 +45,7 @@ SOURCES = {
                                                 "runs give identical results",
 }
 
-SPECS: dict[str, ParamSpec] = with_sources({spec.name: spec for spec in (
+PARAMS: dict[str, ParamSpec] = with_sources({spec.name: spec for spec in (
     shared("timestep", 1 / 240, "Simulated time per step."),
     shared("gravity", (0.0, 0.0, -9.81), "Gravity vector, world frame."),
     shared("solver_iterations", 10, "Constraint solver iterations per step "

@@ -20,7 +20,7 @@ from galton.daemon.engines.pybullet.robots import Robots
 
 
 class Perception:
-    """render, raycast and contacts over the engine's books of bodies and models."""
+    """render, raycast and contacts over the engine's records of bodies and models."""
 
     _bc: BulletClient
     bodies: dict[str, Body]

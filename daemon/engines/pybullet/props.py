@@ -1,7 +1,7 @@
 """A PyBullet body's physical properties: what ``update`` changes and ``properties`` reads.
 
 Plain functions of the client, its bound ``changeDynamics`` (bound once by the engine:
-BulletClient builds a new partial on every attribute access) and the body's books.
+BulletClient builds a new partial on every attribute access) and the body's records.
 """
 
 from __future__ import annotations
@@ -12,14 +12,14 @@ from typing import Any
 
 from pybullet_utils.bullet_client import BulletClient
 
+from galton.daemon.engines.pybullet.bodies import as_rgba, scale_masses
 from galton.daemon.engines.pybullet.rebuild import Body
-from galton.daemon.engines.pybullet.shapes import as_rgba, scale_masses
 from galton.protocol import BodyProperties
 
 
 def edit_spawned(bc: BulletClient, change: Callable[..., Any], body: Body,
                  props: BodyProperties) -> None:
-    """A spawned body's new values, remembered in its books (a rebuild gives them again)."""
+    """A spawned body's new values, remembered in its records (a rebuild gives them again)."""
     dynamics: dict[str, Any] = {}
     if props.mass is not None and body.unit_inertia is not None:
         body.mass = props.mass

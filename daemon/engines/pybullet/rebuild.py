@@ -33,7 +33,7 @@ old state as what ``get_states`` reports until its state is next set or the worl
 Loaded models are loaded again from their text, with the changes ``update`` made since,
 their joints set again to the states they had (left as loaded where they are as loaded, so
 that a rewound model replays its first run bit for bit), their targets and held wrenches
-kept (the books are by name). A world holding a model is still not rebuilt to free
+kept (the records are by name). A world holding a model is still not rebuilt to free
 deleted bodies: the contact caches its joints rely on would go; removeBody's leak stays.
 """
 
@@ -48,7 +48,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from pybullet_utils.bullet_client import BulletClient
 
-from galton.daemon.engines.pybullet.shapes import WHITE, Link, load_bodies
+from galton.daemon.engines.pybullet.bodies import WHITE, Link, load_bodies
 from galton.protocol import (
     BodyGroup,
     BodyProperties,
@@ -60,9 +60,9 @@ if TYPE_CHECKING:
     from collections.abc import Callable
     from typing import Any
 
+    from galton.daemon.engines.pybullet.bodies import BodyMaker
     from galton.daemon.engines.pybullet.frames import Offset
     from galton.daemon.engines.pybullet.robots import JointStates, Robots
-    from galton.daemon.engines.pybullet.shapes import BodyMaker
 
 REBUILD_AFTER = 5_000  # bodies removed since the last rebuild, at the least
 PLACE_TRIES = 4  # quaternion corrections before a pose is held instead
@@ -129,7 +129,7 @@ class Body:
 
 @dataclass(slots=True)
 class Plan:
-    """Everything a rebuild makes a world again from: the bodies' books in the order they
+    """Everything a rebuild makes a world again from: the bodies' records in the order they
     were made, their states (``exact``: poses given since the last step, set as given),
     the models' articulations, inertial offsets and 1-DOF joint states."""
 
@@ -365,7 +365,7 @@ class Rebuilding:
         set makes a matrix a unit in the last place off the loaded one."""
         body = self._adopt_model_body(uid, name, batch)
         if len(model.links) != body.links + 1:  # only a snapshot from elsewhere can differ
-            raise InvalidArgumentError(f"the books of model body {name!r} list "
+            raise InvalidArgumentError(f"the records of model body {name!r} list "
                                        f"{len(model.links)} links; its text makes "
                                        f"{body.links + 1}")
         body.model = model

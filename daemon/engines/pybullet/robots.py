@@ -1,4 +1,4 @@
-"""The PyBullet engine's books of loaded models' links, joints, targets and held wrenches,
+"""The PyBullet engine's records of loaded models' links, joints, targets and held wrenches,
 all by name, so that they outlive a rebuild (which gives every body a new PyBullet id).
 
 ``uid_of`` turns a root's (or a spawned body's) entity name into its PyBullet id now.
@@ -31,7 +31,7 @@ class Robots:
         self._joints: dict[str, tuple[str, int]] = {}  # 1-DOF joint -> root, place
         self.wrenches: dict[str, Wrench] = {}  # by entity name: spawned, root or link
 
-    # -- books ------------------------------------------------------------------------
+    # -- records ------------------------------------------------------------------------
     def check_entities(self, bodies: Collection[str], names: Iterable[str]) -> None:
         """NotFoundError for a name that is neither a body's (spawned or root) nor a link's."""
         for name in names:

@@ -1,8 +1,8 @@
-"""The pure parts of spawning into PyBullet: a group's checks, mass, dynamics and books.
+"""The pure parts of spawning into PyBullet: a group's checks, mass, dynamics and records.
 
 The engine's ``_spawn_group`` makes the bodies (one createMultiBody call for a group, all
 turned like its first body) and hands them these values; a rebuild makes them again from
-the books, through the same calls (rebuild).
+the records, through the same calls (rebuild).
 """
 
 from __future__ import annotations
@@ -11,10 +11,11 @@ from typing import Any
 
 import numpy as np
 
+from galton.daemon.engines.geometry import DENSITY, unit_inertia, volume
 from galton.daemon.engines.pybullet import rebuild
+from galton.daemon.engines.pybullet.bodies import as_rgba
 from galton.daemon.engines.pybullet.params import default_keys
 from galton.daemon.engines.pybullet.rebuild import Body
-from galton.daemon.engines.pybullet.shapes import DENSITY, as_rgba, unit_inertia, volume
 from galton.protocol import BodyGroup, InvalidArgumentError
 from galton.protocol import mesh as mesh_wire
 from galton.protocol.vocabulary import BODY_SHAPES
@@ -75,9 +76,9 @@ def dynamics(group: BodyGroup, size: tuple[float, ...], mass: float,
     return friction, restitution, changes
 
 
-def books(group: BodyGroup, ids: list[int], size: tuple[float, ...], mass: float,
+def records(group: BodyGroup, ids: list[int], size: tuple[float, ...], mass: float,
           surface: tuple[float, float], batch: int, redo: rebuild.Redo) -> dict[str, Body]:
-    """The engine's books of a group's new bodies: everything needed to make them again."""
+    """The engine's records of a group's new bodies: everything needed to make them again."""
     friction, restitution = surface
     rgba = None if group.rgba is None else as_rgba(group.rgba)
     inertia = group_unit_inertia(group, size, mass)

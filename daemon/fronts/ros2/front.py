@@ -184,6 +184,11 @@ class Ros2Front:
     def advertised(self) -> dict[str, Any]:
         return {}
 
+    def client_alive(self, client: str) -> bool | None:
+        """Not this front's to say: a goal's step ends by ``lose`` (a cancel), and a ROS 2
+        caller holds no stream or lease."""
+        return None
+
     def withdraw(self) -> None:
         """The node's token goes at ``close``, after pending requests are answered."""
 

@@ -32,7 +32,7 @@ from galton.client.bench.ray_executor import RayExecutor, RaySettings, ray_execu
 from galton.client.bench.ray_futures import RayFutures
 from galton.client.bench.sweep import run_sweep
 from galton.client.cli.bench import executor_lines
-from galton.client.report_card.pooled import executor_trials
+from galton.client.report_card.trial_runners import executor_trials
 from galton.client.sdk.recording import Recording
 
 TIMEOUT_S = 30.0

@@ -15,7 +15,7 @@ from galton.analysis.report_card import CardResults
 from galton.client.bench.experiment import ExperimentConfig
 from galton.client.cli.app import app
 from galton.client.report_card import CardPlan, run_card, write_report_card
-from galton.client.report_card.pooled import local_trials, pooled_trials
+from galton.client.report_card.trial_runners import local_trials, pool_trials
 from galton.client.sdk.embedded import EmbeddedDaemon, free_loopback_port
 
 TINY = CardPlan(fidelity_balls=20, repetitions=1, curve=(1,), footprint_s=0.5, round_trips=5,
@@ -63,12 +63,12 @@ def test_pool_trials_run_on_a_small_real_pool_and_fall_back_when_none_answers() 
     with EmbeddedDaemon("pybullet", instance="card-pool-1") as first, \
             EmbeddedDaemon("pybullet", instance="card-pool-2",
                            extra_args=["--connect", first.endpoint]), \
-            pooled_trials([first.endpoint], ["card-pool-1", "card-pool-2"], 30.0,
+            pool_trials([first.endpoint], ["card-pool-1", "card-pool-2"], 30.0,
                           said.append) as (trials_of, members):
         assert members == ["card-pool-1", "card-pool-2"]
         records = trials_of(None, "pybullet", config)  # type: ignore[arg-type]
     assert [r.repetition for r in records] == [0, 1] and all(r.balls == 5 for r in records)
-    with pooled_trials([f"tcp/127.0.0.1:{free_loopback_port()}"], None, 5.0,
+    with pool_trials([f"tcp/127.0.0.1:{free_loopback_port()}"], None, 5.0,
                        said.append) as (trials_of, members):
         assert members == [] and trials_of is local_trials
     assert "no pool daemon answers" in said[-1]

@@ -14,8 +14,8 @@ from galton.daemon.core.candidates import CandidateBatch, Observation, position_
 from galton.daemon.core.fit_params import apply_values, parameters
 from galton.daemon.core.limits import Limits
 from galton.daemon.engines import create_engine
-from galton.daemon.world.scene import World
 from galton.daemon.world.snapshot import clone_of
+from galton.daemon.world.world import World
 from galton.protocol.model import BodyGroup
 
 LIMITS = Limits(max_speed=20.0, future_threads=2)

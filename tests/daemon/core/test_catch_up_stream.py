@@ -14,7 +14,7 @@ from galton.daemon.core.calls import Call
 from galton.daemon.core.loop import SimLoop
 from galton.daemon.core.wiring import LoopWiring
 from galton.daemon.engines import create_engine
-from galton.daemon.world.scene import World
+from galton.daemon.world.world import World
 from galton.protocol import BodyGroup, ResultCode, decode_reply, encode_request
 
 BALLS = 200

@@ -1,9 +1,12 @@
-"""Status replies are answered from the loop's snapshot, and a repeated poll of an unchanged
-snapshot reuses the last reply's bytes; any change of what status says is seen at once."""
+"""Status replies are answered from one reading of the loop's status values, and a repeated
+poll of unchanged values reuses the last reply's bytes; any change of what status says is
+seen at once."""
 
 from __future__ import annotations
 
+import gc
 import sys
+import weakref
 from collections.abc import Iterator
 
 import pytest
@@ -12,7 +15,7 @@ from galton.daemon.core.calls import Call
 from galton.daemon.core.loop import SimLoop
 from galton.daemon.core.wiring import LoopWiring
 from galton.daemon.engines import create_engine
-from galton.daemon.world.scene import World
+from galton.daemon.world.world import World
 from galton.protocol import ResultCode, decode_reply, encode_request
 
 
@@ -39,7 +42,7 @@ def handle(loop: SimLoop, op: str, args: dict | None = None) -> None:
     assert answers and decode_reply(answers[0]).code == ResultCode.OK
 
 
-def test_an_unchanged_snapshot_is_answered_with_the_same_bytes(loop: SimLoop) -> None:
+def test_an_unchanged_status_is_answered_with_the_same_bytes(loop: SimLoop) -> None:
     first = poll(loop)
     assert poll(loop) is first
     assert decode_reply(first).result["state"] == "stopped"
@@ -74,3 +77,22 @@ def test_a_bad_request_is_refused_after_a_cached_answer(loop: SimLoop) -> None:
     assert refused.code == ResultCode.NOT_FOUND
     assert "elsewhere" in refused.message
     assert poll(loop) is good
+
+
+def test_a_refused_status_leaves_nothing_for_the_collector(loop: SimLoop) -> None:
+    """Issue 46: a refused status kept its request in a reference cycle (the error, its
+    traceback, the frame that held the error), so each 50 MB one stayed in memory until
+    a full collection; now the call is freed as soon as it is answered."""
+    answers: list[bytes] = []
+    call = Call("status", b"\xc1" * 1000, answers.append)  # 0xc1: never valid msgpack
+    collecting = gc.isenabled()
+    gc.disable()
+    try:
+        loop.handle_readonly(call)
+        freed = weakref.ref(call)
+        del call
+        assert freed() is None
+    finally:
+        if collecting:
+            gc.enable()
+    assert decode_reply(answers[0]).code == ResultCode.MALFORMED_REQUEST

@@ -10,7 +10,7 @@ import pytest
 from galton.daemon.core.loop import DEFAULT_SWITCH_INTERVAL_S, SHORT_SWITCH_INTERVAL_S, SimLoop
 from galton.daemon.core.wiring import LoopWiring
 from galton.daemon.engines import create_engine
-from galton.daemon.world.scene import World
+from galton.daemon.world.world import World
 
 
 @pytest.fixture(autouse=True)

@@ -81,9 +81,9 @@ def test_a_world_edited_in_its_pool_goes_on_exactly_and_later_edits_agree(
     engine.delete([f"s{i}" for i in range(0, 70, 3)])  # parked
     pile(engine, rng, prefix="n", count=20)  # bound from the pool, no compile
     engine.step(200)
-    assert engine.pool_edited
+    assert engine.parked_edited
     twin = engine.clone()
-    assert engine.pool_edited and twin.pool_edited
+    assert engine.parked_edited and twin.parked_edited
     assert_same_world(engine, twin)
     assert_same_runs(engine, twin, [churn, steps(200), lambda e: e.clear(),
                                     lambda e: e.spawn([floor()]),
@@ -122,11 +122,11 @@ def test_a_ball_held_awake_on_a_crown_stays_held_and_is_let_go_alike(
                      poses=np.array([[0, 0, 1.145, 0, 0, 0, 1]]))
     engine.spawn([floor(), pin, ball])
     engine.step(500)
-    assert engine.balance is not None and engine.balance.held
+    assert engine.sleep_guard is not None and engine.sleep_guard.held
     twin = engine.clone()
-    assert twin.balance is not None and twin.balance.held == engine.balance.held
+    assert twin.sleep_guard is not None and twin.sleep_guard.held == engine.sleep_guard.held
     assert_same_runs(engine, twin, [steps(1000)] * 4)
-    assert not engine.balance.held
+    assert not engine.sleep_guard.held
 
 
 def test_changed_parameters_travel_and_later_changes_agree(

@@ -1,7 +1,7 @@
 """The MuJoCo engine on its own, without a daemon: state kept across edits, physics, errors.
 
 What every engine must do is checked by galton.daemon.engines.check (test_engine_check.py);
-here is what is MuJoCo's own: its pool, its compiles, sleep, the balance guard, its limits.
+here is what is MuJoCo's own: its pool, its compiles, sleep, the sleep guard, its limits.
 """
 
 from __future__ import annotations
@@ -20,10 +20,10 @@ from support.materials import board_defaults
 
 from galton.daemon.engines.base import FEATURE_LOAD_MODEL, FEATURE_STATIC_POSE
 from galton.daemon.engines.mujoco import engine as mujoco_engine
-from galton.daemon.engines.mujoco import pool as mujoco_pool
-from galton.daemon.engines.mujoco.balance import HOLD_LIMIT_S
+from galton.daemon.engines.mujoco import parked as mujoco_parked
 from galton.daemon.engines.mujoco.engine import MujocoEngine
-from galton.daemon.engines.mujoco.spec import damping_ratio
+from galton.daemon.engines.mujoco.mj_spec import damping_ratio
+from galton.daemon.engines.mujoco.sleep_guard import HOLD_LIMIT_S
 from galton.protocol import (
     BODY_SHAPES,
     BodyGroup,
@@ -426,11 +426,11 @@ def test_properties_of_a_loaded_model(engine: MujocoEngine) -> None:
 
 
 # -- a refused change changes nothing ----------------------------------------------------
-def _books(engine: MujocoEngine) -> tuple[object, ...]:
+def _records(engine: MujocoEngine) -> tuple[object, ...]:
     """Everything a failed call must leave as it was: the spec, model, data, the engine's
     entities, ids and pool."""
-    pool = {key: list(bodies) for key, bodies in engine.pool._parked.items()}
-    return (engine.spec.to_xml(), engine.model, engine.data, dict(engine.ids),
+    pool = {key: list(bodies) for key, bodies in engine.parked._parked.items()}
+    return (engine.mj_spec.to_xml(), engine.model, engine.data, dict(engine.ids),
             list(engine.entities), pool)
 
 
@@ -448,10 +448,10 @@ def test_a_refused_mass_changes_nothing_and_later_edits_work(engine: MujocoEngin
     (and a delete then lost its bodies with a KeyError); a friction given with it was
     applied."""
     _busy_world(engine)
-    before, props = _books(engine), engine.properties(names)
+    before, props = _records(engine), engine.properties(names)
     with pytest.raises(InvalidArgumentError, match="mass"):
         engine.update(names, BodyProperties(mass=1e-300, friction=0.9, restitution=0.9))
-    assert _books(engine) == before
+    assert _records(engine) == before
     np.testing.assert_array_equal(engine.properties(names), props)
     engine.spawn([group("box", ["crate"], [[2, 2, 1]], size=(0.1, 0.1, 0.1))])  # compiles
     engine.delete([*names, "crate"])
@@ -459,15 +459,15 @@ def test_a_refused_mass_changes_nothing_and_later_edits_work(engine: MujocoEngin
     assert engine.properties(["many7"])[0, 0] == 2.0
 
 
-@pytest.mark.parametrize("count", [1, 100])  # added directly, and attached (see mujoco_pool)
+@pytest.mark.parametrize("count", [1, 100])  # added directly, and attached (see mujoco_parked)
 def test_a_refused_spawn_changes_nothing(engine: MujocoEngine, count: int) -> None:
     _busy_world(engine)
-    before = _books(engine)
+    before = _records(engine)
     names = [f"new{i}" for i in range(count)]
     with pytest.raises(InvalidArgumentError, match="mass"):
         engine.spawn([group("capsule", names, _grid(count, 4.0), size=(0.05, 0.1),
                             mass=1e-300)])
-    assert _books(engine) == before
+    assert _records(engine) == before
     engine.spawn([group("capsule", names, _grid(count, 4.0), size=(0.05, 0.1))])
     engine.delete(names)
 
@@ -482,10 +482,10 @@ def test_a_delete_mujoco_refuses_changes_nothing(engine: MujocoEngine) -> None:
     """Another body's camera aims at "m/a": MuJoCo cannot compile the world without it."""
     _busy_world(engine)
     engine.load_model("mjcf", CAMERA_ON_A, None, "m/")
-    before = _books(engine)
+    before = _records(engine)
     with pytest.raises(InvalidArgumentError, match="camera"):
         engine.delete(["a", "b", "m/a"])
-    assert _books(engine) == before
+    assert _records(engine) == before
     engine.delete(["a", "b", "m/a", "m/c"])
     engine.spawn([ball("a")])
 
@@ -515,11 +515,11 @@ def test_a_model_body_with_a_taken_name_is_refused(engine: MujocoEngine) -> None
     """By an entity (a top-level body, or an inner one) or by another model's inner body."""
     engine.spawn([ball("r2/arm"), ball("r3/base", z=2.0)])
     engine.load_model("mjcf", ROBOT, None, "r/")
-    before = _books(engine)
+    before = _records(engine)
     for prefix, taken in (("r/", "r/base"), ("r2/", "r2/arm"), ("r3/", "r3/base")):
         with pytest.raises(NameNotUniqueError, match=taken):
             engine.load_model("mjcf", ROBOT, None, prefix)
-        assert _books(engine) == before
+        assert _records(engine) == before
     clash = ROBOT.replace('"arm"', '"elbow"').replace('"base"', '"base2"').replace(
         '"pendulum"', '"pendulum2"').replace('"post"', '"arm"')  # "r/arm": r's inner arm
     with pytest.raises(NameNotUniqueError, match="r/arm"):
@@ -674,7 +674,7 @@ def test_a_ball_asleep_on_a_pins_apex_is_woken_and_rolls_off(engine: MujocoEngin
     engine.set_params({"mujoco.wake_balanced": True})
     run(engine, 3.0)
     assert engine.get_states(["a"])[0][0, 2] < start - 0.05  # rolled off the crown
-    assert engine.balance is not None and not engine.balance.held
+    assert engine.sleep_guard is not None and not engine.sleep_guard.held
 
 
 def test_a_ball_asleep_on_another_balls_crown_is_left_alone(engine: MujocoEngine) -> None:
@@ -694,10 +694,10 @@ def test_a_ball_that_stays_on_its_crown_is_let_go_and_sleeps(engine: MujocoEngin
     scene[2].poses[0, 0] = 0.0  # dead centre: perfect balance
     engine.spawn(scene)
     run(engine, 1.0)
-    assert engine.balance is not None and engine.balance.held
+    assert engine.sleep_guard is not None and engine.sleep_guard.held
     run(engine, HOLD_LIMIT_S + 1.0)
     pose, twist = engine.get_states(["a"])
-    assert not engine.balance.held
+    assert not engine.sleep_guard.held
     assert not twist.any() and pose[0, 2] > 1.1  # asleep on the crown after all
 
 
@@ -735,7 +735,7 @@ def test_clearing_the_world_gives_a_held_ball_its_sleep_policy_back(
     """clear() parks bodies in the same compiled model: none may stay barred from sleep."""
     engine.spawn(_crown_scene("pin"))
     run(engine, 0.2)
-    assert engine.balance is not None and engine.balance.held  # still on the crown
+    assert engine.sleep_guard is not None and engine.sleep_guard.held  # still on the crown
     engine.clear()
     never = int(mujoco.mjtSleepPolicy.mjSLEEP_NEVER)
     assert not (engine.model.tree_sleep_policy == never).any()
@@ -751,7 +751,7 @@ def test_how_steps_are_split_into_requests_does_not_change_the_trajectory() -> N
         held = False
         for count in pieces:
             engine.step(count)
-            held |= bool(engine.balance is not None and engine.balance.held)
+            held |= bool(engine.sleep_guard is not None and engine.sleep_guard.held)
         trajectories.append(engine.get_states(["a"]))
         assert held or pieces == [1500]  # the guard acted (seen between requests)
     for poses, twists in trajectories[1:]:
@@ -778,13 +778,13 @@ def test_a_rewound_world_replays_the_same_trajectory(engine: MujocoEngine) -> No
 
 
 def test_wake_balanced_takes_only_a_boolean(engine: MujocoEngine) -> None:
-    guard = engine.balance
+    guard = engine.sleep_guard
     with pytest.raises(InvalidArgumentError, match=r"mujoco\.wake_balanced"):
         engine.set_params({"mujoco.wake_balanced": 1})
-    assert engine.get_params()["mujoco.wake_balanced"] is True and engine.balance is guard
+    assert engine.get_params()["mujoco.wake_balanced"] is True and engine.sleep_guard is guard
 
 
-def test_balls_at_a_stable_rest_still_sleep_with_the_balance_guard(
+def test_balls_at_a_stable_rest_still_sleep_with_the_sleep_guard(
         engine: MujocoEngine) -> None:
     """On a flat cap, a floor, or between two pins, nothing is held awake."""
     engine.spawn([
@@ -798,7 +798,7 @@ def test_balls_at_a_stable_rest_still_sleep_with_the_balance_guard(
     poses, twists = engine.get_states(["on_cap", "on_floor", "wedged"])
     assert not twists.any()  # all three asleep
     assert poses[0, 2] > 1.0 and poses[2, 2] > 1.0
-    assert engine.balance is not None and not engine.balance.held
+    assert engine.sleep_guard is not None and not engine.sleep_guard.held
 
 
 def test_contact_dimension_must_be_one_mujoco_has(engine: MujocoEngine) -> None:
@@ -949,18 +949,18 @@ def test_spawn_cost_grows_linearly_with_the_bodies() -> None:
 
 def test_a_world_past_mujocos_body_limit_is_refused_up_front(engine: MujocoEngine) -> None:
     engine.spawn([ball("a")])
-    before = _books(engine)
+    before = _records(engine)
     with pytest.raises(ResourceLimitError, match="65533"):
         engine.spawn([_spheres("s", 70_000, 0.0, static=True)])
-    assert _books(engine) == before
+    assert _records(engine) == before
 
 
 def test_attached_and_added_bodies_simulate_alike(monkeypatch: pytest.MonkeyPatch) -> None:
     """A group of ATTACH_MIN or more is built apart and attached: the same world, to the
     bit, as one whose bodies were added one by one."""
     results = []
-    for attach_min in (mujoco_pool.ATTACH_MIN, 10_000):
-        monkeypatch.setattr(mujoco_pool, "ATTACH_MIN", attach_min)
+    for attach_min in (mujoco_parked.ATTACH_MIN, 10_000):
+        monkeypatch.setattr(mujoco_parked, "ATTACH_MIN", attach_min)
         engine = MujocoEngine()
         engine.spawn([ground(), group("sphere", [f"b{i}" for i in range(100)],
                                       [[i % 10 * 0.07, i // 10 * 0.07, 0.3 + 0.1 * i]
@@ -968,7 +968,7 @@ def test_attached_and_added_bodies_simulate_alike(monkeypatch: pytest.MonkeyPatc
         engine.step(300)
         results.append(engine.get_states([f"b{i}" for i in range(100)]))
         assert not any(name.startswith("\x01") for name in engine.ids)
-        assert "<default" not in engine.spec.to_xml()  # no class left by the attaches
+        assert "<default" not in engine.mj_spec.to_xml()  # no class left by the attaches
     for got, want in zip(*results, strict=True):
         np.testing.assert_array_equal(got, want)
 
@@ -979,12 +979,12 @@ def test_a_compile_past_max_free_bodies_is_refused_up_front(engine: MujocoEngine
     used to keep the daemon busy for longer than 15 minutes)."""
     engine.set_params({"mujoco.max_free_bodies": 4})
     engine.spawn([ground(), group("sphere", ["a", "b"], [[0, 0, 1], [1, 0, 1]])])
-    before = engine.spec.to_xml()
+    before = engine.mj_spec.to_xml()
     with pytest.raises(ResourceLimitError, match="max_free_bodies") as caught:
         engine.spawn([group("box", ["c", "d", "e"], [[2, 0, 1], [3, 0, 1], [4, 0, 1]],
                             size=(0.05, 0.05, 0.05))])
     assert caught.value.details["count"] > 4
-    assert engine.spec.to_xml() == before
+    assert engine.mj_spec.to_xml() == before
     statics = group("sphere", [f"s{i}" for i in range(10)], [[i, 1, 0] for i in range(10)])
     statics.static = True
     engine.spawn([statics])  # static bodies cost the compile nothing of that kind

@@ -188,7 +188,7 @@ def test_deleting_a_model_takes_its_links_joints_targets_and_wrenches(
         engine.delete(["c/pole"])
     engine.delete(["c/slideBar"])
     assert {j.model for j in engine.joints()} == {"d/slideBar"}
-    assert not engine.wrenches.held and not engine.joint_book.targets
+    assert not engine.wrenches.held and not engine.loaded_joints.targets
     assert not engine.data.xfrc_applied.any()
     with pytest.raises(NotFoundError):
         engine.get_states(["c/pole"])
@@ -214,10 +214,10 @@ def test_joint_names_that_are_not_one_dof_or_unknown_are_refused(engine: MujocoE
 def test_a_broken_urdf_is_refused_and_changes_nothing(engine: MujocoEngine, text: str) -> None:
     engine.spawn([BodyGroup(shape="sphere", size=(0.1,), names=["b"],
                             poses=np.array([[0, 0, 1, 0, 0, 0, 1.0]]))])
-    spec = engine.spec.to_xml()
+    spec = engine.mj_spec.to_xml()
     with pytest.raises(InvalidArgumentError, match="URDF"):
         engine.load_model("urdf", text, None, "x/")
-    assert engine.spec.to_xml() == spec and list(engine.entities) == ["b"]
+    assert engine.mj_spec.to_xml() == spec and list(engine.entities) == ["b"]
     with pytest.raises(FeatureUnsupportedError):
         engine.load_model("sdf", text, None, "x/")
 
@@ -232,7 +232,7 @@ def test_a_deleted_models_meshes_go_with_it(engine: MujocoEngine) -> None:
     for _ in range(2):
         engine.load_model("urdf", urdf_text(KUKA), None, "")
         engine.delete(["lbr_iiwa_link_0"])
-    assert not engine.spec.meshes
+    assert not engine.mj_spec.meshes
 
 
 def test_a_load_refused_at_its_recompile_leaves_no_meshes(
@@ -240,7 +240,7 @@ def test_a_load_refused_at_its_recompile_leaves_no_meshes(
     """A refusal after the attach (the world's recompile, forced to fail here as MuJoCo
     fails when out of memory) takes the model's assets out with its bodies."""
     engine.load_model("urdf", urdf_text(KUKA), None, "a/")
-    meshes = len(engine.spec.meshes)
+    meshes = len(engine.mj_spec.meshes)
 
     def refuse(*_: object) -> None:
         raise InvalidArgumentError("refused")
@@ -248,4 +248,4 @@ def test_a_load_refused_at_its_recompile_leaves_no_meshes(
     monkeypatch.setattr(MujocoEngine, "recompile", refuse)
     with pytest.raises(InvalidArgumentError, match="refused"):
         engine.load_model("urdf", urdf_text(KUKA), None, "b/")
-    assert len(engine.spec.meshes) == meshes and "b/lbr_iiwa_link_0" not in engine.entities
+    assert len(engine.mj_spec.meshes) == meshes and "b/lbr_iiwa_link_0" not in engine.entities

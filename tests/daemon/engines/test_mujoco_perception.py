@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from galton.daemon.engines.base import FEATURE_CONTACTS, FEATURE_RAYCAST, FEATURE_RENDER, CameraView
-from galton.daemon.engines.mujoco import perception as mujoco_sensing
+from galton.daemon.engines.mujoco import rays as mujoco_sensing
 from galton.daemon.engines.mujoco.engine import MujocoEngine
 from galton.protocol import BodyGroup, NotFoundError
 
@@ -168,7 +168,7 @@ def test_a_moved_static_body_is_where_rays_find_it(engine: MujocoEngine) -> None
 def test_parked_bodies_are_not_seen_hit_or_touched(engine: MujocoEngine) -> None:
     scene(engine)
     engine.delete(["ball"])
-    assert len(engine.pool) > 0  # its body waits, parked, far below the world
+    assert len(engine.parked) > 0  # its body waits, parked, far below the world
     below = (0.0, 0.0, -990.0)
     hit, _, _, _, _ = engine.raycast(np.array([below]), np.array([[0.0, 0, -1]]), 100.0)
     assert not hit.any()

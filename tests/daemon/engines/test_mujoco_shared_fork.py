@@ -1,7 +1,7 @@
 """Forks of the MuJoCo engine share their source's spec and compiled model, read-only, and
 copy only the data (clone.py): the first change to what they share, on either side, takes
 its own copy first. A structure change or an edited model array (joint targets' gains, the
-balance guard's sleep policies) never leaks from a fork into its source or the other way
+sleep guard's sleep policies) never leaks from a fork into its source or the other way
 round, and the fork still goes on bit for bit as its source.
 """
 
@@ -37,14 +37,14 @@ def model_arrays(engine: MujocoEngine) -> dict[str, np.ndarray]:
 def assert_unchanged(engine: MujocoEngine, before: tuple[str, dict[str, np.ndarray], set[str]]
                      ) -> None:
     xml, model, names = before
-    assert engine.spec.to_xml() == xml
+    assert engine.mj_spec.to_xml() == xml
     now = arrays(engine.model)
     assert [n for n in model if not np.array_equal(model[n], now[n], equal_nan=True)] == []
     assert set(engine.entities) == names
 
 
 def seen(engine: MujocoEngine) -> tuple[str, dict[str, np.ndarray], set[str]]:
-    return engine.spec.to_xml(), model_arrays(engine), set(engine.entities)
+    return engine.mj_spec.to_xml(), model_arrays(engine), set(engine.entities)
 
 
 @pytest.fixture
@@ -82,7 +82,7 @@ def test_a_fork_shares_the_structure_and_copies_the_data(
         world: tuple[MujocoEngine, list[str]]) -> None:
     engine, _ = world
     fork = engine.clone()
-    assert fork.spec is engine.spec and fork.model is engine.model
+    assert fork.mj_spec is engine.mj_spec and fork.model is engine.model
     assert fork.data is not engine.data
     fork.step(100)  # stepping changes nothing shared
     assert fork.model is engine.model
@@ -112,11 +112,11 @@ def test_a_sources_edit_never_reaches_its_fork(world: tuple[MujocoEngine, list[s
     edits(joints)[edit](engine)
     engine.step(50)
     assert_unchanged(fork, before)
-    assert fork.model is witness.model and fork.spec is witness.spec
+    assert fork.model is witness.model and fork.mj_spec is witness.mj_spec
     assert_same_runs(fork, witness, [steps(100), edits(joints)[edit], steps(100)])
 
 
-def test_the_balance_guards_sleep_policies_stay_in_the_fork(world: tuple[MujocoEngine, list[str]]
+def test_the_sleep_guards_sleep_policies_stay_in_the_fork(world: tuple[MujocoEngine, list[str]]
                                                             ) -> None:
     engine = MujocoEngine()
     pin = BodyGroup(shape="cylinder", size=(0.1, 0.3), names=["pin"],
@@ -127,7 +127,7 @@ def test_the_balance_guards_sleep_policies_stay_in_the_fork(world: tuple[MujocoE
     fork = engine.clone()
     before = engine.model.tree_sleep_policy.copy()
     fork.step(500)
-    assert fork.balance is not None and fork.balance.held  # it wrote a sleep policy
+    assert fork.sleep_guard is not None and fork.sleep_guard.held  # it wrote a sleep policy
     assert fork.model is not engine.model
     np.testing.assert_array_equal(engine.model.tree_sleep_policy, before)
     engine.step(500)
@@ -137,10 +137,10 @@ def test_the_balance_guards_sleep_policies_stay_in_the_fork(world: tuple[MujocoE
 def test_the_last_holder_copies_nothing(world: tuple[MujocoEngine, list[str]]) -> None:
     engine, _ = world
     fork = engine.clone()
-    spec = engine.spec
+    spec = engine.mj_spec
     fork.close()
     engine.update(["s1"], BodyProperties(mass=0.7))
-    assert engine.spec is spec and engine.sharing is None
+    assert engine.mj_spec is spec and engine.sharing is None
 
 
 def test_forks_replay_bit_for_bit_through_edits(world: tuple[MujocoEngine, list[str]]) -> None:

@@ -107,11 +107,11 @@ def test_a_snapshot_after_pool_edits_keeps_the_sources_state_and_sleepers(
     engine.step(100)
     before = {n: a.copy() for n, a in carried(engine.data).items()}
     asleep = int(np.count_nonzero(engine.data.tree_asleep >= 0))
-    assert asleep and engine.pool_edited
+    assert asleep and engine.parked_edited
     engine.snapshot()
     after = carried(engine.data)
     assert [n for n in before if not np.array_equal(before[n], after[n], equal_nan=True)] == []
-    assert not engine.pool_edited
+    assert not engine.parked_edited
 
 
 def test_a_second_snapshot_sees_edits_since_the_first_and_restored_worlds_snapshot_alike(
@@ -161,11 +161,11 @@ def test_a_ball_held_awake_on_a_crown_stays_held_and_is_let_go_alike(
                      poses=np.array([[0, 0, 1.145, 0, 0, 0, 1]]))
     engine.spawn([floor(), pin, ball])
     engine.step(500)
-    assert engine.balance is not None and engine.balance.held
+    assert engine.sleep_guard is not None and engine.sleep_guard.held
     copy_ = restored(engine.snapshot())
-    assert copy_.balance is not None and copy_.balance.held == engine.balance.held
+    assert copy_.sleep_guard is not None and copy_.sleep_guard.held == engine.sleep_guard.held
     assert_same_runs(engine, copy_, [steps(1000)] * 4)
-    assert not engine.balance.held
+    assert not engine.sleep_guard.held
 
 
 def test_a_prism_mesh_world_restores_and_continues_bit_identically(

@@ -129,13 +129,13 @@ def test_churn_and_a_partly_deleted_mjcf_load_clone_as_they_restore(
 def test_what_a_clone_does_never_reaches_its_source_and_the_other_way_round(
         engines: list[PybulletEngine]) -> None:
     """Each goes on as an untouched twin would while the others are changed all over
-    (models' books, targets, wrenches, bodies, parameters)."""
+    (models' records, targets, wrenches, bodies, parameters)."""
     source, untouched = kuka_world(engines), kuka_world(engines)
     names = names_of(source)
     clone, witness, reference = source.clone(), source.clone(), untouched.clone()
     engines.extend([clone, witness, reference])
     meddle(clone)
-    for engine in (source, untouched):  # a rebuild reads the models' books too
+    for engine in (source, untouched):  # a rebuild reads the models' records too
         engine.reset_dynamics()
     assert now(source, names) == now(untouched, names)
     assert_same_run(record(source, names, 200), record(untouched, names, 200))

@@ -28,7 +28,7 @@ from support.pybullet_worlds import (
 
 from galton.daemon.engines.base import FEATURE_SNAPSHOT
 from galton.daemon.engines.pybullet.engine import PybulletEngine
-from galton.daemon.engines.pybullet.snapshot_data import pack
+from galton.daemon.engines.pybullet.snapshot.arrays import pack
 from galton.protocol import BodyGroup, BodyProperties, InvalidArgumentError
 
 

@@ -8,7 +8,7 @@ import pytest
 from support.mujoco_worlds import KUKA, bodies, floor
 
 from galton.daemon.engines import create_engine
-from galton.daemon.world.scene import World
+from galton.daemon.world.world import World
 from galton.protocol import BodyGroup
 
 SEED = 41

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from galton.daemon.ops import handlers, scene
+from galton.daemon.ops import entities, handlers
 from galton.daemon.ops.binding import binding_of
 from galton.daemon.ops.handlers import HANDLERS, OP_MODULES, check_bindings, collect
 from galton.protocol.operations import LONG_RUNNING_TIMEOUT_S, OPERATIONS, Operation, operation
@@ -34,13 +34,13 @@ def test_a_handler_without_a_declaration_stops_the_daemon_loading() -> None:
 
 
 def test_a_marked_handler_binds_itself_and_twice_is_refused() -> None:
-    assert HANDLERS["get_entities"] is not HANDLERS["get_bounds"]  # collected from scene.py
+    assert HANDLERS["get_entities"] is not HANDLERS["get_bounds"]  # collected from entities.py
     module = types.ModuleType("marked_ops")
     exec("from galton.daemon.ops.binding import handles\n"
          "@handles('get_bounds')\ndef bounds_again(context, call, request): return None",
          module.__dict__)
     with pytest.raises(RuntimeError, match="'get_bounds' is bound twice"):
-        collect([scene, module])
+        collect([entities, module])
     assert collect([module])["get_bounds"] is module.bounds_again
 
 

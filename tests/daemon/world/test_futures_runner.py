@@ -15,9 +15,9 @@ from galton.daemon.core.limits import DEFAULT_LIMITS
 from galton.daemon.engines import create_engine
 from galton.daemon.world import states
 from galton.daemon.world.futures import FutureSet, FutureSpec, spread
-from galton.daemon.world.scene import World
 from galton.daemon.world.slots import Slot, SnapshotSlots
 from galton.daemon.world.snapshot import clone_of
+from galton.daemon.world.world import World
 from galton.protocol import BodyProperties
 from galton.protocol.model import BodyGroup
 

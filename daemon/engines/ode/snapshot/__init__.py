@@ -1,4 +1,4 @@
-"""The ODE engine's snapshots and restores (the data and its checks: snapshot_format.py).
+"""The ODE engine's snapshots and restores (the data and its checks: snapshot/format.py).
 
 ``Snapshots`` is a part of ``OdeEngine``: it reads and rebuilds the engine's bodies, models
 and wrenches through the attributes and methods named below.
@@ -11,16 +11,16 @@ from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
-from galton.daemon.engines.ode import snapshot_format as snapshots
 from galton.daemon.engines.ode import spawn as spawning
 from galton.daemon.engines.ode.joints import Robots
 from galton.daemon.engines.ode.native import LIB
+from galton.daemon.engines.ode.snapshot import format as snapshots
 from galton.daemon.engines.ode.spawn import ASLEEP, Body
 from galton.protocol import BodyGroup, EntityInfo, InvalidArgumentError
 
 
 class Snapshots:
-    """Snapshot and restore, bit for bit (snapshot_format.py says what is carried and why)."""
+    """Snapshot and restore, bit for bit (snapshot/format.py says what is carried and why)."""
 
     name: ClassVar[str]
     _world: int

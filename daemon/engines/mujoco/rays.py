@@ -1,20 +1,19 @@
-"""What a MuJoCo world's entities show to rays and what touches what: ray casts, contacts.
+"""Ray casts in a MuJoCo world (``mj_ray``, ``mj_multiRay``), hitting entities only.
 
-Only entities' geoms count: a parked pool body's geom (``pool``) is no entity's and
-is never hit nor reported. Every other geom counts whatever its group or whether its body is
+Only entities' geoms count: a parked body's geom (``parked``) is no entity's and
+is never hit. Every other geom counts whatever its group or whether its body is
 static or asleep; MuJoCo itself skips a geom whose colour is fully transparent.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
 
-from galton.daemon.engines.base import CameraView
-from galton.daemon.engines.mujoco.render import HIDDEN, SHOWN, CameraRig
+from galton.daemon.engines.mujoco.entities import geom_entities
+from galton.daemon.engines.mujoco.render import HIDDEN, SHOWN
 
 if TYPE_CHECKING:
     from galton.daemon.engines.mujoco.engine import MujocoEngine
@@ -26,28 +25,6 @@ EXIT_TRIES = 8
 # Rays sharing one origin go to mj_multiRay when they are at least this many per origin.
 MULTI_RAY_MIN = 8
 _SHOWN_ONLY = np.array([1 if g == SHOWN else 0 for g in range(6)], np.uint8)
-
-
-def render(engine: MujocoEngine, cameras: Sequence[CameraView]
-           ) -> tuple[list[dict[str, np.ndarray]], list[str]]:
-    """The cameras' images at the current positions; labels are the entities seen."""
-    if not cameras:
-        return [], []
-    if engine.cameras is None:
-        engine.cameras = CameraRig()
-    m, d = engine.model, engine.data
-    mujoco.mj_kinematics(m, d)  # the data's poses are from before the last step's move
-    names, label = geom_entities(m, engine.ids)
-    images = engine.cameras.render(m, d, label >= 0, label, cameras)
-    seen = np.unique(np.concatenate([im["segmentation"].ravel() for im in images
-                                     if "segmentation" in im] or [np.empty(0, np.int32)]))
-    seen = seen[seen >= 0]
-    compact = np.full(len(names) + 1, -1, np.int32)  # the last entry maps -1 to -1
-    compact[seen] = np.arange(len(seen))
-    for im in images:
-        if "segmentation" in im:
-            im["segmentation"] = compact[im["segmentation"]]
-    return images, [names[i] for i in seen]
 
 
 def cast_rays(engine: MujocoEngine, origins: np.ndarray, directions: np.ndarray,
@@ -62,45 +39,6 @@ def cast_rays(engine: MujocoEngine, origins: np.ndarray, directions: np.ndarray,
     points = np.where(hit[:, None], origins + directions * dist[:, None], np.nan)
     return (hit, [names[label[g]] if g >= 0 else "" for g in geom], points,
             np.where(hit[:, None], normal, np.nan), np.where(hit, dist, np.nan))
-
-
-def touching(engine: MujocoEngine, names: Sequence[str] | None
-             ) -> tuple[list[str], list[str], np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Engine.contacts: the last step's contacts (see ``contacts``)."""
-    if names is not None:
-        engine.body_ids(names)  # NotFoundError for a name that is no entity's
-    m = engine.model
-    labels, label = geom_entities(m, engine.ids)
-    return contacts(m, _awake_view(m, engine.data, engine.ids), label, labels, names)
-
-
-def _awake_view(model: mujoco.MjModel, data: mujoco.MjData, ids: Mapping[str, int]
-                ) -> mujoco.MjData:
-    """``data`` when no entity sleeps; else a copy forwarded with sleeping off: MuJoCo
-    finds no contacts for a sleeping body (against the static world or another sleeper),
-    so a box asleep on the ground would have none. Its contacts are then those of the
-    current positions (the bodies asleep have not moved since)."""
-    bodies = np.fromiter(ids.values(), np.int64, len(ids))
-    if not (data.body_awake[bodies] == mujoco.mjtSleepState.mjS_ASLEEP).any():
-        return data
-    scratch = mujoco.MjData(model)
-    mujoco.mj_copyData(scratch, model, data)
-    flag = int(mujoco.mjtEnableBit.mjENBL_SLEEP)
-    model.opt.enableflags &= ~flag
-    try:
-        mujoco.mj_forward(model, scratch)
-    finally:
-        model.opt.enableflags |= flag
-    return scratch
-
-
-def geom_entities(model: mujoco.MjModel, ids: Mapping[str, int]
-                  ) -> tuple[list[str], np.ndarray]:
-    """Entity names, and each geom's index into them (-1: no entity's, e.g. parked)."""
-    names = list(ids)
-    of_body = np.full(model.nbody, -1, np.int32)
-    of_body[np.fromiter(ids.values(), np.int64, len(ids))] = np.arange(len(names))
-    return names, of_body[model.geom_bodyid]
 
 
 def raycast(model: mujoco.MjModel, data: mujoco.MjData, shown: np.ndarray,
@@ -170,29 +108,3 @@ def _cast(model: mujoco.MjModel, data: mujoco.MjData, origins: np.ndarray,
         dist[i] = mujoco.mj_ray(model, data, origins[i], directions[i], _SHOWN_ONLY, True,
                                 -1, one, normal[i])
         geom[i] = one[0]
-
-
-def contacts(model: mujoco.MjModel, data: mujoco.MjData, geom_label: np.ndarray,
-             labels: Sequence[str], names: Sequence[str] | None
-             ) -> tuple[list[str], list[str], np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The last step's active contacts between entities (either among ``names`` when
-    given): entities, positions, normals from the first to the second, normal forces,
-    penetrations."""
-    n = data.ncon
-    pair = data.contact.geom[:n]
-    first, second = geom_label[pair[:, 0]], geom_label[pair[:, 1]]
-    keep = (data.contact.exclude[:n] == 0) & (first >= 0) & (second >= 0)
-    if names is not None:
-        index = {name: i for i, name in enumerate(labels)}
-        wanted = np.zeros(len(labels), bool)
-        wanted[[index[x] for x in names if x in index]] = True
-        keep &= wanted[first] | wanted[second]
-    rows = np.flatnonzero(keep)
-    force = np.empty(6)
-    forces = np.empty(len(rows))
-    for k, i in enumerate(rows):
-        mujoco.mj_contactForce(model, data, int(i), force)
-        forces[k] = max(force[0], 0.0)
-    return ([labels[j] for j in first[rows]], [labels[j] for j in second[rows]],
-            data.contact.pos[rows].copy(), data.contact.frame[rows, :3].copy(), forces,
-            np.maximum(-data.contact.dist[rows], 0.0))

@@ -1,9 +1,9 @@
-"""The PyBullet engine's snapshots: its world as plain data (snapshot_format.py), and a
+"""The PyBullet engine's snapshots: its world as plain data (snapshot/format.py), and a
 fresh engine made into that world.
 
 Bullet's contact points and their warm-start impulses cannot be read out, so a snapshot
 cannot carry them. Instead, taking one makes the source world's hidden state canonical:
-the world is rebuilt from its books (as ``reset_dynamics`` does, rebuild.py), and
+the world is rebuilt from its records (as ``reset_dynamics`` does, rebuild.py), and
 a restore makes the same world through the same calls in the same order. Both then start
 from a world with no contact history, and go on alike bit for bit. That costs the source
 a rebuild (about as long as the restore) and its contact history: its run goes on as after
@@ -27,10 +27,10 @@ from typing import TYPE_CHECKING, Any, TypeVar
 
 from pybullet_utils.bullet_client import BulletClient
 
-from galton.daemon.engines.pybullet import snapshot_format as snapformat
 from galton.daemon.engines.pybullet.frames import Offset, base_offset
 from galton.daemon.engines.pybullet.joints import SCALAR
 from galton.daemon.engines.pybullet.rebuild import Body, Plan
+from galton.daemon.engines.pybullet.snapshot import format as snapformat
 from galton.protocol import InvalidArgumentError, OperationFailedError
 
 if TYPE_CHECKING:
@@ -115,8 +115,8 @@ class Snapshots:
 
 def detached(plan: Plan) -> Plan:
     """A copy of a plan read from a live world that another engine can be made from: what
-    the new engine keeps and changes later (loaded models' books, articulations with their
-    targets, wrenches, states) is copied; the bodies' books are only read (the new engine
+    the new engine keeps and changes later (loaded models' records, articulations with their
+    targets, wrenches, states) is copied; the bodies' records are only read (the new engine
     makes its own)."""
     bodies = {name: body if body.model is None else
               dataclasses.replace(body, model=copy.copy(body.model))

@@ -1,4 +1,4 @@
-"""galton-client spawn, load-model, entities, update and delete: the scene's contents."""
+"""galton-client spawn, load-model, entities, update and delete: the world's entities."""
 
 from __future__ import annotations
 

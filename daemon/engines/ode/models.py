@@ -2,8 +2,8 @@
 at its centre of mass (ODE wants the body's origin there) carrying its collision geoms, and
 each joint an ODE joint (joints.py). MJCF is not offered: ODE has no loader for it.
 
-Collision shapes: box, sphere and cylinder as ODE's own; a mesh as the box of its bounds (ODE
-trimeshes are left out). Links of one model do not collide with each other (contacts.py).
+Collision shapes: box, sphere and cylinder as ODE's own; a mesh as the box of its bounds
+(shapes.py). Links of one model do not collide with each other (contacts.py).
 A link without inertial gets 1 g and a 1e-6 kg·m² inertia, as such a link must move with
 its joint. The root sits at the world's origin, a kinematic body (held still, moved only by
 teleports) unless ``fixed_base`` is False, when it is free and its free joint is listed.
@@ -23,6 +23,7 @@ import numpy as np
 from galton.daemon.engines.ode import frames
 from galton.daemon.engines.ode.joints import HI_STOP, HINGES, LO_STOP, Joint, Model, Robots
 from galton.daemon.engines.ode.native import LIB, Mass, body_state, quaternion
+from galton.daemon.engines.ode.shapes import link_shapes
 from galton.daemon.engines.ode.spawn import AWAKE, Body, make_geom
 from galton.protocol import EntityInfo, InvalidArgumentError, JointInfo, NameNotUniqueError
 from galton.protocol.vocabulary import MAX_MASS, MIN_INERTIA, MIN_MASS
@@ -78,46 +79,6 @@ def _ordered(robot: Any, root: str) -> list[Any]:
     return ordered
 
 
-def _shapes(link: Any) -> list[tuple[str, tuple[float, ...], frames.Frame]]:
-    """The link's collision shapes as (shape, half sizes, frame in the link)."""
-    shapes = []
-    for collision in link.collisions:
-        origin = frames.from_matrix(np.asarray(collision.origin if collision.origin is not None
-                                               else np.eye(4), dtype=float))
-        geometry = collision.geometry
-        if geometry.box is not None:
-            shapes.append(("box", tuple(float(s) / 2 for s in geometry.box.size), origin))
-        elif geometry.sphere is not None:
-            shapes.append(("sphere", (float(geometry.sphere.radius),), origin))
-        elif geometry.cylinder is not None:
-            shapes.append(("cylinder", (float(geometry.cylinder.radius),
-                                        float(geometry.cylinder.length) / 2), origin))
-        elif geometry.mesh is not None:
-            shapes.append(_mesh_box(geometry.mesh, origin))
-    return shapes
-
-
-def _mesh_box(mesh: Any, origin: frames.Frame) -> tuple[str, tuple[float, ...], frames.Frame]:
-    import trimesh
-
-    filename = str(mesh.filename)
-    if filename.startswith("file://"):
-        filename = filename[len("file://"):]
-    if not os.path.isfile(filename):
-        raise InvalidArgumentError(f"the URDF's mesh {mesh.filename!r} is not there")
-    try:
-        bounds = np.asarray(trimesh.load(filename, force="mesh").bounds, dtype=float)
-    except Exception as exc:
-        raise InvalidArgumentError(f"the URDF's mesh {filename!r} does not load: {exc}") \
-            from exc
-    scale = np.ones(3) if mesh.scale is None else np.broadcast_to(
-        np.asarray(mesh.scale, dtype=float), (3,))
-    low, high = bounds[0] * scale, bounds[1] * scale
-    half = np.maximum(np.abs(high - low) / 2, 1e-4)
-    centre = frames.compose(origin, ((low + high) / 2, frames.IDENTITY[1]))
-    return "box", tuple(half.tolist()), centre
-
-
 def _check_inertial(link: str, mass: float, inertia: np.ndarray) -> None:
     """Refuse a link ODE would abort on (dMassCheck), or whose push by a bounded effort
     would make ODE's quaternion infinite (issue 46): its mass within the protocol's
@@ -168,7 +129,7 @@ def load_urdf(world: int, space: int, robots: Robots, text: str | None, path: st
         raise NameNotUniqueError(f"the model's link {in_use[0]!r} has the name of an existing "
                                  "entity; load it with another prefix")
     by_name = {link.name: link for link in robot.links}
-    shapes = {name: _shapes(by_name[name]) for name in links}  # every refusal before a body
+    shapes = {name: link_shapes(by_name[name]) for name in links}  # every refusal before a body
     made: list[Body] = []
     try:
         placed = {root: frames.IDENTITY}

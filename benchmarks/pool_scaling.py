@@ -1,10 +1,10 @@
 """Trials per minute on a pool of one daemon against a pool of two, in one run (issue 27).
 
-Usage: python benchmarks/pool.py [--engine mujoco] [--board paper] [--balls 100]
+Usage: python benchmarks/pool_scaling.py [--engine mujoco] [--board paper] [--balls 100]
            [--trials 8] [--max-sim-time 120] [--json FILE]
 
 The same plan (one engine, one ball count, ``--trials`` repetitions) runs through
-``galton.client.bench.pool.run_pool`` on 1, then 2 embedded daemons started for it (meshed,
+``galton.client.bench.pool_executor.run_pool`` on 1, then 2 embedded daemons started for it (meshed,
 as ``bench --pool`` starts them); the wall time counts the trials only, not the daemons'
 start. Prints trials per minute for each and their ratio. Target (issue 27): 2 daemons
 ≥ 1.7 × one daemon on a 2-core machine. Run it on a quiet machine: another process's load
@@ -22,7 +22,7 @@ from galton.analysis.board import BoardSpec
 from galton.client import Client
 from galton.client.bench.daemons import embedded_mesh
 from galton.client.bench.experiment import ExperimentConfig
-from galton.client.bench.pool import run_pool
+from galton.client.bench.pool_executor import run_pool
 
 POOL_SIZES = (1, 2)
 TIMEOUT_S = 120.0

@@ -1,4 +1,5 @@
-"""Snapshots of a DART world as plain data, and their restore into a fresh engine.
+"""Snapshots of a DART world as plain data (its layout: format.py), and their restore into
+a fresh engine.
 
 DART keeps no contact state between steps (each step detects contacts and solves them
 anew), so a world is its skeletons, in the order they were added, their generalized
@@ -15,17 +16,15 @@ import importlib.metadata
 import math
 from typing import Any
 
-import numpy as np
-
+from galton.daemon.engines.base import Target
 from galton.daemon.engines.dart import meshes, models
-from galton.daemon.engines.dart import spawn as books
-from galton.daemon.engines.dart.joints import Robots, Target
-from galton.daemon.engines.dart.params import SPECS
+from galton.daemon.engines.dart import spawn as spawning
+from galton.daemon.engines.dart.joints import Robots
+from galton.daemon.engines.dart.params import PARAMS
+from galton.daemon.engines.dart.snapshot import format as snapformat
 from galton.daemon.engines.params import check_updates
 from galton.protocol import BodyProperties, InvalidArgumentError
 from galton.protocol import mesh as mesh_wire
-
-FORMAT = "galton-dart-1"
 
 
 class Snapshots:
@@ -33,7 +32,7 @@ class Snapshots:
 
     _world: Any
     _values: dict[str, Any]
-    _bodies: dict[str, books.Body]
+    _bodies: dict[str, spawning.Body]
     _robots: Robots
     _owners: list[str]
     _models: dict[str, models.Model]
@@ -43,7 +42,7 @@ class Snapshots:
     def snapshot(self, *, canonical: bool = True) -> dict[str, Any]:
         if canonical:
             self._rebuild()  # type: ignore[attr-defined]
-        return {"format": FORMAT, "engine": "dart",
+        return {"format": snapformat.FORMAT, "engine": "dart",
                 "dartpy": importlib.metadata.version("dartpy"),
                 "params": {k: list(v) if isinstance(v, tuple) else v
                            for k, v in self._values.items()},
@@ -58,31 +57,14 @@ class Snapshots:
 
     def _item(self, owner: str) -> dict[str, Any]:
         body = self._bodies[owner]
-        dynamic = {"positions": [float(v) for v in body.skeleton.getPositions()],
-                   "velocities": [float(v) for v in body.skeleton.getVelocities()]}
         if body.model is None:
-            return {"kind": "body", "name": body.name, "shape": body.shape,
-                    "size": list(body.size), "static": body.static,
-                    "mass": None if body.static else body.mass, "friction": body.friction,
-                    "restitution": body.restitution,
-                    "follows": [body.follows_friction, body.follows_restitution],
-                    "rgba": None if body.rgba is None else list(body.rgba),
-                    "unit_inertia": None if body.unit_inertia is None
-                    else list(body.unit_inertia),
-                    "vertices": None if body.mesh is None
-                    else mesh_wire.pack_vertices(body.mesh[0]),
-                    "faces": None if body.mesh is None else mesh_wire.pack_faces(body.mesh[1]),
-                    **dynamic}
-        model = self._models[owner]
-        return {"kind": "model", "root": owner, "fmt": model.fmt, "text": model.text,
-                "prefix": model.prefix, "fixed_base": model.fixed_base,
-                "index": model.index,
-                "edits": [[name, props.to_wire()] for name, props in
-                          self._edits.get(owner, [])], **dynamic}
+            return snapformat.body_item(body)
+        return snapformat.model_item(body, self._models[owner], self._edits.get(owner, []))
 
     def restore(self, data: dict[str, Any]) -> None:
-        if not isinstance(data, dict) or data.get("format") != FORMAT:
-            raise InvalidArgumentError(f"not a DART snapshot (format {FORMAT!r} expected)")
+        if not isinstance(data, dict) or data.get("format") != snapformat.FORMAT:
+            raise InvalidArgumentError(
+                f"not a DART snapshot (format {snapformat.FORMAT!r} expected)")
         try:
             self._restore(data)
         except (KeyError, TypeError, ValueError, IndexError, AttributeError) as exc:
@@ -92,7 +74,7 @@ class Snapshots:
     def _restore(self, data: dict[str, Any]) -> None:
         # Bodies of one mesh share its shape, as a spawn group's do: each load takes ms.
         self._loaded_meshes = {}
-        self.set_params(check_updates("dart", SPECS, data["params"]))  # type: ignore[attr-defined]
+        self.set_params(check_updates("dart", PARAMS, data["params"]))  # type: ignore[attr-defined]
         for item in data["items"]:
             if item["kind"] == "body":
                 self._restore_body(item)
@@ -109,7 +91,7 @@ class Snapshots:
         self._robots.put_back_damping(data.get("damping", {}))
         for name, (force, torque) in data["wrenches"].items():
             self._robots.wrenches[name] = (self._bodies[name].node,
-                                           _vector(force), _vector(torque))
+                                           snapformat.vector(force), snapformat.vector(torque))
 
     def _restore_body(self, item: dict[str, Any]) -> None:
         shape, size = str(item["shape"]), tuple(float(s) for s in item["size"])
@@ -117,10 +99,10 @@ class Snapshots:
         mass = math.nan if static else float(item["mass"])
         follows = item["follows"]
         rgba = None if item["rgba"] is None else tuple(float(c) for c in item["rgba"])
-        body = books.Body(str(item["name"]), shape, size, static, mass,
+        body = spawning.Body(str(item["name"]), shape, size, static, mass,
                           float(item["friction"]), float(item["restitution"]),
                           bool(follows[0]), bool(follows[1]), None, None, rgba,
-                          unit_inertia=_unit_inertia(item.get("unit_inertia"), static))
+                          unit_inertia=snapformat.unit_inertia(item.get("unit_inertia"), static))
         self._check_new([body.name])  # type: ignore[attr-defined]
         if shape not in ("sphere", "box", "cylinder", "capsule", "plane", "mesh"):
             raise ValueError(f"unknown shape {shape!r}")
@@ -135,7 +117,8 @@ class Snapshots:
             body.mesh, body.mesh_shape = (vertices, faces), self._loaded_meshes[key]
         elif item.get("vertices") is not None or item.get("faces") is not None:
             raise ValueError(f"a {shape} has no vertices or faces")
-        books.build(body, _vector(item["positions"], 6), _vector(item["velocities"], 6))
+        spawning.build(body, snapformat.vector(item["positions"], 6),
+                       snapformat.vector(item["velocities"], 6))
         self._add(body)  # type: ignore[attr-defined]
 
     def _restore_model(self, item: dict[str, Any]) -> None:
@@ -150,23 +133,5 @@ class Snapshots:
         for name, wire in item["edits"]:
             self._edit(self._bodies[name], BodyProperties(**wire))  # type: ignore[attr-defined]
         count = skeleton.getNumDofs()
-        skeleton.setPositions(_vector(item["positions"], count))
-        skeleton.setVelocities(_vector(item["velocities"], count))
-
-
-def _vector(values: Any, length: int = 3) -> np.ndarray:
-    array = np.asarray(values, dtype=float).reshape(-1)
-    if array.shape != (length,):
-        raise ValueError(f"expected {length} numbers, got {array.shape[0]}")
-    return array
-
-
-def _unit_inertia(value: Any, static: bool) -> tuple[float, ...] | None:
-    """A snapshot body's own inertia per kg: three positive finite numbers, or None."""
-    if value is None:
-        return None
-    moments = tuple(float(v) for v in _vector(value, 3))
-    if static or not all(math.isfinite(v) and v > 0 for v in moments):
-        raise ValueError(f"unit_inertia {moments} must be positive, and on a moving body")
-    return moments
-
+        skeleton.setPositions(snapformat.vector(item["positions"], count))
+        skeleton.setVelocities(snapformat.vector(item["velocities"], count))

@@ -12,7 +12,7 @@ from galton.analysis.records import TrialRecord
 from galton.client.bench.daemons import names_running, pool_clients
 from galton.client.bench.executor import Executor
 from galton.client.bench.experiment import ExperimentConfig, run_experiment, run_plan
-from galton.client.bench.pool import run_pool
+from galton.client.bench.pool_executor import run_pool
 from galton.client.sdk.client import Client
 from galton.protocol import GaltonError
 
@@ -26,7 +26,7 @@ def local_trials(sim: Client, engine: str, config: ExperimentConfig) -> list[Tri
 
 
 @contextmanager
-def pooled_trials(connect: list[str] | None, instances: Sequence[str] | None,
+def pool_trials(connect: list[str] | None, instances: Sequence[str] | None,
                   timeout: float, say: Callable[[str], None]
                   ) -> Iterator[tuple[TrialRunner, list[str]]]:
     """A runner over the pool's daemons and their names, or ``local_trials`` and no names

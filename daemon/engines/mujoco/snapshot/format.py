@@ -1,7 +1,7 @@
-"""The MuJoCo engine's own books read back from a snapshot (``snapshot``), each value
+"""The MuJoCo engine's own records read back from a snapshot (``snapshot``), each value
 checked as the untrusted input it is: entities with their spec bodies, models' assets, the
 pool's parked bodies by kind, loaded models' joints and held targets, held wrenches, the
-balance guard and the counters of the periodic looks.
+sleep guard and the counters of the periodic looks.
 """
 
 from __future__ import annotations
@@ -12,11 +12,11 @@ from typing import TYPE_CHECKING, Any
 import mujoco
 import numpy as np
 
-from galton.daemon.engines.mujoco import snapshot_arrays as arrays
-from galton.daemon.engines.mujoco import spec as ms
+from galton.daemon.engines.base import Target
+from galton.daemon.engines.mujoco import mj_spec as ms
 from galton.daemon.engines.mujoco.entities import ASSET_KINDS, Assets, Entity
-from galton.daemon.engines.mujoco.joints import Target
-from galton.daemon.engines.mujoco.rig import body_name
+from galton.daemon.engines.mujoco.model_setup import body_name
+from galton.daemon.engines.mujoco.snapshot import arrays
 from galton.protocol import TARGET_MODES, GaltonError, InvalidArgumentError, JointInfo
 from galton.protocol.errors import brief
 
@@ -26,13 +26,13 @@ if TYPE_CHECKING:
 SOURCES = ("spawn", "model", "link")
 
 
-def read_books(engine: MujocoEngine, data: dict[str, Any]) -> None:
-    """The snapshot's books into the engine whose spec, model and data it now holds."""
+def read_records(engine: MujocoEngine, data: dict[str, Any]) -> None:
+    """The snapshot's records into the engine whose spec, model and data it now holds."""
     loads = [_load(i, load) for i, load in enumerate(_list(data["loads"], "loads"))]
     kinds = [_read_key(kind) for kind in _list(data["kinds"], "kinds")]
     engine.entities = {}
     for row in _list(data["entities"], "entities"):
-        name, entity = _read_entity(engine.spec, row, loads, kinds)
+        name, entity = _read_entity(engine.mj_spec, row, loads, kinds)
         engine.entities[name] = entity
     engine.parts = {n for n, e in engine.entities.items() if e.source == "link"}
     engine.models = sum(e.source == "model" for e in engine.entities.values())
@@ -56,11 +56,11 @@ def read_books(engine: MujocoEngine, data: dict[str, Any]) -> None:
     except (GaltonError, KeyError, IndexError) as exc:
         raise InvalidArgumentError(f"snapshot names what its world lacks: {exc}") from exc
     balance = data["balance"]
-    if (balance is None) != (engine.balance is None):
+    if (balance is None) != (engine.sleep_guard is None):
         raise InvalidArgumentError("snapshot.balance must be given exactly when "
                                    "mujoco.wake_balanced is on")
-    if engine.balance is not None:
-        engine.balance.load(engine.model, balance)
+    if engine.sleep_guard is not None:
+        engine.sleep_guard.load(engine.model, balance)
 
 
 def _list(value: Any, where: str) -> list[Any]:
@@ -151,7 +151,7 @@ def _tuple(value: Any, count: int | None = None) -> tuple[float, ...]:
 
 
 def _read_key(value: Any) -> tuple[Any, ...]:
-    """A pool kind back from plain data: equal to what pool.key_of makes."""
+    """A pool kind back from plain data: equal to what parked.key_of makes."""
     if not isinstance(value, list) or len(value) != 4 or not isinstance(value[0], str) or \
             not isinstance(value[2], bool):
         raise InvalidArgumentError(f"snapshot: a pool kind is malformed: {brief(value)}")
@@ -173,23 +173,23 @@ def _read_key(value: Any) -> tuple[Any, ...]:
 def _pool(engine: MujocoEngine, value: Any, kinds: list[tuple[Any, ...]]) -> None:
     row = _fields(value, {"serial", "parked"}, "pool")
     if type(row["serial"]) is not int or row["serial"] < 0:
-        raise InvalidArgumentError(f"snapshot.pool.serial is {brief(row['serial'])}")
+        raise InvalidArgumentError(f"snapshot.parked.serial is {brief(row['serial'])}")
     parked: dict[tuple[Any, ...], list[Any]] = {}
     for pair in _list(row["parked"], "pool.parked"):
         if not isinstance(pair, list) or len(pair) != 2:
-            raise InvalidArgumentError(f"snapshot.pool.parked holds {brief(pair)}")
-        bodies = [engine.spec.body(n) if isinstance(n, str) else None
+            raise InvalidArgumentError(f"snapshot.parked.parked holds {brief(pair)}")
+        bodies = [engine.mj_spec.body(n) if isinstance(n, str) else None
                   for n in _list(pair[1], "pool.parked[]")]
         if any(b is None for b in bodies):
-            raise InvalidArgumentError("snapshot.pool.parked names a body the spec lacks")
+            raise InvalidArgumentError("snapshot.parked.parked names a body the spec lacks")
         parked[kinds[_index(pair[0], len(kinds), "pool.parked[].kind")]] = bodies
-    engine.pool._serial, engine.pool._parked = row["serial"], parked
+    engine.parked._serial, engine.parked._parked = row["serial"], parked
 
 
 def _joints(engine: MujocoEngine, infos: Any, targets: Any) -> None:
     if not isinstance(infos, dict) or not isinstance(targets, dict):
         raise InvalidArgumentError("snapshot.joints and snapshot.targets must be maps")
-    joints = engine.joint_book
+    joints = engine.loaded_joints
     try:
         joints.infos = {root: [JointInfo.from_wire(i) for i in _list(rows, "joints[]")]
                         for root, rows in infos.items()}

@@ -1,4 +1,4 @@
-"""Scene operations: check a request, apply it to the World, build the result map.
+"""Entity operations (the scene of one World): check a request, apply it, build the result.
 
 Each function takes the World and the operation's typed request (protocol/requests.py,
 already checked for types) and returns the ``result`` map of the reply. The remaining
@@ -23,7 +23,7 @@ from galton.daemon.engines import ENGINE_CLASSES
 from galton.daemon.engines.base import FEATURE_SPAWN_INERTIA, Shape, ShapeMesh
 from galton.daemon.ops.binding import handles, scene_op
 from galton.daemon.world.model_files import search_folders
-from galton.daemon.world.scene import World
+from galton.daemon.world.world import World
 from galton.protocol import (
     BodyGroup,
     BodyProperties,

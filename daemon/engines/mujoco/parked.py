@@ -37,8 +37,10 @@ from typing import Any, NamedTuple
 import mujoco
 import numpy as np
 
-from galton.daemon.engines.mujoco import shapes
-from galton.daemon.engines.mujoco import spec as ms
+from galton.daemon.engines.geometry import DENSITY
+from galton.daemon.engines.mujoco import body_extras
+from galton.daemon.engines.mujoco import mj_spec as ms
+from galton.daemon.engines.mujoco import params as mparams
 from galton.daemon.engines.mujoco import state as mst
 from galton.protocol import BodyGroup, ResourceLimitError
 
@@ -75,7 +77,7 @@ class Planned(NamedTuple):
     spares: int
 
 
-class Pool:
+class ParkedBodies:
     """Parked spec bodies by kind; see the module docstring."""
 
     def __init__(self) -> None:
@@ -114,12 +116,12 @@ class Pool:
             else:
                 nbody += len(group)
                 compiled.append(Planned(group, material, key, 0))
-        if nbody > ms.MAX_BODIES:
+        if nbody > mparams.MAX_BODIES:
             raise ResourceLimitError(
-                f"MuJoCo holds at most {ms.MAX_BODIES} bodies in one world (its broadphase "
+                f"MuJoCo holds at most {mparams.MAX_BODIES} bodies in one world (its broadphase "
                 f"numbers them with 16 bits); this spawn would make {nbody} (the world has "
                 f"{entities} entities and {len(self)} parked bodies)",
-                {"limit": "mujoco_bodies", "max": ms.MAX_BODIES, "count": nbody})
+                {"limit": "mujoco_bodies", "max": mparams.MAX_BODIES, "count": nbody})
         free_room = values["mujoco.max_free_bodies"] - nfree
         if compiled:
             free_room -= sum(len(p.group) for p in compiled if not p.group.static)
@@ -129,7 +131,8 @@ class Pool:
         for i, planned in enumerate(compiled):
             if planned.key is None:
                 continue  # never parked: no spare twins
-            count = min(self.spares(len(planned.group), spares), ms.MAX_BODIES - nbody - spares)
+            count = min(self.spares(len(planned.group), spares),
+                        mparams.MAX_BODIES - nbody - spares)
             if not planned.group.static:  # spare twins of moving bodies are free bodies too
                 count = min(count, free_room)
                 free_room -= count
@@ -211,7 +214,7 @@ class Additions:
     (or ``undo`` if the compile failed)."""
 
     def __init__(self, spec: mujoco.MjSpec, builders: Builders) -> None:
-        self.spec, self.builders = spec, builders
+        self.mj_spec, self.builders = spec, builders
         self._groups: list[tuple[BodyGroup, list[Any] | None]] = []  # None: attached
         self._frames: list[Any] = []
         self._homes: list[Any] = []  # a frame per attached group, made before the compile
@@ -228,16 +231,16 @@ class Additions:
         body still moves without a compile: its pose lives in the model (body_pos, body_quat).
         """
         if len(group) < ATTACH_MIN or group.vertices is not None:
-            mesh = shapes.add_mesh(self.spec, group)
+            mesh = body_extras.add_mesh(self.mj_spec, group)
             if mesh is not None:
                 self._meshes.append(mesh)
-            bodies = _add_bodies(self.spec.worldbody, group, material, range(len(group)),
+            bodies = _add_bodies(self.mj_spec.worldbody, group, material, range(len(group)),
                                  parked, group.names, mesh)
             self._direct += bodies
             self._groups.append((group, bodies))
             return
         block, chunks = self.builders.block, self.builders.chunks
-        self._homes.append(self.spec.worldbody.add_frame())
+        self._homes.append(self.mj_spec.worldbody.add_frame())
         try:
             for start in range(0, len(group), BLOCK):
                 for chunk, first in zip(chunks, range(start, min(start + BLOCK, len(group)),
@@ -247,8 +250,8 @@ class Additions:
                                 [str(self._attached + row - rows.start) for row in rows])
                     self._attached += len(rows)
                     _attach(block, chunk, block.worldbody.add_frame())
-                self._frames.append(self.spec.worldbody.add_frame())
-                _attach(self.spec, block, self._frames[-1])
+                self._frames.append(self.mj_spec.worldbody.add_frame())
+                _attach(self.mj_spec, block, self._frames[-1])
         except BaseException:
             self.builders.reset()
             raise
@@ -256,14 +259,14 @@ class Additions:
 
     def undo(self) -> None:
         """Take every added body (and mesh asset) out of the spec again."""
-        _delete(self.spec, self._direct, [*self._frames, *self._homes])
+        _delete(self.mj_spec, self._direct, [*self._frames, *self._homes])
         for name in self._meshes:
-            self.spec.delete(self.spec.mesh(name))
+            self.mj_spec.delete(self.mj_spec.mesh(name))
 
     def bodies(self) -> list[list[Any]]:
         """Once compiled: each added group's bodies, named, each attached group gathered in
         a frame of its own. All are found before any is renamed: a rename may drop MuJoCo's
-        index of names. The frames they leave empty are ``litter``: a delete costs a walk of
+        index of names. The frames they leave empty are ``empty_frames``: a delete costs a walk of
         the spec (0.6 s at 60,000 bodies, 1.8 s right after a compile), so they go with the
         next bodies deleted. (The groups' frames were made before the compile: adding any
         element to a spec drops the ids of its compiled bodies.)
@@ -272,7 +275,7 @@ class Additions:
         its first body is, while a compile keeps the bodies' order; a frame shared by groups
         spawned apart would make a snapshot's MJCF compile its bodies in another order than
         the world's (whose arrays the snapshot holds by position)."""
-        found = iter([self.spec.body(f"{_TEMPORARY * 2}{i}") for i in range(self._attached)])
+        found = iter([self.mj_spec.body(f"{_TEMPORARY * 2}{i}") for i in range(self._attached)])
         homes = iter(self._homes)
         out = []
         for group, bodies in self._groups:
@@ -286,7 +289,7 @@ class Additions:
         return out
 
     @property
-    def litter(self) -> list[Any]:
+    def empty_frames(self) -> list[Any]:
         return self._frames
 
 
@@ -315,14 +318,14 @@ def _geom(group: BodyGroup, material: ms.Material, mesh: str | None = None
     if material.mass is not None and not group.static:
         geom["mass"] = material.mass
     else:
-        geom["density"] = ms.DENSITY
+        geom["density"] = DENSITY
     return geom
 
 
 def _add_bodies(parent: Any, group: BodyGroup, material: ms.Material, rows: range,
                 parked: bool, names: Sequence[str], mesh: str | None = None) -> list[Any]:
     geom = _geom(group, material, mesh)
-    inertial = shapes.inertial(group, material.mass)
+    inertial = body_extras.inertial(group, material.mass)
     poses = np.asarray(group.poses, dtype=float)[rows.start:rows.stop]
     quats = mst.to_wxyz(poses[:, 3:7])
     bodies = []
@@ -350,10 +353,10 @@ def _delete(spec: mujoco.MjSpec, bodies: Sequence[Any], frames: Sequence[Any]) -
 
 
 def remove_bodies(spec: mujoco.MjSpec, bodies: Sequence[Any],
-                  litter: Sequence[Any] = ()) -> None:
+                  empty_frames: Sequence[Any] = ()) -> None:
     """Delete these top-level bodies (and their subtrees) from the spec in one go, with
-    these empty frames (``Additions.litter``)."""
-    _delete(spec, bodies, litter)
+    these empty frames (``Additions.empty_frames``)."""
+    _delete(spec, bodies, empty_frames)
 
 
 def remove_frame(spec: mujoco.MjSpec, frame: Any) -> None:

@@ -20,7 +20,7 @@ from galton.analysis.records import ExperimentResults
 from galton.client import Client, EmbeddedDaemon, wait_for_daemon
 from galton.client.bench.daemons import pool_clients
 from galton.client.bench.experiment import ExperimentConfig
-from galton.client.bench.pool import PoolHooks, TrialQueue, run_pool
+from galton.client.bench.pool_executor import PoolHooks, TrialQueue, run_pool
 from galton.client.bench.trial import run_trial
 from galton.client.cli.router import DEFAULT_ROUTER_LISTEN, router_config
 from galton.client.transport.discovery import discover_at

@@ -9,11 +9,11 @@ the world's structure and the numbers travel beside it, bit for bit:
 - the data: MuJoCo's integration state (``mj_getState``: time, qpos, qvel, act, warm start,
   ctrl, applied forces, mocap poses...), every other float64 array that is not rebuilt
   from scratch in each step (a sleeping tree's positions, inertias and forces are kept from
-  the step it fell asleep in, not recomputed), and the sleep books (which trees sleep, in
+  the step it fell asleep in, not recomputed), and the sleep records (which trees sleep, in
   which cycles, and the awake lists MuJoCo derives from them).
 
 Arrays travel as ``{"dtype", "shape", "data"}`` with ``data`` the little-endian bytes. Only
-float arrays are taken from a snapshot as they come: the few integer ones (the sleep books)
+float arrays are taken from a snapshot as they come: the few integer ones (the sleep records)
 index other arrays, so each is checked against the model before MuJoCo reads it.
 """
 
@@ -37,7 +37,7 @@ STAT_FIELDS = ("meaninertia", "meanmass", "meansize", "extent", "center")
 # Data arrays in MuJoCo's arena: made anew by every step (contacts, constraints, islands).
 ARENA_PREFIXES = ("efc_", "efm_", "iefc_", "island_", "map_", "contact", "iacc", "ifrc")
 STATE = mujoco.mjtState.mjSTATE_INTEGRATION
-# The sleep books: per tree, per body (flags), and the awake lists with their lengths.
+# The sleep records: per tree, per body (flags), and the awake lists with their lengths.
 SLEEP_FLAGS = ("tree_awake", "body_awake")
 AWAKE_LISTS = {"body_awake_ind": ("nbody_awake", "nbody"),
                "parent_awake_ind": ("nparent_awake", "nbody"),
@@ -156,7 +156,7 @@ def write_data_numbers(m: mujoco.MjModel, d: mujoco.MjData, obj: Any) -> None:
     table = names_map(obj, "snapshot.data")
     state = unpack(table.get("state"), "snapshot.data.state", F64,
                    (mujoco.mj_stateSize(m, STATE),))
-    sleep, counts = _sleep_books(m, d, table)
+    sleep, counts = _sleep_records(m, d, table)
     _write_all(_data_arrays(d), table.get("arrays"), "snapshot.data.arrays")
     mujoco.mj_setState(m, d, state, STATE)
     for name, value in sleep.items():
@@ -165,13 +165,13 @@ def write_data_numbers(m: mujoco.MjModel, d: mujoco.MjData, obj: Any) -> None:
         setattr(d, name, count)
 
 
-def _sleep_books(m: mujoco.MjModel, d: mujoco.MjData,
+def _sleep_records(m: mujoco.MjModel, d: mujoco.MjData,
                  table: dict[str, Any]) -> tuple[dict[str, np.ndarray], dict[str, int]]:
-    """The sleep books, checked: flags are sleep states, awake lists hold valid ids, and
+    """The sleep records, checked: flags are sleep states, awake lists hold valid ids, and
     the sleeping trees' cycles are cycles of sleeping trees."""
-    books = names_map(table.get("sleep"), "snapshot.data.sleep")
+    records = names_map(table.get("sleep"), "snapshot.data.sleep")
     raw = names_map(table.get("counts"), "snapshot.data.counts")
-    sleep = {n: unpack(books.get(n), f"snapshot.data.sleep.{n}", I32, getattr(d, n).shape)
+    sleep = {n: unpack(records.get(n), f"snapshot.data.sleep.{n}", I32, getattr(d, n).shape)
              for n in ("tree_asleep", *SLEEP_FLAGS, *AWAKE_LISTS)}
     counts = {"ntree_awake": _count(raw, "ntree_awake", m.ntree)}
     for name, (count, size) in AWAKE_LISTS.items():

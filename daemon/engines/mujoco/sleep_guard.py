@@ -55,7 +55,7 @@ _NEVER = int(mujoco.mjtSleepPolicy.mjSLEEP_NEVER)
 _POLICIES = frozenset(int(p) for p in mujoco.mjtSleepPolicy.__members__.values())
 
 
-class BalanceGuard:
+class SleepGuard:
     """Watches one compiled model's single-sphere trees; build a new one after a compile."""
 
     def __init__(self, m: mujoco.MjModel) -> None:
@@ -71,10 +71,10 @@ class BalanceGuard:
         # Held for HOLD_LIMIT_S in vain -> whether it has slept since: free until it wakes.
         self._let_go: dict[int, bool] = {}
 
-    def copy(self) -> BalanceGuard:
+    def copy(self) -> SleepGuard:
         """A guard of the same model remembering the same (its model's arrays are shared:
-        they are never written; the books are copied)."""
-        twin: BalanceGuard = object.__new__(BalanceGuard)
+        they are never written; the records are copied)."""
+        twin: SleepGuard = object.__new__(SleepGuard)
         twin._trees, twin._geoms = self._trees, self._geoms
         twin._was_asleep = self._was_asleep.copy()
         twin._held, twin._let_go = dict(self._held), dict(self._let_go)
@@ -133,28 +133,28 @@ class BalanceGuard:
         for tree in list(self._held):
             self._release(m, tree)
 
-    def books(self) -> dict[str, Any]:
+    def records(self) -> dict[str, Any]:
         """What the guard remembers, as plain data (for a snapshot)."""
         return {"held": [[t, g, p, s] for t, (g, p, s) in self._held.items()],
                 "let_go": [[t, slept] for t, slept in self._let_go.items()],
                 "was_asleep": self._was_asleep.astype(np.uint8).tobytes()}
 
-    def load(self, m: mujoco.MjModel, books: Any) -> None:
-        """Take over a snapshot's books (``books``) on a fresh guard of the same model,
-        holding its held balls awake again; InvalidArgumentError for malformed books."""
-        if not isinstance(books, dict) or set(books) != {"held", "let_go", "was_asleep"}:
+    def load(self, m: mujoco.MjModel, records: Any) -> None:
+        """Take over a snapshot's records (``records``) on a fresh guard of the same model,
+        holding its held balls awake again; InvalidArgumentError for malformed records."""
+        if not isinstance(records, dict) or set(records) != {"held", "let_go", "was_asleep"}:
             raise InvalidArgumentError(f"snapshot.balance must be {{held, let_go, "
-                                       f"was_asleep}}, got {brief(books)}")
+                                       f"was_asleep}}, got {brief(records)}")
         geoms = dict(zip(self._trees.tolist(), self._geoms.tolist(), strict=True))
         held = {self._tree(row, geoms): (row[1], row[2], row[3]) for row in
-                _rows(books["held"], 4)}
+                _rows(records["held"], 4)}
         if any(geoms[t] != g or type(p) is not int or p not in _POLICIES or
                not isinstance(s, float) or not math.isfinite(s) for t, (g, p, s) in held.items()):
             raise InvalidArgumentError("snapshot.balance.held holds a ball that is not one")
-        let_go = {self._tree(row, geoms): row[1] for row in _rows(books["let_go"], 2)}
+        let_go = {self._tree(row, geoms): row[1] for row in _rows(records["let_go"], 2)}
         if not all(isinstance(slept, bool) for slept in let_go.values()):
             raise InvalidArgumentError("snapshot.balance.let_go must pair trees with bools")
-        was = books["was_asleep"]
+        was = records["was_asleep"]
         if not isinstance(was, bytes) or len(was) != len(self._trees) or set(was) - {0, 1}:
             raise InvalidArgumentError(f"snapshot.balance.was_asleep must be {len(self._trees)}"
                                        f" bytes of 0 or 1, got {brief(was)}")

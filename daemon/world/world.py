@@ -1,4 +1,4 @@
-"""The scene graph: named entities over one engine, with the clock and the step counter.
+"""The World: one engine's named entities (its scene), with the clock and the step counter.
 
 The World checks every request against the registry before the engine sees it, so an
 engine never receives an unknown or duplicate name, and a rejected request changes nothing.

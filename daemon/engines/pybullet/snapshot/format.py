@@ -1,7 +1,7 @@
 """A PyBullet snapshot's format: a world as plain data and back. A snapshot holds the
 world's rebuild plan (rebuild.Plan), its parameters and its next batch number.
 
-Layout (format 1), every array packed as snapshot_data.pack makes it::
+Layout (format 1), every array packed as arrays.pack makes it::
 
     format, engine ("pybullet"), engine_version, params {name: value}, next_batch,
     runs [spawn or model run, in the order made], poses (n, 7), twists (n, 6),
@@ -23,14 +23,14 @@ from typing import Any
 
 import numpy as np
 
+from galton.daemon.engines.geometry import unit_inertia
 from galton.daemon.engines.params import check_updates
-from galton.daemon.engines.pybullet import snapshot_data as sd
 from galton.daemon.engines.pybullet.joints import Articulation
 from galton.daemon.engines.pybullet.models import MODEL_FORMATS
-from galton.daemon.engines.pybullet.params import SPECS
+from galton.daemon.engines.pybullet.params import PARAMS
 from galton.daemon.engines.pybullet.rebuild import Body, Model, Plan, batches, own_inertia
 from galton.daemon.engines.pybullet.robots import JointStates, Robots
-from galton.daemon.engines.pybullet.shapes import unit_inertia
+from galton.daemon.engines.pybullet.snapshot import arrays as sd
 from galton.protocol import BodyProperties, InvalidArgumentError, JointInfo
 from galton.protocol import mesh as mesh_wire
 from galton.protocol.errors import brief
@@ -112,7 +112,7 @@ def spawn_run(names: list[str], bodies: dict[str, Body]) -> dict[str, Any]:
 
 
 def model_run(names: list[str], bodies: dict[str, Body]) -> dict[str, Any]:
-    """One model load's remaining bodies: its text once, each body's books."""
+    """One model load's remaining bodies: its text once, each body's records."""
     models = [body.model for name in names if (body := bodies[name]).model is not None]
     first = models[0]
     return {
@@ -170,12 +170,12 @@ def decode(data: Any) -> Restored:
 
 
 def read_params(value: Any) -> dict[str, Any]:
-    record = sd.fields(value, tuple(SPECS), "snapshot.params")
-    return check_updates(ENGINE, SPECS, record)
+    record = sd.fields(value, tuple(PARAMS), "snapshot.params")
+    return check_updates(ENGINE, PARAMS, record)
 
 
 def read_runs(value: Any, next_batch: int) -> dict[str, Body]:
-    """Every body's books, run by run, in the order made (batches strictly increasing)."""
+    """Every body's records, run by run, in the order made (batches strictly increasing)."""
     check_type(value, list, "snapshot.runs")
     bodies: dict[str, Body] = {}
     last = -1

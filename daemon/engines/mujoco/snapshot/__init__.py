@@ -3,11 +3,11 @@
 A snapshot holds the world's spec as MJCF (its structure: bodies in their order, frames,
 geoms, joints, actuators, loaded models' assets -- meshes by file name), the compiled
 model's and the data's numbers exactly (``snapshot_arrays``: XML keeps six digits),
-the parameters, and the engine's own books: entities, the pool of parked bodies, loaded
-models' joints and held targets, held wrenches, the balance guard, and the counters of the
+the parameters, and the engine's own records: entities, the pool of parked bodies, loaded
+models' joints and held targets, held wrenches, the sleep guard, and the counters of the
 periodic looks. Restoring parses the MJCF, compiles it, writes the exact numbers into the
 model, writes them back into the spec (``MjSpec.copy_back``: later recompiles start from
-the same values as the source's) and into a fresh MjData, then rebuilds the books.
+the same values as the source's) and into a fresh MjData, then rebuilds the records.
 
 The promise (``MujocoEngine.snapshot``): a world restored from a snapshot of world A, and A
 itself, given the same requests afterwards, give the same states bit for bit. A mesh named
@@ -23,10 +23,11 @@ from typing import TYPE_CHECKING, Any
 import mujoco
 import numpy as np
 
-from galton.daemon.engines.mujoco import snapshot_arrays as arrays
-from galton.daemon.engines.mujoco import spec as ms
+from galton.daemon.engines.mujoco import mj_spec as ms
+from galton.daemon.engines.mujoco import params as mparams
 from galton.daemon.engines.mujoco.entities import MUJOCO_ERRORS, Entity
-from galton.daemon.engines.mujoco.snapshot_books import read_books
+from galton.daemon.engines.mujoco.snapshot import arrays
+from galton.daemon.engines.mujoco.snapshot.format import read_records
 from galton.daemon.engines.params import check_updates
 from galton.protocol import InvalidArgumentError, OperationFailedError
 from galton.protocol.errors import brief
@@ -50,32 +51,33 @@ def snapshot(engine: MujocoEngine) -> dict[str, Any]:
     if engine.broken:
         raise OperationFailedError("the MuJoCo world is broken (a failed step or delete); "
                                    "reset it before taking a snapshot")
-    if engine.pool_edited:
+    if engine.parked_edited:
         _recompile(engine)
     m, d = engine.model, engine.data
     loads: dict[int, int] = {}  # id(Assets) -> its place in "loads"
     kinds: dict[tuple[Any, ...], int] = {}  # pool kind -> its place in "kinds"
     entities = [_entity(name, e, loads, kinds) for name, e in engine.entities.items()]
     parked = [[kinds.setdefault(key, len(kinds)), [b.name for b in bodies]]
-              for key, bodies in engine.pool._parked.items()]
+              for key, bodies in engine.parked._parked.items()]
     assets = {id(e.assets): e.assets for e in engine.entities.values() if e.assets}
     return {
         "format": FORMAT, "engine": ENGINE, "engine_version": mujoco.__version__,
-        "params": engine.get_params(), "spec": _xml(engine), "meshes": _mesh_vertices(engine.spec),
-        "memory": int(engine.spec.memory), "sizes": {s: int(getattr(m, s)) for s in SIZES},
-        "bodies": _body_order(engine.spec),
+        "params": engine.get_params(), "spec": _xml(engine),
+        "meshes": _mesh_vertices(engine.mj_spec),
+        "memory": int(engine.mj_spec.memory), "sizes": {s: int(getattr(m, s)) for s in SIZES},
+        "bodies": _body_order(engine.mj_spec),
         "model": arrays.model_numbers(m), "data": arrays.data_numbers(m, d),
         "entities": entities,
         "loads": [{"assets": sorted([k, n] for k, n in assets[i].names),
                    "roots": assets[i].roots} for i in sorted(loads, key=loads.__getitem__)],
         "kinds": [_key(key) for key in kinds],
-        "pool": {"serial": engine.pool._serial, "parked": parked},
+        "pool": {"serial": engine.parked._serial, "parked": parked},
         "joints": {root: [i.to_wire() for i in infos]
-                   for root, infos in engine.joint_book.infos.items()},
+                   for root, infos in engine.loaded_joints.infos.items()},
         "targets": {n: [t.mode, t.target, t.kp, t.kd, t.max_effort]
-                    for n, t in engine.joint_book.targets.items()},
+                    for n, t in engine.loaded_joints.targets.items()},
         "wrenches": {n: arrays.pack(w) for n, w in engine.wrenches.held.items()},
-        "balance": None if engine.balance is None else engine.balance.books(),
+        "balance": None if engine.sleep_guard is None else engine.sleep_guard.records(),
         "looks": {"diverged": engine.diverged, "crowded": engine.crowded,
                   "steps_since_look": engine.steps_since_look},
     }
@@ -85,7 +87,7 @@ def _xml(engine: MujocoEngine) -> str:
     """The spec as MJCF: 50 ms for a 500-ball board, so kept until the spec changes (a
     compile, a parameter, an update, a static body moved; pool edits recompile first)."""
     if engine.xml is None:
-        engine.xml = engine.spec.to_xml()
+        engine.xml = engine.mj_spec.to_xml()
     return engine.xml
 
 
@@ -123,14 +125,14 @@ def _body_order(spec: mujoco.MjSpec) -> list[str]:
 def _recompile(engine: MujocoEngine) -> None:
     """Compile the model as its spec compiles it, as a restore will: binding and parking
     bodies in the pool edit the compiled model alone (collisions, hence its bounding volume
-    hierarchy). The bodies stay where they are in the model, so the whole data, sleep books
-    included, and the balance guard's books are carried over exactly."""
+    hierarchy). The bodies stay where they are in the model, so the whole data, sleep records
+    included, and the sleep guard's records are carried over exactly."""
     numbers = arrays.data_numbers(engine.model, engine.data)
-    guard = None if engine.balance is None else engine.balance.books()
+    guard = None if engine.sleep_guard is None else engine.sleep_guard.records()
     engine.recompile()
     arrays.write_data_numbers(engine.model, engine.data, numbers)
-    if guard is not None and engine.balance is not None:
-        engine.balance.load(engine.model, guard)
+    if guard is not None and engine.sleep_guard is not None:
+        engine.sleep_guard.load(engine.model, guard)
 
 
 def _entity(name: str, e: Entity, loads: dict[int, int],
@@ -146,7 +148,7 @@ def _entity(name: str, e: Entity, loads: dict[int, int],
 
 
 def _key(key: tuple[Any, ...]) -> list[Any]:
-    """A pool kind (pool.key_of) as plain data."""
+    """A pool kind (parked.key_of) as plain data."""
     shape, size, static, material = key
     return [shape, list(size), static, {
         "friction": material.friction, "spin": list(material.spin),
@@ -181,10 +183,10 @@ def restore(engine: MujocoEngine, data: Any) -> None:
     spec.stat.meaninertia = math.nan
     state = mujoco.MjData(model)
     arrays.write_data_numbers(model, state, data["data"])
-    engine.values, engine.spec = values, spec
-    engine.model, engine.data, engine.litter = model, state, []
+    engine.values, engine.mj_spec = values, spec
+    engine.model, engine.data, engine.empty_frames = model, state, []
     engine.xml = data["spec"]  # compiles to this world as well as its own MJCF would
-    read_books(engine, data)
+    read_records(engine, data)
     engine.workers = 0
     engine.start_workers()
 
@@ -209,11 +211,11 @@ def _check_header(data: Any) -> None:
 
 
 def _params(params: Any) -> dict[str, Any]:
-    if not isinstance(params, dict) or set(params) != set(ms.PARAMS):
+    if not isinstance(params, dict) or set(params) != set(mparams.PARAMS):
         raise InvalidArgumentError(f"snapshot.params must give every MuJoCo parameter, got "
                                    f"{brief(params)}")
-    return {**{n: p.default for n, p in ms.PARAMS.items()},
-            **check_updates(ENGINE, ms.PARAMS, params)}
+    return {**{n: p.default for n, p in mparams.PARAMS.items()},
+            **check_updates(ENGINE, mparams.PARAMS, params)}
 
 
 def _parse(xml: Any, memory: Any, values: dict[str, Any]) -> mujoco.MjSpec:

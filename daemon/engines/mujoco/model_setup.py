@@ -74,7 +74,7 @@ def fixed_joint_name(body: str) -> str:
     return f"{body}:fixed"
 
 
-def rig(child: mujoco.MjSpec, facts: Facts, *, float_base: bool, urdf: bool) -> None:
+def ready_model(child: mujoco.MjSpec, facts: Facts, *, float_base: bool, urdf: bool) -> None:
     """Name, float (URDF's ``fixed_base=False``) and actuate a parsed model, in place;
     a URDF's joint limits made stiff."""
     name_bodies(child)

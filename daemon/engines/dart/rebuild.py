@@ -1,5 +1,5 @@
-"""The engine's scene: its entities' books, the order skeletons were made in, models,
-edits, and the rebuild that makes a world afresh from the same skeletons."""
+"""Rebuilding a DART world afresh from the same skeletons, and what a rebuild needs: the
+entities' records, the order skeletons were made in, models and their edits."""
 
 from __future__ import annotations
 
@@ -9,9 +9,9 @@ from typing import Any
 
 import numpy as np
 
-from galton.daemon.engines.dart import joints as joint_books
+from galton.daemon.engines.dart import joints as model_joints
 from galton.daemon.engines.dart import models
-from galton.daemon.engines.dart import spawn as books
+from galton.daemon.engines.dart import spawn as spawning
 from galton.daemon.engines.dart.contacts import node_key
 from galton.daemon.engines.dart.joints import Robots
 from galton.protocol import (
@@ -25,18 +25,18 @@ SURFACE_DEFAULTS = ("default_friction", "default_restitution", "default_static_f
                     "default_static_restitution")
 
 
-class Scene:
-    """The part of the engine that keeps books (DartEngine sets the attributes)."""
+class Rebuilding:
+    """The part of the engine that keeps records (DartEngine sets the attributes)."""
 
     _world: Any
     _values: dict[str, Any]
-    _bodies: dict[str, books.Body]
+    _bodies: dict[str, spawning.Body]
     _robots: Robots
     _owners: list[str]  # spawned bodies and model roots, in the order they were made
     _models: dict[str, models.Model]
     _edits: dict[str, list[tuple[str, BodyProperties]]]  # per model root, in order
 
-    def _init_scene(self) -> None:
+    def _init_records(self) -> None:
         self._owners, self._models, self._edits = [], {}, {}
 
     def _check_new(self, names: Sequence[str]) -> None:
@@ -46,18 +46,18 @@ class Scene:
                 raise NameNotUniqueError(f"an entity named {name!r} already exists")
             seen.add(name)
 
-    def _lookup(self, names: Sequence[str]) -> list[books.Body]:
+    def _lookup(self, names: Sequence[str]) -> list[spawning.Body]:
         try:
             return [self._bodies[n] for n in names]
         except KeyError as exc:
             raise NotFoundError(f"no entity named {exc.args[0]!r} in the DART world") from None
 
-    def _add(self, body: books.Body) -> None:
+    def _add(self, body: spawning.Body) -> None:
         self._bodies[body.name] = body
         self._owners.append(body.name)
         self._world.addSkeleton(body.skeleton)
 
-    def _remove(self, body: books.Body) -> None:
+    def _remove(self, body: spawning.Body) -> None:
         """A spawned body, or a model's root with its links, joints and wrenches."""
         self._world.removeSkeleton(body.skeleton)
         self._owners.remove(body.name)
@@ -71,7 +71,7 @@ class Scene:
 
     def _rebuild(self) -> None:
         """A new world with the same skeletons, added in the order they were made."""
-        world = books.new_world(self._values)
+        world = spawning.new_world(self._values)
         for owner in self._owners:
             skeleton = self._bodies[owner].skeleton
             self._world.removeSkeleton(skeleton)
@@ -85,7 +85,7 @@ class Scene:
         return keys
 
     # -- properties -----------------------------------------------------------------------
-    def _properties(self, body: books.Body) -> tuple[float, float, float]:
+    def _properties(self, body: spawning.Body) -> tuple[float, float, float]:
         if body.model is None:
             return (math.nan if body.static else body.mass), body.friction, body.restitution
         mass = math.nan if body.static else (
@@ -93,20 +93,20 @@ class Scene:
             else float(body.node.getMass()))
         return mass, body.friction, body.restitution
 
-    def _edit(self, body: books.Body, props: BodyProperties) -> None:
+    def _edit(self, body: spawning.Body, props: BodyProperties) -> None:
         if body.model is not None:
             self._edits.setdefault(body.model, []).append((body.name, props))
             edit_model(self._bodies, body, props)
             return
         if props.mass is not None:
-            books.set_mass(body, float(props.mass))
+            spawning.set_mass(body, float(props.mass))
         if props.friction is not None:
             body.friction, body.follows_friction = float(props.friction), False
         if props.restitution is not None:
             body.restitution, body.follows_restitution = float(props.restitution), False
         if props.rgba is not None:
             body.rgba = tuple(props.rgba)
-        books.set_surface(body)
+        spawning.set_surface(body)
 
     def _follow_defaults(self, changed: dict[str, Any]) -> None:
         """Spawned bodies that set no friction or restitution take their kind's new one."""
@@ -120,7 +120,7 @@ class Scene:
                 body.friction = float(self._values[kind + "friction"])
             if body.follows_restitution:
                 body.restitution = float(self._values[kind + "restitution"])
-            books.set_surface(body)
+            spawning.set_surface(body)
 
     # -- models ---------------------------------------------------------------------------
     def _load(self, fmt: str, text: str | None, path: str | None, prefix: str,
@@ -138,12 +138,12 @@ class Scene:
         return infos
 
     def _add_model(self, model: models.Model) -> list[EntityInfo]:
-        """Books for a parsed skeleton's root and links, its joints, and the world."""
+        """Records for a parsed skeleton's root and links, its joints, and the world."""
         skeleton, root = model.skeleton, model.root
         # The world's own geoms, and a root welded to the world, do not move.
         scenery = skeleton.getName() == models.MJCF_WORLD_BODIES
         static = scenery or skeleton.getRootJoint().getType() == "WeldJoint"
-        skeleton.setName(books.MODEL + root)
+        skeleton.setName(spawning.MODEL + root)
         if scenery:
             skeleton.setMobile(False)
         link_names = [root, *models.link_names(skeleton, model.prefix)[1:]]
@@ -154,7 +154,7 @@ class Scene:
         for k, (name, node) in enumerate(zip(link_names, nodes, strict=True)):
             surface = node_surface(node, friction, restitution)
             fixed = static if k == 0 else scenery  # a fixed base's links move
-            body = books.Body(name, "model" if k == 0 else "link", (), fixed,
+            body = spawning.Body(name, "model" if k == 0 else "link", (), fixed,
                               math.nan if fixed else float(node.getMass()), *surface,
                               False, False, skeleton, node, None, root,
                               link_names[1:] if k == 0 else [])
@@ -166,9 +166,9 @@ class Scene:
                                     source="model", model=root))
         self._owners.append(root)
         self._models[root] = model
-        links = {joint_books.id_of(node): name
+        links = {model_joints.id_of(node): name
                  for name, node in zip(link_names, nodes, strict=True)}
-        for joint in joint_books.describe(skeleton, model.prefix, root, links):
+        for joint in model_joints.describe(skeleton, model.prefix, root, links):
             self._robots.joints[joint.info.name] = joint
         self._world.addSkeleton(skeleton)
         return infos
@@ -184,7 +184,7 @@ def node_surface(node: Any, friction: float, restitution: float) -> tuple[float,
     return float(friction), float(restitution)
 
 
-def edit_model(bodies: dict[str, books.Body], root: books.Body,
+def edit_model(bodies: dict[str, spawning.Body], root: spawning.Body,
                props: BodyProperties) -> None:
     """A model's root edited whole: its mass scaled over every link, friction and
     restitution on every shape."""
@@ -202,7 +202,7 @@ def edit_model(bodies: dict[str, books.Body], root: books.Body,
         if props.restitution is not None:
             body.restitution = float(props.restitution)
         if props.friction is not None or props.restitution is not None:
-            books.set_surface(body)
+            spawning.set_surface(body)
         if props.rgba is not None:
             body.rgba = tuple(props.rgba)
     if props.mass is not None:
