@@ -445,12 +445,45 @@ def decode_args(op: str, declared: type[A], args: dict[str, Any]) -> A:
         raise InvalidArgumentError(explain(op, declared, str(exc), args)) from None
 
 
+def encode_args(request: msgspec.Struct) -> dict[str, Any]:
+    """A typed request as the ``args`` map the daemon decodes (``decode_args`` undone): every
+    field but those left None, which are not sent (the daemon takes a missing field and a
+    nil alike); a field declared as a Struct (``until_rest``, ``perturb``) as its map. The
+    SDK sends its requests so (``Client._send``); values go as they are, bytes as bytes."""
+    return {name: _wire(value) for name in request.__struct_fields__
+            if (value := getattr(request, name)) is not None}
+
+
+def _wire(value: Any) -> Any:
+    if isinstance(value, msgspec.Struct):
+        return encode_args(value)
+    if isinstance(value, dict):
+        return {key: _wire(item) for key, item in value.items()}
+    if isinstance(value, list) and value and isinstance(value[0], msgspec.Struct | list):
+        return [_wire(item) for item in value]  # plans: lists of PlanStep
+    return value
+
+
+def decode_field(op: str, declared: type[Args], name: str, value: Any) -> Any:
+    """One field of a request as its declared type, refused as ``decode_args`` would refuse
+    it in the whole request (INVALID_ARGUMENT naming "op.name...", its range and value): the
+    SDK types a map its caller gives (predict's ``perturb``) so."""
+    field_type = next(f.type for f in msgspec.structs.fields(declared) if f.name == name)
+    try:
+        return msgspec.convert(value, field_type)
+    except msgspec.ValidationError as exc:
+        what, at, path = str(exc).partition(" - at `$")
+        error = f"{what} - at `${'.' + name}{path if at else '`'}"
+        raise InvalidArgumentError(explain(op, declared, error, {name: value})) from None
+
+
 def explain(op: str, declared: type[Args], error: str, args: dict[str, Any]) -> str:
     """msgspec's ``Expected `int`, got `str` - at `$.count``` as the daemon's own message:
     ``step.count must be int, got 'ten'`` (did you mean, for a choice)."""
     what, _, path = error.partition(" - at `")
     steps = _path_steps(path.rstrip("`"))
-    where = op + "".join(f"[{s}]" if isinstance(s, int) else f".{s}" for s in steps)
+    where = op + "".join(f"[{s}]" if isinstance(s, int) or s == _MAP_KEY else f".{s}"
+                         for s in steps)
     if what.startswith("Object missing required field"):
         field = what.rsplit("`", 2)[-2]
         return f"{where}: missing required field {field!r}"
@@ -462,7 +495,7 @@ def explain(op: str, declared: type[Args], error: str, args: dict[str, Any]) -> 
     owner = _struct_at(declared, steps[:-1])
     if what.startswith("Invalid enum value"):
         choices = field_kind(owner, str(steps[-1]))[1] if steps and owner else ()
-        return (f"{where} {brief(value)} is not one of {', '.join(choices)}"
+        return (f"{where}{_quoted(value)} is not one of {', '.join(choices)}"
                 f"{did_you_mean(str(value)[:64], choices)}")
     if what.startswith("Expected `"):  # "Expected `int | null`, got `str`"
         expected = what.split("`")[1].removesuffix(" | null")  # None means "not sent"
@@ -470,22 +503,40 @@ def explain(op: str, declared: type[Args], error: str, args: dict[str, Any]) -> 
             expected = range_text(owner, steps[-1])
         elif ", got `" not in what:  # a list item's range: "float <= 1.0"
             expected = what.removeprefix("Expected ").replace("`", "").replace(" | null", "")
-        return f"{where} must be {expected}, got {brief(value)}"
-    return f"{where}: {what[:1].lower()}{what[1:]}, got {brief(value)}"  # ranges, lengths
+        return f"{where} must be {expected}{_got(value)}"
+    return f"{where}: {what[:1].lower()}{what[1:]}{_got(value)}"  # ranges, lengths
+
+
+# msgspec's step into a map's value ("$.bodies[...].position"): which key, it does not say.
+_MAP_KEY = "..."
+_UNSEEN = object()  # the offending value, in a map of several entries: not known
+
+
+def _got(value: Any) -> str:
+    return "" if value is _UNSEEN else f", got {brief(value)}"
+
+
+def _quoted(value: Any) -> str:
+    return "" if value is _UNSEEN else f" {brief(value)}"
 
 
 def _struct_at(declared: type[msgspec.Struct], steps: list[str | int]
                ) -> type[msgspec.Struct] | None:
-    """The declared Struct a path leads to (through fields declared as Structs), if any."""
-    found: type[msgspec.Struct] = declared
+    """The declared Struct a path leads to (through fields declared as Structs, and maps of
+    them: perturb's ``bodies``), if any."""
+    found: Any = declared
     for step in steps:
-        if not isinstance(step, str) or step not in found.__struct_fields__:
+        if step == _MAP_KEY and get_origin(found) is dict:
+            found = get_args(found)[1]
+        elif _is_struct(found) and isinstance(step, str) and step in found.__struct_fields__:
+            found = _metas(found, step)[0]
+        else:
             return None
-        base = _metas(found, step)[0]
-        if not (isinstance(base, type) and issubclass(base, msgspec.Struct)):
-            return None
-        found = base
-    return found
+    return found if _is_struct(found) else None
+
+
+def _is_struct(found: Any) -> bool:
+    return isinstance(found, type) and issubclass(found, msgspec.Struct)
 
 
 def _fields_at(declared: type[msgspec.Struct], steps: list[str | int]) -> tuple[str, ...]:
@@ -535,8 +586,11 @@ def _metas(declared: type[msgspec.Struct], name: str) -> tuple[Any, list[msgspec
 
 def _path_steps(path: str) -> list[str | int]:
     steps: list[str | int] = []
-    for part in path.removeprefix("$").replace("[", ".[").split("."):
-        if part.startswith("["):
+    marked = path.removeprefix("$").replace(f"[{_MAP_KEY}]", ".<key>")
+    for part in marked.replace("[", ".[").split("."):
+        if part == "<key>":
+            steps.append(_MAP_KEY)
+        elif part.startswith("["):
             steps.append(int(part.strip("[]")))
         elif part:
             steps.append(part)
@@ -546,6 +600,11 @@ def _path_steps(path: str) -> list[str | int]:
 def _value_at(args: Any, steps: list[str | int]) -> Any:
     value = args
     for step in steps:
+        if step == _MAP_KEY and isinstance(value, dict):  # which entry: known if only one
+            value = next(iter(value.values())) if len(value) == 1 else _UNSEEN
+            if value is _UNSEEN:
+                return value
+            continue
         try:
             value = value[step]
         except (KeyError, IndexError, TypeError):

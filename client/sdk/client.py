@@ -5,8 +5,11 @@
 ...     sim.step(500)
 ...     states = sim.get_states(["ball"])
 
-Joints and wrenches (issue 24) take numpy arrays or scalars; their wire arguments are built
-in ``galton.client.sdk.joints``.
+Each method builds its operation's declared request (``galton.protocol.requests``, one
+msgspec Struct per operation) and sends it through ``Client._send``, which refuses a bad
+value before it leaves, as the daemon would (``galton.client.sdk.sending``). Joints and
+wrenches (issue 24) take numpy arrays or scalars; their requests are built in
+``galton.client.sdk.joints``.
 
 A Client holds no per-request state: each result is built from its own reply (stamps
 included), so one Client may serve several threads. Timeouts come from the operation
@@ -19,7 +22,7 @@ import builtins
 import os
 import uuid
 from collections.abc import Callable, Sequence
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 import zenoh
@@ -29,6 +32,7 @@ from galton.client.sdk import joints as sdk_joints
 from galton.client.sdk.control import ControlMethods
 from galton.client.sdk.joints import SearchPath
 from galton.client.sdk.perception import PerceptionMethods
+from galton.client.sdk.sending import wire_args
 from galton.client.sdk.streams import StateSample, StateStream, StreamMethods
 from galton.client.sdk.telemetry import Subscription, TelemetryStream, subscribe_events
 from galton.client.sdk.values import (
@@ -57,9 +61,10 @@ from galton.protocol import (
     pack_f64,
 )
 from galton.protocol import mesh as mesh_wire
+from galton.protocol import requests as rq
 from galton.protocol.arrays import unpack_f64
 from galton.protocol.errors import ClientClosedError, InvalidArgumentError
-from galton.protocol.operations import OPERATIONS
+from galton.protocol.operations import OPERATIONS, GetEntities
 from galton.protocol.replies import (
     BoundsReply,
     EntitiesReply,
@@ -70,6 +75,7 @@ from galton.protocol.replies import (
     StepReply,
     decode_result,
 )
+from galton.protocol.vocabulary import EngineName, EntityKind, ResetScope
 
 if TYPE_CHECKING:  # pyzmq loads only for a zmq+ endpoint (transport_for)
     from galton.client.transport.zmq_keys import ZmqKeys
@@ -168,8 +174,15 @@ class Client(WorldMethods, PerceptionMethods, ControlMethods, StreamMethods):
 
     def call(self, op: str, args: dict[str, Any] | None = None,
              timeout: float | None = None) -> dict[str, Any]:
-        """Send any operation; return its result map or raise the error its code means."""
+        """Send any operation as a raw ``args`` map (unchecked here: the daemon judges it);
+        return its result map or raise the error its code means."""
         return self._ok(op, args, timeout).result
+
+    def _send(self, op: str, request: rq.Args, timeout: float | None = None) -> Reply:
+        """Send ``request``, ``op``'s declared request type, and return the reply it
+        succeeded with; every SDK method sends through here. A bad value is refused before
+        it leaves, as the daemon would refuse it (``galton.client.sdk.sending``)."""
+        return self._ok(op, wire_args(op, request), timeout)
 
     def _ok(self, op: str, args: dict[str, Any] | None = None,
             timeout: float | None = None) -> Reply:
@@ -178,22 +191,23 @@ class Client(WorldMethods, PerceptionMethods, ControlMethods, StreamMethods):
         reply.raise_for_code()
         return reply
 
-    def _status(self, op: str, args: dict[str, Any] | None = None) -> SimStatus:
-        return SimStatus.from_wire(self.call(op, args))
+    def _status(self, op: str, request: rq.Args | None = None) -> SimStatus:
+        sent = rq.NoArgs() if request is None else request
+        return SimStatus.from_wire(self._send(op, sent).result)
 
     # -- discovery & clock --------------------------------------------------------------
     def capabilities(self) -> Capabilities:
-        return Capabilities.from_wire(self.call("capabilities"))
+        return Capabilities.from_wire(self._send("capabilities", rq.NoArgs()).result)
 
     def status(self) -> SimStatus:
         return self._status("status")
 
     def play(self, rtf: float | None = None) -> SimStatus:
         """Run continuously at ``rtf`` × real time (0 = as fast as possible)."""
-        return self._status("play", {} if rtf is None else {"rtf": rtf})
+        return self._status("play", rq.Play(rtf=rtf))
 
     def set_rtf(self, rtf: float) -> SimStatus:
-        return self._status("set_rtf", {"rtf": rtf})
+        return self._status("set_rtf", rq.SetRtf(rtf=rtf))
 
     def pause(self) -> SimStatus:
         return self._status("pause")
@@ -204,76 +218,75 @@ class Client(WorldMethods, PerceptionMethods, ControlMethods, StreamMethods):
 
     def step(self, count: int = 1, timeout: float | None = None) -> Stamp:
         """Advance exactly ``count`` steps; returns when they are done."""
-        return Stamp.of(self._ok("step", {"count": count}, timeout))
+        return Stamp.of(self._send("step", rq.Step(count=count), timeout))
 
     def run_until(self, sim_time: float, timeout: float | None = None) -> Stamp:
-        return Stamp.of(self._ok("run_until", {"sim_time": sim_time}, timeout))
+        return Stamp.of(self._send("run_until", rq.RunUntil(sim_time=sim_time), timeout))
 
     def step_and_read(self, count: int, names: Sequence[str],
                       timeout: float | None = None) -> States:
         """Advance ``count`` steps and return these bodies' states after the last one: one
         round trip, as a control loop wants (step, then observe)."""
         return States.from_reply(
-            self._ok("step", sdk_joints.step_args(count, names, None), timeout))
+            self._send("step", sdk_joints.step_request(count, names, None), timeout))
 
     def step_and_read_joints(self, count: int, joints: Sequence[str],
                              timeout: float | None = None) -> JointStates:
         """Advance ``count`` steps and return these joints' states after the last one: with
         ``set_joint_targets`` before it, a lockstep control cycle."""
         return JointStates.from_step_reply(
-            self._ok("step", sdk_joints.step_args(count, None, joints), timeout))
+            self._send("step", sdk_joints.step_request(count, None, joints), timeout))
 
     def step_and_read_both(self, count: int, names: Sequence[str], joints: Sequence[str],
                            timeout: float | None = None) -> tuple[States, JointStates]:
         """Advance ``count`` steps; return bodies' (or links') and joints' states after the
         last one, both from one reply (one round trip)."""
-        reply = self._ok("step", sdk_joints.step_args(count, names, joints), timeout)
+        reply = self._send("step", sdk_joints.step_request(count, names, joints), timeout)
         return States.from_reply(reply), JointStates.from_step_reply(reply)
 
     def run_until_and_read(self, sim_time: float, names: Sequence[str],
                            timeout: float | None = None) -> States:
         """``run_until`` and ``get_states(names)`` in one round trip."""
-        return States.from_reply(
-            self._ok("run_until", {"sim_time": sim_time, "read": list(names)}, timeout))
+        return States.from_reply(self._send(
+            "run_until", rq.RunUntil(sim_time=sim_time, read=list(names)), timeout))
 
     def run_until_and_read_joints(self, sim_time: float, joints: Sequence[str],
                                   timeout: float | None = None) -> JointStates:
         """``run_until`` and ``get_joint_states(joints)`` in one round trip."""
-        return JointStates.from_step_reply(
-            self._ok("run_until", {"sim_time": sim_time, "read_joints": list(joints)}, timeout))
+        return JointStates.from_step_reply(self._send(
+            "run_until", rq.RunUntil(sim_time=sim_time, read_joints=list(joints)), timeout))
 
     def run_until_rest(self, sim_time: float, names: Sequence[str], speed: float,
                        every: float, timeout: float | None = None) -> tuple[States, bool]:
         """Run until every named body moves slower than ``speed`` m/s (looked at every
         ``every`` s of sim time) or until ``sim_time``; return their states and whether they
         came to rest. One round trip for a whole settling phase."""
-        reply = self._ok("run_until", {"sim_time": sim_time, "read": list(names),
-                                       "until_rest": {"speed": speed, "every": every}},
-                         timeout)
+        rest = rq.UntilRest(speed=speed, every=every)
+        reply = self._send("run_until", rq.RunUntil(sim_time=sim_time, read=list(names),
+                                                    until_rest=rest), timeout)
         return States.from_reply(reply), bool(decode_result(StepReply, reply.result).at_rest)
 
     def reset(self, scope: str = "all") -> SimStatus:
         """Scopes: time, state (entities to their created state), spawned, all."""
-        return self._status("reset", {"scope": scope})
+        return self._status("reset", rq.Reset(scope=cast(ResetScope, scope)))
 
     def load_world(self, engine: str, params: dict[str, Any] | None = None) -> SimStatus:
         """Replace the world with an empty one on another engine, without a restart."""
-        args: dict[str, Any] = {"engine": engine}
-        if params:
-            args["params"] = params
-        return self._status("load_world", args)
+        return self._status("load_world", rq.LoadWorld(engine=cast(EngineName, engine),
+                                                       params=params or None))
 
     def get_params(self) -> dict[str, Any]:
-        return decode_result(ParamsReply, self.call("get_params")).params
+        return decode_result(ParamsReply, self._send("get_params", rq.NoArgs()).result).params
 
     def set_params(self, params: dict[str, Any]) -> dict[str, Any]:
-        return decode_result(ParamsReply, self.call("set_params", {"params": params})).params
+        reply = self._send("set_params", rq.SetParams(params=params))
+        return decode_result(ParamsReply, reply.result).params
 
     # -- scene --------------------------------------------------------------------------
     def spawn(self, *groups: BodyGroup, timeout: float | None = None) -> list[str]:
         """Create every body of every group in one request (one engine rebuild)."""
-        args = {"groups": [g.to_wire() for g in groups]}
-        return decode_result(NamesReply, self.call("spawn", args, timeout)).names
+        request = rq.Spawn(groups=[g.to_wire() for g in groups])
+        return decode_result(NamesReply, self._send("spawn", request, timeout).result).names
 
     def load_model(self, fmt: str, *, text: str | None = None,
                    path: str | os.PathLike[str] | None = None, prefix: str = "",
@@ -283,27 +296,26 @@ class Client(WorldMethods, PerceptionMethods, ControlMethods, StreamMethods):
         return its entities, each root before its links. ``fixed_base`` (URDF; daemon's
         default True) welds the root to the world; ``search_path``: folders (a list, or one
         str joined by ':') where the files the model names are looked for."""
-        result = self.call("load_model", sdk_joints.load_model_args(
+        reply = self._send("load_model", sdk_joints.load_model_request(
             fmt, text, path, prefix, fixed_base, search_path))
-        return decode_result(NamesReply, result).names
+        return decode_result(NamesReply, reply.result).names
 
     def list(self, name: str | None = None, tag: str | None = None,
              kind: str | None = None) -> list[EntityInfo]:
         """Entities matching a name glob, a tag and/or a kind ("static"/"dynamic")."""
-        args = sdk_joints.given(name=name, tag=tag, kind=kind)
-        rows = decode_result(EntitiesReply, self.call("list", args)).entities
+        request = rq.List(name=name, tag=tag, kind=cast(EntityKind | None, kind))
+        rows = decode_result(EntitiesReply, self._send("list", request).result).entities
         return [EntityInfo.from_wire(e) for e in rows]
 
     def get_states(self, names: Sequence[str] | None = None) -> States:
         """States of these bodies (all when None) in one request."""
-        return States.from_reply(
-            self._ok("get_states", sdk_joints.names_arg(names)))
+        return States.from_reply(self._send("get_states", sdk_joints.names_or_all(names)))
 
     def get_bounds(self, names: Sequence[str] | None = None) -> dict[str, FloatArray]:
         """Each entity's world-frame axis-aligned bounds (all when None), as a row
         ``min_x min_y min_z max_x max_y max_z``."""
-        reply = decode_result(BoundsReply, self._ok("get_bounds",
-                                                    sdk_joints.names_arg(names)).result)
+        reply = decode_result(BoundsReply, self._send(
+            "get_bounds", sdk_joints.names_or_all(names)).result)
         rows = unpack_f64(reply.bounds, 6, "bounds")
         return dict(zip(reply.names, rows, strict=True))
 
@@ -313,49 +325,49 @@ class Client(WorldMethods, PerceptionMethods, ControlMethods, StreamMethods):
         ``pattern`` matches (as ``list``'s); bounds touching ``region``, a box as two points
         ``[[min_x, min_y, min_z], [max_x, max_y, max_z]]``."""
         box = None if region is None else pack_f64(np.asarray(region, dtype=float).ravel())
-        result = self._ok("get_entities", sdk_joints.given(pattern=pattern, region=box)).result
-        return decode_result(NamesReply, result).names
+        reply = self._send("get_entities", GetEntities(pattern=pattern, region=box))
+        return decode_result(NamesReply, reply.result).names
 
     def get_shapes(self, names: Sequence[str] | None = None
                    ) -> dict[str, builtins.list[ShapeInfo]]:
         """Each entity's collision shapes (all entities when None), in its own frame; a
         mesh with its triangles where the daemon knows them (``ShapeInfo.boxed`` if not)."""
-        reply = decode_result(ShapesReply, self._ok("get_shapes",
-                                                    sdk_joints.names_arg(names)).result)
+        reply = decode_result(ShapesReply, self._send(
+            "get_shapes", sdk_joints.names_or_all(names)).result)
         return shapes_of(reply)
 
     def set_states(self, names: Sequence[str], poses: ArrayLike | None = None,
                    twists: ArrayLike | None = None) -> Stamp:
         """Poses (rows of 7) and/or twists (rows of 6); a single row is given to every body."""
-        return Stamp.of(self._ok("set_states",
-                                 sdk_joints.set_states_args(names, poses, twists)))
+        return Stamp.of(self._send("set_states",
+                                   sdk_joints.set_states_request(names, poses, twists)))
 
     def update(self, names: Sequence[str], **properties: Any) -> Stamp:
         """Change mass, friction, restitution, rgba or tags of these entities."""
-        props = BodyProperties(**properties)
-        return Stamp.of(self._ok("update", {"names": list(names),
-                                            "properties": props.to_wire()}))
+        props = rq.UpdateProperties(**BodyProperties(**properties).to_wire())
+        return Stamp.of(self._send("update", rq.Update(names=list(names), properties=props)))
 
     def delete(self, names: Sequence[str]) -> Stamp:
-        return Stamp.of(self._ok("delete", {"names": list(names)}))
+        return Stamp.of(self._send("delete", rq.NamedOnly(names=list(names))))
 
     # -- joints and wrenches ------------------------------------------------------------
     def joints(self, model: str | None = None,
                names: Sequence[str] | None = None) -> builtins.list[JointInfo]:
         """Every joint of every loaded model, or of one ``model`` (its root entity), or
         these ``names``; in load order."""
-        result = self.call("joints", sdk_joints.joints_args(model, names))
+        request = rq.Joints(model=model, names=None if names is None else list(names))
+        result = self._send("joints", request).result
         return [JointInfo.from_wire(joint) for joint in decode_result(JointsReply, result).joints]
 
     def get_joint_states(self, names: Sequence[str] | None = None) -> JointStates:
         """Positions, velocities, efforts of these 1-DOF joints (all when None)."""
         return JointStates.from_reply(
-            self._ok("get_joint_states", sdk_joints.names_arg(names)))
+            self._send("get_joint_states", sdk_joints.names_or_all(names)))
 
     def set_joint_states(self, names: Sequence[str], positions: ArrayLike,
                          velocities: ArrayLike | None = None) -> Stamp:
         """Teleport joints between steps (velocities None: each keeps its own)."""
-        return Stamp.of(self._ok("set_joint_states", sdk_joints.set_joint_states_args(
+        return Stamp.of(self._send("set_joint_states", sdk_joints.set_joint_states_request(
             names, positions, velocities)))
 
     def set_joint_states_and_read(self, names: Sequence[str], positions: ArrayLike,
@@ -363,8 +375,8 @@ class Client(WorldMethods, PerceptionMethods, ControlMethods, StreamMethods):
                                   ) -> States:
         """Teleport joints and return these bodies' or links' states where the joints now
         put them (no step): mirroring a robot is one round trip per cycle."""
-        args = sdk_joints.set_joint_states_args(names, positions, velocities)
-        return States.from_reply(self._ok("set_joint_states", {**args, "read": list(read)}))
+        request = sdk_joints.set_joint_states_request(names, positions, velocities, read)
+        return States.from_reply(self._send("set_joint_states", request))
 
     def set_joint_targets(self, names: Sequence[str], mode: str,
                           targets: ArrayLike | None = None, kp: ArrayLike | None = None,
@@ -373,7 +385,7 @@ class Client(WorldMethods, PerceptionMethods, ControlMethods, StreamMethods):
         """Hold a target (mode "position", "velocity", "effort" or "none") on these joints,
         applied every step by the engine until changed. Each of ``targets``, ``kp``, ``kd``
         and ``max_effort`` is one value per joint or a scalar for all."""
-        return Stamp.of(self._ok("set_joint_targets", sdk_joints.set_joint_targets_args(
+        return Stamp.of(self._send("set_joint_targets", sdk_joints.set_joint_targets_request(
             names, mode, targets, kp, kd, max_effort)))
 
     def apply_wrench(self, names: Sequence[str], wrenches: ArrayLike,
@@ -381,12 +393,12 @@ class Client(WorldMethods, PerceptionMethods, ControlMethods, StreamMethods):
         """Hold a world-frame wrench (rows fx fy fz tx ty tz) on bodies or links, at
         ``points`` (rows x y z, world frame; None: each centre of mass), for ``duration``
         seconds or until cleared. One row alone acts on every body."""
-        return Stamp.of(self._ok("apply_wrench", sdk_joints.apply_wrench_args(
+        return Stamp.of(self._send("apply_wrench", sdk_joints.apply_wrench_request(
             names, wrenches, points, duration)))
 
     def clear_wrenches(self, names: Sequence[str] | None = None) -> Stamp:
         """Remove the wrenches of these bodies (every wrench when None)."""
-        return Stamp.of(self._ok("clear_wrenches", sdk_joints.names_arg(names)))
+        return Stamp.of(self._send("clear_wrenches", sdk_joints.names_or_all(names)))
 
     # -- streams ------------------------------------------------------------------------
     def telemetry(self, timeout: float | None = None) -> TelemetryStream:

@@ -15,9 +15,10 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from contextlib import contextmanager, suppress
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from galton.protocol import GaltonError
+from galton.protocol import requests as rq
 from galton.protocol.replies import ReleaseControlReply, TakeControlReply, decode_result
 
 if TYPE_CHECKING:
@@ -28,19 +29,20 @@ class ControlMethods:
     """Client methods that take and release the daemon's control lease."""
 
     if TYPE_CHECKING:
-        def _ok(self, op: str, args: dict[str, Any] | None = None,
-                timeout: float | None = None) -> Reply: ...
+        def _send(self, op: str, request: rq.Args, timeout: float | None = None
+                  ) -> Reply: ...
 
     def take_control(self) -> bool:
         """Hold control of the daemon until ``release_control``, or until this client
         closes or its process dies. True when taken now, False when this client already
         held it; ControlHeldError (naming the holder) when another client holds it."""
-        return decode_result(TakeControlReply, self._ok("take_control").result).taken
+        return decode_result(TakeControlReply, self._send("take_control", rq.NoArgs()).result).taken
 
     def release_control(self) -> bool:
         """Give control back: True when this client held it, False when nobody did;
         ControlHeldError when another client holds it."""
-        return decode_result(ReleaseControlReply, self._ok("release_control").result).released
+        reply = self._send("release_control", rq.NoArgs())
+        return decode_result(ReleaseControlReply, reply.result).released
 
     @contextmanager
     def control(self) -> Iterator[None]:

@@ -1,10 +1,12 @@
-"""The wire arguments of the joint and wrench operations, built from numpy arrays or scalars.
+"""The requests of the joint, wrench and state operations, built from numpy arrays or scalars
+as their declared types (``galton.protocol.requests``).
 
 The ``Client`` methods (``galton.client.sdk.client``) send what these functions build: per-joint
 values and rows go on the wire as packed float64 bins (docs/protocol.md, "set_joint_targets",
 "apply_wrench"). A scalar stands for the same value on every name and a single row for the
 same row on every body. Values that are no numbers, or rows of the wrong width, raise
-``InvalidArgumentError`` here, before any request; everything else (counts, NaN, limits,
+``InvalidArgumentError`` here; types and declared ranges are checked as the daemon checks
+them when the request is sent (``Client._send``); everything else (counts, NaN, limits,
 unknown names) the daemon judges, so its checks stay the one source of truth.
 """
 
@@ -13,7 +15,7 @@ from __future__ import annotations
 import os
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -25,6 +27,8 @@ from galton.protocol import (
     InvalidArgumentError,
     pack_f64,
 )
+from galton.protocol import requests as rq
+from galton.protocol.vocabulary import TargetMode
 
 POINT_WIDTH = 3  # x y z, world frame
 SearchPath = str | os.PathLike[str] | Sequence[str | os.PathLike[str]]
@@ -72,78 +76,72 @@ def search_path_arg(search_path: SearchPath) -> str:
     return ":".join(str(Path(folder)) for folder in search_path)
 
 
-def load_model_args(fmt: str, text: str | None, path: str | os.PathLike[str] | None,
-                    prefix: str, fixed_base: bool | None,
-                    search_path: SearchPath | None) -> dict[str, Any]:
-    return {"format": fmt, "prefix": prefix, **given(
-        text=text, path=None if path is None else os.fspath(path), fixed_base=fixed_base,
-        search_path=None if search_path is None else search_path_arg(search_path))}
+def load_model_request(fmt: str, text: str | None, path: str | os.PathLike[str] | None,
+                       prefix: str, fixed_base: bool | None,
+                       search_path: SearchPath | None) -> rq.LoadModel:
+    """``fixed_base`` None: the daemon's default (True)."""
+    return rq.LoadModel(
+        format=fmt, prefix=prefix, text=text, path=None if path is None else os.fspath(path),
+        search_path=None if search_path is None else search_path_arg(search_path),
+        **given(fixed_base=fixed_base))
 
 
-def joints_args(model: str | None, names: Sequence[str] | None) -> dict[str, Any]:
-    return {**given(model=model), **names_arg(names)}
+def names_or_all(names: Sequence[str] | None) -> rq.NamesOrAll:
+    """These names, or every one (every joint, every wrench) when None."""
+    return rq.NamesOrAll(names=None if names is None else list(names))
 
 
-def names_arg(names: Sequence[str] | None) -> dict[str, Any]:
-    """``{"names": [...]}``, or nothing (every joint, every wrench) when None."""
-    return {} if names is None else {"names": list(names)}
-
-
-def set_joint_states_args(names: Sequence[str], positions: ArrayLike,
-                          velocities: ArrayLike | None) -> dict[str, Any]:
+def set_joint_states_request(names: Sequence[str], positions: ArrayLike,
+                             velocities: ArrayLike | None,
+                             read: Sequence[str] | None = None) -> rq.SetJointStates:
     count = len(names)
-    args: dict[str, Any] = {"names": list(names),
-                            "positions": joint_values(positions, count, "positions")}
-    if velocities is not None:
-        args["velocities"] = joint_values(velocities, count, "velocities")
-    return args
+    return rq.SetJointStates(
+        names=list(names), positions=joint_values(positions, count, "positions"),
+        velocities=None if velocities is None else joint_values(velocities, count,
+                                                                 "velocities"),
+        read=None if read is None else list(read))
 
 
-def set_joint_targets_args(names: Sequence[str], mode: str, targets: ArrayLike | None = None,
-                           kp: ArrayLike | None = None, kd: ArrayLike | None = None,
-                           max_effort: ArrayLike | None = None) -> dict[str, Any]:
-    """Absent gains are left to the daemon's defaults (kp, kd 0; max_effort infinite)."""
+def set_joint_targets_request(names: Sequence[str], mode: str,
+                              targets: ArrayLike | None = None, kp: ArrayLike | None = None,
+                              kd: ArrayLike | None = None,
+                              max_effort: ArrayLike | None = None) -> rq.SetJointTargets:
+    """Absent gains are left to the daemon's defaults (kp, kd 0; max_effort infinite);
+    ``mode`` is held to its choices when the request is sent (``Client._send``)."""
     count = len(names)
-    args: dict[str, Any] = {"names": list(names), "mode": mode}
-    given = {"targets": targets, "kp": kp, "kd": kd, "max_effort": max_effort}
-    for key, values in given.items():
-        if values is not None:
-            args[key] = joint_values(values, count, key)
-    return args
+
+    def values(value: ArrayLike | None, key: str) -> bytes | None:
+        return None if value is None else joint_values(value, count, key)
+    return rq.SetJointTargets(names=list(names), mode=cast(TargetMode, mode),
+                              targets=values(targets, "targets"), kp=values(kp, "kp"),
+                              kd=values(kd, "kd"), max_effort=values(max_effort, "max_effort"))
 
 
-def set_states_args(names: Sequence[str], poses: ArrayLike | None = None,
-                    twists: ArrayLike | None = None) -> dict[str, Any]:
-    """A ``set_states`` request's arguments (rows of 7 and 6; one row for every body)."""
+def set_states_request(names: Sequence[str], poses: ArrayLike | None = None,
+                       twists: ArrayLike | None = None) -> rq.SetStates:
+    """A ``set_states`` request (rows of 7 and 6; one row for every body)."""
     count = len(names)
-    args: dict[str, Any] = {"names": list(names)}
-    if poses is not None:
-        args["poses"] = body_rows(poses, count, POSE_WIDTH, "set_states.poses")
-    if twists is not None:
-        args["twists"] = body_rows(twists, count, TWIST_WIDTH, "set_states.twists")
-    return args
+    return rq.SetStates(
+        names=list(names),
+        poses=None if poses is None else body_rows(poses, count, POSE_WIDTH,
+                                                   "set_states.poses"),
+        twists=None if twists is None else body_rows(twists, count, TWIST_WIDTH,
+                                                     "set_states.twists"))
 
 
-def apply_wrench_args(names: Sequence[str], wrenches: ArrayLike,
-                      points: ArrayLike | None = None,
-                      duration: float | None = None) -> dict[str, Any]:
+def apply_wrench_request(names: Sequence[str], wrenches: ArrayLike,
+                         points: ArrayLike | None = None,
+                         duration: float | None = None) -> rq.ApplyWrench:
     """Wrenches are rows fx fy fz tx ty tz (N, N·m), points rows x y z: world frame."""
     count = len(names)
-    args: dict[str, Any] = {"names": list(names),
-                            "wrenches": body_rows(wrenches, count, WRENCH_WIDTH, "wrenches")}
-    if points is not None:
-        args["points"] = body_rows(points, count, POINT_WIDTH, "points")
-    if duration is not None:
-        args["duration"] = float(duration)
-    return args
+    return rq.ApplyWrench(
+        names=list(names), wrenches=body_rows(wrenches, count, WRENCH_WIDTH, "wrenches"),
+        points=None if points is None else body_rows(points, count, POINT_WIDTH, "points"),
+        duration=None if duration is None else float(duration))
 
 
-def step_args(count: int, names: Sequence[str] | None,
-              joints: Sequence[str] | None) -> dict[str, Any]:
+def step_request(count: int, names: Sequence[str] | None,
+                 joints: Sequence[str] | None) -> rq.Step:
     """A ``step`` that reads bodies (``read``) and/or joints (``read_joints``) after it."""
-    args: dict[str, Any] = {"count": count}
-    if names is not None:
-        args["read"] = list(names)
-    if joints is not None:
-        args["read_joints"] = list(joints)
-    return args
+    return rq.Step(count=count, read=None if names is None else list(names),
+                   read_joints=None if joints is None else list(joints))

@@ -13,7 +13,7 @@ contacts, answered as numpy arrays.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -21,8 +21,9 @@ from numpy.typing import ArrayLike
 from galton.client.sdk.joints import float_array, given
 from galton.client.sdk.values import Contacts, Image, RayHits
 from galton.protocol import InvalidArgumentError, Reply, pack_f64
+from galton.protocol import requests as rq
 from galton.protocol.replies import CamerasReply, RenderReply, decode_result
-from galton.protocol.vocabulary import IMAGE_FORMATS
+from galton.protocol.vocabulary import ImageFormat
 
 if TYPE_CHECKING:
     CameraMap = Mapping[str, Any]
@@ -71,19 +72,18 @@ class PerceptionMethods:
     """Client methods for cameras, images, ray casts and contacts."""
 
     if TYPE_CHECKING:
-        def _ok(self, op: str, args: dict[str, Any] | None = None,
-                timeout: float | None = None) -> Reply: ...
+        def _send(self, op: str, request: rq.Args, timeout: float | None = None
+                  ) -> Reply: ...
 
     def render(self, cameras: CameraMap | Sequence[CameraMap], format: str = "raw",
                timeout: float | None = None) -> list[Image]:
         """One image per camera (a camera map, ``{"camera": NAME}`` for a named one, or a
         list of them), decoded to numpy arrays; ``format="png"`` sends them compressed
         (depth then in whole millimetres)."""
-        if format not in IMAGE_FORMATS:
-            raise InvalidArgumentError(f"render format must be raw or png, got {format!r}")
-        given = [cameras] if isinstance(cameras, Mapping) else list(cameras)
-        reply = self._ok("render", {"cameras": [dict(c) for c in given], "format": format},
-                         timeout)
+        chosen = [cameras] if isinstance(cameras, Mapping) else list(cameras)
+        request = rq.Render(cameras=[dict(c) for c in chosen],
+                            format=cast(ImageFormat, format))
+        reply = self._send("render", request, timeout)
         rendered = decode_result(RenderReply, reply.result)
         labels = [str(n) for n in rendered.labels]
         return [Image.from_wire(image, labels, rendered.format, reply)
@@ -92,16 +92,16 @@ class PerceptionMethods:
     def add_camera(self, name: str, camera: CameraMap) -> dict[str, Any]:
         """Keep a named camera in the world (replacing one of that name); render it with
         ``{"camera": name}``. Returns the camera map as the daemon checked it."""
-        camera_map: dict[str, Any] = self._ok("add_camera", {"name": name,
-                                                              "camera": dict(camera)}).result
+        request = rq.AddCamera(name=name, camera=dict(camera))
+        camera_map: dict[str, Any] = self._send("add_camera", request).result
         return dict(camera_map["camera"])
 
     def remove_camera(self, name: str) -> None:
-        self._ok("remove_camera", {"name": name})
+        self._send("remove_camera", rq.Named(name=name))
 
     def cameras(self) -> dict[str, dict[str, Any]]:
         """The world's named cameras: name -> camera map."""
-        rows = decode_result(CamerasReply, self._ok("cameras").result).cameras
+        rows = decode_result(CamerasReply, self._send("cameras", rq.NoArgs()).result).cameras
         return {str(row["name"]): {k: v for k, v in row.items() if k != "name"}
                 for row in rows}
 
@@ -112,19 +112,15 @@ class PerceptionMethods:
         they reach ``max_length``) or to ``ends``: exactly one of the two."""
         if (directions is None) == (ends is None):
             raise InvalidArgumentError("raycast takes exactly one of directions or ends")
-        start = _rows(origins, "origins")
-        args: dict[str, Any] = {"origins": pack_f64(start)}
-        if directions is not None:
-            args["directions"] = pack_f64(_rows(directions, "directions"))
-        if ends is not None:
-            args["ends"] = pack_f64(_rows(ends, "ends"))
-        if max_length is not None:
-            args["max_length"] = float(max_length)
-        return RayHits.from_reply(self._ok("raycast", args, timeout))
+        request = rq.Raycast(
+            origins=pack_f64(_rows(origins, "origins")),
+            directions=None if directions is None else pack_f64(_rows(directions,
+                                                                       "directions")),
+            ends=None if ends is None else pack_f64(_rows(ends, "ends")),
+            **given(max_length=None if max_length is None else float(max_length)))
+        return RayHits.from_reply(self._send("raycast", request, timeout))
 
     def contacts(self, names: Sequence[str] | None = None) -> Contacts:
         """The contact points of the last step (only those involving ``names`` if given)."""
-        args: dict[str, Any] = {}
-        if names is not None:
-            args["names"] = [names] if isinstance(names, str) else list(names)
-        return Contacts.from_reply(self._ok("contacts", args))
+        listed = None if names is None else [names] if isinstance(names, str) else list(names)
+        return Contacts.from_reply(self._send("contacts", rq.NamesOrAll(names=listed)))

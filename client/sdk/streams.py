@@ -24,6 +24,7 @@ import numpy as np
 from galton.client.sdk.telemetry import Subscription
 from galton.client.transport.session import checked_timeout
 from galton.protocol import POSE_WIDTH, GaltonError, RequestTimeoutError
+from galton.protocol import requests as rq
 from galton.protocol.arrays import unpack_f64
 
 if TYPE_CHECKING:
@@ -124,7 +125,7 @@ class StateStream(Subscription):
         owner, self._owner = self._owner, None  # type: ignore[assignment]
         if owner is not None:
             with contextlib.suppress(GaltonError):
-                owner._ok("close_stream", {"stream": self.stream_id})
+                owner._send("close_stream", rq.CloseStream(stream=self.stream_id))
 
     def __enter__(self) -> StateStream:
         return self
@@ -137,8 +138,8 @@ class StreamMethods:
         transport: Transport
         timeout: float
 
-        def _ok(self, op: str, args: dict[str, Any] | None = None,
-                timeout: float | None = None) -> Reply: ...
+        def _send(self, op: str, request: rq.Args, timeout: float | None = None
+                  ) -> Reply: ...
 
         def _check_open(self) -> None: ...
 
@@ -149,14 +150,12 @@ class StreamMethods:
         ``names``. With ``callback``, each sample is handed to it on the transport's thread
         (keep it short); else iterate the stream (``timeout``: each ``next``'s wait)."""
         self._check_open()
-        args: dict[str, Any] = {"rate": rate}
-        if names is not None:
-            args["names"] = list(names)
-        opened = self._ok("stream_states", args).result
+        request = rq.StreamStates(rate=rate, names=None if names is None else list(names))
+        opened = self._send("stream_states", request).result
         try:
             return StateStream(self, self.transport, opened, callback,
                                self.timeout if timeout is None else timeout)
         except BaseException:
             with contextlib.suppress(GaltonError):
-                self._ok("close_stream", {"stream": opened["stream"]})
+                self._send("close_stream", rq.CloseStream(stream=str(opened["stream"])))
             raise

@@ -15,8 +15,8 @@ connection whose every request names that world:
 from __future__ import annotations
 
 import copy
-from collections.abc import Iterable, Iterator, Mapping, Sequence
-from typing import TYPE_CHECKING, Any, Self
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Self, cast
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -27,9 +27,13 @@ from galton.client.sdk.calibration import (
     calibrate_args,
     trigger_calibration,
 )
+from galton.client.sdk.sending import wire_args
 from galton.client.sdk.values import Comparison, Prediction, SnapshotInfo, Stamp, WorldInfo
 from galton.protocol import POSE_WIDTH, TWIST_WIDTH, InvalidArgumentError, Reply, pack_f64
+from galton.protocol import requests as rq
+from galton.protocol.operations import Calibrate
 from galton.protocol.replies import SnapshotsReply, WorldsReply, decode_result
+from galton.protocol.vocabulary import EngineName
 
 if TYPE_CHECKING:
     from galton.client.sdk.client import Client
@@ -48,8 +52,8 @@ class WorldMethods:
     _own_transport: bool
 
     if TYPE_CHECKING:
-        def _ok(self, op: str, args: dict[str, Any] | None = None,
-                timeout: float | None = None) -> Reply: ...
+        def _send(self, op: str, request: rq.Args, timeout: float | None = None
+                  ) -> Reply: ...
 
         def _check_open(self) -> None: ...
 
@@ -74,35 +78,32 @@ class WorldMethods:
     # -- worlds ---------------------------------------------------------------------------
     def list_worlds(self) -> list[WorldInfo]:
         """Every world of the daemon, the live one first."""
-        rows = decode_result(WorldsReply, self._ok("list_worlds").result).worlds
+        rows = decode_result(WorldsReply, self._send("list_worlds", rq.NoArgs()).result).worlds
         return [WorldInfo.of(row) for row in rows]
 
     def create_world(self, name: str, engine: str | None = None,
                      params: dict[str, Any] | None = None) -> WorldInfo:
         """An empty side world (engine default: the live world's); it moves only when
         stepped."""
-        args: dict[str, Any] = {"name": name}
-        if engine is not None:
-            args["engine"] = engine
-        if params:
-            args["params"] = params
-        return WorldInfo.from_wire(self._ok("create_world", args).result)
+        request = rq.CreateWorld(name=name, engine=cast(EngineName | None, engine),
+                                 params=params or None)
+        return WorldInfo.from_wire(self._send("create_world", request).result)
 
     def fork_world(self, name: str, source: str | None = None) -> WorldInfo:
         """A copy of world ``source`` (default the live one): scene, state, parameters,
         targets, wrenches and clock. The source is not disturbed."""
-        args = {"name": name, **sdk_joints.given(source=source)}
-        return WorldInfo.from_wire(self._ok("fork_world", args).result)
+        request = rq.ForkWorld(name=name, source=source)
+        return WorldInfo.from_wire(self._send("fork_world", request).result)
 
     def delete_world(self, name: str) -> None:
         """Delete a side world (the live one cannot be)."""
-        self._ok("delete_world", {"name": name})
+        self._send("delete_world", rq.Named(name=name))
 
     # -- snapshots ------------------------------------------------------------------------
     def snapshot(self, slot: str | None = None, blob: bool = False) -> SnapshotInfo:
         """The complete world, kept in the daemon under ``slot`` and/or returned as bytes
         (``.blob``) that any daemon with the same engine restores."""
-        reply = self._ok("snapshot", {"blob": blob, **sdk_joints.given(slot=slot)})
+        reply = self._send("snapshot", rq.Snapshot(slot=slot, blob=blob))
         return SnapshotInfo.from_wire(reply.result, self._world or "")
 
     def restore(self, slot: str | None = None, blob: bytes | None = None) -> WorldInfo:
@@ -110,17 +111,17 @@ class WorldMethods:
         same steps after it give the same states, bit for bit."""
         if (slot is None) == (blob is None):
             raise InvalidArgumentError("restore takes exactly one of slot or blob")
-        args: dict[str, Any] = {"slot": slot} if blob is None else {"blob": bytes(blob)}
-        return WorldInfo.from_wire(self._ok("restore", args).result)
+        request = rq.Restore(slot=slot, blob=None if blob is None else bytes(blob))
+        return WorldInfo.from_wire(self._send("restore", request).result)
 
     def snapshots(self) -> list[SnapshotInfo]:
         """The snapshot slots the daemon keeps."""
-        rows = decode_result(SnapshotsReply, self._ok("snapshots").result).slots
+        rows = decode_result(SnapshotsReply, self._send("snapshots", rq.NoArgs()).result).slots
         return [SnapshotInfo(row.slot, row.world, row.engine, row.bytes, row.step, row.sim_time,
                              row.entity_count) for row in rows]
 
     def delete_snapshot(self, slot: str) -> None:
-        self._ok("delete_snapshot", {"slot": slot})
+        self._send("delete_snapshot", rq.Slot(slot=slot))
 
     # -- ahead of reality -----------------------------------------------------------------
     def predict(self, horizon: float, every: float | None = None,
@@ -147,22 +148,20 @@ class WorldMethods:
         each future's distance to the target at the horizon (docs/protocol.md).
         ``first_future`` K: these are futures K.. of ``seed``'s ensemble (a batch of a
         larger one, as ``galton.client.bench.futures`` spreads over daemons)."""
-        args = predict_args(horizon, every, read, read_joints, slot)
-        args.update(sdk_joints.given(futures=futures, seed=seed, first_future=first_future))
-        if perturb is not None:
-            args["perturb"] = dict(perturb)
-        if plans is not None:
-            args["plans"] = [[_plan_step(item) for item in plan] for plan in plans]
-        if score is not None:
-            args["score"] = {"body": score["body"],
-                             "target": [float(v) for v in score["target"]]}
-        if set_states is not None:
-            args["set_states"] = sdk_joints.set_states_args(**set_states)
-        if joint_targets is not None:
-            args["joint_targets"] = sdk_joints.set_joint_targets_args(**joint_targets)
-        if wrenches is not None:
-            args["wrenches"] = sdk_joints.apply_wrench_args(**wrenches)
-        return Prediction.from_reply(self._ok("predict", args, timeout))
+        request = rq.Predict(
+            horizon=horizon, every=every, read=_listed(read), read_joints=_listed(read_joints),
+            slot=slot, futures=futures, seed=seed, **sdk_joints.given(first_future=first_future),
+            perturb=None if perturb is None else rq.decode_field(
+                "predict", rq.Predict, "perturb", dict(perturb)),
+            plans=None if plans is None else [[_plan_step(item) for item in plan]
+                                              for plan in plans],
+            score=None if score is None else rq.Score(
+                body=score["body"], target=[float(v) for v in score["target"]]),
+            set_states=_as_map("set_states", sdk_joints.set_states_request, set_states),
+            joint_targets=_as_map("set_joint_targets", sdk_joints.set_joint_targets_request,
+                                  joint_targets),
+            wrenches=_as_map("apply_wrench", sdk_joints.apply_wrench_request, wrenches))
+        return Prediction.from_reply(self._send("predict", request, timeout))
 
     def compare(self, names: Sequence[str], poses: ArrayLike, twists: ArrayLike | None = None,
                 sigma_position: float | None = None, sigma_angle: float | None = None,
@@ -184,23 +183,19 @@ class WorldMethods:
         also starts the calibration itself, over the streak's observations (``calibrating``;
         ``calibration_started`` and ``calibration_finished`` events)."""
         count = len(names)
-        args: dict[str, Any] = {
-            "names": list(names), "correct": correct,
-            "poses": sdk_joints.body_rows(poses, count, POSE_WIDTH, "compare.poses")}
-        if twists is not None:
-            args["twists"] = sdk_joints.body_rows(twists, count, TWIST_WIDTH, "compare.twists")
-        args.update(sdk_joints.given(sigma_position=sigma_position, sigma_angle=sigma_angle,
-                                     sigma_speed=sigma_speed))
-        if spread is not None:
-            args["spread"] = spread_arg(spread, count)
-        if trigger is not None:
-            args["trigger"] = {"threshold": float(trigger[0]), "window": int(trigger[1])}
-            if calibrate is not None:
-                args["trigger"]["calibrate"] = trigger_calibration(calibrate)
-        elif calibrate is not None:
+        if trigger is None and calibrate is not None:
             raise InvalidArgumentError("compare: calibrate is started by a trigger; give "
                                        "trigger=(threshold, window) with it")
-        return Comparison.from_reply(self._ok("compare", args), list(names))
+        request = rq.Compare(
+            names=list(names), correct=correct,
+            poses=sdk_joints.body_rows(poses, count, POSE_WIDTH, "compare.poses"),
+            twists=None if twists is None else sdk_joints.body_rows(
+                twists, count, TWIST_WIDTH, "compare.twists"),
+            spread=None if spread is None else spread_arg(spread, count),
+            trigger=None if trigger is None else _trigger(trigger, calibrate),
+            **sdk_joints.given(sigma_position=sigma_position, sigma_angle=sigma_angle,
+                               sigma_speed=sigma_speed))
+        return Comparison.from_reply(self._send("compare", request), list(names))
 
     def calibrate(self, fit: Mapping[str, Sequence[float]], names: Sequence[str],
                   times: ArrayLike, poses: ArrayLike, *, twists: ArrayLike | None = None,
@@ -217,7 +212,7 @@ class WorldMethods:
         args = calibrate_args(fit, names, times, poses, twists, {
             "slot": slot, "apply": apply, "max_predictions": max_predictions,
             "population": population, "seed": seed})
-        return CalibrationResult.from_reply(self._ok("calibrate", args, timeout))
+        return CalibrationResult.from_reply(self._send("calibrate", Calibrate(**args), timeout))
 
 
 def spread_arg(spread: ArrayLike | float, count: int) -> float | bytes:
@@ -231,21 +226,35 @@ def spread_arg(spread: ArrayLike | float, count: int) -> float | bytes:
     return pack_f64(values)
 
 
-def _plan_step(item: Mapping[str, Any]) -> dict[str, Any]:
-    """A plan's timed action: its joint targets and wrenches as their requests' args."""
-    out: dict[str, Any] = {"at": float(item["at"])}
-    if item.get("joint_targets") is not None:
-        out["joint_targets"] = sdk_joints.set_joint_targets_args(**item["joint_targets"])
-    if item.get("wrenches") is not None:
-        out["wrenches"] = sdk_joints.apply_wrench_args(**item["wrenches"])
-    return out
+def _trigger(trigger: tuple[float, int], calibrate: Mapping[str, Any] | None) -> rq.Trigger:
+    """compare's trigger, and the calibration it starts (as calibrate's own fields): typed
+    from the caller's map, refused as the daemon would refuse it."""
+    wire: dict[str, Any] = {"threshold": float(trigger[0]), "window": int(trigger[1])}
+    if calibrate is not None:
+        wire["calibrate"] = trigger_calibration(calibrate)
+    typed: rq.Trigger = rq.decode_field("compare", rq.Compare, "trigger", wire)
+    return typed
 
 
-def predict_args(horizon: float, every: float | None, read: Sequence[str] | None,
-                 read_joints: Sequence[str] | None, slot: str | None) -> dict[str, Any]:
-    return {"horizon": horizon, **sdk_joints.given(
-        every=every, slot=slot, read=None if read is None else list(read),
-        read_joints=None if read_joints is None else list(read_joints))}
+def _plan_step(item: Mapping[str, Any]) -> rq.PlanStep:
+    """A plan's timed action: its joint targets and wrenches as their requests' maps."""
+    return rq.PlanStep(
+        at=float(item["at"]),
+        joint_targets=_as_map("set_joint_targets", sdk_joints.set_joint_targets_request,
+                              item.get("joint_targets")),
+        wrenches=_as_map("apply_wrench", sdk_joints.apply_wrench_request, item.get("wrenches")))
+
+
+def _as_map(op: str, build: Callable[..., rq.Args], kwargs: Mapping[str, Any] | None
+            ) -> dict[str, Any] | None:
+    """A request predict carries inside it (its set_states, joint_targets, wrenches, each
+    as keyword arguments of that request's SDK method), built as ``op``'s declared type
+    and sent as its map, checked as the daemon checks it (``wire_args``)."""
+    return None if kwargs is None else wire_args(op, build(**kwargs))
+
+
+def _listed(names: Sequence[str] | None) -> list[str] | None:
+    return None if names is None else list(names)
 
 
 def lockstep(sim: Client, stamps: Iterable[float]) -> Iterator[Stamp]:

@@ -46,6 +46,17 @@ REFUSED = {
                              r"until_rest takes no field 'sped'.*did you mean 'speed'"),
     "no cameras": ("render", {"cameras": []},
                    r"render\.cameras must be a list of 1 to 16 items, got \[\]"),
+    # Through a map's values (msgspec names no key): the value when the map holds one.
+    "in a map": ("predict", {"horizon": 1, "perturb": {"bodies": {"a": {"velocity": "x"}}}},
+                 r"predict\.perturb\.bodies\[\.\.\.\]\.velocity must be float, got 'x'$"),
+    "in a map of several": ("predict", {"horizon": 1, "perturb": {"bodies": {
+        "a": {"position": 0.1}, "b": {"position": 11}}}},
+        r"perturb\.bodies\[\.\.\.\]\.position must be a finite number in \[0, 10\]$"),
+    "unknown field in a map": ("predict", {"horizon": 1, "perturb": {"bodies": {"a": {
+        "velo": 1}}}}, r"bodies\[\.\.\.\] takes no field 'velo'.*it takes: position, "),
+    "list in a map": ("calibrate", {"names": ["a"], "times": b"", "poses": b"",
+                                    "fit": {"a": [1, "x"]}},
+                      r"calibrate\.fit\[\.\.\.\]\[1\] must be float, got 'x'"),
 }
 
 
@@ -208,3 +219,33 @@ def test_new_world_camera_and_slot_names_declare_their_length(
 def test_update_properties_are_declared(properties: dict[str, Any], said: str) -> None:
     with pytest.raises(InvalidArgumentError, match=said):
         OPERATIONS["update"].decode({"names": ["a"], "properties": properties})
+
+
+def test_a_typed_request_encodes_to_the_map_that_decodes_to_it() -> None:
+    """encode_args leaves out what is None (not sent) and writes nested Structs, in maps
+    and lists too, as maps: the daemon decodes the map back to the same request."""
+    request = rq.Predict(horizon=1.0, read=["a"], perturb=rq.Perturb(
+        position=0.01, bodies={"a": rq.Sigmas(velocity=0.2)}),
+        plans=[[rq.PlanStep(at=0.5, wrenches={"names": ["a"]})]],
+        score=rq.Score(body="a", target=[1.0, 2.0, 3.0]))
+    args = rq.encode_args(request)
+    assert args == {
+        "horizon": 1.0, "read": ["a"], "first_future": 0,
+        "perturb": {"position": 0.01, "orientation": 0.0, "velocity": 0.0,
+                    "bodies": {"a": {"position": 0.0, "orientation": 0.0, "velocity": 0.2}}},
+        "plans": [[{"at": 0.5, "wrenches": {"names": ["a"]}}]],
+        "score": {"body": "a", "target": [1.0, 2.0, 3.0]}}
+    assert rq.decode_args("predict", rq.Predict, args) == request
+
+
+def test_one_field_is_refused_as_in_the_whole_request() -> None:
+    perturb = {"bodies": {"a": {"velocity": 101}}}
+    with pytest.raises(InvalidArgumentError) as alone:
+        rq.decode_field("predict", rq.Predict, "perturb", perturb)
+    with pytest.raises(InvalidArgumentError) as whole:
+        rq.decode_args("predict", rq.Predict, {"horizon": 1.0, "perturb": perturb})
+    assert str(alone.value) == str(whole.value) == (
+        "predict.perturb.bodies[...].velocity must be a finite number in [0, 100], got 101")
+    with pytest.raises(InvalidArgumentError, match=r"^predict\.perturb must be object, got 3$"):
+        rq.decode_field("predict", rq.Predict, "perturb", 3)
+    assert rq.decode_field("predict", rq.Predict, "perturb", {}) == rq.Perturb()

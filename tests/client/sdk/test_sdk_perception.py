@@ -111,7 +111,7 @@ def test_contacts_are_arrays(sim: Client) -> None:
 
 
 @pytest.mark.parametrize(("call", "message"), [
-    (lambda c: c.render(top_camera(), format="jpeg"), "raw or png"),
+    (lambda c: c.render(top_camera(), format="jpeg"), "render.format .jpeg. is not one of"),
     (lambda c: c.raycast([0, 0, 1]), "exactly one"),
     (lambda c: c.raycast([0, 0, 1], directions=[0, 0, 1], ends=[0, 0, 2]), "exactly one"),
     (lambda c: c.raycast([[0, 0]], directions=[[0, 0, 1]]), "origins"),
