@@ -20,6 +20,7 @@ import numpy as np
 
 from galton.daemon.core.limits import DEFAULT_LIMITS, Limits
 from galton.daemon.engines.base import Engine
+from galton.daemon.engines.geometry import DENSITY, default_mass
 from galton.daemon.world.joints import JointTable
 from galton.daemon.world.model_files import resolve_model
 from galton.daemon.world.surprise import SurpriseStreak
@@ -38,7 +39,7 @@ from galton.protocol import (
 )
 from galton.protocol.errors import brief, did_you_mean, unknown_names
 from galton.protocol.model import check_type
-from galton.protocol.vocabulary import ENTITY_KINDS
+from galton.protocol.vocabulary import ENTITY_KINDS, MIN_MASS
 
 # A spawned mesh's triangles as spawn gave them: (n, 3) vertices in the body's frame,
 # (m, 3) vertex indices. The bodies of one group share one pair (read-only arrays).
@@ -165,6 +166,8 @@ class World:
         if len(set(names)) != len(names):
             raise InvalidArgumentError("the request names the same entity in two groups")
         self.require_new(names)
+        for group in groups:
+            _require_massive(group)
         self.layout += 1
         self.structure = object()
         for group in (g for g in groups if not g.static):  # a static body cannot diverge
@@ -452,3 +455,17 @@ def canonical_quaternions(poses: np.ndarray) -> np.ndarray:
 
 def _number_or_none(value: float) -> float | None:
     return None if math.isnan(value) else value
+
+
+def _require_massive(group: BodyGroup) -> None:
+    """A moving body with no given mass weighs DENSITY times its volume: one under MIN_MASS
+    is refused here, as a snapshot holding it is refused on restore (one rule for both;
+    lighter bodies overflow a push in every engine)."""
+    if group.static or group.mass is not None:
+        return
+    mass = default_mass(group)
+    if not mass >= MIN_MASS:
+        raise InvalidArgumentError(
+            f"spawn: a moving {group.shape} of size {list(group.size)} weighs {mass:.3g} kg at "
+            f"{DENSITY:g} kg/m³, under the lightest body MIN_MASS {MIN_MASS:g} kg: give "
+            "it a mass or a larger size", details={"field": "mass", "min": MIN_MASS})

@@ -26,3 +26,20 @@ def test_a_refused_quaternion_names_its_field_and_a_near_unit_one_is_normalised(
     pose[0, 6] = 1e155
     with pytest.raises(InvalidArgumentError, match=r"set_states\.poses row 0.*\[0\.5, 2\]"):
         sim.call("set_states", {"names": ["b"], "poses": pack_f64(pose)})
+
+
+def test_a_moving_body_lighter_than_the_lightest_is_refused_unless_given_a_mass(
+        sim: Client) -> None:
+    """A 0.5 mm sphere weighs 5e-7 kg at 1000 kg/m³: under MIN_MASS, as restore refuses it."""
+    pose = pack_f64(np.array([[0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]]))
+    before = sim.list()
+    with pytest.raises(InvalidArgumentError, match=r"MIN_MASS") as refused:
+        sim.call("spawn", {"groups": [{"shape": "sphere", "size": [0.0005], "names": ["dust"],
+                                       "poses": pose}]})
+    assert refused.value.details == {"field": "mass", "min": 1e-6}
+    assert sim.list() == before
+    sim.call("spawn", {"groups": [{"shape": "sphere", "size": [0.0005], "names": ["dust"],
+                                   "poses": pose, "mass": 1e-3}]})
+    sim.call("spawn", {"groups": [{"shape": "sphere", "size": [0.0005], "names": ["grain"],
+                                   "poses": pose, "static": True}]})
+    assert {e.name for e in sim.list()} >= {"dust", "grain"}
