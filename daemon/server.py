@@ -144,7 +144,7 @@ class Daemon:
 
     def open(self) -> None:
         """Open every front on the core's call interface: clients can reach us."""
-        self.fronts.open(self.loop)
+        self.fronts.open(self.loop.intake)
 
     def start(self) -> None:
         """Serve with the physics loop on a thread of its own (for embedding in a process

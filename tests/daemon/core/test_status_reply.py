@@ -31,7 +31,7 @@ def loop() -> Iterator[SimLoop]:
 
 def poll(loop: SimLoop, args: dict | None = None) -> bytes:
     answers: list[bytes] = []
-    loop.handle_readonly(Call("status", encode_request("status", args), answers.append))
+    loop.intake.dispatch(Call("status", encode_request("status", args), answers.append))
     assert len(answers) == 1
     return answers[0]
 
@@ -88,7 +88,7 @@ def test_a_refused_status_leaves_nothing_for_the_collector(loop: SimLoop) -> Non
     collecting = gc.isenabled()
     gc.disable()
     try:
-        loop.handle_readonly(call)
+        loop.intake.dispatch(call)
         freed = weakref.ref(call)
         del call
         assert freed() is None
