@@ -23,7 +23,7 @@ from galton.daemon.access.zmq_auth import refuse_by_role
 from galton.daemon.core import job_results, time_control
 from galton.daemon.core.calls import EVENTS, Call, StepJob, Task
 from galton.daemon.core.inbox import Intake
-from galton.daemon.core.limits import Limits
+from galton.daemon.core.limits import Limits, decode_limits
 from galton.daemon.core.loop_status import StatusBoard
 from galton.daemon.core.monitor import Pacer, RtfWindow
 from galton.daemon.core.replies import Replies
@@ -35,7 +35,6 @@ from galton.daemon.world.slots import SnapshotSlots
 from galton.daemon.world.state_streams import StateStreams
 from galton.daemon.world.world import World
 from galton.protocol import (
-    DecodeLimits,
     NotFoundError,
     OperationFailedError,
     PhysicsError,
@@ -45,7 +44,7 @@ from galton.protocol import (
     decode_request,
 )
 from galton.protocol.errors import brief, did_you_mean
-from galton.protocol.operations import OPERATIONS, operation
+from galton.protocol.operations import operation
 from galton.protocol.requests import Args
 
 log = logging.getLogger("galton.daemon")
@@ -71,11 +70,7 @@ class SimLoop:
         self.world = world
         self.wiring = wiring  # frozen: nothing rewires a loop once it is built
         limits = wiring.limits
-        self.decode_limits = DecodeLimits(
-            max_bytes=limits.max_request_bytes, max_depth=limits.max_depth,
-            max_string=limits.max_string_bytes,
-            long_text_keys=frozenset(a.name for op in OPERATIONS.values() for a in op.args
-                                     if a.long_text))
+        self.decode_limits = decode_limits(limits)
         self.state = SimState.STOPPED
         self.target_rtf = 1.0
         self.job: StepJob | None = None
