@@ -1,8 +1,10 @@
 """The physics thread: applies requests between steps, paces the clock, publishes telemetry.
 
 Everything that touches the engine runs here, on one thread (galton-daemon's main thread;
-``Daemon.start`` gives it a thread of its own when embedded). Zenoh callbacks only put
-``Call`` objects into the inbox; this loop answers each of them exactly once.
+``Daemon.start`` gives it a thread of its own when embedded). The fronts only hand ``Call``
+objects to the loop's intake (daemon/core/inbox.py); this loop answers each of them exactly
+once. What it does not need to own is its collaborators': the steps (core/stepping.py),
+status and telemetry (core/loop_status.py), replies (core/replies.py).
 """
 
 from __future__ import annotations
