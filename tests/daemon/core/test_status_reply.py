@@ -96,3 +96,19 @@ def test_a_refused_status_leaves_nothing_for_the_collector(loop: SimLoop) -> Non
         if collecting:
             gc.enable()
     assert decode_reply(answers[0]).code == ResultCode.MALFORMED_REQUEST
+
+
+def test_a_side_worlds_status_is_handed_to_the_physics_thread(loop: SimLoop) -> None:
+    """The caller's thread answers the live world's status; a side world's waits in the
+    inbox and the physics thread answers it, stamped with that world's clock."""
+    handle(loop, "create_world", {"name": "side"})
+    answers: list[bytes] = []
+    loop.intake.dispatch(Call("status", encode_request("status", {"world": "side"}),
+                              answers.append))
+    assert answers == []
+    waiting = loop.intake.inbox.get_nowait()
+    assert isinstance(waiting, Call)
+    loop.handle(waiting)
+    reply = decode_reply(answers[0])
+    assert (reply.code, reply.result["world"], reply.result["state"]) == (
+        ResultCode.OK, "side", "stopped")
