@@ -18,17 +18,16 @@ from typing import TYPE_CHECKING, Any
 import zenoh
 
 from galton.daemon.access.users import User
-from galton.daemon.access.zenoh_security import TlsFiles, security_settings, tls_settings
+from galton.daemon.access.zenoh_security import TlsFiles, security_settings
 from galton.daemon.access.zmq_auth import ZmqSecurity
 from galton.daemon.core.limits import DEFAULT_LIMITS, Limits
 from galton.daemon.core.loop import SimLoop
 from galton.daemon.core.wiring import Checkpoints, LoopWiring
 from galton.daemon.engines import ENGINE_CLASSES, create_engine
 from galton.daemon.engines.base import Engine
-from galton.daemon.fronts.base import Fronts
+from galton.daemon.fronts.base import Front, Fronts
 from galton.daemon.fronts.ros2.options import Ros2Options
 from galton.daemon.fronts.zenoh import ZenohFront, merged_config
-from galton.daemon.fronts.zenoh_config import listen_endpoints
 from galton.daemon.fronts.zmq import ZmqFront, parse_endpoint
 from galton.daemon.world import checkpoint
 from galton.daemon.world.world import World
@@ -75,12 +74,6 @@ def zenoh_config(options: DaemonOptions) -> zenoh.Config:
                                                      options.instance))
 
 
-def listening_on(options: DaemonOptions) -> list[str]:
-    """The endpoints the daemon's Zenoh configuration listens on (its readiness line)."""
-    tls = tls_settings(options.tls) if options.tls is not None else {}
-    return listen_endpoints(_merged_config(options, tls))
-
-
 def _merged_config(options: DaemonOptions, security: dict[str, Any]) -> zenoh.Config:
     path = options.zenoh_config
     config = zenoh.Config.from_file(str(path)) if path is not None else zenoh.Config()
@@ -99,23 +92,16 @@ class Daemon:
         engine = create_engine(options.engine)
         if options.params:
             engine.set_params(options.params)
-        self.zmq = _zmq_front(options)
-        zenoh_front: ZenohFront | None = None
-        try:
-            self.zenoh = zenoh_front = ZenohFront(zenoh_config(options), options.instance)
-            self.ros2 = _ros2_front(options, zenoh_front)
-        except BaseException:
-            for built in (zenoh_front, self.zmq):
-                if built is not None:
-                    built.close()
-            raise
-        self.fronts = Fronts([front for front in (self.zenoh, self.zmq, self.ros2)
-                              if front is not None])
+        self.fronts = _fronts(options)
         self.loop = SimLoop(self._first_world(engine), self._wiring(signals))
         self._thread: threading.Thread | None = None
         self.finished = threading.Event()
-        # The ready line's words on the ROS 2 front.
-        self.ros2_summary = " " + self.ros2.summary() if self.ros2 is not None else ""
+
+    def ready_line(self) -> str:
+        """What ``run_daemon`` prints once it serves: users and tests parse it."""
+        options = self.options
+        return (f"galton-daemon ready: instance={options.instance} engine={options.engine} "
+                f"{self.fronts.ready_words()} engines={','.join(ENGINE_CLASSES)}")
 
     def _wiring(self, signals: StopSignals | None) -> LoopWiring:
         """Everything the loop is given, once: publishing to every front, the front it
@@ -126,7 +112,7 @@ class Daemon:
         return LoopWiring(
             options.instance, publish=self.fronts.publish,
             telemetry_rate_hz=options.telemetry_rate_hz, engine_factory=create_engine,
-            limits=options.limits, polled=self.zmq, snapshot_key=options.snapshot_key,
+            limits=options.limits, polled=self.fronts.polled(), snapshot_key=options.snapshot_key,
             advertised=self.fronts.advertised, client_alive=self.fronts.client_alive,
             work_guard=((lambda: sigterm_ends_at_once(signals)) if signals is not None
                         else nullcontext),
@@ -158,7 +144,7 @@ class Daemon:
 
     def open(self) -> None:
         """Open every front on the core's call interface: clients can reach us."""
-        self.fronts.open(self.loop)
+        self.fronts.open(self.loop.intake)
 
     def start(self) -> None:
         """Serve with the physics loop on a thread of its own (for embedding in a process
@@ -181,6 +167,25 @@ class Daemon:
         self.loop.world.engine.close()
         self.loop.slots.close()
         self.fronts.close()
+
+
+def _fronts(options: DaemonOptions) -> Fronts:
+    """Every front the options ask for, in the order they open (Zenoh first: ROS 2 rides on
+    its session); what was built is closed again if a later one fails. A new front is one
+    factory here (its options in, the front out) and one line in this list."""
+    zmq_front = _zmq_front(options)  # first: a bad endpoint fails before Zenoh opens
+    built: list[Front] = [zmq_front] if zmq_front is not None else []
+    try:
+        zenoh_front = ZenohFront(zenoh_config(options), options.instance)
+        built.insert(0, zenoh_front)
+        ros2_front = _ros2_front(options, zenoh_front)
+        if ros2_front is not None:
+            built.append(ros2_front)
+    except BaseException:
+        for front in built:
+            front.close()
+        raise
+    return Fronts(built)
 
 
 def _zmq_front(options: DaemonOptions) -> ZmqFront | None:
@@ -280,10 +285,7 @@ def run_daemon(options: DaemonOptions, announce: Callable[[str], None] = print) 
                         "exiting without it", SHUTDOWN_GRACE_S)
             os._exit(0)
     threading.Thread(target=stop_on_signal, name="signals", daemon=True).start()
-    zmq = f" zmq={','.join(daemon.zmq.control)}" if daemon.zmq is not None else ""
-    announce(f"galton-daemon ready: instance={options.instance} engine={options.engine} "
-             f"listen={','.join(listening_on(options))}{zmq}{daemon.ros2_summary} "
-             f"engines={','.join(ENGINE_CLASSES)}")
+    announce(daemon.ready_line())
     try:
         daemon.loop.run()
         daemon.save_checkpoint()  # on SIGTERM or SIGINT, after the last request

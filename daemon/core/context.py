@@ -18,14 +18,15 @@ from typing import TYPE_CHECKING, Any, Protocol
 
 if TYPE_CHECKING:
     from galton.daemon.access.lease import Lease
-    from galton.daemon.core.calls import Call, StepJob
+    from galton.daemon.core.calls import StepJob
     from galton.daemon.core.limits import Limits
     from galton.daemon.core.monitor import Pacer, RtfWindow
+    from galton.daemon.core.replies import Replies
     from galton.daemon.core.step_queue import StepQueue
     from galton.daemon.world.slots import SnapshotSlots
     from galton.daemon.world.state_streams import StateStreams
     from galton.daemon.world.world import World
-    from galton.protocol import RemoteError, SimState, SimStatus
+    from galton.protocol import SimState, SimStatus
     from galton.protocol.requests import Args
 
 
@@ -92,11 +93,10 @@ class JobEnd(Protocol):
     def end_job(self) -> StepJob | None:
         """End the step job, if any, and return it (its caller answers it)."""
 
+    replies: Replies  # answering a call (daemon/core/replies.py)
+
     def finish_job(self, job: StepJob) -> None:
         """Answer a step job that has done its steps."""
-
-    def reply_error(self, call: Call, error: RemoteError) -> None:
-        """Answer ``call`` with ``error``."""
 
 
 class Jobs(JobEnd, Protocol):

@@ -1,6 +1,8 @@
-"""The physics thread's inbox when a front is polled (ZeroMQ): calls handed over from other
-threads (Zenoh's) wait in a queue that wakes the poll, the polled front's are read straight
-from its sockets on this thread. The core builds it; no front replaces the loop's inbox."""
+"""Where calls come in: ``Intake``, the core's call interface (``CallPort``) that every front
+is opened on, and the physics thread's inbox behind it. With a polled front (ZeroMQ) the
+inbox is a ``PolledInbox``: calls handed over from other threads (Zenoh's) wait in a queue
+that wakes the poll, the polled front's are read straight from its sockets on this thread.
+The core builds it; no front replaces the loop's inbox."""
 
 from __future__ import annotations
 
@@ -9,9 +11,52 @@ import time
 from collections import deque
 from collections.abc import Callable
 
-from galton.daemon.core.calls import Call, PolledSource, Task
+from galton.daemon.core.calls import Call, Inbox, PolledSource, Task
+from galton.protocol.operations import OPERATIONS
 
 NOTHING = object()
+
+
+class Intake:
+    """The core's ``CallPort``: a fast call (status) is answered on the caller's thread by
+    ``answer_fast``, any other waits in ``inbox`` for the physics thread, and a client's
+    going becomes a Task there (``gone``)."""
+
+    def __init__(self, polled: PolledSource | None, answer_fast: Callable[[Call], bool],
+                 gone: Callable[[str], None]) -> None:
+        self.answer_fast = answer_fast
+        self.gone = gone
+        self.inbox: Inbox = (PolledInbox(polled, self.gone_task) if polled is not None
+                             else queue.SimpleQueue())
+
+    def dispatch(self, call: Call) -> None:
+        """Any thread: answer a fast call here (unless it asks the physics thread, as a
+        side world's status does), else hand it to the physics thread."""
+        declared = OPERATIONS.get(call.op)
+        if declared is None or not declared.fast or not self.answer_fast(call):
+            self.inbox.put(call)
+
+    def lose_client(self, client: str) -> None:
+        """Any thread: a client has gone; what it held ends on the physics thread."""
+        self.inbox.put(self.gone_task(client))
+
+    def gone_task(self, client: str) -> Task:
+        return Task(lambda: self.gone(client))
+
+    def put(self, item: Call | Task | None) -> None:
+        """Hand work to the physics thread (None: stop)."""
+        self.inbox.put(item)
+
+    def leftovers(self) -> list[Call]:
+        """What is still waiting, taken out (the physics thread, stopping, answers it)."""
+        found: list[Call] = []
+        while True:
+            try:
+                item = self.inbox.get_nowait()
+            except queue.Empty:
+                return found
+            if isinstance(item, Call):
+                found.append(item)
 
 
 class PolledInbox:

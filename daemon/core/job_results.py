@@ -60,7 +60,7 @@ def answer_if_reads_gone(ctx: JobEnd) -> None:
     gone += [name for name in job.read_joints or () if name not in world.joints.by_name]
     if gone:
         ctx.end_job()
-        ctx.reply_error(job.call, NotFoundError(
+        ctx.replies.error(job.call, NotFoundError(
             f"{brief(gone[0])}, which this step request reads, was deleted after "
             f"{job.done} of {job.total} steps", {"missing": gone[:100],
                                                  "steps_done": job.done}))

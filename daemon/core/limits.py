@@ -11,6 +11,9 @@ import os
 from dataclasses import dataclass, field, fields
 from typing import Any
 
+from galton.protocol import DecodeLimits
+from galton.protocol.operations import OPERATIONS
+
 MIB = 1024 * 1024
 
 
@@ -79,3 +82,13 @@ def parse_limits(items: list[str]) -> Limits:
 def describe_limits() -> str:
     return ", ".join(f"{spec.name}={getattr(DEFAULT_LIMITS, spec.name)}"
                      for spec in fields(Limits))
+
+
+def decode_limits(limits: Limits) -> DecodeLimits:
+    """What decoding a request holds it to: its size, nesting and string lengths (a field
+    declared long text, such as a model's, is exempt from max_string_bytes)."""
+    return DecodeLimits(
+        max_bytes=limits.max_request_bytes, max_depth=limits.max_depth,
+        max_string=limits.max_string_bytes,
+        long_text_keys=frozenset(arg.name for op in OPERATIONS.values() for arg in op.args
+                                 if arg.long_text))

@@ -1,8 +1,10 @@
 """The physics thread: applies requests between steps, paces the clock, publishes telemetry.
 
 Everything that touches the engine runs here, on one thread (galton-daemon's main thread;
-``Daemon.start`` gives it a thread of its own when embedded). Zenoh callbacks only put
-``Call`` objects into the inbox; this loop answers each of them exactly once.
+``Daemon.start`` gives it a thread of its own when embedded). The fronts only hand ``Call``
+objects to the loop's intake (daemon/core/inbox.py); this loop answers each of them exactly
+once. What it does not need to own is its collaborators': the steps (core/stepping.py),
+status and telemetry (core/loop_status.py), replies (core/replies.py).
 """
 
 from __future__ import annotations
@@ -20,19 +22,13 @@ import msgpack
 
 from galton.daemon.access import lease
 from galton.daemon.access.zmq_auth import refuse_by_role
-from galton.daemon.core import job_results, loop_status, time_control
-from galton.daemon.core.calls import (
-    EVENTS,
-    Call,
-    Inbox,
-    StepJob,
-    Task,
-)
-from galton.daemon.core.clock import STOPPED_AT_ZERO, WorldClock
-from galton.daemon.core.inbox import PolledInbox
-from galton.daemon.core.limits import Limits
-from galton.daemon.core.monitor import Pacer, ProcessMonitor, RtfWindow
-from galton.daemon.core.reply_limit import too_big
+from galton.daemon.core import job_results, time_control
+from galton.daemon.core.calls import EVENTS, Call, StepJob, Task
+from galton.daemon.core.inbox import Intake
+from galton.daemon.core.limits import Limits, decode_limits
+from galton.daemon.core.loop_status import StatusBoard
+from galton.daemon.core.monitor import Pacer, RtfWindow
+from galton.daemon.core.replies import Replies
 from galton.daemon.core.step_queue import StepBusyError, StepQueue
 from galton.daemon.core.stepping import Stepping
 from galton.daemon.core.wiring import LoopWiring
@@ -41,21 +37,16 @@ from galton.daemon.world.slots import SnapshotSlots
 from galton.daemon.world.state_streams import StateStreams
 from galton.daemon.world.world import World
 from galton.protocol import (
-    DecodeLimits,
     NotFoundError,
     OperationFailedError,
     PhysicsError,
     RemoteError,
-    Reply,
-    ResultCode,
     SimState,
     SimStatus,
     decode_request,
-    encode_reply,
-    error_reply,
 )
 from galton.protocol.errors import brief, did_you_mean
-from galton.protocol.operations import OPERATIONS, operation
+from galton.protocol.operations import operation
 from galton.protocol.requests import Args
 
 log = logging.getLogger("galton.daemon")
@@ -81,14 +72,7 @@ class SimLoop:
         self.world = world
         self.wiring = wiring  # frozen: nothing rewires a loop once it is built
         limits = wiring.limits
-        self.decode_limits = DecodeLimits(
-            max_bytes=limits.max_request_bytes, max_depth=limits.max_depth,
-            max_string=limits.max_string_bytes,
-            long_text_keys=frozenset(a.name for op in OPERATIONS.values() for a in op.args
-                                     if a.long_text))
-        # A polled front (galton-daemon --zmq) is read on this thread: the core's PolledInbox.
-        self.inbox: Inbox = (PolledInbox(wiring.polled, self._gone_task)
-                             if wiring.polled is not None else queue.SimpleQueue())
+        self.decode_limits = decode_limits(limits)
         self.state = SimState.STOPPED
         self.target_rtf = 1.0
         self.job: StepJob | None = None
@@ -96,23 +80,23 @@ class SimLoop:
         self.lease = lease.Lease()  # who holds control (daemon/access/lease.py)
         self.pacer = Pacer()
         self.rtf_window = RtfWindow()
-        self.monitor = ProcessMonitor()
+        self.rtf = 0.0  # measured at each telemetry sample
         # stream_states (daemon/world/state_streams.py): samples go to every front.
         self.streams = StateStreams(wiring.publish)
-        rate = wiring.telemetry_rate_hz
-        self.telemetry_period = 1.0 / rate if rate > 0 else math.inf
         self.side: dict[str, World] = {}  # side worlds by name (daemon/ops/worlds.py)
         self._next_checkpoint = (time.monotonic() + wiring.checkpoints.period_s
                                  if wiring.checkpoints is not None else math.inf)
         self.slots = SnapshotSlots(limits)
         self.stepping = Stepping(self)  # the live world's steps (daemon/core/stepping.py)
-        self.telemetry_seq = 0
+        # Status on any thread, telemetry (daemon/core/loop_status.py); replies from this one.
+        self.status_board = StatusBoard(self, wiring.publish, wiring.telemetry_rate_hz,
+                                        self.decode_limits)
+        self.replies = Replies(self, limits.max_reply_bytes)
+        # The core's CallPort, what the fronts are opened on (daemon/core/inbox.py); a polled
+        # front (galton-daemon --zmq) is read on this thread.
+        self.intake = Intake(wiring.polled, self.status_board.answer, self.client_gone)
         self._event_seq = 0
         self._stopping = False
-        self.rtf = 0.0
-        # The last status reply with the request and status reading it answered (loop_status.py).
-        self.status_reply: tuple[bytes, tuple[Any, ...], bytes] | None = None
-        self.clock: WorldClock = STOPPED_AT_ZERO  # read by status on any thread
         self.refresh_clock()
         self.tune_switch_interval()
 
@@ -147,62 +131,47 @@ class SimLoop:
         holds_gil = not self.world.engine.releases_gil_while_stepping
         sys.setswitchinterval(SHORT_SWITCH_INTERVAL_S if holds_gil else DEFAULT_SWITCH_INTERVAL_S)
 
-    # -- threads ------------------------------------------------------------------------
-    def submit(self, call: Call | Task) -> None:
-        """Called from Zenoh's threads: hand a request (or a task) to the physics thread."""
-        self.inbox.put(call)
-
-    def dispatch(self, call: Call) -> None:
-        """The core's call interface (``CallPort``): hand a request to the physics thread,
-        or answer a fast one on the caller's thread -- the one path of every front."""
-        declared = OPERATIONS.get(call.op)
-        if declared is not None and declared.fast:
-            self.handle_readonly(call)
-        else:
-            self.submit(call)
-
-    def lose_client(self, client: str) -> None:
-        """The core's call interface: a client has gone; its step job and lease end on the
-        physics thread."""
-        self.submit(Task(lambda: self.client_gone(client)))
-
-    def _gone_task(self, client: str) -> Task:
-        return Task(lambda: self.client_gone(client))
-
+    # -- the physics thread -------------------------------------------------------------
     def stop(self) -> None:
+        """Any thread: end ``run`` once what it is doing is done."""
         self._stopping = True
-        self.inbox.put(None)
+        self.intake.put(None)
 
     def run(self) -> None:
         """The physics thread's body; returns after ``stop()``, every query answered.
 
         Nothing a request does can end it: whatever escapes a tick is logged, the world is
         paused (faulted if it diverged), and the loop goes on serving."""
-        next_telemetry = time.monotonic()
         while not self._stopping:
             try:
-                next_telemetry = self._tick(next_telemetry)
+                self._tick()
             except Exception as exc:
                 self._recover(exc)
         self._answer_leftovers()
 
-    def _tick(self, next_telemetry: float) -> float:
+    def _tick(self) -> None:
         """Physics first (the steps due now), then telemetry, then requests until the next
-        step is due; returns when the next telemetry sample is due."""
+        step is due."""
         self.stepping.advance()
         self._start_queued()
         now = time.monotonic()
-        if now >= next_telemetry:
-            loop_status.publish_telemetry(self, now)
-            next_telemetry = max(next_telemetry + self.telemetry_period, now)
+        if self.status_board.telemetry_due(now):
+            self.publish_telemetry(now)
         if now >= self.streams.next_due:
             self.streams.publish_due(self, now)
         checkpoints = self.wiring.checkpoints
         if checkpoints is not None and now >= self._next_checkpoint:
             self._next_checkpoint = now + checkpoints.period_s
             checkpoints.save()
-        self._take_calls(self._idle_timeout(next_telemetry))
-        return next_telemetry
+        self._take_calls(self._idle_timeout())
+
+    def publish_telemetry(self, now: float) -> None:
+        """One telemetry sample per world, after checking the live world is still finite
+        and measuring its real-time factor."""
+        if not self.world.faulted:
+            self.stepping.verify()
+        self.rtf = self.rtf_window.add(now, self.world.sim_time)
+        self.status_board.publish_telemetry()
 
     def _start_queued(self) -> None:
         """With no step job running, handle the waiting step requests in arrival order
@@ -221,13 +190,14 @@ class SimLoop:
                                      f"{brief(str(exc))}")
         job = self.end_job()
         if job is not None:
-            self.reply_error(job.call, error)
+            self.replies.error(job.call, error)
         self.set_state(SimState.PAUSED)
         self.emit({"kind": "error", "message": error.message})
 
-    def _idle_timeout(self, next_telemetry: float) -> float:
+    def _idle_timeout(self) -> float:
         now = time.monotonic()
-        until_telemetry = max(0.0, min(next_telemetry, self.streams.next_due) - now)
+        next_due = min(self.status_board.next_telemetry, self.streams.next_due)
+        until_telemetry = max(0.0, next_due - now)
         if self.job is not None:
             return 0.0
         if self.state == SimState.PLAYING:
@@ -241,11 +211,12 @@ class SimLoop:
         REQUEST_SLICE_S, and at least one is answered."""
         started = time.monotonic()
         deadline = started + max(timeout, REQUEST_SLICE_S)
+        inbox = self.intake.inbox
         try:
             if timeout <= 0:
-                item = self.inbox.get_nowait()
+                item = inbox.get_nowait()
             else:
-                item = self.inbox.get(timeout=None if math.isinf(timeout) else timeout)
+                item = inbox.get(timeout=None if math.isinf(timeout) else timeout)
         except queue.Empty:
             return
         while item is not None:
@@ -256,7 +227,7 @@ class SimLoop:
             if now >= deadline or (self.job is not None and now >= started + REQUEST_SLICE_S):
                 return
             try:
-                item = self.inbox.get_nowait()
+                item = inbox.get_nowait()
             except queue.Empty:
                 return
 
@@ -273,16 +244,11 @@ class SimLoop:
         closing = OperationFailedError("the daemon is shutting down")
         job = self.end_job()
         if job is not None:
-            self.reply_error(job.call, closing)
+            self.replies.error(job.call, closing)
         while (waiting := self.step_queue.take()) is not None:
-            self.reply_error(waiting, closing)
-        while True:
-            try:
-                call = self.inbox.get_nowait()
-            except queue.Empty:
-                return
-            if isinstance(call, Call):
-                self.reply_error(call, closing)
+            self.replies.error(waiting, closing)
+        for call in self.intake.leftovers():
+            self.replies.error(call, closing)
 
     # -- requests -----------------------------------------------------------------------
     def handle(self, call: Call) -> None:
@@ -302,23 +268,23 @@ class SimLoop:
                 result = HANDLERS[op.name](self, call, typed)
             self.stepping.keep_invariants()  # before the reply: what the client asks next sees it
             if result is not None:
-                self._reply_ok(call, result)
+                self.replies.ok(call, result)
         except StepBusyError:  # another step request runs: this one waits for it
             self._hold_step(call)
         except RemoteError as error:
             self.stepping.keep_invariants()
-            self.reply_error(call, error)
+            self.replies.error(call, error)
         except Exception as exc:  # the daemon keeps serving whatever an engine does
             log.exception("operation %s failed", call.op)
             self.stepping.keep_invariants()
-            self.reply_error(call, OperationFailedError(
+            self.replies.error(call, OperationFailedError(
                 f"{type(exc).__name__}: {brief(str(exc))}"))
 
     def _hold_step(self, call: Call) -> None:
         try:
             self.step_queue.hold(call)
         except RemoteError as error:
-            self.reply_error(call, error)
+            self.replies.error(call, error)
 
     def set_state(self, state: SimState) -> None:
         """Move the state machine, announcing a change with a ``state`` event."""
@@ -361,38 +327,6 @@ class SimLoop:
                                 f"{', '.join(known)}")
         return found
 
-    def _reply_ok(self, call: Call, result: dict[str, Any]) -> None:
-        self.refresh_clock()
-        world = self._stamping(call)
-        reply = Reply(ResultCode.OK, result=result, step=world.step_index,
-                      sim_time=world.sim_time)
-        data = encode_reply(reply)
-        if len(data) > self.limits.max_reply_bytes:  # never sent (daemon/core/reply_limit.py)
-            self.reply_error(call, too_big(f"the reply to {call.op or 'this request'}",
-                                           len(data), self.limits.max_reply_bytes,
-                                           "ask for less"))
-            return
-        self.send(call, data)
-
-    def reply_error(self, call: Call, error: RemoteError) -> None:
-        self.refresh_clock()
-        world = self._stamping(call)
-        reply = error_reply(error, world.step_index, world.sim_time)
-        self.send(call, encode_reply(reply))
-
-    def _stamping(self, call: Call) -> World:
-        """The world whose step and sim time a reply carries: the one the request named
-        (the live one when it named none, or when that world is gone)."""
-        if call.world is None:
-            return self.world
-        return self.side.get(call.world, self.world)
-
-    def send(self, call: Call, data: bytes) -> None:
-        try:
-            call.respond(data)
-        except Exception:
-            log.exception("could not answer a %s request", call.op)
-
     # -- the step job (its steps: daemon/core/stepping.py) ----------------------------
     def start_job(self, job: StepJob) -> None:
         """Make ``job`` the step job: the one place it is set (``OpContext``)."""
@@ -412,22 +346,17 @@ class SimLoop:
             result = job_results.job_result(job.world or self.world, job)
         except RemoteError as error:
             error.details["steps_done"] = job.done
-            self.reply_error(job.call, error)
+            self.replies.error(job.call, error)
             return
         finally:
             job.release()
-        self._reply_ok(job.call, result)
+        self.replies.ok(job.call, result)
 
-    # -- status & telemetry -------------------------------------------------------------
+    # -- status (daemon/core/loop_status.py) ------------------------------------------
     def refresh_clock(self) -> None:
         """Publish the world's clock to other threads as one value, swapped atomically."""
-        self.clock = WorldClock.of(self.world)
+        self.status_board.refresh()
 
     def status(self) -> SimStatus:
         """Safe to call from any thread: reads only values swapped atomically."""
-        return loop_status.status_from(self, loop_status.read_status(self))
-
-    def handle_readonly(self, call: Call) -> None:
-        """Answer a status request on the caller's thread (daemon/core/loop_status.py)."""
-        loop_status.answer_status(self, call)
-
+        return self.status_board.status()

@@ -94,4 +94,4 @@ def end(ctx: JobEnd, job: StepJob, error: RemoteError) -> None:
     if isinstance(error, PhysicsError):
         error.details["steps_done"] = job.done
     job.release()
-    ctx.reply_error(job.call, error)
+    ctx.replies.error(job.call, error)

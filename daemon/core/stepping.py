@@ -136,4 +136,4 @@ class Stepping:
         job = loop.job
         if job is not None and job.world is None:
             loop.end_job()
-            loop.reply_error(job.call, error)
+            loop.replies.error(job.call, error)

@@ -255,7 +255,7 @@ def cancel_job(ctx: JobEnd, reason: str) -> None:
     if job is None:
         return
     job.release()
-    ctx.reply_error(job.call, OperationFailedError(
+    ctx.replies.error(job.call, OperationFailedError(
         f"step request interrupted ({reason}) after {job.done} of {job.total} steps",
         {"steps_done": job.done}))
 
@@ -263,7 +263,7 @@ def cancel_job(ctx: JobEnd, reason: str) -> None:
 def end_queued(ctx: Jobs, world: str, reason: str) -> None:
     """Answer the step requests waiting to step ``world``: they will not run."""
     for call in ctx.step_queue.end_for(world, ctx.world.name):
-        ctx.reply_error(call, OperationFailedError(
+        ctx.replies.error(call, OperationFailedError(
             f"step request interrupted ({reason}) before its first step: it was waiting "
             "for another step request", {"steps_done": 0}))
 

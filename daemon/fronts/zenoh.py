@@ -16,10 +16,10 @@ import zenoh
 
 from galton.daemon.access.zenoh_security import remove_private_files
 from galton.daemon.core.calls import Call, CallPort
-from galton.daemon.fronts.base import EVENTS, TELEMETRY
+from galton.daemon.fronts.base import EVENTS, TELEMETRY, Front
 from galton.daemon.fronts.memory import after_request_of
 from galton.daemon.fronts.stream_sender import SampleSender
-from galton.daemon.fronts.zenoh_config import file_says, merge
+from galton.daemon.fronts.zenoh_config import file_says, listen_endpoints, merge
 from galton.protocol import Keys
 from galton.protocol.envelope import is_client_id
 from galton.protocol.keys import (
@@ -41,11 +41,12 @@ def merged_config(base: zenoh.Config, listen: list[str], connect: list[str], mul
     return base
 
 
-class ZenohFront:
+class ZenohFront(Front):
     """The daemon's Zenoh side, as a ``Front`` (daemon/fronts/base.py)."""
 
     def __init__(self, config: zenoh.Config, instance: str) -> None:
         self.keys = Keys(instance)
+        self.listening = listen_endpoints(config)  # as configured, for the ready line
         try:
             self.session = zenoh.open(config)
         finally:
@@ -118,8 +119,9 @@ class ZenohFront:
         self.session.put(f"{self.keys.prefix}/{topic}", data,
                          congestion_control=zenoh.CongestionControl.DROP)
 
-    def advertised(self) -> dict[str, Any]:
-        return {}  # clients find the Zenoh front by its key expressions
+    def ready_words(self) -> str:
+        """Where it listens (clients find it by its key expressions: nothing advertised)."""
+        return f"listen={','.join(self.listening)}"
 
     def withdraw(self) -> None:
         """Withdraw the liveliness token: clients see the daemon go before it closes."""

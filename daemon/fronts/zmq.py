@@ -31,7 +31,8 @@ from zmq.backend.cython._zmq import Socket as BaseSocket
 from zmq.utils.monitor import parse_monitor_message
 
 from galton.daemon.access.zmq_auth import ZmqSecurity, start_authenticator
-from galton.daemon.core.calls import Call, CallPort, Task
+from galton.daemon.core.calls import Call, CallPort, PolledSource, Task
+from galton.daemon.fronts.base import Front
 from galton.protocol import InvalidArgumentError
 from galton.protocol.errors import brief
 
@@ -94,7 +95,7 @@ def telemetry_endpoint(control: str) -> str:
             else f"tcp://{host}:{int(port) + 1}")
 
 
-class ZmqFront:
+class ZmqFront(Front):
     """The ZeroMQ ``Front`` (daemon/fronts/base.py) and the core's ``PolledSource``: the bound
     sockets, the monitor of each ROUTER and the pipe that wakes the poll."""
 
@@ -202,6 +203,13 @@ class ZmqFront:
         if self.security is not None:
             found["server_key"] = self.security.public_key.decode()
         return {"zmq": found}
+
+    def ready_words(self) -> str:
+        return f"zmq={','.join(self.control)}"
+
+    def polled(self) -> PolledSource:
+        """The physics thread reads this front's sockets itself (no thread hand-off)."""
+        return self
 
     def wake(self) -> None:
         """Called from any thread: make a waiting ``wait`` return."""

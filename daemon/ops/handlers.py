@@ -11,9 +11,9 @@ adapter that names the operation.
 Time-control operations (daemon/ops/time_control.py) act on the loop; scene operations
 (daemon/ops/entities.py) act on its World and, when they change it, publish a ``scene``
 event. The one ``fast`` operation, status, is answered on the transport's thread from one
-reading of the loop's status values (``SimLoop.handle_readonly``) and never reaches this
-table's callers; it is bound here too, so that a status that does reach the physics thread
-is answered the same.
+reading of the loop's status values (``StatusBoard.answer``, daemon/core/loop_status.py)
+and never reaches this table's callers; it is bound here too, so that a status that does
+reach the physics thread (a side world's) is answered the same.
 """
 
 from __future__ import annotations
@@ -80,7 +80,7 @@ def collect(modules: Iterable[ModuleType]) -> dict[str, Handler]:
 HANDLERS: dict[str, Handler] = collect(OP_MODULES)
 
 
-# What the transport's thread answers from the loop's status values (SimLoop.handle_readonly).
+# What the transport's thread answers from the loop's status values (StatusBoard.answer).
 ANSWERED_ON_TRANSPORT_THREAD = frozenset({"status"})
 
 

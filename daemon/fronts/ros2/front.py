@@ -22,7 +22,7 @@ from typing import Any
 import zenoh
 
 from galton.daemon.core.calls import Call, CallPort
-from galton.daemon.fronts.base import EVENTS
+from galton.daemon.fronts.base import EVENTS, Front
 from galton.daemon.fronts.memory import after_request_of
 from galton.daemon.fronts.ros2 import codes, rmw_zenoh
 from galton.daemon.fronts.ros2.action import SimulateStepsServer
@@ -48,7 +48,7 @@ def service_name(type_name: str) -> str:
     return re.sub(r"(?<!^)(?=[A-Z])", "_", type_name).lower()
 
 
-class Ros2Front:
+class Ros2Front(Front):
     """One ROS 2 node, named after the daemon's instance, with a server per service: a
     ``Front`` (daemon/fronts/base.py) built on the Zenoh front's session, serving from
     ``open``, and publishing its own topics (so the core's samples are not its business)."""
@@ -83,7 +83,7 @@ class Ros2Front:
         self.topics = TopicLoop(self, self.options)
         self._wake_topics = self.topics.wake
 
-    def summary(self) -> str:
+    def ready_words(self) -> str:
         """What the daemon's ready line says of this front: its node, domain and services
         (the action's three counted apart)."""
         node = self.qualified(self.identity.node)
@@ -180,9 +180,6 @@ class Ros2Front:
         which an event wakes (the clock may start moving: play, a step, a new world)."""
         if topic == EVENTS:
             self._wake_topics()
-
-    def advertised(self) -> dict[str, Any]:
-        return {}
 
     def client_alive(self, client: str) -> bool | None:
         """Not this front's to say: a goal's step ends by ``lose`` (a cancel), and a ROS 2

@@ -16,7 +16,6 @@ import numpy as np
 import pytest
 
 import galton.daemon
-from galton.daemon.core import loop_status
 from galton.daemon.core.calls import Call
 from galton.daemon.core.clock import WorldClock
 from galton.daemon.core.loop import SimLoop
@@ -73,7 +72,7 @@ def test_telemetry_events_and_streams_leave_through_the_one_outlet(
                                 poses=np.array([[0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]]))])
     stream = handle(loop, "stream_states", {"rate": 10.0})
     handle(loop, "play")
-    loop_status.publish_telemetry(loop, time.monotonic())
+    loop.publish_telemetry(time.monotonic())
     loop.streams.publish_due(loop, time.monotonic())
     by_topic = {topic: msgpack.unpackb(data) for topic, data in published}
     assert by_topic["events"]["instance"] == "wired"
@@ -84,11 +83,12 @@ def test_telemetry_events_and_streams_leave_through_the_one_outlet(
 
 def test_the_clock_is_read_by_name(loop: SimLoop) -> None:
     loop.world.step(3)
-    assert loop.clock.step == 0  # the physics thread swaps a new reading in when it answers
+    clock = loop.status_board
+    assert clock.clock.step == 0  # the physics thread swaps a new reading in when it answers
     handle(loop, "capabilities")
-    assert loop.clock == WorldClock(3, pytest.approx(3 * loop.world.engine.timestep),
-                                    loop.world.engine.timestep, 0, False)
-    assert loop.status().step == loop.clock.step == 3
+    assert clock.clock == WorldClock(3, pytest.approx(3 * loop.world.engine.timestep),
+                                     loop.world.engine.timestep, 0, False)
+    assert loop.status().step == clock.clock.step == 3
 
 
 def loop_assignments(source: str) -> list[str]:

@@ -31,7 +31,7 @@ def loop() -> Iterator[SimLoop]:
 
 def poll(loop: SimLoop, args: dict | None = None) -> bytes:
     answers: list[bytes] = []
-    loop.handle_readonly(Call("status", encode_request("status", args), answers.append))
+    loop.intake.dispatch(Call("status", encode_request("status", args), answers.append))
     assert len(answers) == 1
     return answers[0]
 
@@ -88,7 +88,7 @@ def test_a_refused_status_leaves_nothing_for_the_collector(loop: SimLoop) -> Non
     collecting = gc.isenabled()
     gc.disable()
     try:
-        loop.handle_readonly(call)
+        loop.intake.dispatch(call)
         freed = weakref.ref(call)
         del call
         assert freed() is None
@@ -96,3 +96,19 @@ def test_a_refused_status_leaves_nothing_for_the_collector(loop: SimLoop) -> Non
         if collecting:
             gc.enable()
     assert decode_reply(answers[0]).code == ResultCode.MALFORMED_REQUEST
+
+
+def test_a_side_worlds_status_is_handed_to_the_physics_thread(loop: SimLoop) -> None:
+    """The caller's thread answers the live world's status; a side world's waits in the
+    inbox and the physics thread answers it, stamped with that world's clock."""
+    handle(loop, "create_world", {"name": "side"})
+    answers: list[bytes] = []
+    loop.intake.dispatch(Call("status", encode_request("status", {"world": "side"}),
+                              answers.append))
+    assert answers == []
+    waiting = loop.intake.inbox.get_nowait()
+    assert isinstance(waiting, Call)
+    loop.handle(waiting)
+    reply = decode_reply(answers[0])
+    assert (reply.code, reply.result["world"], reply.result["state"]) == (
+        ResultCode.OK, "side", "stopped")
