@@ -19,7 +19,6 @@ import msgpack
 from galton.daemon.core.calls import TELEMETRY, Call
 from galton.daemon.core.clock import WorldClock
 from galton.protocol import (
-    NotFoundError,
     OperationFailedError,
     RemoteError,
     Reply,
@@ -71,11 +70,10 @@ def answer_status(loop: SimLoop, call: Call) -> None:
         operation(request.op).decode(request.args)
         named = request.args.get("world")
         if named is not None and named != status.world:
-            # On the transport's thread only one membership test of the side worlds (the
-            # physics thread may be adding or removing one): no iteration, no race.
-            if not isinstance(named, str) or named not in loop.side:
-                raise NotFoundError(f"no world named {brief(named)}; list_worlds lists them")
-            loop.submit(call)  # a side world's status: the physics thread answers it
+            # A side world's status, or the refusal of an unknown world with its "did you
+            # mean" (it iterates the side worlds, which only the physics thread may do):
+            # the physics thread answers it.
+            loop.submit(call)
             return
         reply = Reply(ResultCode.OK, result=status.to_wire(), step=status.step,
                       sim_time=status.sim_time)

@@ -1,0 +1,295 @@
+"""docs/protocol.md, read as a user who has only that page: each promise below is a request
+the page describes, sent as raw msgpack over the client's transport, and the reply the
+page says it gets (its code, `details`, result fields, message). One test per transport
+and engine runs them all on one world and lists every promise broken, so one run shows
+every mismatch at once. The promises other tests hold (test_bad_input, test_robustness,
+test_protocol_doc, ...) are not repeated here."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import msgpack
+import numpy as np
+import pytest
+from support import ball_row, raw_replies, snapshot
+
+from galton.client import Client
+from galton.protocol import ResultCode, pack_f64
+
+OK, NOT_FOUND = ResultCode.OK, ResultCode.NOT_FOUND
+INCORRECT_STATE, FEATURE_UNSUPPORTED = ResultCode.INCORRECT_STATE, ResultCode.FEATURE_UNSUPPORTED
+INVALID, MALFORMED = ResultCode.INVALID_ARGUMENT, ResultCode.MALFORMED_REQUEST
+VERSION, LIMIT = ResultCode.UNSUPPORTED_VERSION, ResultCode.RESOURCE_LIMIT
+PRESENT = object()  # a `details` key whose value the page does not fix
+
+# The engines named in docs/protocol.md (capabilities.engine, create_world, load_world).
+DOC_ENGINES = {"mujoco", "pybullet", "ode", "dart"}
+# Another engine's parameter (get_params / set_params: FEATURE_UNSUPPORTED).
+FOREIGN_PARAM = {"mujoco": "pybullet.collision_margin", "pybullet": "mujoco.impratio"}
+RENDER_BACKENDS = {"mujoco": {"egl", "osmesa"}, "pybullet": {"tinyrenderer"}}
+CAMERA = {"eye": [1.0, 0.0, 1.0], "target": [0.0, 0.0, 0.0], "width": 8, "height": 8}
+
+
+@dataclass(frozen=True)
+class Promise:
+    """One request the page describes and what it says comes back."""
+
+    section: str
+    op: str
+    args: dict[str, Any] | Callable[[str], dict[str, Any]] | None = None
+    code: ResultCode | dict[str, ResultCode] = OK   # or one per transport
+    details: dict[str, Any] = field(default_factory=dict)
+    result: dict[str, Any] = field(default_factory=dict)  # fields and values (PRESENT: any)
+    message: tuple[str, ...] = ()
+    envelope: dict[str, Any] | None = None  # sent as it is, instead of {v, op, args}
+    check: Callable[[dict[str, Any], str], str | None] | None = None  # more, per engine
+
+
+def capabilities_as_told(result: dict[str, Any], engine: str) -> str | None:
+    host = {"cpu_model", "logical_cores", "memory_bytes", "os", "hostname", "python",
+            "engines"}
+    problems = [
+        result["engine"] not in DOC_ENGINES and f"engine {result['engine']!r}",
+        result["protocol_version"] != 1 and "protocol_version",
+        not {"mjcf", "urdf"} <= set(result["model_formats"]) and "model_formats",
+        set(result["zmq"]) < {"control", "telemetry"} and f"zmq {result['zmq']}",
+        not host <= set(result["host"]) and f"host {sorted(result['host'])}",
+        result["render_backend"] not in RENDER_BACKENDS[engine]
+        and f"render_backend {result['render_backend']!r}",
+        not set(result["engines_available"]) <= DOC_ENGINES and "engines_available",
+    ]
+    return ", ".join(p for p in problems if p) or None
+
+
+def engine_is_told(result: dict[str, Any], engine: str) -> str | None:
+    return None if result.get("engine") == engine else f"engine {result.get('engine')!r}"
+
+
+PROMISES: dict[str, Promise] = {
+    # Requests: the envelope.
+    "a request without v is UNSUPPORTED_VERSION, details.supported": Promise(
+        "Requests", "status", envelope={"op": "status"}, code=VERSION,
+        details={"supported": PRESENT}),
+    "v 2 with an unknown op is UNSUPPORTED_VERSION (the order of checks)": Promise(
+        "Which check comes first", "explode", envelope={"v": 2, "op": "explode"},
+        code=VERSION),
+    "op may be omitted over Zenoh, is required over ZeroMQ": Promise(
+        "Requests; ZeroMQ", "status", envelope={"v": 1},
+        code={"zenoh": OK, "zmq": MALFORMED}),
+    "args not a map is MALFORMED_REQUEST": Promise(
+        "Which check comes first", "status", envelope={"v": 1, "op": "status", "args": [1]},
+        code=MALFORMED),
+    "a client id holding * is refused": Promise(
+        "Requests", "status", envelope={"v": 1, "op": "status", "client": "a*"},
+        code=INVALID, message=("client",)),
+    "a client id starting with @ is refused": Promise(
+        "Requests", "list", envelope={"v": 1, "op": "list", "client": "@zmq:0:x"},
+        code=INVALID, message=("client",)),
+    "an unknown operation suggests close ones": Promise(
+        "Result codes", "stpe", code=ResultCode.UNKNOWN_OPERATION, message=("step",)),
+    "an unknown world is NOT_FOUND with a did you mean": Promise(
+        "Requests", "status", {"world": "defualt"}, code=NOT_FOUND,
+        message=("did you mean", "default")),
+    "a wrong type names op.field and quotes the value": Promise(
+        "Operations", "step", {"count": "ten"}, code=INVALID,
+        message=("step.count must be int, got 'ten'",)),
+    "an out-of-range value names the range": Promise(
+        "Operations", "predict", {"horizon": 0}, code=INVALID,
+        message=("predict.horizon must be a finite number > 0, got 0",)),
+    # Limits.
+    "a string past max_string_bytes: details limit and max": Promise(
+        "Limits", "status", {"world": "w" * 5000}, code=LIMIT,
+        details={"limit": "max_string_bytes", "max": 4096}),
+    "nesting past max_depth: details limit and max": Promise(
+        "Limits", "status", {"world": [[[[[[[[[[[[[[[[[[["deep"]]]]]]]]]]]]]]]]]]]},
+        code=LIMIT, details={"limit": "max_depth", "max": 16}),
+    "a step past max_steps is INVALID_ARGUMENT, as a range": Promise(
+        "Limits", "step", {"count": 10**9 + 1}, code=INVALID, message=("step.count",)),
+    "run_until far away names run_until.sim_time, details.max_steps": Promise(
+        "run_until", "run_until", {"sim_time": 1e308}, code=INVALID,
+        details={"max_steps": 10**9}, message=("run_until.sim_time",)),
+    # Bounds.
+    "a position past 1e9 m names its field, details field and max": Promise(
+        "Bounds", "set_states",
+        {"names": ["ball_0"], "poses": pack_f64(np.array([[2e9, 0, 1, 0, 0, 0, 1]]))},
+        code=INVALID, details={"field": PRESENT, "max": PRESENT}),
+    # Operations' replies.
+    "capabilities: its fields as the table tells them": Promise(
+        "capabilities", "capabilities", check=capabilities_as_told),
+    "status: nobody controls, nothing steps, the live world": Promise(
+        "status", "status", result={"controller": None, "stepping": False,
+                                    "world": "default", "state": "stopped"},
+        check=engine_is_told),
+    "list's name is a glob": Promise(
+        "list", "list", {"name": "ball_?"}, check=lambda r, e: None if sorted(
+            x["name"] for x in r["entities"]) == ["ball_0", "ball_1"] else str(r)),
+    "get_entities' pattern globs as list's name": Promise(
+        "get_entities", "get_entities", {"pattern": "ball_?"},
+        result={"names": ["ball_0", "ball_1"]}),
+    "get_entities: a pattern not a string is INVALID_ARGUMENT naming it": Promise(
+        "get_entities", "get_entities", {"pattern": 3}, code=INVALID, message=("pattern",)),
+    "get_entities: a region whose min exceeds its max is INVALID_ARGUMENT": Promise(
+        "get_entities", "get_entities",
+        {"region": pack_f64(np.array([[1.0, 1, 1], [0, 0, 0]]))}, code=INVALID),
+    "get_bounds: an unknown name is NOT_FOUND": Promise(
+        "get_bounds", "get_bounds", {"names": ["ghost"]}, code=NOT_FOUND),
+    "get_shapes: an unknown name is NOT_FOUND": Promise(
+        "get_shapes", "get_shapes", {"names": ["ghost"]}, code=NOT_FOUND),
+    "load_model: a device is INVALID_ARGUMENT": Promise(
+        "load_model", "load_model", {"format": "urdf", "path": "/dev/zero"}, code=INVALID),
+    "load_model: text and path both is INVALID_ARGUMENT": Promise(
+        "load_model", "load_model", {"format": "urdf", "path": "/x.urdf", "text": "<robot/>"},
+        code=INVALID),
+    "load_model: sdf is FEATURE_UNSUPPORTED naming the formats": Promise(
+        "load_model", "load_model", {"format": "sdf", "text": "<sdf/>"},
+        code=FEATURE_UNSUPPORTED, message=("mjcf", "urdf")),
+    "joints: an unknown joint is NOT_FOUND": Promise(
+        "joints", "joints", {"names": ["ghost"]}, code=NOT_FOUND),
+    "snapshot with neither slot nor blob is refused": Promise(
+        "snapshot", "snapshot", {}, code=INVALID),
+    "restore with slot and blob both is refused": Promise(
+        "restore", "restore", {"slot": "a", "blob": b"x"}, code=INVALID),
+    "restore of an unknown slot is NOT_FOUND": Promise(
+        "restore", "restore", {"slot": "nowhere"}, code=NOT_FOUND),
+    "restore of a corrupt blob is INVALID_ARGUMENT": Promise(
+        "restore", "restore", {"blob": b"\x81\xa1a\x01"}, code=INVALID),
+    "delete_snapshot of an unknown slot is NOT_FOUND": Promise(
+        "delete_snapshot", "delete_snapshot", {"slot": "nowhere"}, code=NOT_FOUND),
+    "delete_world of the live world is INVALID_ARGUMENT": Promise(
+        "delete_world", "delete_world", {"name": "default"}, code=INVALID),
+    "remove_camera of an unknown camera is NOT_FOUND": Promise(
+        "remove_camera", "remove_camera", {"name": "nowhere"}, code=NOT_FOUND),
+    "render of an unknown camera is NOT_FOUND": Promise(
+        "render", "render", {"cameras": [{"camera": "nowhere"}]}, code=NOT_FOUND),
+    "render: a bad camera is INVALID_ARGUMENT naming its field": Promise(
+        "render", "render", {"cameras": [dict(CAMERA, fov=180)]}, code=INVALID,
+        message=("fov",)),
+    "raycast: directions and ends both is refused": Promise(
+        "raycast", "raycast", {"origins": pack_f64(np.zeros((1, 3))),
+                               "directions": pack_f64(np.ones((1, 3))),
+                               "ends": pack_f64(np.ones((1, 3)))}, code=INVALID),
+    "raycast: neither directions nor ends is refused": Promise(
+        "raycast", "raycast", {"origins": pack_f64(np.zeros((1, 3)))}, code=INVALID),
+    "raycast: one entry per ray": Promise(
+        "raycast", "raycast", {"origins": pack_f64(np.array([[0.0, 0, 3]])),
+                               "directions": pack_f64(np.array([[0.0, 0, -1]]))},
+        result={"entities": ["ball_0"], "hits": b"\x01"}),
+    "another engine's parameter is FEATURE_UNSUPPORTED": Promise(
+        "get_params / set_params", "set_params",
+        lambda engine: {"params": {FOREIGN_PARAM[engine]: 0.01}}, code=FEATURE_UNSUPPORTED),
+    "an unknown parameter is INVALID_ARGUMENT with suggestions": Promise(
+        "get_params / set_params", "set_params", {"params": {"gravty": [0, 0, -9.81]}},
+        code=INVALID, message=("gravity",)),
+    "step has no until_rest": Promise(
+        "run_until", "step", {"count": 1, "until_rest": {"speed": 1, "every": 1}},
+        code=INVALID, message=("until_rest",)),
+    "until_rest needs read": Promise(
+        "run_until", "run_until", {"sim_time": 1.0, "until_rest": {"speed": 1, "every": 1}},
+        code=INVALID),
+    "stream_states: a rate past 60 is INVALID_ARGUMENT": Promise(
+        "stream_states", "stream_states", {"rate": 61}, code=INVALID),
+    "close_stream of no open stream is NOT_FOUND": Promise(
+        "stream_states", "close_stream", {"stream": "nowhere"}, code=NOT_FOUND),
+    "play of a side world that does not exist is NOT_FOUND": Promise(
+        "Worlds", "play", {"world": "side"}, code=NOT_FOUND),
+    "take_control without client: INVALID_ARGUMENT over Zenoh, the connection's over ZeroMQ":
+        Promise("take_control", "take_control",
+                code={"zenoh": INVALID, "zmq": OK}),
+    "release_control: released, controller nil": Promise(
+        "take_control", "release_control", result={"controller": None}),
+    "release_control when nobody holds it is no error": Promise(
+        "take_control", "release_control", result={"controller": None, "released": False}),
+    "clear_wrenches without names counts every entity": Promise(
+        "clear_wrenches", "clear_wrenches", result={"count": 2}),
+    # Changes come last: they move the world the refusals above were checked against.
+    "create_world: its row of list_worlds": Promise(
+        "create_world", "create_world", {"name": "side"},
+        result={"name": "side", "live": False, "entity_count": 0, "faulted": False}),
+    "a side world never plays": Promise(
+        "Worlds", "play", {"world": "side"}, code=INCORRECT_STATE),
+    "delete_world: count 1": Promise(
+        "delete_world", "delete_world", {"name": "side"}, result={"count": 1}),
+    "an argument sent as nil takes its default": Promise(
+        "Operations", "step", {"count": None}, result={"steps": 1}),
+    "the Example: step 500": Promise("Example", "step", {"count": 500}, result={"steps": 500}),
+    "a stepped stopped world is paused": Promise(
+        "step", "status", result={"state": "paused", "step": 501}),
+    "reset all keeps a paused world paused, at time 0, empty": Promise(
+        "reset", "reset", {"scope": "all"},
+        result={"state": "paused", "step": 0, "entity_count": 0}),
+}
+
+
+def wire(promise: Promise, engine: str) -> bytes:
+    """The request's bytes, as a client with only the page would write them."""
+    if promise.envelope is not None:
+        return bytes(msgpack.packb(promise.envelope, use_bin_type=True))
+    args = promise.args(engine) if callable(promise.args) else promise.args
+    envelope: dict[str, Any] = {"v": 1, "op": promise.op}
+    if args is not None:
+        envelope["args"] = args
+    return bytes(msgpack.packb(envelope, use_bin_type=True))
+
+
+def reply_shape(reply: dict[str, Any]) -> list[str]:
+    """Replies: every reply carries these fields, of these types (the Replies table)."""
+    problems = []
+    kinds = {"v": int, "code": int, "code_name": str, "message": str, "result": dict,
+             "step": int, "sim_time": float}
+    for name, kind in kinds.items():
+        if not isinstance(reply.get(name), kind):
+            problems.append(f"reply field {name} is {reply.get(name)!r}")
+    if reply.get("v") != 1:
+        problems.append("reply v is not 1")
+    if reply.get("code_name") != ResultCode(reply["code"]).name:
+        problems.append(f"code_name {reply.get('code_name')} for code {reply['code']}")
+    if reply["code"] != OK and (reply["result"] or not isinstance(reply.get("details"), dict)):
+        problems.append("a failure's result is not empty or its details not a map")
+    if len(reply.get("message", "")) > 2000:
+        problems.append("message longer than 2,000 characters")
+    return problems
+
+
+def broken(promise: Promise, reply: dict[str, Any], transport: str, engine: str) -> list[str]:
+    """How this reply breaks the promise (nothing when it keeps it)."""
+    code = promise.code[transport] if isinstance(promise.code, dict) else promise.code
+    if reply["code"] != code:
+        return [f"code {reply.get('code_name')} ({reply.get('message')!r}), page says "
+                f"{code.name}"]
+    problems = reply_shape(reply)
+    details = reply.get("details") or {}
+    for key, value in promise.details.items():
+        if key not in details or (value is not PRESENT and details[key] != value):
+            problems.append(f"details {details}, page says {key}={value!r}")
+    for key, value in promise.result.items():
+        if key not in reply["result"] or (value is not PRESENT and reply["result"][key] != value):
+            problems.append(f"result {key}={reply['result'].get(key)!r}, page says {value!r}")
+    problems += [f"message lacks {m!r}: {reply['message']!r}" for m in promise.message
+                 if m not in reply["message"]]
+    if promise.check is not None and code == OK:
+        problems += [p for p in [promise.check(reply["result"], engine)] if p]
+    return problems
+
+
+@pytest.mark.parametrize("engine", ["mujoco", "pybullet"])  # one per transport (conftest)
+def test_every_promise_of_the_page_holds(sim: Client, engine: str, transport: str) -> None:
+    sim.spawn(ball_row(2)[1])
+    failures = []
+    for name, promise in PROMISES.items():
+        before = snapshot(sim)
+        replies = raw_replies(sim, promise.op, wire(promise, engine))
+        if len(replies) != 1:
+            failures.append(f"{name}: {len(replies)} replies, the page says one")
+            continue
+        reply = msgpack.unpackb(replies[0], raw=False)
+        problems = broken(promise, reply, transport, engine)
+        if reply["code"] != OK:
+            try:
+                snapshot(sim).assert_same(before)
+            except AssertionError:
+                problems.append("a rejected request changed the world")
+        failures += [f"{name} ({promise.section}): {p}" for p in problems]
+    assert not failures, "\n".join(failures)
