@@ -18,6 +18,7 @@ from support import ball_row, raw_replies, snapshot
 
 from galton.client import Client
 from galton.protocol import ResultCode, pack_f64
+from galton.protocol.operations import OPERATIONS
 
 OK, NOT_FOUND = ResultCode.OK, ResultCode.NOT_FOUND
 INCORRECT_STATE, FEATURE_UNSUPPORTED = ResultCode.INCORRECT_STATE, ResultCode.FEATURE_UNSUPPORTED
@@ -46,6 +47,7 @@ class Promise:
     message: tuple[str, ...] = ()
     envelope: dict[str, Any] | None = None  # sent as it is, instead of {v, op, args}
     check: Callable[[dict[str, Any], str], str | None] | None = None  # more, per engine
+    before: tuple[tuple[str, dict[str, Any]], ...] = ()  # sent first, each answered OK
 
 
 def capabilities_as_told(result: dict[str, Any], engine: str) -> str | None:
@@ -60,8 +62,35 @@ def capabilities_as_told(result: dict[str, Any], engine: str) -> str | None:
         result["render_backend"] not in RENDER_BACKENDS[engine]
         and f"render_backend {result['render_backend']!r}",
         not set(result["engines_available"]) <= DOC_ENGINES and "engines_available",
+        any(set(spec) != {"default", "unit", "doc", "source"}
+            for spec in result["params"].values()) and "params' {default, unit, doc, source}",
     ]
     return ", ".join(p for p in problems if p) or None
+
+
+SHARED_PARAMS = {"timestep", "gravity", "solver_iterations", "default_friction",
+                 "default_restitution", "default_static_friction", "default_static_restitution"}
+
+
+def shared_params(result: dict[str, Any], engine: str) -> str | None:
+    params = result["params"]
+    missing = SHARED_PARAMS - set(params)
+    if missing:
+        return f"no shared parameter {sorted(missing)}"
+    return None if list(params["gravity"]) == [0, 0, -9.81] else f"gravity {params['gravity']}"
+
+
+def rows_of(key: str, fields: set[str]) -> Callable[[dict[str, Any], str], str | None]:
+    def check(result: dict[str, Any], engine: str) -> str | None:
+        bad = [row for row in result[key] if set(row) != fields]
+        return f"{key} rows {bad}" if bad else None
+    return check
+
+
+def samples(count: int) -> Callable[[dict[str, Any], str], str | None]:
+    def check(result: dict[str, Any], engine: str) -> str | None:
+        return None if len(result["times"]) == 8 * count else f"times {result['times']!r}"
+    return check
 
 
 def engine_is_told(result: dict[str, Any], engine: str) -> str | None:
@@ -204,6 +233,62 @@ PROMISES: dict[str, Promise] = {
         "take_control", "release_control", result={"controller": None, "released": False}),
     "clear_wrenches without names counts every entity": Promise(
         "clear_wrenches", "clear_wrenches", result={"count": 2}),
+    "an invalid client is checked before the operation exists": Promise(
+        "Which check comes first", "explode",
+        envelope={"v": 1, "op": "explode", "client": "a*"}, code=INVALID),
+    "get_params: the shared names, gravity (0, 0, -9.81)": Promise(
+        "get_params / set_params; Conventions", "get_params", check=shared_params),
+    "list_worlds: each row's fields": Promise(
+        "list_worlds", "list_worlds", check=rows_of("worlds", {
+            "name", "live", "engine", "state", "step", "sim_time", "entity_count",
+            "faulted"})),
+    "contacts: its fields": Promise(
+        "contacts", "contacts", result={"count": 0, "a": [], "b": [], "positions": PRESENT,
+                                        "normals": PRESENT, "forces": PRESENT,
+                                        "penetrations": PRESENT}),
+    "compare at the created pose scores 0": Promise(
+        "compare", "compare",
+        {"names": ["ball_0"], "poses": pack_f64(np.array([[0.0, 0, 1, 0, 0, 0, 1]]))},
+        result={"score": 0.0, "corrected": False, "position_errors": pack_f64(np.zeros(1)),
+                "angle_errors": pack_f64(np.zeros(1))}),
+    "predict: an every past the horizon samples the present and the end": Promise(
+        "predict", "predict", {"horizon": 0.02, "every": 5.0, "read": ["ball_0"]},
+        result={"names": ["ball_0"]}, check=samples(2)),
+    "predict: a horizon under one step is INVALID_ARGUMENT": Promise(
+        "predict", "predict", {"horizon": 1e-7}, code=INVALID),
+    "snapshot to a slot: its fields": Promise(
+        "snapshot", "snapshot", {"slot": "doc-promise"},
+        result={"slot": "doc-promise", "world": "default", "entity_count": 2,
+                "bytes": PRESENT, "step": 0, "sim_time": 0.0}),
+    "snapshots: each slot's fields": Promise(
+        "snapshots", "snapshots", check=rows_of("slots", {
+            "slot", "world", "engine", "bytes", "step", "sim_time", "entity_count"})),
+    "delete_snapshot: count 1": Promise(
+        "delete_snapshot", "delete_snapshot", {"slot": "doc-promise"}, result={"count": 1}),
+    "fork_world: the new world's row": Promise(
+        "fork_world", "fork_world", {"name": "fork"},
+        result={"name": "fork", "live": False, "entity_count": 2}),
+    "delete_world of the fork: count 1": Promise(
+        "delete_world", "delete_world", {"name": "fork"}, result={"count": 1}),
+    "cameras: none in a fresh world": Promise("cameras", "cameras", result={"cameras": []}),
+    "a 33rd camera: RESOURCE_LIMIT, details.limit cameras, details.max 32": Promise(
+        "add_camera", "add_camera", {"name": "c32", "camera": CAMERA}, code=LIMIT,
+        details={"limit": "cameras", "max": 32},
+        before=tuple(("add_camera", {"name": f"c{i}", "camera": CAMERA}) for i in range(32))),
+    "cameras: each with its name": Promise(
+        "cameras", "cameras", check=lambda r, e: None if len(r["cameras"]) == 32 and all(
+            c["name"].startswith("c") for c in r["cameras"]) else str(r)[:200]),
+    "render: images, labels and the format asked": Promise(
+        "render", "render", {"cameras": [CAMERA]},
+        result={"format": "raw", "labels": PRESENT},
+        check=lambda r, e: None if (r["images"][0]["width"], r["images"][0]["height"],
+                                    len(r["images"][0]["rgb"])) == (8, 8, 192)
+        else str(r["images"])[:200]),
+    "stream_states without client: INVALID_ARGUMENT over Zenoh, the connection's over ZeroMQ":
+        Promise("stream_states", "stream_states", {"rate": 5},
+                code={"zenoh": INVALID, "zmq": OK},
+                result={"rate": 5.0, "world": "default", "silence_s": 10.0,
+                        "stream": PRESENT, "key": PRESENT, "topic": PRESENT}),
     # Changes come last: they move the world the refusals above were checked against.
     "create_world: its row of list_worlds": Promise(
         "create_world", "create_world", {"name": "side"},
@@ -264,7 +349,7 @@ def broken(promise: Promise, reply: dict[str, Any], transport: str, engine: str)
     for key, value in promise.details.items():
         if key not in details or (value is not PRESENT and details[key] != value):
             problems.append(f"details {details}, page says {key}={value!r}")
-    for key, value in promise.result.items():
+    for key, value in (promise.result if code == OK else {}).items():
         if key not in reply["result"] or (value is not PRESENT and reply["result"][key] != value):
             problems.append(f"result {key}={reply['result'].get(key)!r}, page says {value!r}")
     problems += [f"message lacks {m!r}: {reply['message']!r}" for m in promise.message
@@ -279,6 +364,9 @@ def test_every_promise_of_the_page_holds(sim: Client, engine: str, transport: st
     sim.spawn(ball_row(2)[1])
     failures = []
     for name, promise in PROMISES.items():
+        for op, args in promise.before:
+            sent = msgpack.packb({"v": 1, "op": op, "args": args}, use_bin_type=True)
+            assert msgpack.unpackb(raw_replies(sim, op, sent)[0])["code"] == OK, (name, op)
         before = snapshot(sim)
         replies = raw_replies(sim, promise.op, wire(promise, engine))
         if len(replies) != 1:
@@ -286,10 +374,11 @@ def test_every_promise_of_the_page_holds(sim: Client, engine: str, transport: st
             continue
         reply = msgpack.unpackb(replies[0], raw=False)
         problems = broken(promise, reply, transport, engine)
-        if reply["code"] != OK:
+        declared = OPERATIONS.get(promise.op)
+        if reply["code"] != OK or not (declared and declared.mutates):
             try:
                 snapshot(sim).assert_same(before)
             except AssertionError:
-                problems.append("a rejected request changed the world")
+                problems.append("a rejected request, or a read, changed the world")
         failures += [f"{name} ({promise.section}): {p}" for p in problems]
     assert not failures, "\n".join(failures)
