@@ -7,8 +7,11 @@ test_protocol_doc, ...) are not repeated here."""
 
 from __future__ import annotations
 
+import queue
+import re
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import msgpack
@@ -382,3 +385,45 @@ def test_every_promise_of_the_page_holds(sim: Client, engine: str, transport: st
                 problems.append("a rejected request, or a read, changed the world")
         failures += [f"{name} ({promise.section}): {p}" for p in problems]
     assert not failures, "\n".join(failures)
+
+
+PAGE = (Path(__file__).resolve().parents[2] / "docs" / "protocol.md").read_text()
+EVENTS_WAIT_S = 20.0
+
+
+def events_table() -> dict[str, tuple[set[str], dict[str, set[str]]]]:
+    """Events: each kind's fields as the page's table gives them: those every event of the
+    kind carries, and those it adds for one operation ("`scope` for `reset`")."""
+    table = {}
+    for kind, cell in re.findall(r"^\| `(\w+)` \| ([^|]+) \|", PAGE.split("## Events")[1],
+                                 re.MULTILINE):
+        always, _, extras = cell.partition("(")
+        per_op = {op: set(re.findall(r"`(\w+)`", told)) for told, op in
+                  re.findall(r"((?:`\w+`(?: and )?)+) for `(\w+)`", extras)}
+        table[kind] = (set(re.findall(r"`(\w+)`", always)), per_op)
+    return table
+
+
+@pytest.mark.parametrize("engine", ["mujoco", "pybullet"])  # one per transport (conftest)
+def test_every_event_carries_the_fields_of_the_table(sim: Client, engine: str) -> None:
+    table = events_table()
+    seen: queue.Queue[dict[str, Any]] = queue.Queue()
+    with sim.on_event(seen.put):
+        names, group = ball_row(1)
+        sim.spawn(group)
+        sim.compare(names, np.array([[0.0, 0, 1, 0, 0, 0, 1]]))
+        sim.fork_world("fork")
+        sim.delete_world("fork")
+        sim.take_control()
+        sim.release_control()
+        sim.step(1)
+        sim.reset("state")
+        sim.load_world(engine)
+        events = []
+        while not any(e.get("op") == "load_world" for e in events):
+            events.append(seen.get(timeout=EVENTS_WAIT_S))
+    assert {e["kind"] for e in events} >= {"scene", "world", "control", "state"}
+    for event in events:
+        always, per_op = table[event["kind"]]
+        told = {"instance", "seq", "kind"} | always | per_op.get(event.get("op", ""), set())
+        assert told <= set(event), (event, told - set(event))
