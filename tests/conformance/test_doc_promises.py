@@ -19,7 +19,8 @@ import numpy as np
 import pytest
 from support import ball_row, raw_replies, snapshot
 
-from galton.client import Client
+from galton.client import Client, EmbeddedDaemon
+from galton.client.transport.discovery import wait_for_daemon
 from galton.protocol import ResultCode, pack_f64
 from galton.protocol.operations import OPERATIONS
 
@@ -427,3 +428,46 @@ def test_every_event_carries_the_fields_of_the_table(sim: Client, engine: str) -
         always, per_op = table[event["kind"]]
         told = {"instance", "seq", "kind"} | always | per_op.get(event.get("op", ""), set())
         assert told <= set(event), (event, told - set(event))
+
+
+# Limits, each set lower with --limit NAME=VALUE: a request just over it, and what must
+# still hold after its refusal (the limits the default suite cannot reach cheaply).
+LOWERED = {"max_entities": 3, "max_model_bytes": 300, "max_worlds": 2, "max_request_bytes": 4096}
+URDF = ('<robot name="r"><link name="base"><inertial><mass value="1"/><inertia ixx="1" '
+        'ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial></link></robot>')
+
+
+def test_each_limit_lowered_is_refused_by_name_and_value(tmp_path: Path) -> None:
+    """Limits: `--limit NAME=VALUE` sets it; over it, RESOURCE_LIMIT with details.limit
+    naming it and details.max its value, and nothing changed."""
+    big_model = tmp_path / "big.urdf"
+    big_model.write_text(URDF + " " * 400)
+    over = {
+        "max_entities": ("spawn", {"groups": [ball_row(2, prefix="more")[1].to_wire()]}),
+        "max_model_bytes": ("load_model", {"format": "urdf", "text": URDF + " " * 400}),
+        "max_worlds": ("create_world", {"name": "second"}),
+        "max_request_bytes": ("status", {"world": "w" * 3000, "tag": "t" * 3000}),
+    }
+    args = [part for name, value in LOWERED.items() for part in ("--limit", f"{name}={value}")]
+    with EmbeddedDaemon("mujoco", instance="test-doc-limits", extra_args=args) as daemon, \
+            Client(daemon.instance, daemon.endpoint, timeout=20.0) as sim:
+        wait_for_daemon(sim.session, daemon.instance, 60.0)
+        sim.spawn(ball_row(2)[1])
+        sim.create_world("first")
+        failures = []
+        for name, (op, op_args) in [*over.items(), ("max_model_bytes (path)", (
+                "load_model", {"format": "urdf", "path": str(big_model)}))]:
+            limit = name.split()[0]
+            before = snapshot(sim)
+            sent = msgpack.packb({"v": 1, "op": op, "args": op_args}, use_bin_type=True)
+            reply = msgpack.unpackb(raw_replies(sim, op, sent)[0])
+            details = reply.get("details") or {}
+            if (reply["code"], details.get("limit"), details.get("max")) != (
+                    LIMIT, limit, LOWERED[limit]):
+                failures.append(f"{name}: {reply['code_name']} {details} {reply['message']!r}")
+            try:
+                snapshot(sim).assert_same(before)
+            except AssertionError:
+                failures.append(f"{name}: the refusal changed the world")
+        assert [w.name for w in sim.list_worlds()] == ["default", "first"]
+        assert not failures, "\n".join(failures)
