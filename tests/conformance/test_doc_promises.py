@@ -54,18 +54,30 @@ class Promise:
     before: tuple[tuple[str, dict[str, Any]], ...] = ()  # sent first, each answered OK
 
 
+def engines_md_formats(engine: str) -> set[str]:
+    """docs/ENGINES.md's "Model formats:" line under the engine's heading."""
+    page = (Path(__file__).resolve().parents[2] / "docs" / "ENGINES.md").read_text()
+    section = page.split(f"\n## {engine} ")[1].split("\n## ")[0]
+    line = re.search(r"Model formats: ([\w, ]+)", section)
+    assert line, f"docs/ENGINES.md: no model formats for {engine}"
+    return {name.strip() for name in line.group(1).split(",")}
+
+
 def capabilities_as_told(result: dict[str, Any], engine: str) -> str | None:
     host = {"cpu_model", "logical_cores", "memory_bytes", "os", "hostname", "python",
             "engines"}
     problems = [
         result["engine"] not in DOC_ENGINES and f"engine {result['engine']!r}",
         result["protocol_version"] != 1 and "protocol_version",
-        not {"mjcf", "urdf"} <= set(result["model_formats"]) and "model_formats",
+        set(result["model_formats"]) != engines_md_formats(engine) and "model_formats",
         set(result["zmq"]) < {"control", "telemetry"} and f"zmq {result['zmq']}",
         not host <= set(result["host"]) and f"host {sorted(result['host'])}",
         result["render_backend"] not in RENDER_BACKENDS[engine]
         and f"render_backend {result['render_backend']!r}",
         not set(result["engines_available"]) <= DOC_ENGINES and "engines_available",
+        not {"spawn_inertia", "model_shapes"} <= set(result["features"]) and "features",
+        not {"sphere", "box", "cylinder", "capsule", "plane"} <= set(result["body_shapes"])
+        and "body_shapes",
         any(set(spec) != {"default", "unit", "doc", "source"}
             for spec in result["params"].values()) and "params' {default, unit, doc, source}",
     ]
@@ -293,12 +305,45 @@ PROMISES: dict[str, Promise] = {
                 code={"zenoh": INVALID, "zmq": OK},
                 result={"rate": 5.0, "world": "default", "silence_s": 10.0,
                         "stream": PRESENT, "key": PRESENT, "topic": PRESENT}),
+    "spawn: a taken name is NAME_NOT_UNIQUE, details.taken": Promise(
+        "spawn", "spawn", {"groups": [ball_row(1)[1].to_wire()]},
+        code=ResultCode.NAME_NOT_UNIQUE, details={"taken": ["ball_0"]}),
+    "spawn: a name of 129 characters is refused": Promise(
+        "Conventions", "spawn", {"groups": [ball_row(1, prefix="n" * 127)[1].to_wire()]},
+        code=INVALID),
+    "spawn: a size past 10^4 m is refused": Promise(
+        "spawn", "spawn", {"groups": [dict(ball_row(1, prefix="huge")[1].to_wire(),
+                                           size=[2e4])]}, code=INVALID),
+    "spawn: a static body's twist must be zero": Promise(
+        "spawn", "spawn", {"groups": [dict(ball_row(1, prefix="still")[1].to_wire(),
+                                           static=True,
+                                           twists=pack_f64(np.array([[1.0, 0, 0, 0, 0, 0]])))]},
+        code=INVALID),
+    "update: friction out of [0, 100] names update.properties.friction": Promise(
+        "update", "update", {"names": ["ball_0"], "properties": {"friction": 101}},
+        code=INVALID, message=("update.properties.friction",)),
+    "apply_wrench: a duration of 0 is refused": Promise(
+        "apply_wrench", "apply_wrench", {"names": ["ball_0"],
+                                         "wrenches": pack_f64(np.zeros((1, 6))),
+                                         "duration": 0}, code=INVALID),
+    "apply_wrench: a wrong number of rows is refused": Promise(
+        "apply_wrench", "apply_wrench", {"names": ["ball_0"],
+                                         "wrenches": pack_f64(np.zeros((2, 6)))},
+        code=INVALID),
+    "joints: none in a world without models": Promise("joints", "joints",
+                                                      result={"joints": []}),
+    "render: png when asked": Promise(
+        "render", "render", {"cameras": [CAMERA], "format": "png"}, result={"format": "png"},
+        check=lambda r, e: None if bytes(r["images"][0]["rgb"]).startswith(b"\x89PNG")
+        else "not a png"),
     # Changes come last: they move the world the refusals above were checked against.
     "create_world: its row of list_worlds": Promise(
         "create_world", "create_world", {"name": "side"},
         result={"name": "side", "live": False, "entity_count": 0, "faulted": False}),
     "a side world never plays": Promise(
         "Worlds", "play", {"world": "side"}, code=INCORRECT_STATE),
+    "a side world takes no set_rtf": Promise(
+        "Worlds", "set_rtf", {"rtf": 2.0, "world": "side"}, code=INCORRECT_STATE),
     "delete_world: count 1": Promise(
         "delete_world", "delete_world", {"name": "side"}, result={"count": 1}),
     "an argument sent as nil takes its default": Promise(
@@ -309,6 +354,9 @@ PROMISES: dict[str, Promise] = {
     "reset all keeps a paused world paused, at time 0, empty": Promise(
         "reset", "reset", {"scope": "all"},
         result={"state": "paused", "step": 0, "entity_count": 0}),
+    "stop: stopped at time 0": Promise("stop", "stop", result={"state": "stopped", "step": 0}),
+    "pause from stopped gives paused at time 0": Promise(
+        "stop", "pause", result={"state": "paused", "step": 0, "sim_time": 0.0}),
 }
 
 
@@ -471,3 +519,38 @@ def test_each_limit_lowered_is_refused_by_name_and_value(tmp_path: Path) -> None
                 failures.append(f"{name}: the refusal changed the world")
         assert [w.name for w in sim.list_worlds()] == ["default", "first"]
         assert not failures, "\n".join(failures)
+
+
+BOX_URDF = ('<robot name="r"><link name="base"><inertial><mass value="1"/><inertia ixx="1" '
+            'ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial><collision><geometry>'
+            '<box size="0.2 0.2 0.2"/></geometry></collision></link></robot>')
+
+
+@pytest.mark.parametrize("engine", ["ode", "dart"])  # one per transport (conftest)
+def test_ode_and_dart_answer_as_the_sections_that_name_them_say(sim: Client, engine: str
+                                                                ) -> None:
+    """get_bounds and get_entities' region: FEATURE_UNSUPPORTED for a loaded model on ODE
+    and DART; get_shapes: all four answer (model_shapes); render: FEATURE_UNSUPPORTED where
+    render_backend is nil; raycast where the features list it; model formats as
+    docs/ENGINES.md lists them."""
+    def call(op: str, args: dict[str, Any]) -> dict[str, Any]:
+        sent = msgpack.packb({"v": 1, "op": op, "args": args}, use_bin_type=True)
+        return dict(msgpack.unpackb(raw_replies(sim, op, sent)[0]))
+
+    caps = call("capabilities", {})["result"]
+    assert set(caps["model_formats"]) == engines_md_formats(engine)
+    assert caps["render_backend"] is None and "render" not in caps["features"]
+    assert call("load_model", {"format": "urdf", "text": BOX_URDF})["code"] == OK
+    assert call("get_bounds", {})["code"] == FEATURE_UNSUPPORTED
+    region = pack_f64(np.array([[-1.0, -1, -1], [1, 1, 1]]))
+    assert call("get_entities", {"region": region})["code"] == FEATURE_UNSUPPORTED
+    assert "model_shapes" in caps["features"]
+    assert call("get_shapes", {})["result"]["kinds"] == ["box"]
+    assert call("render", {"cameras": [CAMERA]})["code"] == FEATURE_UNSUPPORTED
+    ray = {"origins": pack_f64(np.array([[0.0, 0, 3]])),
+           "directions": pack_f64(np.array([[0.0, 0, -1]]))}
+    cast = call("raycast", ray)
+    if "raycast" in caps["features"]:
+        assert cast["result"]["entities"] == ["base"]
+    else:
+        assert cast["code"] == FEATURE_UNSUPPORTED
