@@ -414,25 +414,7 @@ def broken(promise: Promise, reply: dict[str, Any], transport: str, engine: str)
 @pytest.mark.parametrize("engine", ["mujoco", "pybullet"])  # one per transport (conftest)
 def test_every_promise_of_the_page_holds(sim: Client, engine: str, transport: str) -> None:
     sim.spawn(ball_row(2)[1])
-    failures = []
-    for name, promise in PROMISES.items():
-        for op, args in promise.before:
-            sent = msgpack.packb({"v": 1, "op": op, "args": args}, use_bin_type=True)
-            assert msgpack.unpackb(raw_replies(sim, op, sent)[0])["code"] == OK, (name, op)
-        before = snapshot(sim)
-        replies = raw_replies(sim, promise.op, wire(promise, engine))
-        if len(replies) != 1:
-            failures.append(f"{name}: {len(replies)} replies, the page says one")
-            continue
-        reply = msgpack.unpackb(replies[0], raw=False)
-        problems = broken(promise, reply, transport, engine)
-        declared = OPERATIONS.get(promise.op)
-        if reply["code"] != OK or not (declared and declared.mutates):
-            try:
-                snapshot(sim).assert_same(before)
-            except AssertionError:
-                problems.append("a rejected request, or a read, changed the world")
-        failures += [f"{name} ({promise.section}): {p}" for p in problems]
+    failures = keeps_every_promise(sim, PROMISES, transport, engine)
     assert not failures, "\n".join(failures)
 
 
@@ -554,3 +536,151 @@ def test_ode_and_dart_answer_as_the_sections_that_name_them_say(sim: Client, eng
         assert cast["result"]["entities"] == ["base"]
     else:
         assert cast["code"] == FEATURE_UNSUPPORTED
+
+
+def inertial(mass: float = 1.0) -> str:
+    return (f'<inertial><mass value="{mass}"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" '
+            'iyz="0" izz="0.01"/></inertial>')
+
+
+ARM_URDF = (
+    '<robot name="arm">'
+    f'<link name="base">{inertial()}</link>'
+    f'<link name="upper">{inertial()}<collision><geometry><box size="0.1 0.1 0.4"/>'
+    '</geometry></collision></link>'
+    f'<link name="tip">{inertial(0.1)}</link>'
+    '<joint name="hinge" type="revolute"><parent link="base"/><child link="upper"/>'
+    '<origin xyz="0 0 0.5"/><axis xyz="0 1 0"/>'
+    '<limit lower="-1" upper="1" effort="10" velocity="2"/></joint>'
+    '<joint name="weld" type="fixed"><parent link="upper"/><child link="tip"/>'
+    '<origin xyz="0 0 0.4"/></joint>'
+    '</robot>')
+
+# An observation calibrate is given: two samples of one body, still (calibrate).
+SEEN = {"times": pack_f64(np.array([0.0, 0.1])),
+        "poses": pack_f64(np.tile([0.0, 0, 1, 0, 0, 0, 1], (2, 1)))}
+
+JOINT_PROMISES: dict[str, Promise] = {
+    "load_model: roots first, each before its links": Promise(
+        "load_model", "load_model", {"format": "urdf", "text": ARM_URDF},
+        result={"names": ["base", "upper", "tip"]}),
+    "list: a model's shape, source and model": Promise(
+        "load_model; list", "list", check=lambda r, e: None if [
+            (x["name"], x["shape"], x["source"], x["model"], x["static"])
+            for x in r["entities"]] == [
+            ("base", "model", "model", "base", True), ("upper", "link", "model", "base", False),
+            ("tip", "link", "model", "base", False)] else str(r["entities"])[:300]),
+    "joints: the table's fields, in load order, mode none": Promise(
+        "joints", "joints", check=lambda r, e: None if [
+            (j["name"], j["type"], j["parent"], j["child"], j["lower"], j["upper"], j["mode"])
+            for j in r["joints"]] == [
+            ("hinge", "revolute", "base", "upper", -1.0, 1.0, "none"),
+            ("weld", "fixed", "upper", "tip", None, None, "none")] else str(r["joints"])[:300]),
+    "joints: an unknown joint is NOT_FOUND with a did you mean": Promise(
+        "joints", "joints", {"names": ["hinje"]}, code=NOT_FOUND, message=("hinge",)),
+    "get_joint_states: every 1-DOF joint when absent": Promise(
+        "get_joint_states", "get_joint_states", result={"names": ["hinge"]}),
+    "get_joint_states: a fixed joint is INVALID_ARGUMENT": Promise(
+        "get_joint_states", "get_joint_states", {"names": ["weld"]}, code=INVALID),
+    "set_joint_states: outside the limits, details joint, lower, upper": Promise(
+        "set_joint_states", "set_joint_states", {"names": ["hinge"], "positions": 2.0},
+        code=INVALID, details={"joint": "hinge", "lower": -1.0, "upper": 1.0}),
+    "set_joint_states: one number for every name, read back": Promise(
+        "set_joint_states", "set_joint_states",
+        {"names": ["hinge"], "positions": 0.5, "read": ["tip"]},
+        result={"count": 1, "names": ["tip"], "poses": PRESENT, "twists": PRESENT}),
+    "set_joint_targets: a position target with kp 0 is refused": Promise(
+        "set_joint_targets", "set_joint_targets",
+        {"names": ["hinge"], "mode": "position", "targets": 0.2}, code=INVALID),
+    "set_joint_targets: a position target outside the limits is refused": Promise(
+        "set_joint_targets", "set_joint_targets",
+        {"names": ["hinge"], "mode": "position", "targets": 3.0, "kp": 10.0}, code=INVALID),
+    "set_joint_targets: max_effort 0 is refused": Promise(
+        "set_joint_targets", "set_joint_targets",
+        {"names": ["hinge"], "mode": "effort", "targets": 1.0, "max_effort": 0.0},
+        code=INVALID),
+    "set_joint_targets: a fixed joint is refused": Promise(
+        "set_joint_targets", "set_joint_targets",
+        {"names": ["weld"], "mode": "effort", "targets": 1.0}, code=INVALID),
+    "set_joint_targets: held, and joints shows its mode": Promise(
+        "set_joint_targets", "set_joint_targets",
+        {"names": ["hinge"], "mode": "position", "targets": 0.2, "kp": 50.0, "kd": 5.0,
+         "max_effort": float("inf")}, result={"count": 1}),
+    "joints shows the mode": Promise(
+        "set_joint_targets", "joints", {"names": ["hinge"]},
+        check=lambda r, e: None if r["joints"][0]["mode"] == "position" else str(r)),
+    "set_states of a link names its model": Promise(
+        "load_model", "set_states",
+        {"names": ["upper"], "poses": pack_f64(np.array([[0.0, 0, 1, 0, 0, 0, 1]]))},
+        code=INVALID, message=("base",)),
+    "delete of a link is refused": Promise(
+        "load_model", "delete", {"names": ["tip"]}, code=INVALID, message=("base",)),
+    "apply_wrench on a fixed-base root is refused": Promise(
+        "apply_wrench", "apply_wrench", {"names": ["base"],
+                                         "wrenches": pack_f64(np.zeros((1, 6)))},
+        code=INVALID),
+    "apply_wrench on a link: count": Promise(
+        "apply_wrench", "apply_wrench", {"names": ["tip"],
+                                         "wrenches": pack_f64(np.ones((1, 6)))},
+        result={"count": 1}),
+    "calibrate: bounds not low < high are INVALID_ARGUMENT": Promise(
+        "calibrate", "calibrate", {"names": ["base"], **SEEN,
+                                   "fit": {"hinge.damping": [1.0, 0.5]}}, code=INVALID,
+        message=("low < high",)),
+    "calibrate: a joint without one degree of freedom is INVALID_ARGUMENT": Promise(
+        "calibrate", "calibrate", {"names": ["base"], **SEEN,
+                                   "fit": {"weld.damping": [0.0, 1.0]}}, code=INVALID,
+        message=("weld",)),
+    "calibrate: a link observed without a slot is INVALID_ARGUMENT naming its model":
+        Promise("calibrate", "calibrate", {
+            "names": ["tip"], **SEEN,
+            "fit": {"hinge.damping": [0.0, 1.0]}}, code=INVALID,
+            message=("calibrate.names", "base")),
+    "calibrate: an unknown body is NOT_FOUND": Promise(
+        "calibrate", "calibrate", {"names": ["base"], **SEEN,
+                                   "fit": {"ghost.friction": [0.0, 1.0]}}, code=NOT_FOUND),
+    "a step, then efforts": Promise("get_joint_states", "step", {"count": 5,
+                                                                 "read_joints": ["hinge"]},
+                                    result={"steps": 5, "joints": PRESENT}),
+    "stop sets every mode back to none": Promise("set_joint_targets", "stop"),
+    "modes after stop": Promise(
+        "set_joint_targets", "joints", check=lambda r, e: None if {
+            j["mode"] for j in r["joints"]} == {"none"} else str(r["joints"])[:300]),
+    "clear_wrenches after stop: the wrench went with stop, count all": Promise(
+        "apply_wrench", "clear_wrenches", result={"count": 3}),
+    "delete of the root removes the model": Promise(
+        "load_model", "delete", {"names": ["base"]}, result={"count": 1}),
+    "and its joints": Promise("load_model", "joints", result={"joints": []}),
+}
+
+
+def keeps_every_promise(sim: Client, promises: dict[str, Promise], transport: str,
+                        engine: str) -> list[str]:
+    """Send each promise's request in turn; what each reply breaks."""
+    failures = []
+    for name, promise in promises.items():
+        for op, args in promise.before:
+            sent = msgpack.packb({"v": 1, "op": op, "args": args}, use_bin_type=True)
+            assert msgpack.unpackb(raw_replies(sim, op, sent)[0])["code"] == OK, (name, op)
+        before = snapshot(sim)
+        replies = raw_replies(sim, promise.op, wire(promise, engine))
+        if len(replies) != 1:
+            failures.append(f"{name}: {len(replies)} replies, the page says one")
+            continue
+        reply = msgpack.unpackb(replies[0], raw=False)
+        problems = broken(promise, reply, transport, engine)
+        declared = OPERATIONS.get(promise.op)
+        if reply["code"] != OK or not (declared and declared.mutates):
+            try:
+                snapshot(sim).assert_same(before)
+            except AssertionError:
+                problems.append("a rejected request, or a read, changed the world")
+        failures += [f"{name} ({promise.section}): {p}" for p in problems]
+    return failures
+
+
+@pytest.mark.parametrize("engine", ["mujoco", "pybullet"])  # one per transport (conftest)
+def test_every_promise_about_models_and_joints_holds(sim: Client, engine: str,
+                                                     transport: str) -> None:
+    failures = keeps_every_promise(sim, JOINT_PROMISES, transport, engine)
+    assert not failures, "\n".join(failures)
