@@ -556,6 +556,18 @@ ARM_URDF = (
     '<origin xyz="0 0 0.4"/></joint>'
     '</robot>')
 
+def shapeless_bounds(result: dict[str, Any], engine: str) -> str | None:
+    """get_bounds: MuJoCo a box of no size at the body's origin, PyBullet the small box
+    Bullet keeps round a link without a shape (about ±1 mm)."""
+    low, high = np.frombuffer(result["bounds"]).reshape(2, 3)
+    half = (high - low) / 2
+    if engine == "mujoco" and not (np.all(half == 0) and np.allclose(low, 0)):
+        return f"MuJoCo: {low} {high}, the page says a box of no size at the origin"
+    if engine == "pybullet" and not np.all((half > 1e-4) & (half < 3e-3)):
+        return f"PyBullet: {low} {high}, the page says about ±1 mm"
+    return None
+
+
 # An observation calibrate is given: two samples of one body, still (calibrate).
 SEEN = {"times": pack_f64(np.array([0.0, 0.1])),
         "poses": pack_f64(np.tile([0.0, 0, 1, 0, 0, 0, 1], (2, 1)))}
@@ -648,9 +660,17 @@ JOINT_PROMISES: dict[str, Promise] = {
             j["mode"] for j in r["joints"]} == {"none"} else str(r["joints"])[:300]),
     "clear_wrenches after stop: the wrench went with stop, count all": Promise(
         "apply_wrench", "clear_wrenches", result={"count": 3}),
+    "get_bounds: a model body with no collision shape, as each engine tells it": Promise(
+        "get_bounds", "get_bounds", {"names": ["base"]}, check=shapeless_bounds),
     "delete of the root removes the model": Promise(
         "load_model", "delete", {"names": ["base"]}, result={"count": 1}),
     "and its joints": Promise("load_model", "joints", result={"joints": []}),
+    "a capsule's half_length leaves its caps out": Promise(
+        "Conventions; get_bounds", "get_bounds", {"names": ["pill"]},
+        result={"bounds": pack_f64(np.array([[-0.1, -0.1, 0.7, 0.1, 0.1, 1.3]]))},
+        before=(("spawn", {"groups": [{
+            "shape": "capsule", "size": [0.1, 0.2], "names": ["pill"], "static": True,
+            "poses": pack_f64(np.array([[0.0, 0, 1, 0, 0, 0, 1]]))}]}),)),
 }
 
 
