@@ -19,6 +19,7 @@ import msgpack
 from galton.daemon.core.calls import TELEMETRY, Call
 from galton.daemon.core.clock import WorldClock
 from galton.protocol import (
+    NotFoundError,
     OperationFailedError,
     RemoteError,
     Reply,
@@ -30,7 +31,7 @@ from galton.protocol import (
     encode_reply,
     error_reply,
 )
-from galton.protocol.errors import brief
+from galton.protocol.errors import brief, did_you_mean
 from galton.protocol.operations import operation
 
 if TYPE_CHECKING:
@@ -70,10 +71,11 @@ def answer_status(loop: SimLoop, call: Call) -> None:
         operation(request.op).decode(request.args)
         named = request.args.get("world")
         if named is not None and named != status.world:
-            # A side world's status, or the refusal of an unknown world with its "did you
-            # mean" (it iterates the side worlds, which only the physics thread may do):
-            # the physics thread answers it.
-            loop.submit(call)
+            if not isinstance(named, str) or named not in loop.side:
+                raise NotFoundError(f"no world named {brief(named)}"
+                                    f"{did_you_mean(str(named)[:64], world_names(loop))}; "
+                                    "list_worlds lists them")
+            loop.submit(call)  # a side world's status: the physics thread answers it
             return
         reply = Reply(ResultCode.OK, result=status.to_wire(), step=status.step,
                       sim_time=status.sim_time)
@@ -83,6 +85,16 @@ def answer_status(loop: SimLoop, call: Call) -> None:
     data = encode_reply(reply)
     loop.status_reply = (call.payload, taken, data)
     loop.send(call, data)
+
+
+def world_names(loop: SimLoop) -> list[str]:
+    """The live and side worlds' names, read on the transport's thread while the physics
+    thread may add or remove one: copied in one C call (no Python code runs between its
+    items), and a copy that meets a change anyway suggests the live world alone."""
+    try:
+        return [loop.world.name, *tuple(loop.side)]
+    except RuntimeError:  # the dict changed size while it was copied
+        return [loop.world.name]
 
 
 def _error_data(exc: Exception, status: SimStatus) -> bytes:
