@@ -151,3 +151,18 @@ def test_every_limit_s_default_is_the_table_s() -> None:
             assert told is None  # the cores: told in words, not as a number
             continue
         assert told == getattr(defaults, spec.name), (spec.name, rows[spec.name])
+
+
+@pytest.mark.parametrize(("name", "valid"), [
+    ("galton", True), ("x.y-z_1", True), ("a" * 64, True), ("a" * 65, False), ("", False),
+    ("-x", False), (".x", False), ("a b", False), ("a/b", False), ("a*", False),
+    ("é", False)])
+def test_an_instance_name_is_as_the_transport_section_says(name: str, valid: bool) -> None:
+    """Transport: a single key chunk of 1-64 characters from A-Z a-z 0-9 _ - . (not
+    starting with - or .)."""
+    from galton.protocol import InvalidArgumentError, validate_instance_name
+    if valid:
+        assert validate_instance_name(name) == name
+    else:
+        with pytest.raises(InvalidArgumentError):
+            validate_instance_name(name)
