@@ -704,3 +704,23 @@ def test_every_promise_about_models_and_joints_holds(sim: Client, engine: str,
                                                      transport: str) -> None:
     failures = keeps_every_promise(sim, JOINT_PROMISES, transport, engine)
     assert not failures, "\n".join(failures)
+
+
+@pytest.mark.parametrize("engine", ["mujoco"])
+def test_a_wildcard_get_reaches_no_operation_and_discovery_finds_the_daemon(
+        sim: Client, engine: str, transport: str) -> None:
+    """Key expressions: the control chunk starts with `@`, so `galton/**` never reaches an
+    operation; a liveliness get on `galton/*/alive` returns one key per daemon, its
+    second chunk the instance name."""
+    if transport != "zenoh":
+        pytest.skip("Zenoh's key expressions")
+    instance = sim.instance
+    sim.spawn(ball_row(1)[1])
+    before = snapshot(sim)
+    reset = msgpack.packb({"v": 1, "args": {"scope": "all"}}, use_bin_type=True)
+    for key in ("galton/**", f"galton/{instance}/**", f"galton/{instance}/*/reset"):
+        assert list(sim.session.get(key, payload=reset, timeout=5.0)) == [], key
+    snapshot(sim).assert_same(before)
+    alive = [str(r.ok.key_expr) for r in sim.session.liveliness().get("galton/*/alive",
+                                                                     timeout=5.0) if r.ok]
+    assert f"galton/{instance}/alive" in alive
