@@ -20,6 +20,7 @@ import pytest
 from support import ball_row, raw_replies, snapshot
 
 from galton.client import Client, EmbeddedDaemon
+from galton.client.sdk.telemetry import Subscription
 from galton.client.transport.discovery import wait_for_daemon
 from galton.protocol import ResultCode, pack_f64
 from galton.protocol.operations import OPERATIONS
@@ -724,3 +725,33 @@ def test_a_wildcard_get_reaches_no_operation_and_discovery_finds_the_daemon(
     alive = [str(r.ok.key_expr) for r in sim.session.liveliness().get("galton/*/alive",
                                                                      timeout=5.0) if r.ok]
     assert f"galton/{instance}/alive" in alive
+
+
+def telemetry_fields() -> set[str]:
+    """Telemetry: the fields of the page's table."""
+    table = PAGE.split("## Telemetry")[1].split("## Events")[0]
+    return set(re.findall(r"^\| `(\w+)` \|", table, re.MULTILINE))
+
+
+@pytest.mark.parametrize("engine", ["mujoco", "pybullet"])  # one per transport (conftest)
+def test_telemetry_carries_the_table_s_fields_and_a_sample_per_world(sim: Client,
+                                                                      engine: str) -> None:
+    """Telemetry: one sample per world each period, `world` naming it; a side world's reads
+    as its status does: stopped before its first step, rtf and target_rtf 0."""
+    sim.create_world("quiet")
+    samples: queue.Queue[dict[str, Any]] = queue.Queue()
+    try:
+        with Subscription(sim.transport.subscribe(
+                "telemetry", lambda data: samples.put(msgpack.unpackb(data)))):
+            seen: dict[str, dict[str, Any]] = {}
+            while len(seen) < 2:
+                sample = samples.get(timeout=EVENTS_WAIT_S)
+                seen[sample["world"]] = sample
+    finally:
+        sim.delete_world("quiet")
+    assert set(seen) == {"default", "quiet"}
+    for sample in seen.values():
+        assert set(sample) == telemetry_fields(), sample
+    side = seen["quiet"]
+    assert (side["state"], side["rtf"], side["target_rtf"], side["engine"]) == (
+        "stopped", 0, 0, engine)
