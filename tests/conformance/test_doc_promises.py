@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import queue
 import re
+import threading
+import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -22,7 +24,7 @@ from support import ball_row, raw_replies, snapshot
 from galton.client import Client, EmbeddedDaemon
 from galton.client.sdk.telemetry import Subscription
 from galton.client.transport.discovery import wait_for_daemon
-from galton.protocol import ResultCode, pack_f64
+from galton.protocol import ControlHeldError, ResultCode, pack_f64
 from galton.protocol.operations import OPERATIONS
 
 OK, NOT_FOUND = ResultCode.OK, ResultCode.NOT_FOUND
@@ -755,3 +757,37 @@ def test_telemetry_carries_the_table_s_fields_and_a_sample_per_world(sim: Client
     side = seen["quiet"]
     assert (side["state"], side["rtf"], side["target_rtf"], side["engine"]) == (
         "stopped", 0, 0, engine)
+
+
+LONG_STEP = {"mujoco": 300_000, "pybullet": 1_000_000}  # about a second each, idle
+
+
+@pytest.mark.parametrize("engine", ["mujoco", "pybullet"])  # one per transport (conftest)
+def test_a_running_step_survives_another_client_taking_control(
+        sim: Client, daemon: EmbeddedDaemon, engine: str, transport: str) -> None:
+    """take_control: a step request already running when another client takes control
+    runs to its end; the lease refuses only what is asked after it is taken, and an
+    unknown argument is INVALID_ARGUMENT before the lease is looked at."""
+    endpoint = daemon.endpoint if transport == "zenoh" else daemon.zmq_endpoint
+    done: queue.Queue[Any] = queue.Queue()
+    with Client(daemon.instance, endpoint, timeout=20.0) as other:
+        stepping = threading.Thread(target=lambda: done.put(sim.step(LONG_STEP[engine])))
+        stepping.start()
+        try:
+            deadline = time.monotonic() + EVENTS_WAIT_S
+            while not other.status().stepping and time.monotonic() < deadline:
+                pass  # polling the daemon's own answer: no sleep
+            assert other.take_control()
+            assert other.status().stepping, "the step ended before control changed hands"
+        finally:
+            stepping.join(timeout=60.0)
+        try:
+            assert done.get(timeout=1.0).step == LONG_STEP[engine]  # every step asked
+            with pytest.raises(ControlHeldError):
+                sim.step(1)
+            sent = msgpack.packb({"v": 1, "op": "spawn", "args": {"grops": []}},
+                                 use_bin_type=True)
+            refused = msgpack.unpackb(raw_replies(sim, "spawn", sent)[0])
+            assert refused["code"] == INVALID and "groups" in refused["message"]
+        finally:
+            other.release_control()
