@@ -226,6 +226,8 @@ def _start(ctx: PredictContext, source: World, request: Calibrate, names: list[s
         return ctx.slots.world_of(ctx.slots.get(request.slot), name, lambda blob: world_from(
             decode(blob, ctx.limits, ctx.snapshot_key), factory, name, ctx.limits))
     source.require_known(names)
+    source.require_no_links(names, "calibrate.names", "a link moves with its joints, so the "
+                            "start cannot set it: observe the model's root")
     twists = (start_twists(times, poses, source.engine.timestep) if request.twists is None
               else decode_twists(request.twists, len(names), "calibrate.twists"))
     source.verify()

@@ -36,7 +36,7 @@ from galton.protocol import (
     encode_reply,
     error_reply,
 )
-from galton.protocol.errors import brief
+from galton.protocol.errors import brief, did_you_mean
 from galton.protocol.operations import operation
 
 if TYPE_CHECKING:
@@ -117,11 +117,12 @@ class StatusBoard:
             operation(request.op).decode(request.args)
             named = request.args.get("world")
             if named is not None and named != status.world:
-                # On the transport's thread only one membership test of the side worlds
-                # (the physics thread may be adding or removing one): no iteration, no race.
+                # On the transport's thread the physics thread may be adding or removing
+                # a side world: one membership test, and the names copied in one C call.
                 if not isinstance(named, str) or named not in self.loop.side:
-                    raise NotFoundError(f"no world named {brief(named)}; list_worlds "
-                                        "lists them")
+                    raise NotFoundError(f"no world named {brief(named)}"
+                                        f"{did_you_mean(str(named)[:64], world_names(self.loop))}"
+                                        "; list_worlds lists them")
                 return False
             reply = Reply(ResultCode.OK, result=status.to_wire(), step=status.step,
                           sim_time=status.sim_time)
@@ -160,6 +161,16 @@ class StatusBoard:
                 self.publish(TELEMETRY, msgpack.packb(sample.to_wire()))
             except Exception:
                 log.exception("could not publish telemetry")
+
+
+def world_names(loop: Watched) -> list[str]:
+    """The live and side worlds' names, read on the transport's thread while the physics
+    thread may add or remove one: copied in one C call (no Python code runs between its
+    items), and a copy that meets a change anyway suggests the live world alone."""
+    try:
+        return [loop.world.name, *tuple(loop.side)]
+    except RuntimeError:  # the dict changed size while it was copied
+        return [loop.world.name]
 
 
 def _error_data(exc: Exception, status: SimStatus) -> bytes:

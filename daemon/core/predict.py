@@ -159,7 +159,7 @@ def horizon_steps(horizon: float, dt: float, max_steps: int) -> int:
     if exact > max_steps:
         raise InvalidArgumentError(f"predict.horizon {horizon:g} s is {exact:.3g} steps; at "
                                    f"most {max_steps}", {"max_steps": max_steps})
-    if exact <= 0:
+    if horizon / dt < 1 - 1e-9:
         raise InvalidArgumentError(f"predict.horizon {horizon:g} s is less than one step of "
                                    f"{dt:g} s")
     return math.ceil(exact)

@@ -138,14 +138,11 @@ def reset(ctx: TimeContext, call: Call, request: rq.Reset) -> dict[str, Any]:
     world = ctx.world_for(request)
     _cancel_job_on(ctx, world, "reset")
     world.reset(scope)
-    if world is not ctx.world:
-        ctx.emit({"kind": "scene", "op": "reset", "scope": scope, "world": world.name,
-                   "step": world.step_index})
-        return side_status(ctx, world).to_wire()
-    _after_reset(ctx)
-    ctx.emit({"kind": "scene", "op": "reset", "scope": scope,
-               "step": ctx.world.step_index})
-    return ctx.status().to_wire()
+    if world is ctx.world:
+        _after_reset(ctx)
+    ctx.emit({"kind": "scene", "op": "reset", "scope": scope, "world": world.name,
+               "step": world.step_index})
+    return ctx.status().to_wire() if world is ctx.world else side_status(ctx, world).to_wire()
 
 
 def load_world(ctx: TimeContext, call: Call, request: rq.LoadWorld) -> dict[str, Any]:
@@ -169,7 +166,8 @@ def load_world(ctx: TimeContext, call: Call, request: rq.LoadWorld) -> dict[str,
     ctx.tune_switch_interval()
     _after_reset(ctx)
     ctx.set_state(SimState.STOPPED)
-    ctx.emit({"kind": "scene", "op": "load_world", "engine": name, "step": 0})
+    ctx.emit({"kind": "scene", "op": "load_world", "engine": name, "world": ctx.world.name,
+               "step": 0})
     return ctx.status().to_wire()
 
 

@@ -128,3 +128,41 @@ def test_every_daemon_option_the_page_names_exists() -> None:
                for opt in param.opts}
     named = set(re.findall(r"(?<![\w#-])(--[a-z][a-z-]*[a-z])(?![\w*-])", PAGE))
     assert named - options == set(), "docs/protocol.md names options galton-daemon lacks"
+
+
+def documented_default(text: str) -> float | None:
+    """A Limits row's default as a number ("16 MiB", "100,000", "10⁹", "10⁶ m", "2,073,600
+    (1920 × 1080)"), or None where it is not one ("the cores the daemon may use")."""
+    powers = str.maketrans("⁰¹²³⁴⁵⁶⁷⁸⁹", "0123456789")
+    if match := re.match(r"10([⁰¹²³⁴⁵⁶⁷⁸⁹]+)", text):
+        return 10.0 ** int(match.group(1).translate(powers))
+    if match := re.match(r"([\d,.]+)( MiB)?", text):
+        return float(match.group(1).replace(",", "")) * (2**20 if match.group(2) else 1)
+    return None
+
+
+def test_every_limit_s_default_is_the_table_s() -> None:
+    """Limits: the default column is what a daemon started without --limit holds."""
+    rows = dict(re.findall(r"^\| `(\w+)` \| ([^|]+) \|", PAGE, re.MULTILINE))
+    defaults = Limits()
+    for spec in fields(Limits):
+        told = documented_default(rows[spec.name].strip())
+        if spec.name == "future_threads":
+            assert told is None  # the cores: told in words, not as a number
+            continue
+        assert told == getattr(defaults, spec.name), (spec.name, rows[spec.name])
+
+
+@pytest.mark.parametrize(("name", "valid"), [
+    ("galton", True), ("x.y-z_1", True), ("a" * 64, True), ("a" * 65, False), ("", False),
+    ("-x", False), (".x", False), ("a b", False), ("a/b", False), ("a*", False),
+    ("é", False)])
+def test_an_instance_name_is_as_the_transport_section_says(name: str, valid: bool) -> None:
+    """Transport: a single key chunk of 1-64 characters from A-Z a-z 0-9 _ - . (not
+    starting with - or .)."""
+    from galton.protocol import InvalidArgumentError, validate_instance_name
+    if valid:
+        assert validate_instance_name(name) == name
+    else:
+        with pytest.raises(InvalidArgumentError):
+            validate_instance_name(name)
