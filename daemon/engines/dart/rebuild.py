@@ -126,7 +126,7 @@ def follow_defaults(engine: DartEngine, changed: dict[str, Any]) -> None:
         spawning.set_surface(body)
 
 def load(engine: DartEngine, fmt: str, text: str | None, path: str | None, prefix: str,
-          fixed_base: bool) -> list[EntityInfo]:
+         fixed_base: bool) -> list[EntityInfo]:
     models.check_format(fmt)
     source = models.model_text(text, path)
     skeletons = models.parse(fmt, source, fixed_base)

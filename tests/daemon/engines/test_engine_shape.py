@@ -130,7 +130,7 @@ def test_no_engine_writes_its_capabilities_or_a_feature_list(name: str) -> None:
 
 
 @pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.xfail(
-    strict=True, reason="still mixins")) if n in ("pybullet",) else n
+    strict=True, reason="still mixins")) if n in () else n
     for n in sorted(ENGINE_CLASSES)])
 def test_every_engine_class_is_composed_the_same_way(name: str) -> None:
     """One composition (docs/ARCHITECTURE.md, "How to add an engine"): the class is
