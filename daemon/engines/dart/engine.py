@@ -76,6 +76,7 @@ class DartEngine(Engine):
         self._diverged = False
 
     # -- records (rebuild.py) -------------------------------------------------------------
+    # What snapshot/ and fast_state.py call on the engine, each a call to rebuild.py.
     def _lookup(self, names: Sequence[str]) -> list[spawning.Body]:
         return rebuild.lookup(self, names)
 

@@ -146,8 +146,8 @@ def joints(engine: PybulletEngine) -> list[JointInfo]:
     return engine.robots.joints()
 
 
-def get_joint_states(engine: PybulletEngine, names: Sequence[str]) -> tuple[np.ndarray, np.ndarray,
-                     np.ndarray]:
+def get_joint_states(engine: PybulletEngine, names: Sequence[str]
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return engine.robots.read(engine._bc, engine._uid_of, names)
 
 
@@ -179,5 +179,3 @@ def clear_wrenches(engine: PybulletEngine, names: Sequence[str] | None) -> None:
 
 def restore_joints(engine: PybulletEngine) -> None:
     engine.robots.restore(engine._bc, engine._uid_of)
-
-

@@ -140,8 +140,8 @@ def apply(engine: PybulletEngine, values: dict[str, Any]) -> None:
                 set_margin(engine, body.uid, body.shape, body.size)
 
 
-def follow_surface_defaults(engine: PybulletEngine, bodies: list[Body], values: dict[str,
-                            Any]) -> None:
+def follow_surface_defaults(engine: PybulletEngine, bodies: list[Body],
+                            values: dict[str, Any]) -> None:
     """Bodies spawned without a friction or restitution take their kind's new default."""
     for body in bodies:
         friction_key, restitution_key = default_keys(body.static)
@@ -157,5 +157,3 @@ def set_margin(engine: PybulletEngine, uid: int, shape: str, size: tuple[float, 
     margin = margin_for(shape, size, engine._values["pybullet.collision_margin"])
     if margin is not None:
         engine._change(uid, -1, collisionMargin=margin)
-
-

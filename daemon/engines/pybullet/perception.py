@@ -25,8 +25,8 @@ def codes(engine: PybulletEngine) -> dict[int, str]:
 
 
 @engine_call
-def render(engine: PybulletEngine, cameras: Sequence[CameraView]) -> tuple[list[dict[str,
-           np.ndarray]], list[str]]:
+def render(engine: PybulletEngine, cameras: Sequence[CameraView]
+           ) -> tuple[list[dict[str, np.ndarray]], list[str]]:
     """TinyRenderer, one getCameraImage per camera (render.py)."""
     return pybullet_render.render(engine._bc, codes(engine), cameras)
 
@@ -48,5 +48,3 @@ def contacts(engine: PybulletEngine, names: Sequence[str] | None) -> ContactPoin
         engine.robots.check_entities(engine.bodies, names)
     wanted = None if names is None else set(names)
     return ContactPoints(*pybullet_contacts.contacts(engine._bc, codes(engine), wanted))
-
-

@@ -170,8 +170,8 @@ def batches(bodies: dict[str, Body]) -> Iterator[list[str]]:
         yield list(run)
 
 
-def as_group(names: list[str], bodies: dict[str, Body], states: dict[str,
-             State]) -> tuple[BodyGroup, Redo]:
+def as_group(names: list[str], bodies: dict[str, Body],
+             states: dict[str, State]) -> tuple[BodyGroup, Redo]:
     """What is left of a spawn group, as the group that makes it again (with the first
     body's values) and how: a body is turned when it was or when its turn has changed."""
     body = bodies[names[0]]
@@ -248,7 +248,8 @@ def report_held(held: dict[str, Held], names: Sequence[str], poses: np.ndarray,
             twists[k] = twist
 
 
-def release_held(held: dict[str, Held], names: Sequence[str], poses: bool, twists: bool) -> None:
+def release_held(held: dict[str, Held], names: Sequence[str], poses: bool,
+                 twists: bool) -> None:
     """Forget what ``set_states`` sets now (it reads back as it is from then on)."""
     for name in names:
         if name in held:
@@ -299,8 +300,8 @@ def make_again(engine: PybulletEngine, plan: Plan, check: Callable[[], None] | N
     engine.rebuilds += 1
 
 
-def remake(engine: PybulletEngine, names: list[str], kept: dict[str, Body], states: dict[str,
-           State]) -> None:
+def remake(engine: PybulletEngine, names: list[str], kept: dict[str, Body],
+           states: dict[str, State]) -> None:
     """A spawn group's remaining bodies made again as spawn first made them, then given
     what update or a default has changed since."""
     group, redo = as_group(names, kept, states)
@@ -316,8 +317,8 @@ def remake(engine: PybulletEngine, names: list[str], kept: dict[str, Body], stat
     engine.bodies.update(bodies)
 
 
-def reload(engine: PybulletEngine, names: list[str], kept: dict[str, Body], states: dict[str,
-           State]) -> None:
+def reload(engine: PybulletEngine, names: list[str], kept: dict[str, Body],
+           states: dict[str, State]) -> None:
     """A model loaded again from its text, the bodies
     deleted since its load removed again, the others restored."""
     models = {name: model for name in names if (model := kept[name].model) is not None}
@@ -353,5 +354,3 @@ def restore_model_body(engine: PybulletEngine, uid: int, name: str, batch: int, 
         pose, twist = state
         engine.reset_pose(uid, pose[:3], pose[3:])
         engine.reset_velocity(uid, twist[:3], twist[3:])
-
-

@@ -129,9 +129,7 @@ def test_no_engine_writes_its_capabilities_or_a_feature_list(name: str) -> None:
         assert "FEATURES" not in assigned, path
 
 
-@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.xfail(
-    strict=True, reason="still mixins")) if n in () else n
-    for n in sorted(ENGINE_CLASSES)])
+@pytest.mark.parametrize("name", sorted(ENGINE_CLASSES))
 def test_every_engine_class_is_composed_the_same_way(name: str) -> None:
     """One composition (docs/ARCHITECTURE.md, "How to add an engine"): the class is
     ``Engine``'s subclass alone, no mixin, the only class of its engine.py, and every method

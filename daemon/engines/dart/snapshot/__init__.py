@@ -133,5 +133,3 @@ def _restore_model(self: DartEngine, item: dict[str, Any]) -> None:
     count = skeleton.getNumDofs()
     skeleton.setPositions(snapformat.vector(item["positions"], count))
     skeleton.setVelocities(snapformat.vector(item["velocities"], count))
-
-

@@ -119,4 +119,3 @@ def _inertia(data: dict[str, Any]) -> tuple[float, float, float] | None:
         return None
     ixx, iyy, izz = (float(data["mass"]) * float(i) for i in unit)
     return (ixx, iyy, izz)
-
