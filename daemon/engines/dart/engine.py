@@ -8,7 +8,8 @@ the constraint solver's collision option, so this engine runs DART's own limit (
 contacts a step, shared between colliding pairs) and no per-pair cap. Past 1,000
 touching pairs the pairs found last get no contact (DART warns once).
 
-The engine's parts: spawn.py (records, spawned skeletons, the world's set-up), state.py
+The class is the Engine contract, each method short or a call to the module of its
+part: spawn.py (records, spawned skeletons, the world's set-up), state.py
 (states and divergence), models.py (URDF and MJCF), joints.py (joints, targets, wrenches),
 snapshot/ (snapshots), rebuild.py (records, rebuilds), meshes.py (mesh shapes), shapes.py
 and contacts.py. dartpy has no ray casts and no headless renderer: ``raycast`` and
@@ -32,15 +33,14 @@ from galton.daemon.engines.base import (
     Target,
 )
 from galton.daemon.engines.dart import contacts as contact_points
-from galton.daemon.engines.dart import fast_state, frames, meshes, state
+from galton.daemon.engines.dart import fast_state, frames, meshes, models, rebuild, state
+from galton.daemon.engines.dart import snapshot as snapshots
 from galton.daemon.engines.dart import spawn as spawning
 from galton.daemon.engines.dart.joints import Robots
 from galton.daemon.engines.dart.mesh_files import MeshFiles
 from galton.daemon.engines.dart.models import MODEL_FORMATS
 from galton.daemon.engines.dart.params import PARAMS
-from galton.daemon.engines.dart.rebuild import Rebuilding
 from galton.daemon.engines.dart.shapes import node_meshes, node_shapes
-from galton.daemon.engines.dart.snapshot import Snapshots
 from galton.daemon.engines.params import check_updates
 from galton.protocol import (
     BodyGroup,
@@ -52,13 +52,18 @@ from galton.protocol import (
 from galton.protocol.vocabulary import POSE_WIDTH, TWIST_WIDTH
 
 
-class DartEngine(Rebuilding, Snapshots, Engine):
+class DartEngine(Engine):
     """Named rigid bodies and models in a DART world."""
 
     name = "dart"
     param_specs = PARAMS
     model_formats = MODEL_FORMATS
     spawn_inertia = True
+    # The records a rebuild makes the world again from (rebuild.py: init_records).
+    _owners: list[str]  # spawned bodies and model roots, in the order they were made
+    _models: dict[str, models.Model]
+    _edits: dict[str, list[tuple[str, BodyProperties]]]  # per model root, in order
+    _loaded_meshes: dict[tuple[bytes, bytes], Any]  # during a restore: mesh -> its shape
 
     def __init__(self) -> None:
         self._values: dict[str, Any] = spawning.defaults()
@@ -66,9 +71,29 @@ class DartEngine(Rebuilding, Snapshots, Engine):
         self._bodies: dict[str, spawning.Body] = {}
         self._robots = Robots()
         self._mesh_files = MeshFiles()  # model mesh files' triangles, for get_shapes
-        self._init_records()
+        rebuild.init_records(self)
         self._unchecked = False  # states were set from outside since the last step
         self._diverged = False
+
+    # -- records (rebuild.py) -------------------------------------------------------------
+    # What snapshot/ and fast_state.py call on the engine, each a call to rebuild.py.
+    def _lookup(self, names: Sequence[str]) -> list[spawning.Body]:
+        return rebuild.lookup(self, names)
+
+    def _check_new(self, names: Sequence[str]) -> None:
+        rebuild.check_new(self, names)
+
+    def _add(self, body: spawning.Body) -> None:
+        rebuild.add(self, body)
+
+    def _add_model(self, model: models.Model) -> list[EntityInfo]:
+        return rebuild.add_model(self, model)
+
+    def _edit(self, body: spawning.Body, props: BodyProperties) -> None:
+        rebuild.edit(self, body, props)
+
+    def _rebuild(self) -> None:
+        rebuild.rebuild(self)
 
     # -- description ----------------------------------------------------------------------
     @classmethod
@@ -86,7 +111,7 @@ class DartEngine(Rebuilding, Snapshots, Engine):
         clean = check_updates(self.name, PARAMS, params)
         self._values.update(clean)
         spawning.configure(self._world, self._values)
-        self._follow_defaults(clean)
+        rebuild.follow_defaults(self, clean)
 
     # -- bodies ---------------------------------------------------------------------------
     def spawn(self, groups: Sequence[BodyGroup]) -> None:
@@ -122,13 +147,13 @@ class DartEngine(Rebuilding, Snapshots, Engine):
     def delete(self, names: Sequence[str]) -> None:
         found = self._lookup(names)
         for body in found:
-            self._remove(body)
+            rebuild.remove(self, body)
 
     def clear(self) -> None:
         self._world = spawning.new_world(self._values)
         self._bodies.clear()
         self._robots = Robots()
-        self._init_records()
+        rebuild.init_records(self)
         self._diverged = False
 
     def reset_dynamics(self) -> None:
@@ -148,7 +173,7 @@ class DartEngine(Rebuilding, Snapshots, Engine):
             self._edit(body, props)
 
     def properties(self, names: Sequence[str]) -> np.ndarray:
-        rows = [self._properties(body) for body in self._lookup(names)]
+        rows = [rebuild.body_properties(self, body) for body in self._lookup(names)]
         return np.array(rows, dtype=float).reshape(len(rows), 3)
 
     # -- states ---------------------------------------------------------------------------
@@ -200,7 +225,7 @@ class DartEngine(Rebuilding, Snapshots, Engine):
     # -- models and joints ----------------------------------------------------------------
     def load_model(self, fmt: str, text: str | None, path: str | None,
                    prefix: str, *, fixed_base: bool = True) -> list[EntityInfo]:
-        return self._load(fmt, text, path, prefix, fixed_base)
+        return rebuild.load(self, fmt, text, path, prefix, fixed_base)
 
     def joints(self) -> list[JointInfo]:
         targets = self._robots.targets
@@ -257,6 +282,13 @@ class DartEngine(Rebuilding, Snapshots, Engine):
         for name in names:
             self._robots.wrenches.pop(name, None)
 
+    # -- snapshots (snapshot/, fast_state.py) -----------------------------------------------
+    def snapshot(self, *, canonical: bool = True) -> dict[str, Any]:
+        return snapshots.snapshot(self, canonical=canonical)
+
+    def restore(self, data: dict[str, Any]) -> None:
+        snapshots.restore(self, data)
+
     def save_state(self) -> object | None:
         """Skeletons' positions and velocities, the time and the held records (fast_state)."""
         return fast_state.save(self)
@@ -277,4 +309,4 @@ class DartEngine(Rebuilding, Snapshots, Engine):
     def contacts(self, names: Sequence[str] | None
                  ) -> ContactPoints:
         return ContactPoints(*contact_points.contacts(
-            self._world, self._entity_keys(), None if names is None else set(names)))
+            self._world, rebuild.entity_keys(self), None if names is None else set(names)))

@@ -3,10 +3,11 @@ contacts with Coulomb friction 1, bounce 0.5 above 0.01 m/s, soft CFM 0.001 and 
 0.2, at most 10 contact joints per pair, bodies asleep after 1 s idle (params.py; the
 Webots sources in docs/ENGINES.md).
 
-One world, one sweep-and-prune space holding every geom, one group of contact joints emptied before
-each step's collision. Parts: bodies (spawn.py; meshes: trimesh.py), states (state.py),
-collision and contact reports (contacts.py), ray casts (rays.py), snapshots (snapshot.py,
-snapshot/format.py), robots (joints.py, models.py).
+One world, one sweep-and-prune space holding every geom, one group of contact joints
+emptied before each step's collision. The class is the Engine contract, each method short
+or a call to the module of its part: bodies (spawn.py; meshes: trimesh.py), states
+(state.py), collision and contact reports (contacts.py), ray casts (rays.py), snapshots
+(snapshot/, fast_state.py), robots (joints.py, models.py).
 
 Determinism: ``dWorldStep`` draws no random numbers, ODE's space visits geoms in the order
 they were made, and a restore makes them again in that order, so the same steps give the
@@ -28,6 +29,7 @@ from galton.daemon.engines.base import (
     Shape,
 )
 from galton.daemon.engines.ode import fast_state
+from galton.daemon.engines.ode import snapshot as snapshots
 from galton.daemon.engines.ode import spawn as spawning
 from galton.daemon.engines.ode import state as states
 from galton.daemon.engines.ode.contacts import Collider, sync_sleep
@@ -37,7 +39,6 @@ from galton.daemon.engines.ode.native import LIB, SAP_AXES_XZY, version
 from galton.daemon.engines.ode.params import PARAMS, SURFACE_DEFAULTS, default_keys
 from galton.daemon.engines.ode.rays import RayCaster
 from galton.daemon.engines.ode.shapes import model_shapes
-from galton.daemon.engines.ode.snapshot import Snapshots
 from galton.daemon.engines.ode.spawn import Body
 from galton.daemon.engines.params import check_updates
 from galton.protocol import (
@@ -54,7 +55,7 @@ from galton.protocol import (
 MAX_SPIN = 1e8  # rad/s: the most spin ODE integrates in a body (above the protocol's MAX_TWIST)
 
 
-class OdeEngine(Snapshots, Engine):
+class OdeEngine(Engine):
     """Named rigid bodies in an ODE world stepped as Webots steps it."""
 
     name = "ode"
@@ -356,6 +357,15 @@ class OdeEngine(Snapshots, Engine):
     def set_joint_targets(self, names: Sequence[str], mode: str, targets: np.ndarray,
                           kp: np.ndarray, kd: np.ndarray, max_effort: np.ndarray) -> None:
         self._robots.hold(names, mode, targets, kp, kd, max_effort, self._bodies)
+
+    # -- snapshots (snapshot/, fast_state.py) -----------------------------------------------
+    def snapshot(self, *, canonical: bool = True) -> dict[str, Any]:
+        """Every body's and link's own doubles, wake flags, wrenches, joint targets and the
+        parameters (snapshot/format.py); ``canonical`` first restarts the idle counters."""
+        return snapshots.snapshot(self, canonical=canonical)
+
+    def restore(self, data: dict[str, Any]) -> None:
+        snapshots.restore(self, data)
 
     def save_state(self) -> object | None:
         """The bodies' own doubles, wake flags, wrenches and joint targets (fast_state)."""

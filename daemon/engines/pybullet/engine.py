@@ -26,13 +26,12 @@ Rewinding: ``reset_dynamics`` rebuilds the world too, every body made again as i
 made, so that a stopped world replays its first run bit for bit (Bullet would otherwise keep
 contact points and their warm starts across the teleport).
 
-The engine's parts: this module (bodies, models), ``Parameters``
-(params.py), ``Rebuilding`` (rebuild.py), ``Articulated`` (joints,
-articulated.py), ``Snapshots`` (snapshot.py) and ``Perception``
-(render, raycast, contacts: perception.py). Plain functions do the rest:
-states and the divergence check (state.py), a spawn group's values and records
-(spawn.py), a body's updates and properties
-(props.py), a model load's checks and names (models.py).
+The class is the Engine contract, each method short or a call to the module of its part,
+a function of the engine: parameters (params.py), rebuilds (rebuild.py), models, joints,
+targets and wrenches (articulated.py), snapshots (snapshot/), render, raycast and contacts
+(perception.py), states and the divergence check (state.py), a spawn group's values and
+records (spawn.py), a body's updates and properties (props.py), a model load's checks and
+names (models.py).
 """
 
 from __future__ import annotations
@@ -47,42 +46,44 @@ import pybullet
 from pybullet_utils.bullet_client import BulletClient
 
 from galton.daemon.engines.base import (
+    CameraView,
+    ContactPoints,
     Engine,
+    RayHits,
     Shape,
     ShapeMesh,
     native_output_silenced,
 )
 from galton.daemon.engines.params import check_updates
+from galton.daemon.engines.pybullet import articulated, perception, rebuild, shapes
+from galton.daemon.engines.pybullet import params as parameters
 from galton.daemon.engines.pybullet import props as bodyprops
-from galton.daemon.engines.pybullet import rebuild, shapes
+from galton.daemon.engines.pybullet import snapshot as snapshots
 from galton.daemon.engines.pybullet import spawn as spawning
 from galton.daemon.engines.pybullet import state as states
-from galton.daemon.engines.pybullet.articulated import Articulated
 from galton.daemon.engines.pybullet.bodies import BodyMaker, ShapeCache
 from galton.daemon.engines.pybullet.calls import engine_call
 from galton.daemon.engines.pybullet.frames import Offset
 from galton.daemon.engines.pybullet.joints import set_damping
 from galton.daemon.engines.pybullet.mesh_files import HullCache
 from galton.daemon.engines.pybullet.models import MODEL_FORMATS
-from galton.daemon.engines.pybullet.params import PARAMS, Parameters
-from galton.daemon.engines.pybullet.perception import Perception
+from galton.daemon.engines.pybullet.params import PARAMS
 from galton.daemon.engines.pybullet.rebuild import Body as _Body
-from galton.daemon.engines.pybullet.rebuild import Rebuilding
 from galton.daemon.engines.pybullet.render import RENDER_BACKEND
 from galton.daemon.engines.pybullet.robots import Robots
-from galton.daemon.engines.pybullet.snapshot import Snapshots
 from galton.protocol import (
     BodyGroup,
     BodyProperties,
     EntityInfo,
     InvalidArgumentError,
+    JointInfo,
     NameNotUniqueError,
     NotFoundError,
 )
 from galton.protocol.vocabulary import POSE_WIDTH, TWIST_WIDTH
 
 
-class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception, Engine):
+class PybulletEngine(Engine):
     """Named rigid bodies in a headless PyBullet world."""
 
     name = "pybullet"
@@ -116,7 +117,7 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
         self.robots = Robots()  # models' links, joints, targets, held wrenches
         self.frames: dict[str, Offset] = {}  # roots whose inertial frame is offset
         self.rebuilds = 0
-        self._configure_world()
+        parameters.configure_world(self)
 
     # -- description ----------------------------------------------------------------------
     @classmethod
@@ -138,7 +139,7 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
     def set_params(self, params: dict[str, Any]) -> None:
         clean = check_updates(self.name, PARAMS, params)
         self._values.update(clean)
-        self._apply(clean)
+        parameters.apply(self, clean)
 
     # -- bodies ---------------------------------------------------------------------------
     @engine_call
@@ -183,7 +184,7 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
             if twists is not None:
                 self.reset_velocity(uid, twists[k][:3], twists[k][3:])
             self._change(uid, -1, **dynamics)
-        self._set_margin(ids[0], group.shape, size)
+        parameters.set_margin(self, ids[0], group.shape, size)
         return spawning.records(group, ids, size, mass, (friction, restitution), batch, redo)
 
     def _group_shapes(self, group: BodyGroup, size: tuple[float, ...]) -> tuple[int, int]:
@@ -212,7 +213,7 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
         if not self.bodies:
             self.clear()
         elif rebuild.due(self._removed, self.bodies):
-            self._rebuild()
+            rebuild.rebuild(self)
 
     @engine_call
     def clear(self) -> None:
@@ -225,7 +226,7 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
         self.robots, self.frames = Robots(), {}
         self._maker.forget()
         self._shapes.forget()
-        self._configure_world()
+        parameters.configure_world(self)
 
     @engine_call
     def reset_dynamics(self) -> None:
@@ -234,7 +235,7 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
         would otherwise not replay its first run, and would replay it differently after a
         longer run."""
         if self.bodies:
-            self._rebuild()
+            rebuild.rebuild(self)
 
     @engine_call
     def update(self, names: Sequence[str], props: BodyProperties) -> None:
@@ -258,6 +259,16 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
 
     def _owned(self) -> set[int]:
         return {b.uid for b in self.bodies.values()}
+
+    def _uid_of(self, name: str) -> int:
+        try:
+            return self.bodies[name].uid
+        except KeyError:
+            raise NotFoundError(f"no entity named {name!r} in the PyBullet world") from None
+
+    def _adopt_model_body(self, uid: int, name: str, batch: int) -> _Body:
+        """Register one loaded body (a load's and a rebuild's: articulated.py)."""
+        return articulated.adopt_model_body(self, uid, name, batch)
 
     def lookup(self, names: Sequence[str]) -> list[_Body]:
         try:
@@ -330,8 +341,6 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
         for _ in range(count):
             step()
 
-    def set_joint_damping(self, names: Sequence[str], damping: np.ndarray) -> None:
-        set_damping(self._bc, self.robots.models, self._uid_of, names, damping)
 
     @engine_call
     def state_within(self, max_position: float, max_speed: float) -> bool:
@@ -343,7 +352,7 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
         a rigid body's restitution as 0); models from PyBullet, the mass summed over links."""
         links = self.robots.links
         self.lookup([name for name in names if name not in links])  # NotFound for others
-        rows = [self._link_properties(name) if name in links
+        rows = [articulated.link_properties(self, name) if name in links
                 else self._properties(self.bodies[name]) for name in names]
         return np.array(rows, dtype=float).reshape(len(rows), 3)
 
@@ -357,9 +366,53 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
         """URDF (one model) or MJCF (one model per top-level body, plus one for the world's
         own geoms), roots and links (articulated.py). Text is loaded from a
         temporary file, so relative mesh paths only work when a path is given."""
-        return self._load(fmt, text, path, prefix, fixed_base)
+        return articulated.load(self, fmt, text, path, prefix, fixed_base)
 
-    # -- snapshots (snapshot.py) ------------------------------------------------
+    # -- joints, targets and wrenches (articulated.py) -------------------------------------
+    def joints(self) -> list[JointInfo]:
+        return articulated.joints(self)
+
+    def get_joint_states(self, names: Sequence[str]
+                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        return articulated.get_joint_states(self, names)
+
+    def set_joint_states(self, names: Sequence[str], positions: np.ndarray,
+                         velocities: np.ndarray | None) -> None:
+        articulated.set_joint_states(self, names, positions, velocities)
+
+    def set_joint_targets(self, names: Sequence[str], mode: str, targets: np.ndarray,
+                          kp: np.ndarray, kd: np.ndarray, max_effort: np.ndarray) -> None:
+        articulated.set_joint_targets(self, names, mode, targets, kp, kd, max_effort)
+
+    def set_joint_damping(self, names: Sequence[str], damping: np.ndarray) -> None:
+        set_damping(self._bc, self.robots.models, self._uid_of, names, damping)
+
+    def set_wrenches(self, names: Sequence[str], wrenches: np.ndarray,
+                     points: np.ndarray | None) -> None:
+        articulated.set_wrenches(self, names, wrenches, points)
+
+    def clear_wrenches(self, names: Sequence[str] | None) -> None:
+        articulated.clear_wrenches(self, names)
+
+    def restore_joints(self) -> None:
+        articulated.restore_joints(self)
+
+    # -- perception (perception.py) ---------------------------------------------------------
+    def render(self, cameras: Sequence[CameraView]
+               ) -> tuple[list[dict[str, np.ndarray]], list[str]]:
+        """TinyRenderer, one getCameraImage per camera (render.py)."""
+        return perception.render(self, cameras)
+
+    def raycast(self, origins: np.ndarray, directions: np.ndarray, max_length: float
+                ) -> RayHits:
+        """rayTestBatch, hits on spawned primitives made exact (rays.py)."""
+        return perception.raycast(self, origins, directions, max_length)
+
+    def contacts(self, names: Sequence[str] | None) -> ContactPoints:
+        """getContactPoints of the last step, normals from the first entity to the second."""
+        return perception.contacts(self, names)
+
+    # -- snapshots (snapshot/) ------------------------------------------------
     @engine_call
     def snapshot(self, *, canonical: bool = True) -> dict[str, Any]:
         """The world as plain data: every body's records, model texts, articulations, targets,
@@ -371,13 +424,13 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
         differs from the one it would have had, as after ``reset_dynamics``); with
         ``canonical`` False this world is left untouched, and the restore goes on bit for
         bit as this world would after ``reset_dynamics`` now."""
-        return self._snapshot(canonical)
+        return snapshots.snapshot(self, canonical)
 
     @engine_call
     def restore(self, data: dict[str, Any]) -> None:
         """Make this fresh engine the world ``data`` describes (checked whole first:
         InvalidArgumentError naming the field for anything malformed)."""
-        self._restore(data)
+        snapshots.restore(self, data)
 
     def entity_names(self) -> list[str]:
         return [*self.bodies, *self.robots.links]
@@ -386,7 +439,7 @@ class PybulletEngine(Parameters, Rebuilding, Articulated, Snapshots, Perception,
     def clone(self) -> PybulletEngine:
         """As ``restore(snapshot(canonical=False))`` into a fresh engine, without the plain
         data between them (snapshot.py); this world is untouched."""
-        return self._clone_into(type(self)())
+        return snapshots.clone_into(self, type(self)())
 
     # -- life -----------------------------------------------------------------------------
     def close(self) -> None:

@@ -1,7 +1,8 @@
 """The PyBullet engine's parameters: name, default, unit, meaning and check of each, and the
 setPhysicsEngineParameter keyword of those that are world settings.
 
-``Parameters``, a part of the engine, hands values to PyBullet and to the bodies they reach.
+``configure_world`` and ``apply``, functions of the engine, hand values to PyBullet and to the
+bodies they reach.
 
 The contact defaults are PyBullet's own (restitution 0, friction 0.5, contacts made from
 Bullet's 0.02 m, cone friction): a world starts as PyBullet sets it up. The Galton board
@@ -10,15 +11,14 @@ carries its own calibrated materials (docs/physics/pybullet.md, client/boards).
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from galton.daemon.engines.params import ParamSpec, flag, number, shared, with_sources
 from galton.daemon.engines.pybullet.bodies import margin_for
 
 if TYPE_CHECKING:
-    from pybullet_utils.bullet_client import BulletClient
 
+    from galton.daemon.engines.pybullet.engine import PybulletEngine
     from galton.daemon.engines.pybullet.rebuild import Body
 
 # Where each default comes from (docs/PHYSICS.md tables them): PyBullet's own (3.2.7,
@@ -108,58 +108,52 @@ def default_keys(static: bool) -> tuple[str, str]:
     return "default_friction", "default_restitution"
 
 
-class Parameters:
-    """The engine's part that applies parameters: world settings and per-body values."""
+def configure_world(engine: PybulletEngine) -> None:
+    """Every setting of a fresh (or reset) world: resetSimulation forgets them all."""
+    # The file cache keys on file names and keeps every file read: with temporary files
+    # it only grows, and with a rewritten file it serves the old text.
+    engine._bc.setPhysicsEngineParameter(enableFileCaching=0)
+    apply(engine, engine._values)
 
-    # What it uses of the engine it is a part of (PybulletEngine sets them).
-    _bc: BulletClient
-    bodies: dict[str, Body]
-    _values: dict[str, Any]
-    _change: Callable[..., Any]
 
-    def _configure_world(self) -> None:
-        """Every setting of a fresh (or reset) world: resetSimulation forgets them all."""
-        # The file cache keys on file names and keeps every file read: with temporary files
-        # it only grows, and with a rewritten file it serves the old text.
-        self._bc.setPhysicsEngineParameter(enableFileCaching=0)
-        self._apply(self._values)
-
-    def _apply(self, values: dict[str, Any]) -> None:
-        """Hand changed values to PyBullet: world settings, then the bodies they reach."""
-        world = {WORLD_PARAMS[k]: int(v) if isinstance(v, bool) else v
-                 for k, v in values.items() if k in WORLD_PARAMS}
-        if world:
-            self._bc.setPhysicsEngineParameter(**world)
-        if "gravity" in values:
-            self._bc.setGravity(*values["gravity"])
-        bodies = list(self.bodies.values())
-        if values.keys() & SURFACE_DEFAULTS:
-            self._follow_surface_defaults(bodies, values)
-        if "pybullet.ccd_swept_sphere_radius" in values:
-            radius = values["pybullet.ccd_swept_sphere_radius"]
-            for body in bodies:
-                if not body.static:
-                    self._change(body.uid, -1, ccdSweptSphereRadius=radius)
-        if "pybullet.collision_margin" in values:
-            done: set[tuple[str, tuple[float, ...]]] = set()
-            for body in bodies:  # the shape is shared: one body per shape sets it for all
-                if (body.shape, body.size) not in done:
-                    done.add((body.shape, body.size))
-                    self._set_margin(body.uid, body.shape, body.size)
-
-    def _follow_surface_defaults(self, bodies: list[Body],
-                                 values: dict[str, Any]) -> None:
-        """Bodies spawned without a friction or restitution take their kind's new default."""
+def apply(engine: PybulletEngine, values: dict[str, Any]) -> None:
+    """Hand changed values to PyBullet: world settings, then the bodies they reach."""
+    world = {WORLD_PARAMS[k]: int(v) if isinstance(v, bool) else v
+             for k, v in values.items() if k in WORLD_PARAMS}
+    if world:
+        engine._bc.setPhysicsEngineParameter(**world)
+    if "gravity" in values:
+        engine._bc.setGravity(*values["gravity"])
+    bodies = list(engine.bodies.values())
+    if values.keys() & SURFACE_DEFAULTS:
+        follow_surface_defaults(engine, bodies, values)
+    if "pybullet.ccd_swept_sphere_radius" in values:
+        radius = values["pybullet.ccd_swept_sphere_radius"]
         for body in bodies:
-            friction_key, restitution_key = default_keys(body.static)
-            if body.follows_friction and friction_key in values:
-                body.friction = values[friction_key]
-                self._change(body.uid, -1, lateralFriction=body.friction)
-            if body.follows_restitution and restitution_key in values:
-                body.restitution = values[restitution_key]
-                self._change(body.uid, -1, restitution=body.restitution)
+            if not body.static:
+                engine._change(body.uid, -1, ccdSweptSphereRadius=radius)
+    if "pybullet.collision_margin" in values:
+        done: set[tuple[str, tuple[float, ...]]] = set()
+        for body in bodies:  # the shape is shared: one body per shape sets it for all
+            if (body.shape, body.size) not in done:
+                done.add((body.shape, body.size))
+                set_margin(engine, body.uid, body.shape, body.size)
 
-    def _set_margin(self, uid: int, shape: str, size: tuple[float, ...]) -> None:
-        margin = margin_for(shape, size, self._values["pybullet.collision_margin"])
-        if margin is not None:
-            self._change(uid, -1, collisionMargin=margin)
+
+def follow_surface_defaults(engine: PybulletEngine, bodies: list[Body],
+                            values: dict[str, Any]) -> None:
+    """Bodies spawned without a friction or restitution take their kind's new default."""
+    for body in bodies:
+        friction_key, restitution_key = default_keys(body.static)
+        if body.follows_friction and friction_key in values:
+            body.friction = values[friction_key]
+            engine._change(body.uid, -1, lateralFriction=body.friction)
+        if body.follows_restitution and restitution_key in values:
+            body.restitution = values[restitution_key]
+            engine._change(body.uid, -1, restitution=body.restitution)
+
+
+def set_margin(engine: PybulletEngine, uid: int, shape: str, size: tuple[float, ...]) -> None:
+    margin = margin_for(shape, size, engine._values["pybullet.collision_margin"])
+    if margin is not None:
+        engine._change(uid, -1, collisionMargin=margin)

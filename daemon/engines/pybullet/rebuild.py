@@ -58,9 +58,8 @@ from galton.protocol import (
 
 if TYPE_CHECKING:
     from collections.abc import Callable
-    from typing import Any
 
-    from galton.daemon.engines.pybullet.bodies import BodyMaker
+    from galton.daemon.engines.pybullet.engine import PybulletEngine
     from galton.daemon.engines.pybullet.frames import Offset
     from galton.daemon.engines.pybullet.robots import JointStates, Robots
 
@@ -267,110 +266,91 @@ def merged(edits: BodyProperties, props: BodyProperties) -> BodyProperties:
         if (value := getattr(props, key)) is not None})
 
 
-class Rebuilding:
-    """The engine's part that rebuilds its world."""
+def rebuild(engine: PybulletEngine) -> None:
+    """resetSimulation, then every body made again, in the order it was first made, as
+    the protocol sees it (see the module's docstring)."""
+    make_again(engine, read_plan(engine))
 
-    # What it uses of the engine it is a part of (PybulletEngine sets and defines them).
-    _bc: BulletClient
-    bodies: dict[str, Body]
-    given: dict[str, list[float]]
-    held: dict[str, Held]
-    _maker: BodyMaker
-    reset_pose: Callable[..., Any]
-    reset_velocity: Callable[..., Any]
-    robots: Robots  # models' joints, targets and wrenches: kept, by name, across a rebuild
-    frames: dict[str, Offset]
-    rebuilds: int
 
-    if TYPE_CHECKING:
-        def clear(self) -> None: ...
-        def _spawn_group(self, group: BodyGroup, made: list[int], batch: int,
-                         redo: Redo | None = None) -> dict[str, Body]: ...
-        def _edit_spawned(self, body: Body, props: BodyProperties) -> None: ...
-        def _edit_model(self, body: Body, props: BodyProperties) -> None: ...
-        def _adopt_model_body(self, uid: int, name: str, batch: int) -> Body: ...
-        def _uid_of(self, name: str) -> int: ...
+def read_plan(engine: PybulletEngine) -> Plan:
+    """What a rebuild makes the world again from, read from the world as it is."""
+    kept = dict(engine.bodies)
+    return Plan(kept, read_states(engine._bc, kept, engine.given, engine.held),
+                set(engine.given), engine.robots, engine.frames,
+                engine.robots.snapshot(engine._bc, engine._uid_of))
 
-    def _rebuild(self) -> None:
-        """resetSimulation, then every body made again, in the order it was first made, as
-        the protocol sees it (see the module's docstring)."""
-        self._make_again(self._plan())
 
-    def _plan(self) -> Plan:
-        """What a rebuild makes the world again from, read from the world as it is."""
-        kept = dict(self.bodies)
-        return Plan(kept, read_states(self._bc, kept, self.given, self.held),
-                    set(self.given), self.robots, self.frames,
-                    self.robots.snapshot(self._bc, self._uid_of))
+def make_again(engine: PybulletEngine, plan: Plan, check: Callable[[], None] | None = None) -> None:
+    """A new world holding what ``plan`` describes: the same calls, in the same order,
+    whether the plan was read from this world or from a snapshot of another (whose
+    ``check`` then looks at the bodies made before joints are set)."""
+    kept, states = plan.bodies, plan.states
+    engine.clear()
+    for names in batches(kept):
+        if kept[names[0]].model is not None:
+            reload(engine, names, kept, states)
+        else:
+            remake(engine, names, kept, states)
+    if check is not None:
+        check()
+    engine.robots, engine.frames = plan.robots, plan.frames
+    plan.robots.put_back(engine._bc, engine._uid_of, plan.joints)
+    engine.held = settle(engine._bc, engine.bodies, states, plan.exact)
+    engine.given = {name: states[name][0] for name in plan.exact}
+    engine.rebuilds += 1
 
-    def _make_again(self, plan: Plan, check: Callable[[], None] | None = None) -> None:
-        """A new world holding what ``plan`` describes: the same calls, in the same order,
-        whether the plan was read from this world or from a snapshot of another (whose
-        ``check`` then looks at the bodies made before joints are set)."""
-        kept, states = plan.bodies, plan.states
-        self.clear()
-        for names in batches(kept):
-            if kept[names[0]].model is not None:
-                self._reload(names, kept, states)
-            else:
-                self._remake(names, kept, states)
-        if check is not None:
-            check()
-        self.robots, self.frames = plan.robots, plan.frames
-        plan.robots.put_back(self._bc, self._uid_of, plan.joints)
-        self.held = settle(self._bc, self.bodies, states, plan.exact)
-        self.given = {name: states[name][0] for name in plan.exact}
-        self.rebuilds += 1
 
-    def _remake(self, names: list[str], kept: dict[str, Body],
-                states: dict[str, State]) -> None:
-        """A spawn group's remaining bodies made again as spawn first made them, then given
-        what update or a default has changed since."""
-        group, redo = as_group(names, kept, states)
-        bodies = self._spawn_group(group, [], kept[names[0]].batch, redo)
-        for name, body in bodies.items():
-            old = kept[name]
-            fixes = changes(old, body)
-            if fixes is not None:
-                self._edit_spawned(body, fixes)
-            body.follows_friction = old.follows_friction
-            body.follows_restitution = old.follows_restitution
-            body.turned, body.rgba = old.turned, old.rgba
-        self.bodies.update(bodies)
+def remake(engine: PybulletEngine, names: list[str], kept: dict[str, Body],
+           states: dict[str, State]) -> None:
+    """A spawn group's remaining bodies made again as spawn first made them, then given
+    what update or a default has changed since."""
+    group, redo = as_group(names, kept, states)
+    bodies = engine._spawn_group(group, [], kept[names[0]].batch, redo)
+    for name, body in bodies.items():
+        old = kept[name]
+        fixes = changes(old, body)
+        if fixes is not None:
+            engine._edit_spawned(body, fixes)
+        body.follows_friction = old.follows_friction
+        body.follows_restitution = old.follows_restitution
+        body.turned, body.rgba = old.turned, old.rgba
+    engine.bodies.update(bodies)
 
-    def _reload(self, names: list[str], kept: dict[str, Body],
-                states: dict[str, State]) -> None:
-        """A model loaded again from its text, the bodies
-        deleted since its load removed again, the others restored."""
-        models = {name: model for name in names if (model := kept[name].model) is not None}
-        first = models[names[0]]
-        try:
-            ids = load_bodies(self._bc, self._maker, first.fmt, first.text, None,
-                              first.fixed_base)
-        except InvalidArgumentError as exc:  # its meshes gone?
-            raise OperationFailedError(f"a model could not be loaded again: {exc}") from exc
-        wanted = {model.index: name for name, model in models.items()}
-        for index, uid in enumerate(ids):
-            name = wanted.get(index)
-            if name is None:
-                self._maker.remove([uid])
-            else:
-                self._restore_model_body(uid, name, kept[name].batch, models[name],
-                                         states[name])
 
-    def _restore_model_body(self, uid: int, name: str, batch: int,
-                            model: Model, state: State) -> None:
-        """A body loaded again, given what update changed and its state; its joints are
-        back as loaded, at rest. A state as loaded is not set again: a pose read back and
-        set makes a matrix a unit in the last place off the loaded one."""
-        body = self._adopt_model_body(uid, name, batch)
-        if len(model.links) != body.links + 1:  # only a snapshot from elsewhere can differ
-            raise InvalidArgumentError(f"the records of model body {name!r} list "
-                                       f"{len(model.links)} links; its text makes "
-                                       f"{body.links + 1}")
-        body.model = model
-        self._edit_model(body, model.edits)
-        if state != model.loaded:
-            pose, twist = state
-            self.reset_pose(uid, pose[:3], pose[3:])
-            self.reset_velocity(uid, twist[:3], twist[3:])
+def reload(engine: PybulletEngine, names: list[str], kept: dict[str, Body],
+           states: dict[str, State]) -> None:
+    """A model loaded again from its text, the bodies
+    deleted since its load removed again, the others restored."""
+    models = {name: model for name in names if (model := kept[name].model) is not None}
+    first = models[names[0]]
+    try:
+        ids = load_bodies(engine._bc, engine._maker, first.fmt, first.text, None,
+                          first.fixed_base)
+    except InvalidArgumentError as exc:  # its meshes gone?
+        raise OperationFailedError(f"a model could not be loaded again: {exc}") from exc
+    wanted = {model.index: name for name, model in models.items()}
+    for index, uid in enumerate(ids):
+        name = wanted.get(index)
+        if name is None:
+            engine._maker.remove([uid])
+        else:
+            restore_model_body(engine, uid, name, kept[name].batch, models[name],
+                                     states[name])
+
+
+def restore_model_body(engine: PybulletEngine, uid: int, name: str, batch: int, model: Model,
+                       state: State) -> None:
+    """A body loaded again, given what update changed and its state; its joints are
+    back as loaded, at rest. A state as loaded is not set again: a pose read back and
+    set makes a matrix a unit in the last place off the loaded one."""
+    body = engine._adopt_model_body(uid, name, batch)
+    if len(model.links) != body.links + 1:  # only a snapshot from elsewhere can differ
+        raise InvalidArgumentError(f"the records of model body {name!r} list "
+                                   f"{len(model.links)} links; its text makes "
+                                   f"{body.links + 1}")
+    body.model = model
+    engine._edit_model(body, model.edits)
+    if state != model.loaded:
+        pose, twist = state
+        engine.reset_pose(uid, pose[:3], pose[3:])
+        engine.reset_velocity(uid, twist[:3], twist[3:])

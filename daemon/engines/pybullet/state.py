@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from galton.daemon.engines.pybullet import rebuild
+from galton.daemon.engines.pybullet import articulated, rebuild
 from galton.daemon.engines.pybullet.frames import com_to_frame
 from galton.protocol.vocabulary import POSE_WIDTH, TWIST_WIDTH
 
@@ -49,7 +49,7 @@ def states_with_links(engine: PybulletEngine, names: Sequence[str]
     poses, twists = np.zeros((len(names), POSE_WIDTH)), np.zeros((len(names), TWIST_WIDTH))
     if others:
         poses[others], twists[others] = engine.get_states([names[k] for k in others])
-    engine.link_states(names, rows, poses, twists)
+    articulated.put_link_states(engine, names, rows, poses, twists)
     return poses, twists
 
 
@@ -69,7 +69,7 @@ def set_states(engine: PybulletEngine, names: Sequence[str], poses: np.ndarray |
     if engine.held:
         rebuild.release_held(engine.held, names, poses is not None, twists is not None)
     if engine.frames and any(name in engine.frames for name in names):
-        poses, twists = engine.to_centres(names, poses, twists)
+        poses, twists = articulated.to_centres(engine, names, poses, twists)
     if poses is not None:
         rows = np.asarray(poses, dtype=float).tolist()
         if twists is None:
@@ -87,7 +87,7 @@ def state_within(engine: PybulletEngine, max_position: float, max_speed: float) 
     hundreds of pins cost nothing here. Bullet itself reports no divergence: a ball at
     x = 4e299 is finite, and falls on there as if nothing were wrong."""
     moving = [b.uid for b in engine.bodies.values() if not b.static]
-    if not engine.joints_finite():
+    if not articulated.joints_finite(engine):
         return False
     if not moving:
         return True

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import ast
 import importlib
+import inspect
 from pathlib import Path
 
 import pytest
@@ -126,6 +127,27 @@ def test_no_engine_writes_its_capabilities_or_a_feature_list(name: str) -> None:
                     for t in n.targets if isinstance(t, ast.Name)}
         assert not {"capabilities", "features"} & defined, path
         assert "FEATURES" not in assigned, path
+
+
+@pytest.mark.parametrize("name", sorted(ENGINE_CLASSES))
+def test_every_engine_class_is_composed_the_same_way(name: str) -> None:
+    """One composition (docs/ARCHITECTURE.md, "How to add an engine"): the class is
+    ``Engine``'s subclass alone, no mixin, the only class of its engine.py, and every method
+    it has beyond the base's is written there; its parts are functions of the engine (or
+    objects it holds) in the package's modules."""
+    cls = engine_class(name)
+    assert cls.__bases__ == (Engine,), cls.__bases__
+    assert cls.__mro__[1:] == Engine.__mro__
+    source = ENGINES_DIR / name / "engine.py"
+    assert Path(inspect.getsourcefile(cls) or "") == source
+    classes = [n.name for n in ast.parse(source.read_text()).body if isinstance(n, ast.ClassDef)]
+    assert classes == [cls.__name__]
+    for attr, value in vars(cls).items():
+        function = value.fget if isinstance(value, property) else getattr(
+            value, "__func__", value)
+        if inspect.isfunction(function):
+            written = inspect.unwrap(function)
+            assert Path(inspect.getsourcefile(written) or "") == source, (attr, written)
 
 
 @pytest.mark.parametrize("name", sorted(ENGINE_CLASSES))

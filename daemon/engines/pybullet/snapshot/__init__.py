@@ -23,94 +23,78 @@ import copy
 import dataclasses
 import importlib.metadata
 import itertools
-from typing import TYPE_CHECKING, Any, TypeVar
+from typing import TYPE_CHECKING, Any
 
-from pybullet_utils.bullet_client import BulletClient
-
-from galton.daemon.engines.pybullet.frames import Offset, base_offset
+from galton.daemon.engines.pybullet import rebuild
+from galton.daemon.engines.pybullet.frames import base_offset
 from galton.daemon.engines.pybullet.joints import SCALAR
-from galton.daemon.engines.pybullet.rebuild import Body, Plan
+from galton.daemon.engines.pybullet.rebuild import Plan
 from galton.daemon.engines.pybullet.snapshot import format as snapformat
 from galton.protocol import InvalidArgumentError, OperationFailedError
 
 if TYPE_CHECKING:
-    from collections.abc import Callable
-
-    from galton.daemon.engines.pybullet.robots import Robots
-
-_Fresh = TypeVar("_Fresh", bound="Snapshots")
+    from galton.daemon.engines.pybullet.engine import PybulletEngine
 
 
-class Snapshots:
-    """The engine's part that takes and restores snapshots (mixed into PybulletEngine)."""
+def snapshot(engine: PybulletEngine, canonical: bool) -> dict[str, Any]:
+    plan = rebuild.read_plan(engine)
+    data = snapformat.encode(plan, engine._values, next_batch(engine),
+                             importlib.metadata.version("pybullet"))
+    if canonical and engine.bodies:
+        rebuild.make_again(engine, plan)
+    return data
 
-    _bc: BulletClient
-    bodies: dict[str, Body]
-    _values: dict[str, Any]
-    _batches: itertools.count[int]
-    robots: Robots
-    frames: dict[str, Offset]
 
-    if TYPE_CHECKING:
-        def _plan(self) -> Plan: ...
-        def _make_again(self, plan: Plan, check: Callable[[], None] | None = None) -> None: ...
-        def close(self) -> None: ...
+def restore(engine: PybulletEngine, data: dict[str, Any]) -> None:
+    restored = snapformat.decode(data)
+    engine._values = restored.params
+    engine._batches = itertools.count(restored.next_batch)
+    plan = restored.plan
+    try:
+        rebuild.make_again(engine, plan, lambda: check_made(engine, plan))
+    except OperationFailedError as exc:  # a model whose text or meshes fail here
+        raise InvalidArgumentError(f"the snapshot cannot be restored here: {exc}") from exc
 
-    def _snapshot(self, canonical: bool) -> dict[str, Any]:
-        plan = self._plan()
-        data = snapformat.encode(plan, self._values, self._next_batch(),
-                                 importlib.metadata.version("pybullet"))
-        if canonical and self.bodies:
-            self._make_again(plan)
-        return data
 
-    def _restore(self, data: dict[str, Any]) -> None:
-        restored = snapformat.decode(data)
-        self._values = restored.params
-        self._batches = itertools.count(restored.next_batch)
-        plan = restored.plan
-        try:
-            self._make_again(plan, lambda: self._check_made(plan))
-        except OperationFailedError as exc:  # a model whose text or meshes fail here
-            raise InvalidArgumentError(f"the snapshot cannot be restored here: {exc}") from exc
+def clone_into(engine: PybulletEngine, fresh: PybulletEngine) -> PybulletEngine:
+    """Make a fresh engine this world as ``restore(snapshot(canonical=False))`` would,
+    from the plan itself (closed again if that fails); this world is untouched."""
+    try:
+        fresh._values = dict(engine._values)
+        fresh._batches = itertools.count(next_batch(engine))
+        rebuild.make_again(fresh, detached(rebuild.read_plan(engine)))
+    except BaseException:
+        fresh.close()
+        raise
+    return fresh
 
-    def _clone_into(self, fresh: _Fresh) -> _Fresh:
-        """Make a fresh engine this world as ``restore(snapshot(canonical=False))`` would,
-        from the plan itself (closed again if that fails); this world is untouched."""
-        try:
-            fresh._values = dict(self._values)
-            fresh._batches = itertools.count(self._next_batch())
-            fresh._make_again(detached(self._plan()))
-        except BaseException:
-            fresh.close()
-            raise
-        return fresh
 
-    def _next_batch(self) -> int:
-        """The number the next spawn group or model load takes (the counter keeps it)."""
-        number = next(self._batches)
-        self._batches = itertools.count(number)
-        return number
+def next_batch(engine: PybulletEngine) -> int:
+    """The number the next spawn group or model load takes (the counter keeps it)."""
+    number = next(engine._batches)
+    engine._batches = itertools.count(number)
+    return number
 
-    def _check_made(self, plan: Plan) -> None:
-        """After a snapshot's bodies are made, before its joints are set: every body is
-        there, and each articulation fits the model its text made; the roots' inertial
-        offsets are read from the bodies made (as a load reads them)."""
-        missing = [name for name in plan.bodies if name not in self.bodies]
-        if missing:
-            raise InvalidArgumentError(f"the snapshot's model body {missing[0]!r} is not "
-                                       "among the bodies its model text makes")
-        for root, model in plan.robots.models.items():
-            uid = self.bodies[root].uid
-            joints = self.bodies[root].links
-            if len(model.links) != joints or any(
-                    self._bc.getJointInfo(uid, j)[2] not in SCALAR for j in model.indices):
-                raise InvalidArgumentError(f"the snapshot's joints of model {root!r} do not "
-                                           "fit the model its text makes")
-        for name, body in self.bodies.items():
-            if body.model is not None and (
-                    offset := base_offset(self._bc, body.uid)) is not None:
-                plan.frames[name] = offset
+
+def check_made(engine: PybulletEngine, plan: Plan) -> None:
+    """After a snapshot's bodies are made, before its joints are set: every body is
+    there, and each articulation fits the model its text made; the roots' inertial
+    offsets are read from the bodies made (as a load reads them)."""
+    missing = [name for name in plan.bodies if name not in engine.bodies]
+    if missing:
+        raise InvalidArgumentError(f"the snapshot's model body {missing[0]!r} is not "
+                                   "among the bodies its model text makes")
+    for root, model in plan.robots.models.items():
+        uid = engine.bodies[root].uid
+        joints = engine.bodies[root].links
+        if len(model.links) != joints or any(
+                engine._bc.getJointInfo(uid, j)[2] not in SCALAR for j in model.indices):
+            raise InvalidArgumentError(f"the snapshot's joints of model {root!r} do not "
+                                       "fit the model its text makes")
+    for name, body in engine.bodies.items():
+        if body.model is not None and (
+                offset := base_offset(engine._bc, body.uid)) is not None:
+            plan.frames[name] = offset
 
 
 def detached(plan: Plan) -> Plan:
