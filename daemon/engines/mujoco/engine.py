@@ -413,11 +413,11 @@ class MujocoEngine(Engine):
         return rows
 
     def shapes(self, names: Sequence[str]) -> list[list[Shape]]:
-        """Each body's colliding geoms in its frame (geoms.py)."""
+        """Each body's colliding geoms in its frame (shapes.py)."""
         return colliders.body_shapes(self.model, self.body_ids(names).tolist())
 
     def shape_meshes(self, names: Sequence[str]) -> list[dict[int, ShapeMesh]]:
-        """The triangles of each body's mesh geoms (geoms.py)."""
+        """The triangles of each body's mesh geoms (shapes.py)."""
         return colliders.body_meshes(self.model, self.body_ids(names).tolist())
 
     def close(self) -> None:
