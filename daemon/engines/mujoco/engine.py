@@ -55,6 +55,7 @@ from galton.daemon.engines.base import (
     Shape,
     ShapeMesh,
 )
+from galton.daemon.engines.geometry import check_group
 from galton.daemon.engines.mujoco import clone as cloning
 from galton.daemon.engines.mujoco import compiled as compiling
 from galton.daemon.engines.mujoco import fast_state, models, removal, teleport, wrench
@@ -253,6 +254,8 @@ class MujocoEngine(Engine):
 
     # -- Engine: create & delete ---------------------------------------------------------
     def spawn(self, groups: Sequence[BodyGroup]) -> None:
+        for group in groups:
+            check_group(group)
         observing.freeze(self)
         self.own()
         adding.spawn(self, groups)
