@@ -216,7 +216,3 @@ def security_settings(users: Mapping[str, User] | None, tls: TlsFiles | None,
     if uses_passwords(users):
         settings[USRPWD] = str(write_private_file(dictionary_text(users)))
     return settings
-
-
-def has_tls_endpoint(endpoints: list[str]) -> bool:
-    return any(endpoint.startswith(TLS_SCHEME) for endpoint in endpoints)

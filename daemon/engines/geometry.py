@@ -6,10 +6,19 @@ from __future__ import annotations
 
 import math
 
-from galton.protocol import BodyGroup
+from galton.protocol import BodyGroup, InvalidArgumentError
 from galton.protocol import mesh as mesh_wire
+from galton.protocol.vocabulary import BODY_SHAPES
 
 DENSITY = 1000.0  # kg/m³: the protocol's mass for a dynamic body spawned with mass None
+
+
+def check_group(group: BodyGroup) -> None:
+    """Refuse a shape the protocol does not know, and a plane that would move."""
+    if group.shape not in BODY_SHAPES:
+        raise InvalidArgumentError(f"unknown shape {group.shape!r}")
+    if group.shape == "plane" and not group.static:
+        raise InvalidArgumentError("a plane must be static")
 
 
 def volume(shape: str, size: tuple[float, ...]) -> float:

@@ -16,7 +16,6 @@ import numpy as np
 from galton.daemon.engines.geometry import volume as primitive_volume
 
 DEFAULT_DENSITY = 1000.0  # kg/m³, MuJoCo's
-PRIMITIVES = ("sphere", "box", "capsule", "cylinder", "ellipsoid")
 Attrs = dict[str, str]
 Classes = dict[str, dict[str, Attrs]]  # default class -> tag -> attributes
 

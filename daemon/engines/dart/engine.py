@@ -41,6 +41,7 @@ from galton.daemon.engines.dart.mesh_files import MeshFiles
 from galton.daemon.engines.dart.models import MODEL_FORMATS
 from galton.daemon.engines.dart.params import PARAMS
 from galton.daemon.engines.dart.shapes import node_meshes, node_shapes
+from galton.daemon.engines.geometry import check_group
 from galton.daemon.engines.params import check_updates
 from galton.protocol import (
     BodyGroup,
@@ -117,7 +118,7 @@ class DartEngine(Engine):
     def spawn(self, groups: Sequence[BodyGroup]) -> None:
         self._check_new([n for g in groups for n in g.names])
         for group in groups:
-            spawning.check_group(group)
+            check_group(group)
         for group in groups:
             if group.names:
                 self._spawn_group(group)

@@ -17,8 +17,7 @@ import numpy as np
 
 from galton.daemon.engines.dart.params import PARAMS
 from galton.daemon.engines.geometry import default_mass
-from galton.protocol import BodyGroup, InvalidArgumentError
-from galton.protocol.vocabulary import BODY_SHAPES
+from galton.protocol import BodyGroup
 
 SPAWNED, MODEL = "b:", "m:"  # skeleton name prefixes: unique, whatever entities are named
 
@@ -60,16 +59,6 @@ def make_shape(shape: str, size: tuple[float, ...]) -> Any:
     if shape == "capsule":
         return dart.dynamics.CapsuleShape(size[0], 2.0 * size[1])
     return dart.dynamics.PlaneShape(np.array([0.0, 0.0, 1.0]), 0.0)
-
-
-
-
-def check_group(group: BodyGroup) -> None:
-    """Refuse a shape the engine does not know, and a plane that would move."""
-    if group.shape not in BODY_SHAPES:
-        raise InvalidArgumentError(f"unknown shape {group.shape!r}")
-    if group.shape == "plane" and not group.static:
-        raise InvalidArgumentError("a plane must be static")
 
 
 def group_values(group: BodyGroup, values: dict[str, Any]) -> tuple[float, float, float]:

@@ -55,6 +55,7 @@ from galton.daemon.engines.base import (
     Shape,
     ShapeMesh,
 )
+from galton.daemon.engines.geometry import check_group
 from galton.daemon.engines.mujoco import clone as cloning
 from galton.daemon.engines.mujoco import compiled as compiling
 from galton.daemon.engines.mujoco import fast_state, models, removal, teleport, wrench
@@ -253,6 +254,8 @@ class MujocoEngine(Engine):
 
     # -- Engine: create & delete ---------------------------------------------------------
     def spawn(self, groups: Sequence[BodyGroup]) -> None:
+        for group in groups:
+            check_group(group)
         observing.freeze(self)
         self.own()
         adding.spawn(self, groups)
@@ -413,11 +416,11 @@ class MujocoEngine(Engine):
         return rows
 
     def shapes(self, names: Sequence[str]) -> list[list[Shape]]:
-        """Each body's colliding geoms in its frame (geoms.py)."""
+        """Each body's colliding geoms in its frame (shapes.py)."""
         return colliders.body_shapes(self.model, self.body_ids(names).tolist())
 
     def shape_meshes(self, names: Sequence[str]) -> list[dict[int, ShapeMesh]]:
-        """The triangles of each body's mesh geoms (geoms.py)."""
+        """The triangles of each body's mesh geoms (shapes.py)."""
         return colliders.body_meshes(self.model, self.body_ids(names).tolist())
 
     def close(self) -> None:

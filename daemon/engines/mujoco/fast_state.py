@@ -1,5 +1,5 @@
 """A MuJoCo world's state kept in memory, for snapshots and restores of an unchanged
-structure (daemon/world/scene.py ``World.save_state``): the whole MjData (``mj_copyData``:
+structure (``Engine.save_state``, daemon/world/states.py): the whole MjData (``mj_copyData``:
 contacts, warm starts, sleep records, the lot, so the world goes on bit for bit as from the
 moment it was kept), the few model arrays the engine edits between compiles (joint targets'
 gains and damping, the sleep guard's sleep policies) and the engine's own records.

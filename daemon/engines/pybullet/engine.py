@@ -54,6 +54,7 @@ from galton.daemon.engines.base import (
     ShapeMesh,
     native_output_silenced,
 )
+from galton.daemon.engines.geometry import check_group
 from galton.daemon.engines.params import check_updates
 from galton.daemon.engines.pybullet import articulated, perception, rebuild, shapes
 from galton.daemon.engines.pybullet import params as parameters
@@ -166,7 +167,7 @@ class PybulletEngine(Engine):
         """The group's bodies in (at most) one createMultiBody call, all turned like the
         first, then each one's own orientation where it differs, velocity and dynamics. A
         rebuild (``redo``) makes them as they were first made."""
-        spawning.check_group(group)
+        check_group(group)
         size = tuple(float(s) for s in group.size)
         poses = np.asarray(group.poses, dtype=float).reshape(-1, POSE_WIDTH).tolist()
         if redo is None:

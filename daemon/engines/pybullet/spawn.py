@@ -16,17 +16,8 @@ from galton.daemon.engines.pybullet import rebuild
 from galton.daemon.engines.pybullet.bodies import as_rgba
 from galton.daemon.engines.pybullet.params import default_keys
 from galton.daemon.engines.pybullet.rebuild import Body
-from galton.protocol import BodyGroup, InvalidArgumentError
+from galton.protocol import BodyGroup
 from galton.protocol import mesh as mesh_wire
-from galton.protocol.vocabulary import BODY_SHAPES
-
-
-def check_group(group: BodyGroup) -> None:
-    """Refuse a shape PyBullet is not given here, and a plane that would move."""
-    if group.shape not in BODY_SHAPES:
-        raise InvalidArgumentError(f"unknown shape {group.shape!r}")
-    if group.shape == "plane" and not group.static:
-        raise InvalidArgumentError("a plane must be static")
 
 
 def first_redo(poses: list[list[float]]) -> rebuild.Redo:
