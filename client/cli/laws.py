@@ -15,6 +15,7 @@ import typer
 from rich.table import Table
 
 from galton.client.cli.common import JsonOpt, Target, console, emit, run_guarded
+from galton.protocol import GaltonError
 
 if TYPE_CHECKING:
     from galton.analysis.laws import LawResults
@@ -69,9 +70,14 @@ def laws(
     report.md and plots. With no --connect a daemon is started here."""
     from galton.analysis.laws_report import write_law_outputs
     from galton.client.laws import run_laws
+    from galton.client.laws.runner import choose
 
     wanted = _csv(engines)
     given = _params(params)
+    try:  # a usage error, as a bad --engines or --params is: exit 2, before any daemon
+        choose(_csv(only))
+    except GaltonError as exc:
+        raise typer.BadParameter(str(exc), param_hint="--only") from None
 
     def run() -> LawResults:
         with _daemon(ctx.obj, wanted) as sim:
