@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any
 
 from galton.client.cli.plain import error_line, into_pipe, plain_table, status_rows, status_title
 from galton.protocol import RESET_SCOPES, GaltonError
+from galton.protocol.vocabulary import MAX_RTF
 
 if TYPE_CHECKING:
     from galton.client.transport.credentials import Credentials
@@ -134,7 +135,7 @@ def _rtf(text: str) -> float:
         rtf = float(text)
     except ValueError:
         raise NotLeanError(text) from None
-    if not math.isfinite(rtf) or rtf < 0:
+    if not math.isfinite(rtf) or not 0 <= rtf <= MAX_RTF:
         raise NotLeanError(text)
     return rtf
 

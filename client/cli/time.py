@@ -12,6 +12,7 @@ from galton.client.cli.common import JsonOpt, show_stamp, show_status, status_ca
 from galton.client.cli.joints import joint_states_dict, render_joint_states, show_joint_states
 from galton.client.cli.states import show_states, states_dict
 from galton.client.cli.worlds import WorldOpt, on_world
+from galton.protocol.vocabulary import MAX_RTF
 
 if TYPE_CHECKING:
     from galton.client.sdk.client import Client, JointStates, States
@@ -26,14 +27,15 @@ ReadJoints = Annotated[str | None, typer.Option(
     help=f"1-DOF joints whose states the reply carries, read after the last step, "
          f"{LIST_HELP}.")]
 Rtf = Annotated[float, typer.Argument(
-    help="Target real-time factor (0 = as fast as possible).", min=0.0, show_default=False)]
+    help="Target real-time factor (0 = as fast as possible).", min=0.0, max=MAX_RTF,
+    show_default=False)]
 
 
 @commands.command(rich_help_panel=PANEL)
 def play(ctx: typer.Context,
          rtf: Annotated[float | None, typer.Option(
              help="Target real-time factor (0 = as fast as possible; default: the current "
-                  "target).", min=0.0)] = None,
+                  "target).", min=0.0, max=MAX_RTF)] = None,
          as_json: JsonOpt = False) -> None:
     """Run the simulation continuously."""
     show_status(status_call(ctx, "play", {} if rtf is None else {"rtf": rtf}), as_json)

@@ -17,6 +17,7 @@ from typing import Any
 
 import pytest
 import typer.main
+from support.cli import run
 
 from galton.client import Client, EmbeddedDaemon
 from galton.client.cli import console, lean, time, world
@@ -132,6 +133,7 @@ LEFT = [
     ["--help"], ["status", "--help"], ["--version", "status"], ["status", "extra"],
     ["--timeout", "0", "status"], ["--timeout", "nan", "status"], ["--timeout", "x", "status"],
     ["play", "--rtf", "-1"], ["set-rtf", "-1"], ["set-rtf"], ["set-rtf", "1", "2"],
+    ["play", "--rtf", "inf"], ["set-rtf", "1e7"],
     ["reset", "--scope", "every"], ["--instance", "status"], ["status", "--rtf", "1"],
     ["--instance", "a", "--instance", "b", "status"], ["--inst", "a", "status"],
     ["--password-file", ".", "status"], ["status", "--json", "--json"], ["spawn", "cube"],
@@ -150,6 +152,13 @@ def test_the_lean_front_reads_a_line_as_typer_does(
 @pytest.mark.parametrize("argv", LEFT, ids=" ".join)
 def test_the_lean_front_leaves_help_and_doubtful_lines_to_typer(argv: list[str]) -> None:
     assert lean.parse(argv) is None
+
+
+@pytest.mark.parametrize("argv", [["play", "--rtf", "inf"], ["set-rtf", "1e7"]], ids=" ".join)
+def test_an_rtf_past_the_protocols_bound_is_a_usage_error(argv: list[str]) -> None:
+    """As a negative one is: exit 2 from typer, naming the bound, before any daemon."""
+    result = run(argv)
+    assert result.exit_code == 2 and "1000000" in result.output, result.output
 
 
 def test_the_lean_front_declares_what_the_cli_and_the_protocol_declare() -> None:
