@@ -112,11 +112,17 @@ class ZmqFront(Front):
         self.peers: list[dict[int, bytes]] = []
         self.known: list[dict[bytes, int]] = []
         # Per ROUTER: when each peer was last heard from (its last message's receive), and
-        # when the ROUTER was last read empty: a peer is silent only if, with everything
-        # sent to us read, we had not heard from it for silence_s (a physics thread held by
-        # a long request has not read the pings waiting meanwhile).
+        # the latest moment by which everything sent to us had been read (``drained``): a
+        # peer is silent only if, with everything it sent read, we had not heard from it
+        # for silence_s (a physics thread held by a long request has not read the pings
+        # waiting meanwhile). Read empty, the ROUTER is drained now; under a flood it never
+        # is, but ZeroMQ hands out its connections' messages in turn, so once a connection
+        # is read twice every connection that had a message waiting when that turn began
+        # has been read in it: the turn's start is drained (``_turn``).
         self.heard: list[dict[bytes, float]] = []
         self.drained: list[float] = []
+        self.turn_read: list[set[bytes]] = []  # per ROUTER: who was read in this turn
+        self.turn_start: list[float] = []
         self.control: list[str] = []
         self.telemetry: list[str] = []
         self.files: dict[str, tuple[int, int]] = {}  # our ipc socket files: (device, inode)
@@ -169,6 +175,8 @@ class ZmqFront(Front):
         self.known.append({})
         self.heard.append({})
         self.drained.append(0.0)
+        self.turn_read.append(set())
+        self.turn_start.append(0.0)
         bound = router.getsockopt_string(zmq.LAST_ENDPOINT)
         self.control.append(bound)
         self._own(bound)
@@ -248,6 +256,7 @@ class ZmqFront(Front):
             while True:
                 if not _has_input(router):
                     self.drained[index] = now
+                    self.turn_read[index].clear()
                     break
                 call = self._call(index, router, gone, items, now)
                 if call is not None:
@@ -290,6 +299,7 @@ class ZmqFront(Front):
             frame = _recv(router, 0, False)
             frames.append(frame.bytes)
         routing, payload = frames[:-1], frames[-1]
+        self._turn(index, frames[0], now)
         if frames[0] in self.known[index]:
             self.heard[index][frames[0]] = now  # any message counts, a malformed one too
         if len(frames) < 2 or len(frames) - 1 > MAX_FRAMES or any(
@@ -314,6 +324,18 @@ class ZmqFront(Front):
         role = (self.security.role_of(first.get("User-Id"))
                 if self.security is not None else None)
         return Call("", payload, respond, peer=peer_name(index, routing[0]), role=role)
+
+    def _turn(self, index: int, identity: bytes, now: float) -> None:
+        """Count one message of ``identity`` read from ROUTER ``index`` in ZeroMQ's turn
+        (its fair queue): a connection read again starts a new turn, and the one that ends
+        drained the ROUTER of what was waiting when it began."""
+        read = self.turn_read[index]
+        if identity in read:
+            self.drained[index] = max(self.drained[index], self.turn_start[index])
+            read.clear()
+        if not read:
+            self.turn_start[index] = now
+        read.add(identity)
 
     def _welcome_subscribers(self) -> None:
         """Publish one "hello" after any new subscription the XPUB has read: a subscriber

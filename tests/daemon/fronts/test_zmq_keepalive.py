@@ -5,8 +5,11 @@ gone, and the SDK keeps its streams' connection heard (docs/protocol.md, "ZeroMQ
 
 from __future__ import annotations
 
+import contextlib
+import threading
 import time
 from collections.abc import Iterator
+from pathlib import Path
 
 import msgpack
 import numpy as np
@@ -14,7 +17,7 @@ import pytest
 import zmq
 
 from galton.client import Client, EmbeddedDaemon
-from galton.daemon.fronts.zmq import telemetry_endpoint
+from galton.daemon.fronts.zmq import ZmqFront, telemetry_endpoint
 from galton.protocol import ResourceLimitError, pack_f64
 from galton.protocol.keys import STREAMS_CHUNK
 
@@ -131,6 +134,65 @@ def test_an_sdk_client_keeps_its_stream_past_the_silence(daemon: EmbeddedDaemon)
         context.destroy(linger=0)
 
 
+class Flood:
+    """Clients that keep the daemon's ROUTER never empty: each pipelines status requests
+    as fast as ZeroMQ takes them and reads its replies, until stopped."""
+
+    def __init__(self, context: zmq.Context, daemon: EmbeddedDaemon, clients: int) -> None:
+        self.stop = threading.Event()
+        self.answered = 0
+        self.sockets = [context.socket(zmq.DEALER) for _ in range(clients)]
+        for socket in self.sockets:
+            socket.connect(control(daemon))
+        self.threads = [threading.Thread(target=self._run, args=(s,)) for s in self.sockets]
+
+    def _run(self, socket: zmq.Socket) -> None:
+        request = msgpack.packb({"v": 1, "op": "status", "args": {}})
+        while not self.stop.is_set():
+            with contextlib.suppress(zmq.Again):
+                while True:  # as many in flight as ZeroMQ holds: never a gap
+                    socket.send(request, zmq.NOBLOCK)
+            with contextlib.suppress(zmq.Again):
+                while True:
+                    socket.recv(zmq.NOBLOCK)
+                    self.answered += 1
+
+    def __enter__(self) -> Flood:
+        for thread in self.threads:
+            thread.start()
+        return self
+
+    def __exit__(self, *_: object) -> None:
+        self.stop.set()
+        for thread in self.threads:
+            thread.join()
+
+
+def test_under_a_flood_a_silent_client_loses_its_streams_and_a_live_one_keeps_them(
+        daemon: EmbeddedDaemon) -> None:
+    """With three clients flooding, the ROUTER is never read empty; ZeroMQ's fair queue
+    still reads every waiting connection in turn, so silence is judged all the same: the
+    silent raw client's stream ends, the SDK's (its pings read in their turn) goes on."""
+    context = zmq.Context()
+    try:
+        watcher = Watcher(context, daemon)
+        silent = context.socket(zmq.DEALER)
+        silent.connect(control(daemon))
+        with Client(connect=daemon.zmq_endpoint) as sim, \
+                sim.stream_states(rate=20, timeout=DEADLINE_S) as kept, \
+                Flood(context, daemon, clients=3) as flood:
+            dropped = call(silent, "stream_states", {"rate": 5})["result"]["stream"]
+            watcher.until_ended({dropped})
+            assert watcher.ended[dropped] == "its client went"
+            until = time.monotonic() + SILENCE_S
+            while (sample := kept.next()).ended is None and time.monotonic() < until:
+                pass
+            assert sample.ended is None, sample.ended
+            assert flood.answered > 100  # the flood was one
+    finally:
+        context.destroy(linger=0)
+
+
 @pytest.mark.slow
 def test_a_long_request_holding_the_daemon_ends_no_stream(daemon: EmbeddedDaemon) -> None:
     """Silence is counted while the daemon reads: a spawn that holds the physics thread
@@ -154,3 +216,21 @@ def test_a_long_request_holding_the_daemon_ends_no_stream(daemon: EmbeddedDaemon
                 pass
             assert sample.ended is None, f"held {held:.1f} s: {sample.ended}"
             other.call("reset", {"scope": "all"})
+
+
+def test_a_turn_of_the_fair_queue_drains_what_waited_when_it_began(tmp_path: Path) -> None:
+    """Under a flood the ROUTER is never read empty; once a connection is read a second
+    time, ZeroMQ's fair queue has read every connection that had a message waiting when
+    the turn began, so the turn's start is when everything sent before it had been read."""
+    front = ZmqFront([f"ipc://{tmp_path}/ctl.sock"], "turns", silence_s=SILENCE_S)
+    try:
+        for identity, now in ((b"a", 1.0), (b"b", 2.0), (b"c", 2.5)):
+            front._turn(0, identity, now)
+        assert front.drained[0] == 0.0  # a turn under way drains nothing yet
+        front._turn(0, b"a", 3.0)  # a again: the turn that began at 1.0 is whole
+        assert front.drained[0] == 1.0
+        front._turn(0, b"b", 4.0)
+        front._turn(0, b"b", 5.0)
+        assert front.drained[0] == 3.0
+    finally:
+        front.close()
