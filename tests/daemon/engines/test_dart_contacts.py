@@ -6,11 +6,10 @@ reports, and parameters that say where they come from."""
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
-from typing import Any
 
 import numpy as np
 import pytest
+from support.engine_bodies import at, engine_fixture, ground, seconds
 
 from galton.daemon.engines import create_engine
 from galton.daemon.engines.base import Engine
@@ -20,26 +19,7 @@ from galton.protocol.mesh import box_mesh
 RADIUS = 0.05
 
 
-@pytest.fixture
-def engine() -> Iterator[Engine]:
-    made = create_engine("dart")
-    yield made
-    made.close()
-
-
-def at(*positions: list[float]) -> np.ndarray:
-    out = np.zeros((len(positions), 7))
-    out[:, :3] = positions
-    out[:, 6] = 1.0
-    return out
-
-
-def ground(**options: Any) -> BodyGroup:
-    return BodyGroup("plane", (5.0, 5.0), ["ground"], at([0, 0, 0]), static=True, **options)
-
-
-def seconds(engine: Engine, duration: float) -> None:
-    engine.step(round(duration / engine.timestep))
+engine = engine_fixture("dart")
 
 
 def test_a_dropped_ball_comes_to_rest_on_the_ground(engine: Engine) -> None:

@@ -8,6 +8,7 @@ from collections.abc import Iterator
 
 import numpy as np
 import pytest
+from support.engine_bodies import seconds
 
 from galton.daemon.engines import create_engine
 from galton.daemon.engines.base import Engine
@@ -40,10 +41,6 @@ def engine() -> Iterator[Engine]:
     made.load_model("urdf", LEVER, None, "l_", fixed_base=True)
     yield made
     made.close()
-
-
-def seconds(engine: Engine, duration: float) -> None:
-    engine.step(round(duration / engine.timestep))
 
 
 def target(engine: Engine, mode: str, value: float, kp: float = 200.0, kd: float = 20.0,

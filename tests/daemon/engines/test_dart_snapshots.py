@@ -7,11 +7,12 @@ rebuilds nothing the others feel."""
 from __future__ import annotations
 
 import copy
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 import pytest
+from support.engine_bodies import at, engine_fixture
 
 from galton.daemon.engines import create_engine
 from galton.daemon.engines.base import Engine
@@ -23,18 +24,7 @@ RADIUS = 0.05
 NAMES = ["r_arm", "r_carriage", "ball", "crate", "pill"]
 
 
-@pytest.fixture
-def engine() -> Iterator[Engine]:
-    made = create_engine("dart")
-    yield made
-    made.close()
-
-
-def at(*positions: list[float]) -> np.ndarray:
-    out = np.zeros((len(positions), 7))
-    out[:, :3] = positions
-    out[:, 6] = 1.0
-    return out
+engine = engine_fixture("dart")
 
 
 def busy_world(engine: Engine) -> None:

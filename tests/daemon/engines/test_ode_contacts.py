@@ -5,11 +5,11 @@ bounce threshold, the contact-joint cap, and parameters that say where they come
 
 from __future__ import annotations
 
-from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
 import pytest
+from support.engine_bodies import at, engine_fixture, ground, seconds
 
 from galton.daemon.engines import create_engine
 from galton.daemon.engines.base import Engine
@@ -18,30 +18,11 @@ from galton.protocol import BodyGroup, InvalidArgumentError
 RADIUS = 0.05
 
 
-@pytest.fixture
-def engine() -> Iterator[Engine]:
-    made = create_engine("ode")
-    yield made
-    made.close()
-
-
-def at(*positions: list[float]) -> np.ndarray:
-    out = np.zeros((len(positions), 7))
-    out[:, :3] = positions
-    out[:, 6] = 1.0
-    return out
-
-
-def ground(**options: Any) -> BodyGroup:
-    return BodyGroup("plane", (5.0, 5.0), ["ground"], at([0, 0, 0]), static=True, **options)
+engine = engine_fixture("ode")
 
 
 def ball(name: str, position: list[float], **options: Any) -> BodyGroup:
     return BodyGroup("sphere", (RADIUS,), [name], at(position), **options)
-
-
-def seconds(engine: Engine, duration: float) -> None:
-    engine.step(round(duration / engine.timestep))
 
 
 def rest_height(params: dict[str, Any]) -> float:

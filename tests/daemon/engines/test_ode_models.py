@@ -5,11 +5,11 @@ meshes, what ODE cannot do refused as such, and the snapshot's own format."""
 
 from __future__ import annotations
 
-from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
 import pytest
+from support.engine_bodies import at, engine_fixture, ground, seconds
 
 from galton.daemon.engines import create_engine
 from galton.daemon.engines.base import Engine
@@ -32,26 +32,7 @@ LEVER = """<robot name="lever">
   <limit lower="-1" upper="1" effort="100" velocity="10"/></joint></robot>"""
 
 
-@pytest.fixture
-def engine() -> Iterator[Engine]:
-    made = create_engine("ode")
-    yield made
-    made.close()
-
-
-def at(*positions: list[float]) -> np.ndarray:
-    out = np.zeros((len(positions), 7))
-    out[:, :3] = positions
-    out[:, 6] = 1.0
-    return out
-
-
-def ground() -> BodyGroup:
-    return BodyGroup("plane", (5.0, 5.0), ["ground"], at([0, 0, 0]), static=True)
-
-
-def seconds(engine: Engine, duration: float) -> None:
-    engine.step(round(duration / engine.timestep))
+engine = engine_fixture("ode")
 
 
 def hold(engine: Engine, target: float) -> None:
