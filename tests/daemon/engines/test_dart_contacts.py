@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 import pytest
-from support.engine_bodies import at, engine_fixture, ground, seconds
+from support.engine_bodies import at, engine_fixture, ground, seconds, slide
 
 from galton.daemon.engines import create_engine
 from galton.daemon.engines.base import Engine
@@ -19,7 +19,8 @@ from galton.protocol.mesh import box_mesh
 RADIUS = 0.05
 
 
-engine = engine_fixture("dart")
+ENGINE = "dart"
+engine = engine_fixture(ENGINE)
 
 
 def test_a_dropped_ball_comes_to_rest_on_the_ground(engine: Engine) -> None:
@@ -30,28 +31,15 @@ def test_a_dropped_ball_comes_to_rest_on_the_ground(engine: Engine) -> None:
     assert np.abs(twists[0]).max() < 1e-3
 
 
-def slide(ground_friction: float, box_friction: float) -> float:
-    """How far a box launched at 2 m/s slides in a second."""
-    engine = create_engine("dart")
-    try:
-        engine.spawn([ground(friction=ground_friction),
-                      BodyGroup("box", (0.05, 0.05, 0.05), ["box"], at([0, 0, 0.05]),
-                                friction=box_friction, twists=np.array([[2.0, 0, 0, 0, 0, 0]]))])
-        seconds(engine, 1.0)
-        return float(engine.get_states(["box"])[0][0, 0])
-    finally:
-        engine.close()
-
-
 def test_a_pair_slides_on_the_smaller_of_its_two_frictions() -> None:
     """DART takes the smaller friction of a pair (ODE, as Webots sets it up, takes the
     scenery's): a slippery box on a rough ground slides as far as a rough box on a
     slippery ground, and Coulomb's v² / (2 μ g) says how far."""
-    slippery = slide(1.0, 0.2)
-    assert slippery == pytest.approx(slide(0.2, 1.0), abs=1e-6)
-    assert slippery == pytest.approx(slide(0.2, 0.2), abs=1e-6)
+    slippery = slide(ENGINE, 1.0, 0.2)
+    assert slippery == pytest.approx(slide(ENGINE, 0.2, 1.0), abs=1e-6)
+    assert slippery == pytest.approx(slide(ENGINE, 0.2, 0.2), abs=1e-6)
     assert slippery == pytest.approx(4.0 / (2 * 0.2 * 9.8), rel=0.05)
-    assert slide(1.0, 1.0) == pytest.approx(4.0 / (2 * 1.0 * 9.8), rel=0.05)
+    assert slide(ENGINE, 1.0, 1.0) == pytest.approx(4.0 / (2 * 1.0 * 9.8), rel=0.05)
 
 
 def cube_on_capsule(detector: str, along: float) -> float:

@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 import pytest
-from support.engine_bodies import at, engine_fixture, ground, seconds
+from support.engine_bodies import at, engine_fixture, ground, seconds, slide
 
 from galton.daemon.engines import create_engine
 from galton.daemon.engines.base import Engine
@@ -18,7 +18,8 @@ from galton.protocol import BodyGroup, InvalidArgumentError
 RADIUS = 0.05
 
 
-engine = engine_fixture("ode")
+ENGINE = "ode"
+engine = engine_fixture(ENGINE)
 
 
 def ball(name: str, position: list[float], **options: Any) -> BodyGroup:
@@ -47,25 +48,12 @@ def test_a_dropped_ball_rests_on_the_ground_sunk_as_deep_as_its_soft_contact_let
     assert RADIUS - 1e-3 < softer < webots
 
 
-def slide(ground_friction: float, box_friction: float) -> float:
-    """How far a box launched at 2 m/s slides in a second."""
-    engine = create_engine("ode")
-    try:
-        engine.spawn([ground(friction=ground_friction),
-                      BodyGroup("box", (0.05, 0.05, 0.05), ["box"], at([0, 0, 0.05]),
-                                friction=box_friction, twists=np.array([[2.0, 0, 0, 0, 0, 0]]))])
-        seconds(engine, 1.0)
-        return float(engine.get_states(["box"])[0][0, 0])
-    finally:
-        engine.close()
-
-
 def test_against_the_scenery_the_scenerys_friction_decides() -> None:
     """Webots: a contact with a static body takes the static body's surface, so a box's
     own friction does not change how far it slides on the ground; the ground's does."""
-    rough, slippery = slide(1.0, 0.2), slide(0.2, 1.0)
-    assert rough == pytest.approx(slide(1.0, 1.0), abs=1e-9)
-    assert slippery == pytest.approx(slide(0.2, 0.2), abs=1e-9)
+    rough, slippery = slide(ENGINE, 1.0, 0.2), slide(ENGINE, 0.2, 1.0)
+    assert rough == pytest.approx(slide(ENGINE, 1.0, 1.0), abs=1e-9)
+    assert slippery == pytest.approx(slide(ENGINE, 0.2, 0.2), abs=1e-9)
     # Coulomb: v² / (2 μ g), 0.20 m at μ 1 and 1.02 m at μ 0.2 (it stops before a second).
     assert rough == pytest.approx(4.0 / (2 * 1.0 * 9.81), rel=0.1)
     assert slippery == pytest.approx(4.0 / (2 * 0.2 * 9.81), rel=0.1)

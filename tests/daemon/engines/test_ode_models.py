@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 import pytest
-from support.engine_bodies import at, engine_fixture, ground, seconds
+from support.engine_bodies import LEVER, at, engine_fixture, ground, seconds
 
 from galton.daemon.engines import create_engine
 from galton.daemon.engines.base import Engine
@@ -17,19 +17,6 @@ from galton.protocol import BodyGroup, FeatureUnsupportedError, InvalidArgumentE
 from galton.protocol.mesh import box_mesh
 
 RADIUS = 0.05
-# A lever on a fixed base: the arm's mass and collision box lie 0.2 m along x from its
-# link frame, which sits on the hinge, 1 m above the base.
-LEVER = """<robot name="lever">
-<link name="base"><inertial><mass value="5"/>
-  <inertia ixx=".1" ixy="0" ixz="0" iyy=".1" iyz="0" izz=".1"/></inertial>
-  <collision><geometry><box size=".1 .1 .1"/></geometry></collision></link>
-<link name="arm"><inertial><origin xyz="0.2 0 0"/><mass value="1"/>
-  <inertia ixx=".01" ixy="0" ixz="0" iyy=".01" iyz="0" izz=".01"/></inertial>
-  <collision><origin xyz="0.2 0 0"/><geometry><box size=".4 .05 .05"/></geometry></collision>
-</link>
-<joint name="hinge" type="revolute"><parent link="base"/><child link="arm"/>
-  <origin xyz="0 0 1"/><axis xyz="0 1 0"/>
-  <limit lower="-1" upper="1" effort="100" velocity="10"/></joint></robot>"""
 
 
 engine = engine_fixture("ode")
